@@ -1,0 +1,278 @@
+//! Camera files as users bring them, all read into one [`OpenCvCamera`]:
+//!
+//! * vklens JSON: `{"width", "height", "fx", "fy", "cx", "cy", "dist_coeffs": [...]}`;
+//!   unknown keys are ignored (the cases of the shared reference file load as they stand).
+//! * OpenCV `FileStorage` as `calibrateCamera` samples write it — YAML (with the `%YAML:1.0`
+//!   header of OpenCV 3/4 that strict YAML parsers reject, or `%YAML 1.2`), XML and JSON:
+//!   `camera_matrix` and `distortion_coefficients` as `opencv-matrix`, `image_width`,
+//!   `image_height`.
+//! * ROS `camera_info` YAML (`plumb_bob`, `rational_polynomial`).
+//!
+//! Every format is first turned into a JSON tree, then read by one function, so every format
+//! gets the same checks and the same error messages (file, field, value).
+
+use std::fmt;
+use std::path::Path;
+
+use serde_json::{Map, Value};
+
+use crate::model::{Intrinsics, ModelError, OpenCvCamera};
+
+/// A camera file that could not be used: which file, and what is wrong with it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraFileError {
+    pub file: String,
+    pub message: String,
+}
+
+impl fmt::Display for CameraFileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.file, self.message)
+    }
+}
+
+impl std::error::Error for CameraFileError {}
+
+/// Reads a camera file (format detected from its content).
+pub fn load_camera(path: &Path) -> Result<OpenCvCamera, CameraFileError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| CameraFileError {
+        file: file.clone(),
+        message: format!("cannot read camera file: {e}"),
+    })?;
+    parse_camera(&text, &file)
+}
+
+/// Parses the text of a camera file; `origin` names it in errors.
+pub fn parse_camera(text: &str, origin: &str) -> Result<OpenCvCamera, CameraFileError> {
+    let err = |message: String| CameraFileError {
+        file: origin.to_string(),
+        message,
+    };
+    let trimmed = text.trim_start_matches('\u{feff}').trim_start();
+    let tree = if trimmed.starts_with('{') {
+        serde_json::from_str::<Value>(trimmed).map_err(|e| err(format!("invalid JSON: {e}")))?
+    } else if trimmed.starts_with('<') {
+        xml_to_tree(trimmed).map_err(err)?
+    } else {
+        yaml_to_tree(trimmed).map_err(err)?
+    };
+    camera_from_tree(&tree).map_err(err)
+}
+
+/// Reads a camera from a parsed JSON object (any of the layouts above).
+pub fn camera_from_value(value: &Value) -> Result<OpenCvCamera, String> {
+    camera_from_tree(value)
+}
+
+fn camera_from_tree(tree: &Value) -> Result<OpenCvCamera, String> {
+    let obj = tree
+        .as_object()
+        .ok_or_else(|| "expected an object/mapping at the top level".to_string())?;
+    let width = dimension(obj, &["width", "image_width"])?;
+    let height = dimension(obj, &["height", "image_height"])?;
+
+    let intrinsics = if obj.contains_key("fx") {
+        Intrinsics {
+            fx: number_field(obj, "fx")?,
+            fy: number_field(obj, "fy")?,
+            cx: number_field(obj, "cx")?,
+            cy: number_field(obj, "cy")?,
+        }
+    } else {
+        let (key, k) = matrix_data(obj, &["camera_matrix", "K", "k"])?
+            .ok_or("missing `fx` (or `camera_matrix`)")?;
+        if k.len() != 9 {
+            return Err(format!(
+                "`{key}` must have 9 entries (3×3), got {}",
+                k.len()
+            ));
+        }
+        let expected_zero = [(1, "skew"), (3, "[1][0]"), (6, "[2][0]"), (7, "[2][1]")];
+        for (i, what) in expected_zero {
+            if k[i] != 0.0 {
+                return Err(format!(
+                    "`{key}` entry {what} is {}; vklens supports camera matrices without skew only ([[fx,0,cx],[0,fy,cy],[0,0,1]])",
+                    k[i]
+                ));
+            }
+        }
+        if k[8] != 1.0 {
+            return Err(format!("`{key}` entry [2][2] must be 1, got {}", k[8]));
+        }
+        Intrinsics {
+            fx: k[0],
+            fy: k[4],
+            cx: k[2],
+            cy: k[5],
+        }
+    };
+
+    if let Some(model) = obj.get("distortion_model").and_then(Value::as_str) {
+        if !["plumb_bob", "rational_polynomial", "opencv"].contains(&model) {
+            return Err(format!(
+                "`distortion_model` is `{model}`; vklens reads `plumb_bob` and `rational_polynomial` (the OpenCV standard model)"
+            ));
+        }
+    }
+    let coeffs = if let Some(v) = obj.get("dist_coeffs") {
+        number_list(v, "dist_coeffs")?
+    } else {
+        match matrix_data(obj, &["distortion_coefficients", "D", "d"])? {
+            Some((_, d)) => d,
+            None => Vec::new(),
+        }
+    };
+    let coeffs = if coeffs.is_empty() {
+        vec![0.0; 4]
+    } else {
+        coeffs
+    };
+    OpenCvCamera::from_coeffs(width, height, intrinsics, &coeffs).map_err(|e| match e {
+        ModelError::CoefficientCount(n) => format!(
+            "distortion coefficients: OpenCV accepts 4, 5, 8, 12 or 14 values, this file has {n}"
+        ),
+        other => other.to_string(),
+    })
+}
+
+fn as_number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Number(n) => n.as_f64(),
+        // FileStorage writes `.Nan`/`.Inf` and YAML floats like `400.`; they arrive as text.
+        Value::String(s) => parse_float(s),
+        _ => None,
+    }
+}
+
+fn parse_float(s: &str) -> Option<f64> {
+    let t = s.trim();
+    match t.to_ascii_lowercase().as_str() {
+        ".nan" | "nan" => Some(f64::NAN),
+        ".inf" | "+.inf" | "inf" => Some(f64::INFINITY),
+        "-.inf" | "-inf" => Some(f64::NEG_INFINITY),
+        _ => t.parse().ok(),
+    }
+}
+
+fn number_field(obj: &Map<String, Value>, key: &str) -> Result<f64, String> {
+    let v = obj
+        .get(key)
+        .ok_or_else(|| format!("missing field `{key}`"))?;
+    as_number(v).ok_or_else(|| format!("field `{key}` must be a number, got {v}"))
+}
+
+fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> Result<u32, String> {
+    let (key, v) = keys
+        .iter()
+        .find_map(|k| obj.get(*k).map(|v| (*k, v)))
+        .ok_or_else(|| format!("missing field `{}` (image size)", keys.join("` or `")))?;
+    let n = as_number(v).ok_or_else(|| format!("field `{key}` must be a number, got {v}"))?;
+    if !(n.fract() == 0.0 && n >= 1.0 && n <= crate::model::MAX_IMAGE_SIDE as f64) {
+        return Err(format!(
+            "field `{key}` must be a whole number of pixels in 1..={}, got {v}",
+            crate::model::MAX_IMAGE_SIDE
+        ));
+    }
+    Ok(n as u32)
+}
+
+fn number_list(v: &Value, key: &str) -> Result<Vec<f64>, String> {
+    let arr = v
+        .as_array()
+        .ok_or_else(|| format!("field `{key}` must be a list of numbers, got {v}"))?;
+    arr.iter()
+        .enumerate()
+        .map(|(i, x)| {
+            as_number(x).ok_or_else(|| format!("field `{key}`[{i}] must be a number, got {x}"))
+        })
+        .collect()
+}
+
+/// An `opencv-matrix` (`{rows, cols, data}`) or a plain list under one of `keys`.
+fn matrix_data<'a>(
+    obj: &Map<String, Value>,
+    keys: &[&'a str],
+) -> Result<Option<(&'a str, Vec<f64>)>, String> {
+    let Some((key, v)) = keys.iter().find_map(|k| obj.get(*k).map(|v| (*k, v))) else {
+        return Ok(None);
+    };
+    let data = match v {
+        Value::Object(m) => m
+            .get("data")
+            .ok_or_else(|| format!("field `{key}` has no `data`"))?,
+        other => other,
+    };
+    let values = number_list(data, &format!("{key}.data"))?;
+    if let Value::Object(m) = v {
+        if let (Some(r), Some(c)) = (
+            m.get("rows").and_then(as_number),
+            m.get("cols").and_then(as_number),
+        ) {
+            if (r * c) as usize != values.len() {
+                return Err(format!(
+                    "field `{key}` says {r}×{c} but its data has {} values",
+                    values.len()
+                ));
+            }
+        }
+    }
+    Ok(Some((key, values)))
+}
+
+/// YAML (OpenCV FileStorage or ROS) → JSON tree. OpenCV's `%YAML:1.0` directive is not valid
+/// YAML 1.1/1.2 syntax, so directive lines are dropped; `!!opencv-matrix` tags are ignored.
+fn yaml_to_tree(text: &str) -> Result<Value, String> {
+    use yaml_rust2::{Yaml, YamlLoader};
+    let cleaned: String = text
+        .lines()
+        .filter(|l| !l.starts_with('%'))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let docs = YamlLoader::load_from_str(&cleaned).map_err(|e| format!("invalid YAML: {e}"))?;
+    let doc = docs.into_iter().next().ok_or("empty YAML file")?;
+    fn convert(y: &Yaml) -> Value {
+        match y {
+            Yaml::Real(s) => Value::String(s.clone()),
+            Yaml::Integer(i) => Value::from(*i),
+            Yaml::String(s) => Value::String(s.clone()),
+            Yaml::Boolean(b) => Value::Bool(*b),
+            Yaml::Array(a) => Value::Array(a.iter().map(convert).collect()),
+            Yaml::Hash(h) => Value::Object(
+                h.iter()
+                    .filter_map(|(k, v)| k.as_str().map(|k| (k.to_string(), convert(v))))
+                    .collect(),
+            ),
+            _ => Value::Null,
+        }
+    }
+    Ok(convert(&doc))
+}
+
+/// OpenCV FileStorage XML → JSON tree: `<opencv_storage>`'s children become keys; an element
+/// with children becomes an object; `data` text becomes a list of numbers.
+fn xml_to_tree(text: &str) -> Result<Value, String> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| format!("invalid XML: {e}"))?;
+    let root = doc.root_element();
+    fn convert(node: roxmltree::Node) -> Value {
+        let children: Vec<_> = node.children().filter(|c| c.is_element()).collect();
+        if children.is_empty() {
+            let text = node.text().unwrap_or("").trim();
+            if node.tag_name().name() == "data" {
+                return Value::Array(
+                    text.split_whitespace()
+                        .map(|t| Value::String(t.to_string()))
+                        .collect(),
+                );
+            }
+            return Value::String(text.trim_matches('"').to_string());
+        }
+        Value::Object(
+            children
+                .into_iter()
+                .map(|c| (c.tag_name().name().to_string(), convert(c)))
+                .collect(),
+        )
+    }
+    Ok(convert(root))
+}

@@ -1,0 +1,160 @@
+//! Camera models as plain f64 math: no Vulkan in this module.
+//!
+//! # Pixel-centre convention
+//!
+//! vklens uses OpenCV's convention everywhere: **pixel (0, 0) has its centre at (0, 0)**, so an
+//! image of width `w` covers `x ∈ [-0.5, w - 0.5]`. A pinhole camera maps a point (X, Y, Z) in
+//! the OpenCV camera frame (x right, y down, z forward) to `u = fx·X/Z + cx`, `v = fy·Y/Z + cy`.
+//! `glsl/include/camera_model.glsl` states the same convention word for word.
+//!
+//! # Layout (after COLMAP's `sensor/models.h`)
+//!
+//! * [`opencv`] — the OpenCV "standard" model with all 14 coefficients (seed 000, Eq. 1, and
+//!   OpenCV's own `projectPoints`), its analytic Jacobian and three inverse methods.
+//! * [`brown`] — seed 002's Brown radial model for headset lenses (Eq. 1, Eq. 2).
+//! * [`domain`] — the valid (invertible) domain of a distortion, computed once per camera.
+//! * [`projection`] — the Sec. 3.1 frustum as a Vulkan projection matrix.
+//! * [`CameraModel`] — the interface both models share: maps between the ideal (pinhole)
+//!   pixel and the distorted pixel, in both directions, with an explicit "invalid".
+
+pub mod brown;
+pub mod domain;
+pub mod opencv;
+pub mod projection;
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::{DMat2, DVec2};
+
+pub use brown::BrownRadial;
+pub use domain::ValidDomain;
+pub use opencv::{Intrinsics, OpenCvCamera, OpenCvDistortion, Terms};
+pub use projection::{vulkan_projection, Frustum};
+
+/// Largest magnitude accepted for any parameter; beyond it a model is certainly a unit or
+/// parsing mistake (and f32 on the GPU would lose all precision).
+pub const ABSURD_MAGNITUDE: f64 = 1e7;
+/// Largest image side accepted (pixels).
+pub const MAX_IMAGE_SIDE: u32 = 1 << 16;
+
+/// Why a set of model parameters was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModelError {
+    #[error("parameter `{name}` is {value}, which is not a finite number")]
+    NotFinite { name: &'static str, value: f64 },
+    #[error("parameter `{name}` must be > 0, got {value}")]
+    NotPositive { name: &'static str, value: f64 },
+    #[error("parameter `{name}` = {value} is absurdly large (|value| must be ≤ {limit})")]
+    Absurd {
+        name: &'static str,
+        value: f64,
+        limit: f64,
+    },
+    #[error("image size {width}×{height} is out of range (each side must be 1..={max})")]
+    BadSize { width: u32, height: u32, max: u32 },
+    #[error("OpenCV distortion vectors have 4, 5, 8, 12 or 14 coefficients, got {0}")]
+    CoefficientCount(usize),
+    #[error("{0}")]
+    Other(String),
+}
+
+/// How to invert a distortion (distorted pixel → ideal pixel). Selectable by name:
+/// `newton`, `heikkila`, `fixed-point:N`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum InverseMethod {
+    /// Newton's method with the analytic Jacobian on every coefficient; converges to the
+    /// machine precision of f64 inside the valid domain.
+    Newton,
+    /// The closed-form Taylor approximation of seed 000 Eq. 2 (Heikkilä), k1 k2 p1 p2 only;
+    /// for the Brown model, seed 002 Eq. 2 (Mallon & Whelan).
+    Heikkila,
+    /// OpenCV's `undistortPoints` fixed-point iteration with this many iterations
+    /// (OpenCV's default criteria are 5).
+    FixedPoint(u32),
+}
+
+impl InverseMethod {
+    /// Upper bound on fixed-point iterations accepted from users.
+    pub const MAX_ITERATIONS: u32 = 10_000;
+}
+
+impl fmt::Display for InverseMethod {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            InverseMethod::Newton => write!(f, "newton"),
+            InverseMethod::Heikkila => write!(f, "heikkila"),
+            InverseMethod::FixedPoint(n) => write!(f, "fixed-point:{n}"),
+        }
+    }
+}
+
+impl FromStr for InverseMethod {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "newton" => Ok(InverseMethod::Newton),
+            "heikkila" => Ok(InverseMethod::Heikkila),
+            _ => {
+                let Some(n) = s.strip_prefix("fixed-point:") else {
+                    return Err(format!(
+                        "unknown inverse method `{s}` (expected newton, heikkila or fixed-point:N)"
+                    ));
+                };
+                let n: u32 = n.parse().map_err(|_| {
+                    format!("`{s}`: N in fixed-point:N must be a whole number of iterations")
+                })?;
+                if n == 0 || n > Self::MAX_ITERATIONS {
+                    return Err(format!(
+                        "`{s}`: N must be between 1 and {}",
+                        Self::MAX_ITERATIONS
+                    ));
+                }
+                Ok(InverseMethod::FixedPoint(n))
+            }
+        }
+    }
+}
+
+/// What every distortion model offers: maps between *ideal* pixels (the pinhole image a
+/// graphics pipeline renders, same intrinsics) and *distorted* pixels (what the lens makes).
+///
+/// `None` always means "outside the valid domain": the map is not defined or not invertible
+/// there. No method panics on any input, NaN included.
+pub trait CameraModel {
+    /// Short model name, e.g. `opencv` or `brown`.
+    fn model_name(&self) -> &'static str;
+    /// Image size in pixels.
+    fn size(&self) -> (u32, u32);
+    /// Forward model: ideal pixel → distorted pixel.
+    fn distort_pixel(&self, ideal: DVec2) -> Option<DVec2>;
+    /// Jacobian of [`CameraModel::distort_pixel`] (∂distorted/∂ideal).
+    fn distort_jacobian_pixel(&self, ideal: DVec2) -> Option<DMat2>;
+    /// Inverse model: distorted pixel → ideal pixel, or `None` outside the valid domain.
+    fn undistort_pixel(&self, distorted: DVec2, method: InverseMethod) -> Option<DVec2>;
+    /// Whether an ideal pixel lies in the valid (invertible) domain.
+    fn ideal_in_domain(&self, ideal: DVec2) -> bool;
+}
+
+/// Checks a named parameter for finiteness and magnitude.
+pub(crate) fn check_finite(name: &'static str, value: f64, limit: f64) -> Result<(), ModelError> {
+    if !value.is_finite() {
+        return Err(ModelError::NotFinite { name, value });
+    }
+    if value.abs() > limit {
+        return Err(ModelError::Absurd { name, value, limit });
+    }
+    Ok(())
+}
+
+pub(crate) fn check_size(width: u32, height: u32) -> Result<(), ModelError> {
+    if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        return Err(ModelError::BadSize {
+            width,
+            height,
+            max: MAX_IMAGE_SIDE,
+        });
+    }
+    Ok(())
+}

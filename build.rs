@@ -5,7 +5,9 @@
 //! and line, e.g. `glsl/points.comp:42: 'foo' : undeclared identifier`.
 //!
 //! The SPIR-V lands in `$OUT_DIR/<file name>.spv` (e.g. `points.comp.spv`) and is embedded
-//! with `include_bytes!` by `src/gpu/shaders.rs`.
+//! with `include_bytes!` by `src/gpu/shaders.rs`. A shader with a line
+//! `// vklens:variant NAME DEFINE` is compiled once more with `#define DEFINE`, to
+//! `<file name>.NAME.spv` (e.g. `points.comp.f64.spv`, the f64 model).
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -94,32 +96,49 @@ fn main() {
         let shown = format!("glsl/{name}");
         let stage = stage_of(path).expect("filtered above");
         let text = fs::read_to_string(path).unwrap_or_else(|e| panic!("{shown}: {e}"));
-        let source = ShaderSource::from(text);
-        let mut includes = Includes {
-            dir: glsl.join("include"),
-        };
-        let input = match ShaderInput::new(
-            &source,
-            stage,
-            &options,
-            None::<&[(&str, Option<&str>)]>,
-            Some(&mut includes),
-        ) {
-            Ok(input) => input,
-            Err(e) => {
-                failures.push(format!("{shown}: {}", locate(&e.to_string(), &shown)));
-                continue;
+        let mut variants: Vec<(String, Option<String>)> = vec![(format!("{name}.spv"), None)];
+        for line in text.lines() {
+            if let Some(rest) = line.trim().strip_prefix("// vklens:variant ") {
+                let mut parts = rest.split_whitespace();
+                if let (Some(suffix), Some(define)) = (parts.next(), parts.next()) {
+                    variants.push((format!("{name}.{suffix}.spv"), Some(define.to_string())));
+                }
             }
-        };
-        let result = compiler
-            .create_shader(input)
-            .and_then(|shader| shader.compile());
-        match result {
-            Ok(words) => {
-                let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-                fs::write(out.join(format!("{name}.spv")), bytes).expect("write SPIR-V");
+        }
+        for (output, define) in variants {
+            let source = ShaderSource::from(text.clone());
+            let mut includes = Includes {
+                dir: glsl.join("include"),
+            };
+            let defines: Vec<(&str, Option<&str>)> =
+                define.iter().map(|d| (d.as_str(), Some("1"))).collect();
+            let input = match ShaderInput::new(
+                &source,
+                stage,
+                &options,
+                Some(&defines[..]),
+                Some(&mut includes),
+            ) {
+                Ok(input) => input,
+                Err(e) => {
+                    failures.push(format!("{shown}: {}", locate(&e.to_string(), &shown)));
+                    continue;
+                }
+            };
+            let result = compiler
+                .create_shader(input)
+                .and_then(|shader| shader.compile());
+            match result {
+                Ok(words) => {
+                    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+                    fs::write(out.join(&output), bytes).expect("write SPIR-V");
+                }
+                Err(e) => failures.push(format!(
+                    "{shown} ({}): {}",
+                    define.as_deref().unwrap_or("default"),
+                    locate(&e.to_string(), &shown)
+                )),
             }
-            Err(e) => failures.push(format!("{shown}: {}", locate(&e.to_string(), &shown))),
         }
     }
     if !failures.is_empty() {

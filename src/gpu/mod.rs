@@ -1,1 +1,168 @@
-//! GPU
+//! Vulkan plumbing.
+//!
+//! * [`Gpu`] — the handles a pass needs (device, queue, allocator), built from the caller's
+//!   objects ([`Gpu::from_caller`]) or created by the headless [`Context`]. Cheap to clone; the
+//!   last clone of a [`Context`]-made `Gpu` destroys the device it created, never a caller's.
+//! * Owned objects: [`Buffer`], [`Image`], [`ComputePipeline`], [`DescriptorPool`],
+//!   [`QueryPool`], each destroying its handle (and freeing its allocation) in `Drop`.
+//! * [`Context`] — headless: instance (validation layer on request), device selection
+//!   (`VKLENS_DEVICE`), one queue, submission and timing for tests and the CLI.
+
+mod context;
+mod pipeline;
+pub mod reflect;
+mod resources;
+pub mod shaders;
+
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use gpu_allocator::vulkan::Allocator;
+
+pub use context::{Context, ContextOptions};
+pub use pipeline::{ComputePipeline, DescriptorPool, SpecConstants};
+pub use resources::{Buffer, Image, QueryPool};
+
+/// Errors from the GPU layer.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum GpuError {
+    #[error("cannot load the Vulkan library ({0}); install it with: apt-get install libvulkan1 mesa-vulkan-drivers")]
+    Loading(String),
+    #[error("Vulkan call failed: {0}")]
+    Vk(#[from] vk::Result),
+    #[error("GPU memory allocation failed: {0}")]
+    Allocation(#[from] gpu_allocator::AllocationError),
+    #[error("no Vulkan device matches: {0}")]
+    NoDevice(String),
+    #[error("the Khronos validation layer was requested but is not installed (apt-get install vulkan-validationlayers)")]
+    NoValidationLayer,
+    #[error("Vulkan validation reported {} message(s):\n{}", .0.len(), .0.join("\n"))]
+    Validation(Vec<String>),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Crate result for GPU work.
+pub type Result<T, E = GpuError> = std::result::Result<T, E>;
+
+/// The handles every pass needs: a device, a queue it may use for one-off uploads, and a
+/// `gpu-allocator` allocator. Built from the caller's objects or by [`Context`].
+#[derive(Clone)]
+pub struct Gpu {
+    inner: Arc<GpuInner>,
+}
+
+pub(crate) struct GpuInner {
+    pub(crate) device: ash::Device,
+    pub(crate) queue: vk::Queue,
+    pub(crate) queue_family: u32,
+    pub(crate) allocator: ManuallyDrop<Arc<Mutex<Allocator>>>,
+    pub(crate) timestamp_period_ns: f64,
+    pub(crate) timestamps: bool,
+    pub(crate) device_name: String,
+    /// Whether `shaderFloat64` is enabled on the device (f64 shader variants).
+    pub(crate) float64: bool,
+    /// Present when vklens created the device (headless [`Context`]); destroys it last.
+    pub(crate) owner: Option<context::Owned>,
+}
+
+impl Gpu {
+    /// Wraps the caller's device, queue and allocator. vklens never destroys any of them; the
+    /// caller must keep them alive as long as this `Gpu` or anything built from it.
+    ///
+    /// # Safety
+    /// `device` must have been created from `physical_device` of `instance`, `queue` must be a
+    /// queue of `queue_family` of that device supporting compute, and `allocator` must have
+    /// been created for that device. `float64_enabled` must be true only if the device was
+    /// created with the `shaderFloat64` feature enabled (it unlocks the f64 shader variants).
+    pub unsafe fn from_caller(
+        instance: &ash::Instance,
+        physical_device: vk::PhysicalDevice,
+        device: ash::Device,
+        queue: vk::Queue,
+        queue_family: u32,
+        allocator: Arc<Mutex<Allocator>>,
+        float64_enabled: bool,
+    ) -> Result<Self> {
+        if device.handle() == vk::Device::null() || queue == vk::Queue::null() {
+            return Err(GpuError::Invalid("null device or queue handle".into()));
+        }
+        let props = unsafe { instance.get_physical_device_properties(physical_device) };
+        let families =
+            unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
+        let family = families.get(queue_family as usize).ok_or_else(|| {
+            GpuError::Invalid(format!("queue family {queue_family} does not exist"))
+        })?;
+        Ok(Gpu {
+            inner: Arc::new(GpuInner {
+                device,
+                queue,
+                queue_family,
+                allocator: ManuallyDrop::new(allocator),
+                timestamp_period_ns: props.limits.timestamp_period as f64,
+                timestamps: family.timestamp_valid_bits > 0,
+                device_name: device_name(&props),
+                float64: float64_enabled,
+                owner: None,
+            }),
+        })
+    }
+
+    pub(crate) fn from_inner(inner: GpuInner) -> Self {
+        Gpu {
+            inner: Arc::new(inner),
+        }
+    }
+
+    /// The ash device.
+    pub fn device(&self) -> &ash::Device {
+        &self.inner.device
+    }
+    /// The queue one-off work is submitted to.
+    pub fn queue(&self) -> vk::Queue {
+        self.inner.queue
+    }
+    /// Its family index.
+    pub fn queue_family(&self) -> u32 {
+        self.inner.queue_family
+    }
+    /// The shared allocator.
+    pub fn allocator(&self) -> &Arc<Mutex<Allocator>> {
+        &self.inner.allocator
+    }
+    /// Nanoseconds per timestamp tick, and whether the queue has timestamps at all.
+    pub fn timestamp_period_ns(&self) -> Option<f64> {
+        self.inner
+            .timestamps
+            .then_some(self.inner.timestamp_period_ns)
+    }
+    /// Whether f64 shader variants can run (`shaderFloat64` enabled).
+    pub fn supports_float64(&self) -> bool {
+        self.inner.float64
+    }
+    /// The device's name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
+    pub fn device_name(&self) -> &str {
+        &self.inner.device_name
+    }
+}
+
+impl Drop for GpuInner {
+    fn drop(&mut self) {
+        unsafe {
+            // The allocator goes before the device it allocates from.
+            ManuallyDrop::drop(&mut self.allocator);
+            if let Some(owner) = self.owner.take() {
+                owner.destroy(&self.device);
+            }
+        }
+    }
+}
+
+pub(crate) fn device_name(props: &vk::PhysicalDeviceProperties) -> String {
+    props
+        .device_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|_| "unnamed device".into())
+}

@@ -29,8 +29,10 @@ pub struct ValidDomain {
 }
 
 impl ValidDomain {
-    /// Rays (and table entries) around the principal point.
-    pub const SAMPLES: usize = 1024;
+    /// Rays (and table entries) around the principal point. The GPU gets the very same table
+    /// (`CameraParams.domain` in `glsl/include/camera_model.glsl`), so CPU and GPU agree on
+    /// what is valid up to f32 rounding.
+    pub const SAMPLES: usize = 256;
     /// Largest ideal radius considered (normalized units): tan(88.9°). A lens that never folds
     /// is still bounded here: a perspective image cannot reach 90° off axis.
     pub const RADIUS_CAP: f64 = 50.0;
@@ -115,15 +117,18 @@ impl ValidDomain {
         r.is_finite() && (r == 0.0 || r <= self.distorted_radius(y.y.atan2(y.x)))
     }
 
-    /// The two tables resampled to `n` uniform angles, `[ideal, distorted]` per entry, for the
-    /// GPU mirror (which interpolates the same way as [`ValidDomain::ideal_radius`]).
-    pub fn resampled(&self, n: usize) -> Vec<[f64; 2]> {
-        (0..n)
-            .map(|j| {
-                let angle = TAU * j as f64 / n as f64;
-                [self.ideal_radius(angle), self.distorted_radius(angle)]
-            })
-            .collect()
+    /// Smallest distorted boundary radius over all directions.
+    pub fn min_distorted_radius(&self) -> f64 {
+        self.distorted.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+
+    /// The table as `[ideal, distorted]` radius pairs at angles `TAU * i / SAMPLES`, for the GPU
+    /// mirror (which interpolates the same way as [`ValidDomain::ideal_radius`]).
+    pub fn table(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
+        self.ideal
+            .iter()
+            .zip(&self.distorted)
+            .map(|(&a, &b)| [a, b])
     }
 }
 

@@ -33,6 +33,8 @@ pub const NEWTON_MAX_ITERATIONS: usize = 50;
 /// Newton: a solution is accepted when it reproduces the distorted point to this (normalized
 /// units; ~1e-9 px at fx = 1000).
 pub const NEWTON_ACCEPT_RESIDUAL: f64 = 1e-12;
+/// Newton: most step halvings per iteration (damping near the domain boundary).
+pub const NEWTON_MAX_HALVINGS: usize = 40;
 
 /// Pinhole intrinsics in pixels (no skew).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -393,27 +395,26 @@ impl OpenCvCamera {
             return Some(DVec2::ZERO);
         }
         let mut x = self.radial_start(target);
+        let (mut f, mut jac) = d.distort_pre_tilt(x)?;
         for _ in 0..NEWTON_MAX_ITERATIONS {
-            let (fx, jac) = d.distort_pre_tilt(x)?;
-            let residual = fx - target;
-            if residual.length() <= f64::EPSILON * (1.0 + rho) {
+            let residual = (f - target).length();
+            if residual <= f64::EPSILON * (1.0 + rho) {
                 break;
             }
-            let det = jac.determinant();
-            if !(det > 0.0) {
+            if !(jac.determinant() > 0.0) {
                 return None;
             }
-            let step = jac.inverse() * residual;
-            // Damp: halve the step until the new point stays in the domain and does not make
-            // the residual worse than a (1 - 1e-4) fraction (Armijo-like) — a trust region.
+            let step = jac.inverse() * (f - target);
+            // Damp: halve the step until the new point stays in the domain and reduces the
+            // residual by at least a (1 - 1e-4 t) fraction (Armijo) — a simple trust region.
             let mut t = 1.0;
             let mut accepted = false;
-            for _ in 0..40 {
+            for _ in 0..NEWTON_MAX_HALVINGS {
                 let candidate = x - step * t;
                 if self.domain.contains_ideal(candidate) {
-                    if let Some((fc, _)) = d.distort_pre_tilt(candidate) {
-                        if (fc - target).length() < residual.length() * (1.0 - 1e-4 * t) {
-                            x = candidate;
+                    if let Some((fc, jc)) = d.distort_pre_tilt(candidate) {
+                        if (fc - target).length() < residual * (1.0 - 1e-4 * t) {
+                            (x, f, jac) = (candidate, fc, jc);
                             accepted = true;
                             break;
                         }
@@ -425,8 +426,7 @@ impl OpenCvCamera {
                 break;
             }
         }
-        let (fx, jac) = d.distort_pre_tilt(x)?;
-        let ok = (fx - target).length() <= NEWTON_ACCEPT_RESIDUAL * (1.0 + rho)
+        let ok = (f - target).length() <= NEWTON_ACCEPT_RESIDUAL * (1.0 + rho)
             && jac.determinant() > 0.0
             && self.domain.contains_ideal(x);
         ok.then_some(x)

@@ -1,1 +1,10 @@
-//! passes
+//! GPU passes. Each is built once from a [`crate::gpu::Gpu`] (`new`) and then *records* into a
+//! command buffer the caller owns; no pass submits work by itself. The headless
+//! [`crate::gpu::Context`] is just one caller.
+
+pub mod camera_params;
+pub mod grid_demo;
+pub mod points;
+
+pub use camera_params::{CameraParams, CameraParams64, CAMERA_SPEC_IDS};
+pub use points::{PointsMode, PointsPass, Precision};

@@ -1,0 +1,321 @@
+// camera_model.glsl — the OpenCV standard camera model in f32, mirroring src/model/opencv.rs
+// function for function (forward, Jacobian, tilt, valid domain, Newton / Heikkilä /
+// fixed-point inverses). Tested against the f64 model on the shared reference points.
+//
+// Pixel-centre convention: OpenCV's, pixel (0, 0) has its centre at (0, 0), so an image of
+// width w covers x in [-0.5, w - 0.5]; a pinhole maps (X, Y, Z) to u = fx·X/Z + cx,
+// v = fy·Y/Z + cy.
+//
+// Terms whose coefficients are all zero compile out: the host sets the specialization
+// constants VKL_RADIAL .. VKL_TILT from the camera (model::Terms), so a k1 k2 camera runs no
+// rational, prism or tilt code at all. Constant ids 0-7 belong to this file; shaders use 8+.
+//
+// Before including, a shader may define VKL_CAMERA_SET / VKL_CAMERA_BINDING (default 0, 0).
+// The block layout is `pass::CameraParams` (f32) / `pass::CameraParams64` (f64) on the host,
+// layout-tested against this SPIR-V.
+
+#ifndef VKL_CAMERA_MODEL_GLSL
+#define VKL_CAMERA_MODEL_GLSL
+
+#ifndef VKL_CAMERA_SET
+#define VKL_CAMERA_SET 0
+#endif
+#ifndef VKL_CAMERA_BINDING
+#define VKL_CAMERA_BINDING 0
+#endif
+
+// model::ValidDomain::SAMPLES
+#define VKL_DOMAIN_SAMPLES 256
+#define VKL_TAU 6.283185307179586
+// Precision: f32 by default; a shader compiled with VKL_F64 defined gets the same model in
+// f64 (GLSL double; needs the shaderFloat64 device feature) and the `CameraParams64` block.
+// f32 is what the warp uses; near a fold the problem is ill-conditioned (σ_min(J) → 0) and
+// f32 rounding of the residual is amplified by 1/σ_min, which f64 avoids.
+#ifdef VKL_F64
+#define VKL_FLOAT double
+#define VKL_VEC2 dvec2
+#define VKL_VEC3 dvec3
+#define VKL_VEC4 dvec4
+#define VKL_MAT2 dmat2
+#define VKL_PARAMS_BLOCK CameraParams64
+// Machine epsilon: Newton stops when the residual reaches rounding level.
+#define VKL_EPSILON 2.220446049250313e-16LF
+// Newton accepts a solution whose residual is within this (normalized units, relative).
+#define VKL_NEWTON_ACCEPT 1e-12LF
+#else
+#define VKL_FLOAT float
+#define VKL_VEC2 vec2
+#define VKL_VEC3 vec3
+#define VKL_VEC4 vec4
+#define VKL_MAT2 mat2
+#define VKL_PARAMS_BLOCK CameraParams
+#define VKL_EPSILON 1.1920929e-7
+#define VKL_NEWTON_ACCEPT 2e-6
+#endif
+// model::opencv::NEWTON_MAX_HALVINGS: near a fold the first steps overshoot the domain.
+#define VKL_NEWTON_MAX_HALVINGS 40
+
+layout(constant_id = 0) const bool VKL_RADIAL = true;      // k1 k2 k3
+layout(constant_id = 1) const bool VKL_RATIONAL = true;    // k4 k5 k6
+layout(constant_id = 2) const bool VKL_TANGENTIAL = true;  // p1 p2
+layout(constant_id = 3) const bool VKL_PRISM = true;       // s1 s2 s3 s4
+layout(constant_id = 4) const bool VKL_TILT = true;        // tau_x tau_y
+layout(constant_id = 5) const uint VKL_NEWTON_ITERATIONS = 20;
+
+layout(set = VKL_CAMERA_SET, binding = VKL_CAMERA_BINDING, std140) uniform VKL_PARAMS_BLOCK {
+    VKL_VEC4 intrinsics;        // fx fy cx cy
+    VKL_VEC4 radial;            // k1 k2 k3 -
+    VKL_VEC4 rational;          // k4 k5 k6 -
+    VKL_VEC4 tangential_prism;  // p1 p2 s1 s2
+    VKL_VEC4 prism;             // s3 s4 - -
+    VKL_VEC4 tilt[3];           // rows of OpenCV's tilt matrix (xyz)
+    VKL_VEC4 untilt[3];         // rows of its inverse
+    VKL_VEC4 domain_info;       // x: smallest ideal boundary radius, y: smallest distorted one
+    VKL_VEC4 domain[VKL_DOMAIN_SAMPLES]; // x: ideal boundary radius, y: distorted, at angle TAU*i/N
+} vkl_cam;
+
+VKL_VEC2 vkl_to_pixel(VKL_VEC2 x) { return x * vkl_cam.intrinsics.xy + vkl_cam.intrinsics.zw; }
+VKL_VEC2 vkl_to_normalized(VKL_VEC2 p) { return (p - vkl_cam.intrinsics.zw) / vkl_cam.intrinsics.xy; }
+
+// Radial numerator and denominator of R(s), s = r², and their derivatives in s.
+void vkl_radial(VKL_FLOAT s, out VKL_FLOAT num, out VKL_FLOAT den, out VKL_FLOAT dnum, out VKL_FLOAT dden) {
+    num = 1.0; dnum = 0.0; den = 1.0; dden = 0.0;
+    if (VKL_RADIAL) {
+        VKL_VEC3 k = vkl_cam.radial.xyz;
+        num = 1.0 + s * (k.x + s * (k.y + s * k.z));
+        dnum = k.x + s * (2.0 * k.y + 3.0 * s * k.z);
+    }
+    if (VKL_RATIONAL) {
+        VKL_VEC3 k = vkl_cam.rational.xyz;
+        den = 1.0 + s * (k.x + s * (k.y + s * k.z));
+        dden = k.x + s * (2.0 * k.y + 3.0 * s * k.z);
+    }
+}
+
+// Pre-tilt distortion (x', y') of an ideal normalized point, and its Jacobian J (column-major:
+// J[0] = d/dx). False where the rational denominator is zero.
+bool vkl_distort_pre_tilt(VKL_VEC2 p, out VKL_VEC2 d, out VKL_MAT2 J) {
+    d = p;
+    J = VKL_MAT2(1.0);
+    VKL_FLOAT s = dot(p, p);
+    VKL_FLOAT num, den, dnum, dden;
+    vkl_radial(s, num, den, dnum, dden);
+    if (den == 0.0) return false;
+    VKL_FLOAT r = num / den;
+    VKL_FLOAT dr = (dnum * den - num * dden) / (den * den);
+    d = p * r;
+    VKL_FLOAT j00 = r + 2.0 * p.x * p.x * dr;
+    VKL_FLOAT j01 = 2.0 * p.x * p.y * dr;
+    VKL_FLOAT j10 = j01;
+    VKL_FLOAT j11 = r + 2.0 * p.y * p.y * dr;
+    if (VKL_TANGENTIAL) {
+        VKL_FLOAT p1 = vkl_cam.tangential_prism.x;
+        VKL_FLOAT p2 = vkl_cam.tangential_prism.y;
+        d += VKL_VEC2(2.0 * p1 * p.x * p.y + p2 * (s + 2.0 * p.x * p.x),
+                  p1 * (s + 2.0 * p.y * p.y) + 2.0 * p2 * p.x * p.y);
+        j00 += 2.0 * p1 * p.y + 6.0 * p2 * p.x;
+        j01 += 2.0 * p1 * p.x + 2.0 * p2 * p.y;
+        j10 += 2.0 * p1 * p.x + 2.0 * p2 * p.y;
+        j11 += 6.0 * p1 * p.y + 2.0 * p2 * p.x;
+    }
+    if (VKL_PRISM) {
+        VKL_VEC2 s12 = vkl_cam.tangential_prism.zw;
+        VKL_VEC2 s34 = vkl_cam.prism.xy;
+        d += VKL_VEC2(s12.x * s + s12.y * s * s, s34.x * s + s34.y * s * s);
+        VKL_FLOAT prism_x = s12.x + 2.0 * s12.y * s;
+        VKL_FLOAT prism_y = s34.x + 2.0 * s34.y * s;
+        j00 += 2.0 * p.x * prism_x;
+        j01 += 2.0 * p.y * prism_x;
+        j10 += 2.0 * p.x * prism_y;
+        j11 += 2.0 * p.y * prism_y;
+    }
+    J = VKL_MAT2(j00, j10, j01, j11);
+    return true;
+}
+
+// OpenCV's tilt homography applied to a pre-tilt point, with its Jacobian T.
+bool vkl_apply_tilt(VKL_VEC2 p, out VKL_VEC2 d, out VKL_MAT2 T) {
+    d = p;
+    T = VKL_MAT2(1.0);
+    if (!VKL_TILT) return true;
+    VKL_VEC3 q = VKL_VEC3(p, 1.0);
+    VKL_VEC3 h = VKL_VEC3(dot(vkl_cam.tilt[0].xyz, q), dot(vkl_cam.tilt[1].xyz, q), dot(vkl_cam.tilt[2].xyz, q));
+    if (h.z == 0.0) return false;
+    d = h.xy / h.z;
+    VKL_VEC3 m0 = vkl_cam.tilt[0].xyz;
+    VKL_VEC3 m1 = vkl_cam.tilt[1].xyz;
+    VKL_VEC3 m2 = vkl_cam.tilt[2].xyz;
+    T = VKL_MAT2(VKL_VEC2(m0.x - d.x * m2.x, m1.x - d.y * m2.x) / h.z,
+             VKL_VEC2(m0.y - d.x * m2.y, m1.y - d.y * m2.y) / h.z);
+    return true;
+}
+
+// Removes the tilt exactly: distorted normalized (x'', y'') -> pre-tilt (x', y').
+bool vkl_remove_tilt(VKL_VEC2 d, out VKL_VEC2 p) {
+    p = d;
+    if (!VKL_TILT) return true;
+    VKL_VEC3 q = VKL_VEC3(d, 1.0);
+    VKL_VEC3 h = VKL_VEC3(dot(vkl_cam.untilt[0].xyz, q), dot(vkl_cam.untilt[1].xyz, q), dot(vkl_cam.untilt[2].xyz, q));
+    if (!(h.z > 0.0)) return false;
+    p = h.xy / h.z;
+    return true;
+}
+
+// Forward model on normalized coordinates with its Jacobian: ideal (X/Z, Y/Z) -> distorted.
+bool vkl_distort_jacobian(VKL_VEC2 x, out VKL_VEC2 d, out VKL_MAT2 J) {
+    VKL_VEC2 pre;
+    VKL_MAT2 Jpre;
+    VKL_MAT2 T;
+    d = x;
+    J = VKL_MAT2(1.0);
+    if (!vkl_distort_pre_tilt(x, pre, Jpre)) return false;
+    if (!vkl_apply_tilt(pre, d, T)) return false;
+    J = T * Jpre;
+    return true;
+}
+
+// Forward model on normalized coordinates.
+bool vkl_distort(VKL_VEC2 x, out VKL_VEC2 d) {
+    VKL_MAT2 J;
+    return vkl_distort_jacobian(x, d, J);
+}
+
+// Boundary radius of the valid domain at `angle`: component 0 ideal, 1 distorted.
+VKL_FLOAT vkl_domain_radius(float angle, int which) {
+    float t = fract(angle / VKL_TAU) * float(VKL_DOMAIN_SAMPLES);
+    int i = min(int(floor(t)), VKL_DOMAIN_SAMPLES - 1);
+    VKL_FLOAT f = VKL_FLOAT(t - float(i));
+    VKL_FLOAT a = vkl_cam.domain[i][which];
+    VKL_FLOAT b = vkl_cam.domain[(i + 1) % VKL_DOMAIN_SAMPLES][which];
+    return mix(a, b, f);
+}
+
+// Whether an ideal (pre-tilt normalized) point is in the valid domain. Inside the smallest
+// boundary radius no table lookup is needed (the common case).
+bool vkl_contains_ideal(VKL_VEC2 x) {
+    VKL_FLOAT r2 = dot(x, x);
+    if (r2 <= vkl_cam.domain_info.x * vkl_cam.domain_info.x) return true;
+    return sqrt(r2) <= vkl_domain_radius(atan(float(x.y), float(x.x)), 0);
+}
+
+// Whether a distorted (pre-tilt) point has its preimage in the valid domain.
+bool vkl_contains_distorted(VKL_VEC2 d) {
+    VKL_FLOAT r2 = dot(d, d);
+    if (r2 <= vkl_cam.domain_info.y * vkl_cam.domain_info.y) return true;
+    return sqrt(r2) <= vkl_domain_radius(atan(float(d.y), float(d.x)), 1);
+}
+
+// Start for Newton: the exact inverse of the radial part along the target's direction, by
+// safeguarded Newton / bisection on [0, boundary radius].
+VKL_VEC2 vkl_radial_start(VKL_VEC2 t) {
+    VKL_FLOAT rho = length(t);
+    VKL_VEC2 dir = t / rho;
+    VKL_FLOAT hi = vkl_domain_radius(atan(float(dir.y), float(dir.x)), 0);
+    VKL_FLOAT lo = 0.0;
+    VKL_FLOAT r = min(rho, hi);
+    for (int i = 0; i < 40; ++i) {
+        VKL_FLOAT s = r * r;
+        VKL_FLOAT num, den, dnum, dden;
+        vkl_radial(s, num, den, dnum, dden);
+        VKL_FLOAT R = num / den;
+        VKL_FLOAT v = r * R - rho;
+        VKL_FLOAT dv = R + 2.0 * s * (dnum * den - num * dden) / (den * den);
+        if (v == 0.0) break;
+        if (v < 0.0) lo = r; else hi = r;
+        VKL_FLOAT next = r - v / dv;
+        r = (dv > 0.0 && next > lo && next < hi) ? next : 0.5 * (lo + hi);
+        if (hi - lo < 2.0 * VKL_EPSILON * hi) break;
+    }
+    return dir * r;
+}
+
+// Newton's method with the analytic Jacobian, damped to stay in the valid domain.
+// Distorted normalized -> ideal normalized; false outside the valid domain.
+bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
+    x = VKL_VEC2(0.0);
+    VKL_VEC2 t;
+    if (!vkl_remove_tilt(d, t)) return false;
+    if (!vkl_contains_distorted(t)) return false;
+    VKL_FLOAT rho = length(t);
+    if (rho == 0.0) return true;
+    x = vkl_radial_start(t);
+    VKL_VEC2 f;
+    VKL_MAT2 J;
+    if (!vkl_distort_pre_tilt(x, f, J)) return false;
+    for (uint i = 0u; i < VKL_NEWTON_ITERATIONS; ++i) {
+        VKL_FLOAT residual = length(f - t);
+        if (residual <= VKL_EPSILON * (1.0 + rho)) break;
+        if (!(determinant(J) > 0.0)) return false;
+        VKL_VEC2 step = inverse(J) * (f - t);
+        VKL_FLOAT s = 1.0;
+        bool accepted = false;
+        for (int k = 0; k < VKL_NEWTON_MAX_HALVINGS; ++k) {
+            VKL_VEC2 c = x - step * s;
+            VKL_VEC2 fc;
+            VKL_MAT2 Jc;
+            if (vkl_contains_ideal(c) && vkl_distort_pre_tilt(c, fc, Jc)
+                    && length(fc - t) < residual * (1.0 - 1e-4 * s)) {
+                x = c;
+                f = fc;
+                J = Jc;
+                accepted = true;
+                break;
+            }
+            s *= 0.5;
+        }
+        if (!accepted) break;
+    }
+    return length(f - t) <= VKL_NEWTON_ACCEPT * (1.0 + rho) && determinant(J) > 0.0
+        && vkl_contains_ideal(x);
+}
+
+// Seed 000 Eq. 2 (Heikkilä): closed-form approximate inverse, k1 k2 p1 p2 only.
+bool vkl_undistort_heikkila(VKL_VEC2 d, out VKL_VEC2 x) {
+    x = VKL_VEC2(0.0);
+    VKL_VEC2 t;
+    if (!vkl_remove_tilt(d, t)) return false;
+    if (!vkl_contains_distorted(t)) return false;
+    VKL_FLOAT k1 = VKL_RADIAL ? vkl_cam.radial.x : 0.0;
+    VKL_FLOAT k2 = VKL_RADIAL ? vkl_cam.radial.y : 0.0;
+    VKL_FLOAT p1 = VKL_TANGENTIAL ? vkl_cam.tangential_prism.x : 0.0;
+    VKL_FLOAT p2 = VKL_TANGENTIAL ? vkl_cam.tangential_prism.y : 0.0;
+    VKL_FLOAT r2 = dot(t, t);
+    VKL_FLOAT d1 = k1 * r2 + k2 * r2 * r2;
+    VKL_FLOAT denom = 4.0 * k1 * r2 + 6.0 * k2 * r2 * r2 + 8.0 * p1 * t.y + 8.0 * p2 * t.x + 1.0;
+    if (!(abs(denom) > 1e-12)) return false;
+    VKL_FLOAT d2 = 1.0 / denom;
+    x = VKL_VEC2(t.x - d2 * (d1 * t.x + 2.0 * p1 * t.x * t.y + p2 * (r2 + 2.0 * t.x * t.x)),
+             t.y - d2 * (d1 * t.y + p1 * (r2 + 2.0 * t.y * t.y) + 2.0 * p2 * t.x * t.y));
+    return true;
+}
+
+// OpenCV's undistortPoints iteration with n iterations.
+bool vkl_undistort_fixed_point(VKL_VEC2 d, uint n, out VKL_VEC2 x) {
+    x = VKL_VEC2(0.0);
+    VKL_VEC2 y0;
+    if (!vkl_remove_tilt(d, y0)) return false;
+    if (!vkl_contains_distorted(y0)) return false;
+    x = y0;
+    for (uint i = 0u; i < n; ++i) {
+        VKL_FLOAT r2 = dot(x, x);
+        VKL_FLOAT num, den, dnum, dden;
+        vkl_radial(r2, num, den, dnum, dden);
+        VKL_FLOAT icdist = den / num;
+        if (!(icdist >= 0.0)) return false;
+        VKL_VEC2 delta = VKL_VEC2(0.0);
+        if (VKL_TANGENTIAL) {
+            VKL_FLOAT p1 = vkl_cam.tangential_prism.x;
+            VKL_FLOAT p2 = vkl_cam.tangential_prism.y;
+            delta += VKL_VEC2(2.0 * p1 * x.x * x.y + p2 * (r2 + 2.0 * x.x * x.x),
+                          p1 * (r2 + 2.0 * x.y * x.y) + 2.0 * p2 * x.x * x.y);
+        }
+        if (VKL_PRISM) {
+            delta += VKL_VEC2(vkl_cam.tangential_prism.z * r2 + vkl_cam.tangential_prism.w * r2 * r2,
+                          vkl_cam.prism.x * r2 + vkl_cam.prism.y * r2 * r2);
+        }
+        x = (y0 - delta) * icdist;
+    }
+    return true;
+}
+
+#endif

@@ -1,0 +1,46 @@
+#version 450
+// The camera model on a list of points: `vklens points distort|undistort --backend gpu`, the
+// GPU side of the reference tests, and the GPU rows of `vklens bench inverse`.
+//
+// MODE 0 (distort):   ideal normalized (X/Z, Y/Z) -> distorted pixel.
+// MODE 1 (undistort): distorted pixel -> ideal normalized, by METHOD.
+// outputs[i] = (result.xy, valid ? 1 : 0, 0). Compiled twice: f32, and f64 (VKL_F64).
+#extension GL_GOOGLE_include_directive : require
+// vklens:variant f64 VKL_F64
+
+layout(local_size_x = 64) in;
+
+#include "camera_model.glsl"
+
+layout(constant_id = 8) const uint MODE = 0;
+layout(constant_id = 9) const uint METHOD = 0;  // 0 newton, 1 heikkila, 2 fixed-point
+layout(constant_id = 10) const uint FIXED_POINT_ITERATIONS = 5;
+
+layout(set = 0, binding = 1, std430) readonly buffer Inputs { VKL_VEC2 inputs[]; };
+layout(set = 0, binding = 2, std430) writeonly buffer Outputs { VKL_VEC4 outputs[]; };
+
+layout(push_constant) uniform Push { uint count; } pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count) return;
+    VKL_VEC2 p = inputs[i];
+    VKL_VEC2 result = VKL_VEC2(0.0);
+    bool valid;
+    if (MODE == 0u) {
+        VKL_VEC2 d;
+        valid = vkl_distort(p, d);
+        result = vkl_to_pixel(d);
+    } else {
+        VKL_VEC2 d = vkl_to_normalized(p);
+        if (METHOD == 0u) {
+            valid = vkl_undistort_newton(d, result);
+        } else if (METHOD == 1u) {
+            valid = vkl_undistort_heikkila(d, result);
+        } else {
+            valid = vkl_undistort_fixed_point(d, FIXED_POINT_ITERATIONS, result);
+        }
+    }
+    valid = valid && !any(isnan(result)) && !any(isinf(result));
+    outputs[i] = VKL_VEC4(result, valid ? 1.0 : 0.0, 0.0);
+}

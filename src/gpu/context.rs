@@ -1,0 +1,379 @@
+//! The headless context: vklens creates its own instance and device. Tests and the CLI use it;
+//! it is just one caller of the passes, which never depend on it.
+
+use std::ffi::{c_void, CStr};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use super::{device_name, Gpu, GpuError, GpuInner, Result};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How the headless context is set up.
+#[derive(Debug, Clone, Default)]
+pub struct ContextOptions {
+    /// Enable the Khronos validation layer and collect its messages.
+    pub validation: bool,
+    /// Which device: `cpu` (lavapipe), `gpu`, an index, or part of the device name.
+    /// `None` prefers a discrete GPU, then an integrated one, then anything.
+    pub device: Option<String>,
+}
+
+impl ContextOptions {
+    /// From the environment: `VKLENS_VALIDATION=1` turns validation on, `VKLENS_DEVICE`
+    /// picks the device.
+    pub fn from_env() -> Self {
+        ContextOptions {
+            validation: matches!(
+                std::env::var("VKLENS_VALIDATION").as_deref(),
+                Ok("1") | Ok("true") | Ok("yes")
+            ),
+            device: std::env::var("VKLENS_DEVICE")
+                .ok()
+                .filter(|s| !s.is_empty()),
+        }
+    }
+}
+
+/// What the headless context created and must destroy after the device's last user.
+pub(crate) struct Owned {
+    _entry: ash::Entry,
+    instance: ash::Instance,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    _messages: Arc<Mutex<Vec<String>>>,
+}
+
+impl Owned {
+    pub(crate) unsafe fn destroy(self, device: &ash::Device) {
+        unsafe {
+            device.destroy_device(None);
+            if let Some((loader, messenger)) = &self.debug {
+                loader.destroy_debug_utils_messenger(*messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// A headless Vulkan context: instance, device, queue, allocator, command pool.
+pub struct Context {
+    gpu: Gpu,
+    command_pool: vk::CommandPool,
+    messages: Arc<Mutex<Vec<String>>>,
+    validation: bool,
+}
+
+unsafe extern "system" fn on_debug_message(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    if data.is_null() || user.is_null() {
+        return vk::FALSE;
+    }
+    let relevant = kind.intersects(
+        vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+            | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+    ) && severity.intersects(
+        vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+            | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+    );
+    if relevant {
+        // SAFETY: the loader passes valid callback data; `user` is the Mutex owned by `Owned`,
+        // which outlives the messenger.
+        let text = unsafe {
+            let d = &*data;
+            d.message_as_c_str()
+                .map(|m| m.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        };
+        let messages = unsafe { &*(user as *const Mutex<Vec<String>>) };
+        if let Ok(mut m) = messages.lock() {
+            m.push(format!("[{severity:?}] {text}"));
+        }
+    }
+    vk::FALSE
+}
+
+impl Context {
+    /// Creates a context with options from the environment (see [`ContextOptions::from_env`]).
+    pub fn from_env() -> Result<Self> {
+        Self::new(ContextOptions::from_env())
+    }
+
+    /// Creates a context.
+    pub fn new(options: ContextOptions) -> Result<Self> {
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loading(e.to_string()))?;
+        let messages = Arc::new(Mutex::new(Vec::new()));
+
+        let mut layers = Vec::new();
+        let mut extensions = Vec::new();
+        if options.validation {
+            let available = unsafe { entry.enumerate_instance_layer_properties()? };
+            let found = available.iter().any(|l| {
+                l.layer_name_as_c_str()
+                    .map(|n| n == VALIDATION_LAYER)
+                    .unwrap_or(false)
+            });
+            if !found {
+                return Err(GpuError::NoValidationLayer);
+            }
+            layers.push(VALIDATION_LAYER.as_ptr());
+            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"vklens")
+            .engine_name(c"vklens")
+            .api_version(vk::API_VERSION_1_1);
+        let info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        let instance = unsafe { entry.create_instance(&info, None)? };
+
+        let debug = if options.validation {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE
+                        | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
+                )
+                .pfn_user_callback(Some(on_debug_message))
+                .user_data(Arc::as_ptr(&messages) as *mut c_void);
+            match unsafe { loader.create_debug_utils_messenger(&info, None) } {
+                Ok(m) => Some((loader, m)),
+                Err(e) => {
+                    unsafe { instance.destroy_instance(None) };
+                    return Err(e.into());
+                }
+            }
+        } else {
+            None
+        };
+        let mut owned = Some(Owned {
+            _entry: entry,
+            instance,
+            debug,
+            _messages: messages.clone(),
+        });
+        // On failure below, destroy the instance (and messenger) we made.
+        let fail = |owned: &mut Option<Owned>, e: GpuError| -> GpuError {
+            if let Some(o) = owned.take() {
+                unsafe {
+                    if let Some((loader, m)) = &o.debug {
+                        loader.destroy_debug_utils_messenger(*m, None);
+                    }
+                    o.instance.destroy_instance(None);
+                }
+            }
+            e
+        };
+        let instance = owned.as_ref().expect("set above").instance.clone();
+        let (physical, family) = match pick_device(&instance, options.device.as_deref()) {
+            Ok(p) => p,
+            Err(e) => return Err(fail(&mut owned, e)),
+        };
+        let priorities = [1.0f32];
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
+        // f64 shader variants (the precise inverse near folds) need shaderFloat64; enable it
+        // where the device has it (lavapipe does) and fall back to f32 elsewhere.
+        let supported = unsafe { instance.get_physical_device_features(physical) };
+        let float64 = supported.shader_float64 == vk::TRUE;
+        let features = vk::PhysicalDeviceFeatures::default().shader_float64(float64);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&features);
+        let device = match unsafe { instance.create_device(physical, &device_info, None) } {
+            Ok(d) => d,
+            Err(e) => return Err(fail(&mut owned, e.into())),
+        };
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        let allocator = match Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        }) {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_device(None) };
+                return Err(fail(&mut owned, e.into()));
+            }
+        };
+        let props = unsafe { instance.get_physical_device_properties(physical) };
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let gpu = Gpu::from_inner(GpuInner {
+            device,
+            queue,
+            queue_family: family,
+            allocator: ManuallyDrop::new(Arc::new(Mutex::new(allocator))),
+            timestamp_period_ns: props.limits.timestamp_period as f64,
+            timestamps: families[family as usize].timestamp_valid_bits > 0,
+            device_name: device_name(&props),
+            float64,
+            owner: owned,
+        });
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let command_pool = unsafe { gpu.device().create_command_pool(&pool_info, None)? };
+        Ok(Context {
+            gpu,
+            command_pool,
+            messages,
+            validation: options.validation,
+        })
+    }
+
+    /// The GPU handles passes are built from.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    /// Whether the validation layer is on.
+    pub fn validation_enabled(&self) -> bool {
+        self.validation
+    }
+
+    /// Records work with `record` into a fresh command buffer, submits it and waits.
+    pub fn submit<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
+        let device = self.gpu.device();
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = unsafe { device.allocate_command_buffers(&alloc)?[0] };
+        let fence = match unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) } {
+            Ok(f) => f,
+            Err(e) => {
+                unsafe { device.free_command_buffers(self.command_pool, &[cmd]) };
+                return Err(e.into());
+            }
+        };
+        let result = (|| {
+            unsafe {
+                device.begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default()
+                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )?
+            };
+            let value = record(cmd)?;
+            unsafe {
+                device.end_command_buffer(cmd)?;
+                let cmds = [cmd];
+                let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+                device.queue_submit(self.gpu.queue(), &submit, fence)?;
+                device.wait_for_fences(&[fence], true, u64::MAX)?;
+            }
+            Ok(value)
+        })();
+        unsafe {
+            device.destroy_fence(fence, None);
+            device.free_command_buffers(self.command_pool, &[cmd]);
+        }
+        result
+    }
+
+    /// Validation messages collected so far (empty when validation is off).
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.messages.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+
+    /// `Err` if the validation layer reported anything.
+    pub fn check_validation(&self) -> Result<()> {
+        let m = self.validation_messages();
+        if m.is_empty() {
+            Ok(())
+        } else {
+            Err(GpuError::Validation(m))
+        }
+    }
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.gpu.device().device_wait_idle();
+            self.gpu
+                .device()
+                .destroy_command_pool(self.command_pool, None);
+        }
+    }
+}
+
+/// Picks a physical device and a queue family with compute and graphics.
+fn pick_device(
+    instance: &ash::Instance,
+    wanted: Option<&str>,
+) -> Result<(vk::PhysicalDevice, u32)> {
+    let devices = unsafe { instance.enumerate_physical_devices()? };
+    let mut candidates = Vec::new();
+    for (index, &pd) in devices.iter().enumerate() {
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let need = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
+        if let Some(family) = families.iter().position(|f| f.queue_flags.contains(need)) {
+            candidates.push((
+                index,
+                pd,
+                family as u32,
+                props.device_type,
+                device_name(&props),
+            ));
+        }
+    }
+    let names: Vec<String> = candidates
+        .iter()
+        .map(|c| format!("{}: {} ({:?})", c.0, c.4, c.3))
+        .collect();
+    if candidates.is_empty() {
+        return Err(GpuError::NoDevice(
+            "no Vulkan device with a compute+graphics queue (install mesa-vulkan-drivers for lavapipe)".into(),
+        ));
+    }
+    let rank = |t: vk::PhysicalDeviceType| match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    };
+    let chosen = match wanted.map(|w| w.to_ascii_lowercase()) {
+        None => candidates.iter().min_by_key(|c| rank(c.3)),
+        Some(w) if w == "cpu" || w == "lavapipe" => candidates
+            .iter()
+            .find(|c| c.3 == vk::PhysicalDeviceType::CPU),
+        Some(w) if w == "gpu" => candidates
+            .iter()
+            .filter(|c| c.3 != vk::PhysicalDeviceType::CPU)
+            .min_by_key(|c| rank(c.3)),
+        Some(w) => match w.parse::<usize>() {
+            Ok(i) => candidates.iter().find(|c| c.0 == i),
+            Err(_) => candidates
+                .iter()
+                .find(|c| c.4.to_ascii_lowercase().contains(&w)),
+        },
+    };
+    let c = chosen.ok_or_else(|| {
+        GpuError::NoDevice(format!(
+            "VKLENS_DEVICE={} matches none of: {}",
+            wanted.unwrap_or(""),
+            names.join("; ")
+        ))
+    })?;
+    Ok((c.1, c.2))
+}

@@ -1,0 +1,211 @@
+//! Compute pipelines (with specialization constants) and descriptor pools.
+
+use ash::vk;
+
+use super::{Gpu, GpuError, Result};
+
+/// Specialization constants: `(constant_id, 32-bit value)` pairs. Booleans are 32-bit in
+/// SPIR-V (0 or 1).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct SpecConstants {
+    entries: Vec<(u32, u32)>,
+}
+
+impl SpecConstants {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    /// Sets a `bool` constant.
+    pub fn bool(mut self, id: u32, value: bool) -> Self {
+        self.entries.push((id, value as u32));
+        self
+    }
+    /// Sets a `uint`/`int` constant.
+    pub fn u32(mut self, id: u32, value: u32) -> Self {
+        self.entries.push((id, value));
+        self
+    }
+    /// Sets a `float` constant.
+    pub fn f32(mut self, id: u32, value: f32) -> Self {
+        self.entries.push((id, value.to_bits()));
+        self
+    }
+    /// The value given for `id`, if any.
+    pub fn get(&self, id: u32) -> Option<u32> {
+        self.entries
+            .iter()
+            .rev()
+            .find(|(i, _)| *i == id)
+            .map(|(_, v)| *v)
+    }
+    /// All entries, in the order set.
+    pub fn entries(&self) -> &[(u32, u32)] {
+        &self.entries
+    }
+}
+
+/// A compute pipeline with its shader module, descriptor-set layout (set 0) and layout.
+pub struct ComputePipeline {
+    gpu: Gpu,
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    pub set_layout: vk::DescriptorSetLayout,
+    module: vk::ShaderModule,
+    /// The specialization constants it was built with (what a plan can be checked against).
+    pub constants: SpecConstants,
+    bindings: Vec<vk::DescriptorType>,
+}
+
+impl ComputePipeline {
+    /// Builds a pipeline from SPIR-V whose set 0 has `bindings` (binding i has type
+    /// `bindings[i]`) and whose push-constant block has `push_size` bytes.
+    pub fn new(
+        gpu: &Gpu,
+        spirv: &[u8],
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+        constants: SpecConstants,
+    ) -> Result<Self> {
+        let device = gpu.device();
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+            .map_err(|e| GpuError::Invalid(format!("bad SPIR-V: {e}")))?;
+        let module = unsafe {
+            device
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)?
+        };
+        // From here on, `pipeline` owns what is created, so an early return cleans up.
+        let mut pipeline = ComputePipeline {
+            gpu: gpu.clone(),
+            raw: vk::Pipeline::null(),
+            layout: vk::PipelineLayout::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            module,
+            constants,
+            bindings: bindings.to_vec(),
+        };
+        let layout_bindings: Vec<_> = bindings
+            .iter()
+            .enumerate()
+            .map(|(i, &ty)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        pipeline.set_layout = unsafe {
+            device.create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
+                None,
+            )?
+        };
+        let ranges = [vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::COMPUTE,
+            offset: 0,
+            size: push_size,
+        }];
+        let set_layouts = [pipeline.set_layout];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if push_size > 0 {
+            layout_info = layout_info.push_constant_ranges(&ranges);
+        }
+        pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None)? };
+
+        let map: Vec<vk::SpecializationMapEntry> = pipeline
+            .constants
+            .entries()
+            .iter()
+            .enumerate()
+            .map(|(i, (id, _))| vk::SpecializationMapEntry {
+                constant_id: *id,
+                offset: (i * 4) as u32,
+                size: 4,
+            })
+            .collect();
+        let data: Vec<u8> = pipeline
+            .constants
+            .entries()
+            .iter()
+            .flat_map(|(_, v)| v.to_ne_bytes())
+            .collect();
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&map)
+            .data(&data);
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main")
+            .specialization_info(&spec);
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(pipeline.layout);
+        pipeline.raw = unsafe {
+            device
+                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .map_err(|(_, e)| e)?[0]
+        };
+        Ok(pipeline)
+    }
+
+    /// Descriptor types of set 0, by binding.
+    pub fn bindings(&self) -> &[vk::DescriptorType] {
+        &self.bindings
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        let d = self.gpu.device();
+        unsafe {
+            d.destroy_pipeline(self.raw, None);
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+            d.destroy_shader_module(self.module, None);
+        }
+    }
+}
+
+/// A descriptor pool sized for `sets` sets of one pipeline's layout; sets are freed with it.
+pub struct DescriptorPool {
+    gpu: Gpu,
+    pub raw: vk::DescriptorPool,
+}
+
+impl DescriptorPool {
+    pub fn for_pipeline(gpu: &Gpu, pipeline: &ComputePipeline, sets: u32) -> Result<Self> {
+        let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+        for &ty in pipeline.bindings() {
+            match sizes.iter_mut().find(|s| s.ty == ty) {
+                Some(s) => s.descriptor_count += sets,
+                None => sizes.push(vk::DescriptorPoolSize {
+                    ty,
+                    descriptor_count: sets,
+                }),
+            }
+        }
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(sets)
+            .pool_sizes(&sizes);
+        let raw = unsafe { gpu.device().create_descriptor_pool(&info, None)? };
+        Ok(DescriptorPool {
+            gpu: gpu.clone(),
+            raw,
+        })
+    }
+
+    /// Allocates one set of `pipeline`'s layout.
+    pub fn allocate(&self, pipeline: &ComputePipeline) -> Result<vk::DescriptorSet> {
+        let layouts = [pipeline.set_layout];
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.raw)
+            .set_layouts(&layouts);
+        Ok(unsafe { self.gpu.device().allocate_descriptor_sets(&info)?[0] })
+    }
+}
+
+impl Drop for DescriptorPool {
+    fn drop(&mut self) {
+        unsafe { self.gpu.device().destroy_descriptor_pool(self.raw, None) };
+    }
+}

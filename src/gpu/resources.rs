@@ -1,0 +1,309 @@
+//! Buffers, images and query pools, each owning its handle and its memory.
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::{Gpu, GpuError, Result};
+
+/// A buffer with its allocation. Host-visible ones can be read and written directly.
+pub struct Buffer {
+    gpu: Gpu,
+    pub raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    pub size: u64,
+}
+
+impl Buffer {
+    /// Creates a buffer of `size` bytes for `usage` in `location`.
+    pub fn new(
+        gpu: &Gpu,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Self> {
+        let size = size.max(4);
+        let device = gpu.device();
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let raw = unsafe { device.create_buffer(&info, None)? };
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let allocation = gpu
+            .allocator()
+            .lock()
+            .map_err(|_| GpuError::Invalid("allocator lock poisoned".into()))?
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(e.into());
+            }
+        };
+        if let Err(e) =
+            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
+        {
+            let _ = gpu.allocator().lock().map(|mut a| a.free(allocation));
+            unsafe { device.destroy_buffer(raw, None) };
+            return Err(e.into());
+        }
+        Ok(Buffer {
+            gpu: gpu.clone(),
+            raw,
+            allocation: Some(allocation),
+            size,
+        })
+    }
+
+    /// A host-visible buffer holding `data`.
+    pub fn from_pod<T: bytemuck::Pod>(
+        gpu: &Gpu,
+        name: &str,
+        data: &[T],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Self> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let buffer = Self::new(
+            gpu,
+            name,
+            bytes.len() as u64,
+            usage,
+            MemoryLocation::CpuToGpu,
+        )?;
+        buffer.write(0, bytes)?;
+        Ok(buffer)
+    }
+
+    fn mapped(&self) -> Result<&[u8]> {
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .ok_or_else(|| GpuError::Invalid("buffer is not host-visible".into()))
+    }
+
+    /// Writes bytes at `offset` (host-visible buffers only; memory is host-coherent).
+    pub fn write(&self, offset: usize, bytes: &[u8]) -> Result<()> {
+        let alloc = self
+            .allocation
+            .as_ref()
+            .ok_or_else(|| GpuError::Invalid("buffer has no memory".into()))?;
+        let ptr = alloc
+            .mapped_ptr()
+            .ok_or_else(|| GpuError::Invalid("buffer is not host-visible".into()))?;
+        if offset + bytes.len() > alloc.size() as usize {
+            return Err(GpuError::Invalid("write past the end of a buffer".into()));
+        }
+        // SAFETY: in bounds (checked above), the mapping lives as long as the allocation, and
+        // the GPU does not use the buffer while the host writes it (callers wait on fences).
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                bytes.as_ptr(),
+                (ptr.as_ptr() as *mut u8).add(offset),
+                bytes.len(),
+            )
+        };
+        Ok(())
+    }
+
+    /// Reads the first `count` elements back (host-visible buffers only).
+    pub fn read_pod<T: bytemuck::Pod>(&self, count: usize) -> Result<Vec<T>> {
+        let bytes = self.mapped()?;
+        let n = count * std::mem::size_of::<T>();
+        if n > bytes.len() {
+            return Err(GpuError::Invalid("read past the end of a buffer".into()));
+        }
+        Ok(bytemuck::pod_collect_to_vec(&bytes[..n]))
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(a) = self.allocation.take() {
+            if let Ok(mut allocator) = self.gpu.allocator().lock() {
+                let _ = allocator.free(a);
+            }
+        }
+        unsafe { self.gpu.device().destroy_buffer(self.raw, None) };
+    }
+}
+
+/// A 2D image with its view and allocation (device-local).
+pub struct Image {
+    gpu: Gpu,
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    allocation: Option<Allocation>,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+}
+
+impl Image {
+    /// Creates a device-local 2D image with one mip level and a colour view.
+    pub fn new_2d(
+        gpu: &Gpu,
+        name: &str,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self> {
+        let device = gpu.device();
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D {
+                width,
+                height,
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let raw = unsafe { device.create_image(&info, None)? };
+        let requirements = unsafe { device.get_image_memory_requirements(raw) };
+        let allocation = gpu
+            .allocator()
+            .lock()
+            .map_err(|_| GpuError::Invalid("allocator lock poisoned".into()))?
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_image(raw, None) };
+                return Err(e.into());
+            }
+        };
+        let mut image = Image {
+            gpu: gpu.clone(),
+            raw,
+            view: vk::ImageView::null(),
+            allocation: Some(allocation),
+            format,
+            extent: vk::Extent2D { width, height },
+        };
+        let alloc = image.allocation.as_ref().expect("just set");
+        unsafe { device.bind_image_memory(raw, alloc.memory(), alloc.offset())? };
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(Self::color_range());
+        image.view = unsafe { device.create_image_view(&view_info, None)? };
+        Ok(image)
+    }
+
+    /// The whole colour subresource.
+    pub fn color_range() -> vk::ImageSubresourceRange {
+        vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        }
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        let device = self.gpu.device();
+        unsafe {
+            if self.view != vk::ImageView::null() {
+                device.destroy_image_view(self.view, None);
+            }
+        }
+        if let Some(a) = self.allocation.take() {
+            if let Ok(mut allocator) = self.gpu.allocator().lock() {
+                let _ = allocator.free(a);
+            }
+        }
+        unsafe { device.destroy_image(self.raw, None) };
+    }
+}
+
+/// A timestamp query pool.
+pub struct QueryPool {
+    gpu: Gpu,
+    pub raw: vk::QueryPool,
+    pub count: u32,
+}
+
+impl QueryPool {
+    /// `count` timestamp queries; fails if the queue has no timestamps.
+    pub fn timestamps(gpu: &Gpu, count: u32) -> Result<Self> {
+        if gpu.timestamp_period_ns().is_none() {
+            return Err(GpuError::Invalid(
+                "this queue does not support timestamps".into(),
+            ));
+        }
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(count);
+        let raw = unsafe { gpu.device().create_query_pool(&info, None)? };
+        Ok(QueryPool {
+            gpu: gpu.clone(),
+            raw,
+            count,
+        })
+    }
+
+    /// Records a reset of every query (must be outside a render pass).
+    pub fn cmd_reset(&self, cmd: vk::CommandBuffer) {
+        unsafe {
+            self.gpu
+                .device()
+                .cmd_reset_query_pool(cmd, self.raw, 0, self.count)
+        };
+    }
+
+    /// Records a timestamp into query `index` after all prior work.
+    pub fn cmd_write(&self, cmd: vk::CommandBuffer, index: u32) {
+        unsafe {
+            self.gpu.device().cmd_write_timestamp(
+                cmd,
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                self.raw,
+                index,
+            )
+        };
+    }
+
+    /// Reads all timestamps (waiting for them) and returns them in nanoseconds.
+    pub fn read_ns(&self) -> Result<Vec<f64>> {
+        let mut ticks = vec![0u64; self.count as usize];
+        unsafe {
+            self.gpu.device().get_query_pool_results(
+                self.raw,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )?
+        };
+        let period = self.gpu.timestamp_period_ns().unwrap_or(1.0);
+        Ok(ticks.iter().map(|&t| t as f64 * period).collect())
+    }
+}
+
+impl Drop for QueryPool {
+    fn drop(&mut self) {
+        unsafe { self.gpu.device().destroy_query_pool(self.raw, None) };
+    }
+}

@@ -1,0 +1,294 @@
+//! The camera model on a list of points (`glsl/points.comp`).
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::camera_params::{CameraParams, CameraParams64};
+use crate::gpu::{
+    shaders, Buffer, ComputePipeline, Context, DescriptorPool, Gpu, GpuError, Result,
+};
+use crate::model::{InverseMethod, OpenCvCamera};
+
+/// What the pass computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PointsMode {
+    /// Ideal normalized (X/Z, Y/Z) → distorted pixel.
+    Distort,
+    /// Distorted pixel → ideal normalized, by the given method.
+    Undistort(InverseMethod),
+}
+
+/// Arithmetic of the shader: f32 (what the warp uses) or f64 (needs `shaderFloat64`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Precision {
+    F32,
+    F64,
+}
+
+impl Precision {
+    /// Bytes per input point and per output point.
+    fn strides(self) -> (usize, usize) {
+        match self {
+            Precision::F32 => (8, 16),
+            Precision::F64 => (16, 32),
+        }
+    }
+}
+
+impl std::str::FromStr for Precision {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "f32" => Ok(Precision::F32),
+            "f64" => Ok(Precision::F64),
+            _ => Err(format!("unknown precision `{s}` (expected f32 or f64)")),
+        }
+    }
+}
+
+impl std::fmt::Display for Precision {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+        })
+    }
+}
+
+const WORKGROUP: u32 = 64;
+
+/// A compute pass mapping `vec2` points through one camera. Build once per camera and mode;
+/// bind input/output buffers; record as often as needed.
+pub struct PointsPass {
+    gpu: Gpu,
+    pipeline: ComputePipeline,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    camera: Buffer,
+    precision: Precision,
+}
+
+impl PointsPass {
+    /// Builds the pipeline for `camera` (terms it does not use are compiled out), `mode` and
+    /// `precision`. F64 needs a device with `shaderFloat64` enabled.
+    pub fn new(
+        gpu: &Gpu,
+        camera: &OpenCvCamera,
+        mode: PointsMode,
+        precision: Precision,
+    ) -> Result<Self> {
+        if precision == Precision::F64 && !gpu.supports_float64() {
+            return Err(GpuError::Invalid(format!(
+                "{} has no shaderFloat64: use f32",
+                gpu.device_name()
+            )));
+        }
+        let (mode_id, method, iterations) = match mode {
+            PointsMode::Distort => (0, 0, 1),
+            PointsMode::Undistort(InverseMethod::Newton) => (1, 0, 1),
+            PointsMode::Undistort(InverseMethod::Heikkila) => (1, 1, 1),
+            PointsMode::Undistort(InverseMethod::FixedPoint(n)) => (1, 2, n),
+        };
+        let constants = CameraParams::spec_constants(camera.distortion.terms())
+            .u32(8, mode_id)
+            .u32(9, method)
+            .u32(10, iterations);
+        let spirv = match precision {
+            Precision::F32 => shaders::POINTS_COMP,
+            Precision::F64 => shaders::POINTS_COMP_F64,
+        };
+        let pipeline = ComputePipeline::new(
+            gpu,
+            spirv,
+            &[
+                vk::DescriptorType::UNIFORM_BUFFER,
+                vk::DescriptorType::STORAGE_BUFFER,
+                vk::DescriptorType::STORAGE_BUFFER,
+            ],
+            4,
+            constants,
+        )?;
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
+        let set = pool.allocate(&pipeline)?;
+        let usage = vk::BufferUsageFlags::UNIFORM_BUFFER;
+        let camera = match precision {
+            Precision::F32 => Buffer::from_pod(
+                gpu,
+                "points.camera",
+                &[CameraParams::from_camera(camera)],
+                usage,
+            )?,
+            Precision::F64 => Buffer::from_pod(
+                gpu,
+                "points.camera64",
+                &[CameraParams64::from_camera(camera)],
+                usage,
+            )?,
+        };
+        Ok(PointsPass {
+            gpu: gpu.clone(),
+            pipeline,
+            _pool: pool,
+            set,
+            camera,
+            precision,
+        })
+    }
+
+    /// The arithmetic the pass was built with.
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// The pipeline (its specialization constants show what was compiled in).
+    pub fn pipeline(&self) -> &ComputePipeline {
+        &self.pipeline
+    }
+
+    /// Points the pass at `inputs` (`vec2` per point; `dvec2` in f64) and `outputs` (`vec4`
+    /// per point: result xy, valid flag; `dvec4` in f64). Must not be called while a recorded dispatch is pending.
+    pub fn bind(&mut self, inputs: &Buffer, outputs: &Buffer) {
+        let ubo = [vk::DescriptorBufferInfo {
+            buffer: self.camera.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }];
+        let ins = [vk::DescriptorBufferInfo {
+            buffer: inputs.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }];
+        let outs = [vk::DescriptorBufferInfo {
+            buffer: outputs.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }];
+        let writes = [
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.set)
+                .dst_binding(0)
+                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                .buffer_info(&ubo),
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.set)
+                .dst_binding(1)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(&ins),
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.set)
+                .dst_binding(2)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(&outs),
+        ];
+        unsafe { self.gpu.device().update_descriptor_sets(&writes, &[]) };
+    }
+
+    /// Records the dispatch over `count` points.
+    ///
+    /// # Safety
+    /// `cmd` must be in the recording state, outside a render pass, on a queue with compute.
+    /// The bound buffers must hold `count` points and stay alive until the work completes.
+    /// The caller orders the dispatch against other work: host or transfer writes to the
+    /// inputs must be visible to `COMPUTE_SHADER` reads, and reads of the outputs need a
+    /// barrier from `COMPUTE_SHADER` / `SHADER_WRITE`.
+    pub unsafe fn record(&self, cmd: vk::CommandBuffer, count: u32) {
+        let d = self.gpu.device();
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.pipeline.layout,
+                0,
+                &[self.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                self.pipeline.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                &count.to_ne_bytes(),
+            );
+            d.cmd_dispatch(cmd, count.div_ceil(WORKGROUP), 1, 1);
+        }
+    }
+}
+
+/// Largest number of points one dispatch takes (the dispatch size limit × workgroup size).
+pub const MAX_POINTS: usize = 65_535 * WORKGROUP as usize;
+
+/// Runs the pass on `points` through a headless context and reads the results back
+/// (`None` = invalid / outside the valid domain). In f32, inputs are rounded to f32.
+pub fn run_points(
+    ctx: &Context,
+    camera: &OpenCvCamera,
+    mode: PointsMode,
+    precision: Precision,
+    points: &[[f64; 2]],
+) -> Result<Vec<Option<[f64; 2]>>> {
+    if points.is_empty() {
+        return Ok(Vec::new());
+    }
+    let gpu = ctx.gpu();
+    let mut out = Vec::with_capacity(points.len());
+    let mut pass = PointsPass::new(gpu, camera, mode, precision)?;
+    let (_, out_stride) = precision.strides();
+    for chunk in points.chunks(MAX_POINTS) {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let in_buf = match precision {
+            Precision::F32 => {
+                let v: Vec<[f32; 2]> = chunk.iter().map(|p| [p[0] as f32, p[1] as f32]).collect();
+                Buffer::from_pod(gpu, "points.in", &v, usage)?
+            }
+            Precision::F64 => Buffer::from_pod(gpu, "points.in", chunk, usage)?,
+        };
+        let out_buf = Buffer::new(
+            gpu,
+            "points.out",
+            (chunk.len() * out_stride) as u64,
+            usage,
+            MemoryLocation::GpuToCpu,
+        )?;
+        pass.bind(&in_buf, &out_buf);
+        ctx.submit(|cmd| {
+            unsafe {
+                pass.record(cmd, chunk.len() as u32);
+                // The host reads the outputs after the fence: make the shader writes visible.
+                host_read_barrier(gpu, cmd);
+            }
+            Ok(())
+        })?;
+        let results: Vec<[f64; 4]> = match precision {
+            Precision::F32 => out_buf
+                .read_pod::<[f32; 4]>(chunk.len())?
+                .iter()
+                .map(|r| r.map(f64::from))
+                .collect(),
+            Precision::F64 => out_buf.read_pod::<[f64; 4]>(chunk.len())?,
+        };
+        out.extend(results.iter().map(|r| (r[2] > 0.5).then_some([r[0], r[1]])));
+    }
+    Ok(out)
+}
+
+/// A barrier making compute-shader writes visible to host reads.
+///
+/// # Safety
+/// `cmd` must be recording.
+pub unsafe fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
+    let barrier = [vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+        .dst_access_mask(vk::AccessFlags::HOST_READ)];
+    unsafe {
+        gpu.device().cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::PipelineStageFlags::HOST,
+            vk::DependencyFlags::empty(),
+            &barrier,
+            &[],
+            &[],
+        )
+    };
+}

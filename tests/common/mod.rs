@@ -1,0 +1,22 @@
+//! Shared test helpers.
+#![allow(dead_code)]
+
+use vklens::gpu::{Context, ContextOptions};
+
+/// A headless context with the Khronos validation layer on (tests always validate).
+pub fn validated_context() -> Context {
+    Context::new(ContextOptions {
+        validation: true,
+        device: std::env::var("VKLENS_DEVICE")
+            .ok()
+            .filter(|s| !s.is_empty()),
+    })
+    .expect("a Vulkan device with the validation layer (README: the test command installs both)")
+}
+
+/// Fails the test if the validation layer said anything.
+pub fn assert_no_validation_messages(ctx: &Context) {
+    if let Err(e) = ctx.check_validation() {
+        panic!("{e}");
+    }
+}

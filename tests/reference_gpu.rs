@@ -184,3 +184,141 @@ fn gpu_approximations_agree_with_their_cpu_twins() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn specialization_constants_compile_out_unused_terms() {
+    use ash::vk;
+    use gpu_allocator::MemoryLocation;
+    use vklens::gpu::{shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool};
+    use vklens::pass::points::host_read_barrier;
+    use vklens::pass::{CameraParams, PointsPass};
+
+    let ctx = common::validated_context();
+    let gpu = ctx.gpu();
+    let reference = load_reference().expect("shared reference");
+    // A k1 k2 p1 p2 camera builds a pipeline with rational, prism and tilt switched off.
+    let fig2 = reference
+        .cases
+        .iter()
+        .find(|c| c.name == "seed_fig2")
+        .unwrap()
+        .camera()
+        .unwrap();
+    let pass = PointsPass::new(gpu, &fig2, PointsMode::Distort, Precision::F32).unwrap();
+    let c = &pass.pipeline().constants;
+    assert_eq!(
+        (c.get(0), c.get(1), c.get(2), c.get(3), c.get(4)),
+        (Some(1), Some(0), Some(1), Some(0), Some(0))
+    );
+
+    // The constants really gate the code: the prism_tilt camera with VKL_PRISM forced off
+    // loses exactly its prism terms.
+    let case = reference
+        .cases
+        .iter()
+        .find(|c| c.name == "prism_tilt")
+        .unwrap();
+    let cam = case.camera().unwrap();
+    let mut terms = cam.distortion.terms();
+    let run = |terms: vklens::model::Terms| -> Vec<[f32; 4]> {
+        let constants = CameraParams::spec_constants(terms)
+            .u32(8, 0)
+            .u32(9, 0)
+            .u32(10, 1);
+        let pipeline = ComputePipeline::new(
+            gpu,
+            shaders::POINTS_COMP,
+            &[
+                vk::DescriptorType::UNIFORM_BUFFER,
+                vk::DescriptorType::STORAGE_BUFFER,
+                vk::DescriptorType::STORAGE_BUFFER,
+            ],
+            4,
+            constants,
+        )
+        .unwrap();
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1).unwrap();
+        let set = pool.allocate(&pipeline).unwrap();
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let params = Buffer::from_pod(
+            gpu,
+            "p",
+            &[CameraParams::from_camera(&cam)],
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+        )
+        .unwrap();
+        let inputs: Vec<[f32; 2]> = case
+            .points
+            .iter()
+            .map(|p| p.undistorted_normalized.map(|v| v as f32))
+            .collect();
+        let ins = Buffer::from_pod(gpu, "in", &inputs, usage).unwrap();
+        let outs = Buffer::new(
+            gpu,
+            "out",
+            (inputs.len() * 16) as u64,
+            usage,
+            MemoryLocation::GpuToCpu,
+        )
+        .unwrap();
+        write_buffer_descriptors(
+            gpu,
+            set,
+            &[
+                (0, vk::DescriptorType::UNIFORM_BUFFER, &params),
+                (1, vk::DescriptorType::STORAGE_BUFFER, &ins),
+                (2, vk::DescriptorType::STORAGE_BUFFER, &outs),
+            ],
+        );
+        ctx.submit(|cmd| unsafe {
+            let d = gpu.device();
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                pipeline.layout,
+                0,
+                &[set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                pipeline.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                &(inputs.len() as u32).to_ne_bytes(),
+            );
+            d.cmd_dispatch(cmd, (inputs.len() as u32).div_ceil(64), 1, 1);
+            host_read_barrier(gpu, cmd);
+            Ok(())
+        })
+        .unwrap();
+        outs.read_pod(inputs.len()).unwrap()
+    };
+    let full = run(terms);
+    terms.prism = false;
+    let no_prism = run(terms);
+    let mut cpu = cam.clone();
+    let mut d = cam.distortion;
+    (d.s1, d.s2, d.s3, d.s4) = (0.0, 0.0, 0.0, 0.0);
+    cpu = vklens::model::OpenCvCamera::new(cpu.width, cpu.height, cpu.intrinsics, d).unwrap();
+    let (mut moved, mut worst) = (0.0f64, 0.0f64);
+    for ((p, a), b) in case.points.iter().zip(&full).zip(&no_prism) {
+        moved = moved.max(((a[0] - b[0]) as f64).hypot((a[1] - b[1]) as f64));
+        let expect = cpu.intrinsics.to_pixel(
+            cpu.distort_normalized(DVec2::from(p.undistorted_normalized))
+                .unwrap(),
+        );
+        worst = worst.max((DVec2::new(b[0] as f64, b[1] as f64) - expect).length());
+    }
+    println!("VKL_PRISM=false moves points by up to {moved:.2} px; matches the prism-free model to {worst:.1e} px");
+    assert!(
+        moved > 1.0,
+        "turning the prism constant off changed nothing"
+    );
+    assert!(
+        worst < 2e-3,
+        "with VKL_PRISM=false the shader is not the prism-free model"
+    );
+    common::assert_no_validation_messages(&ctx);
+}

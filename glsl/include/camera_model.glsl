@@ -223,6 +223,8 @@ VKL_VEC2 vkl_radial_start(VKL_VEC2 t) {
         if (v == 0.0) break;
         if (v < 0.0) lo = r; else hi = r;
         VKL_FLOAT next = r - v / dv;
+        // Converged from one side (the bracket need not shrink then).
+        if (next == r) break;
         r = (dv > 0.0 && next > lo && next < hi) ? next : 0.5 * (lo + hi);
         if (hi - lo < 2.0 * VKL_EPSILON * hi) break;
     }
@@ -247,6 +249,8 @@ bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
         if (residual <= VKL_EPSILON * (1.0 + rho)) break;
         if (!(determinant(J) > 0.0)) return false;
         VKL_VEC2 step = inverse(J) * (f - t);
+        // Converged to rounding: the step no longer changes x.
+        if (all(equal(x - step, x))) break;
         VKL_FLOAT s = 1.0;
         bool accepted = false;
         for (int k = 0; k < VKL_NEWTON_MAX_HALVINGS; ++k) {

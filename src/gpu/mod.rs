@@ -21,7 +21,7 @@ use ash::vk;
 use gpu_allocator::vulkan::Allocator;
 
 pub use context::{Context, ContextOptions};
-pub use pipeline::{ComputePipeline, DescriptorPool, SpecConstants};
+pub use pipeline::{write_buffer_descriptors, ComputePipeline, DescriptorPool, SpecConstants};
 pub use resources::{Buffer, Image, QueryPool};
 
 /// Errors from the GPU layer.

@@ -209,3 +209,33 @@ impl Drop for DescriptorPool {
         unsafe { self.gpu.device().destroy_descriptor_pool(self.raw, None) };
     }
 }
+
+/// Points the bindings of `set` at whole buffers: `(binding, descriptor type, buffer)`.
+pub fn write_buffer_descriptors(
+    gpu: &Gpu,
+    set: vk::DescriptorSet,
+    bindings: &[(u32, vk::DescriptorType, &super::Buffer)],
+) {
+    let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
+        .iter()
+        .map(|(_, _, b)| {
+            [vk::DescriptorBufferInfo {
+                buffer: b.raw,
+                offset: 0,
+                range: vk::WHOLE_SIZE,
+            }]
+        })
+        .collect();
+    let writes: Vec<vk::WriteDescriptorSet> = bindings
+        .iter()
+        .zip(&infos)
+        .map(|((binding, ty, _), info)| {
+            vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(*binding)
+                .descriptor_type(*ty)
+                .buffer_info(info)
+        })
+        .collect();
+    unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
+}

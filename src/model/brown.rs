@@ -142,6 +142,10 @@ impl BrownRadial {
                         hi = r;
                     }
                     let next = r - v / dv;
+                    if next == r {
+                        // Converged from one side (the bracket need not shrink then).
+                        break;
+                    }
                     r = if dv > 0.0 && next > lo && next < hi {
                         next
                     } else {

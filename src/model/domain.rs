@@ -25,6 +25,9 @@ use glam::DVec2;
 pub struct ValidDomain {
     ideal: Vec<f64>,
     distorted: Vec<f64>,
+    /// Smallest entries of each table: inside them no lookup is needed (the common case).
+    min_ideal: f64,
+    min_distorted: f64,
     folds: bool,
 }
 
@@ -69,7 +72,14 @@ impl ValidDomain {
                 nearest_crossing(&boundary, DVec2::new(angle.cos(), angle.sin()))
             })
             .collect();
+        Self::from_tables(ideal, distorted, folds)
+    }
+
+    fn from_tables(ideal: Vec<f64>, distorted: Vec<f64>, folds: bool) -> Self {
+        let min = |t: &[f64]| t.iter().copied().fold(f64::INFINITY, f64::min);
         ValidDomain {
+            min_ideal: min(&ideal),
+            min_distorted: min(&distorted),
             ideal,
             distorted,
             folds,
@@ -78,11 +88,11 @@ impl ValidDomain {
 
     /// A domain without any boundary but the radius cap (no distortion).
     pub fn unbounded() -> Self {
-        ValidDomain {
-            ideal: vec![Self::RADIUS_CAP; Self::SAMPLES],
-            distorted: vec![Self::RADIUS_CAP; Self::SAMPLES],
-            folds: false,
-        }
+        Self::from_tables(
+            vec![Self::RADIUS_CAP; Self::SAMPLES],
+            vec![Self::RADIUS_CAP; Self::SAMPLES],
+            false,
+        )
     }
 
     /// True when the model folds over (or hits a pole) somewhere before the radius cap.
@@ -102,24 +112,30 @@ impl ValidDomain {
 
     /// Smallest ideal boundary radius over all directions.
     pub fn min_ideal_radius(&self) -> f64 {
-        self.ideal.iter().copied().fold(f64::INFINITY, f64::min)
+        self.min_ideal
     }
 
     /// Whether an ideal normalized point (principal point at 0) lies in the domain.
     pub fn contains_ideal(&self, x: DVec2) -> bool {
-        let r = x.length();
-        r.is_finite() && (r == 0.0 || r <= self.ideal_radius(x.y.atan2(x.x)))
+        let r2 = x.length_squared();
+        if r2 <= self.min_ideal * self.min_ideal {
+            return true;
+        }
+        r2.is_finite() && r2.sqrt() <= self.ideal_radius(x.y.atan2(x.x))
     }
 
     /// Whether a distorted normalized point has its preimage in the domain.
     pub fn contains_distorted(&self, y: DVec2) -> bool {
-        let r = y.length();
-        r.is_finite() && (r == 0.0 || r <= self.distorted_radius(y.y.atan2(y.x)))
+        let r2 = y.length_squared();
+        if r2 <= self.min_distorted * self.min_distorted {
+            return true;
+        }
+        r2.is_finite() && r2.sqrt() <= self.distorted_radius(y.y.atan2(y.x))
     }
 
     /// Smallest distorted boundary radius over all directions.
     pub fn min_distorted_radius(&self) -> f64 {
-        self.distorted.iter().copied().fold(f64::INFINITY, f64::min)
+        self.min_distorted
     }
 
     /// The table as `[ideal, distorted]` radius pairs at angles `TAU * i / SAMPLES`, for the GPU
@@ -131,6 +147,9 @@ impl ValidDomain {
             .map(|(&a, &b)| [a, b])
     }
 }
+
+/// Relative margin by which a found boundary is pulled inward.
+const BOUNDARY_MARGIN: f64 = 1e-9;
 
 /// Linear interpolation in a table of radii at uniform angles `TAU * i / len`.
 fn lookup(table: &[f64], angle: f64) -> f64 {
@@ -157,7 +176,10 @@ fn march(valid_at: &impl Fn(DVec2, DVec2) -> bool, dir: DVec2) -> (f64, bool) {
                     outside = mid;
                 }
             }
-            return (inside, true);
+            // Stored strictly inside: interpolating between rays, or a rounding of the radius,
+            // must never land on the pole or past the fold itself. The band given up is far
+            // thinner than any inverse can resolve there (the Jacobian vanishes at the fold).
+            return (inside * (1.0 - BOUNDARY_MARGIN), true);
         }
         inside = r;
         // Steps grow with r: fine near the centre where lenses are tuned, coarser far out.
@@ -166,7 +188,7 @@ fn march(valid_at: &impl Fn(DVec2, DVec2) -> bool, dir: DVec2) -> (f64, bool) {
     if valid_at(dir * ValidDomain::RADIUS_CAP, dir) {
         (ValidDomain::RADIUS_CAP, false)
     } else {
-        (inside, true)
+        (inside * (1.0 - BOUNDARY_MARGIN), true)
     }
 }
 

@@ -405,6 +405,10 @@ impl OpenCvCamera {
                 return None;
             }
             let step = jac.inverse() * (f - target);
+            if x - step == x {
+                // Converged to rounding: the step no longer changes x.
+                break;
+            }
             // Damp: halve the step until the new point stays in the domain and reduces the
             // residual by at least a (1 - 1e-4 t) fraction (Armijo) — a simple trust region.
             let mut t = 1.0;
@@ -465,6 +469,10 @@ impl OpenCvCamera {
                 hi = r;
             }
             let next = r - v / dv;
+            if next == r {
+                // Converged from one side (the bracket need not shrink then).
+                break;
+            }
             r = if dv > 0.0 && next > lo && next < hi {
                 next
             } else {

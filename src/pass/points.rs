@@ -5,7 +5,8 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::{CameraParams, CameraParams64};
 use crate::gpu::{
-    shaders, Buffer, ComputePipeline, Context, DescriptorPool, Gpu, GpuError, Result,
+    shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context, DescriptorPool, Gpu,
+    GpuError, Result,
 };
 use crate::model::{InverseMethod, OpenCvCamera};
 
@@ -148,39 +149,15 @@ impl PointsPass {
     /// Points the pass at `inputs` (`vec2` per point; `dvec2` in f64) and `outputs` (`vec4`
     /// per point: result xy, valid flag; `dvec4` in f64). Must not be called while a recorded dispatch is pending.
     pub fn bind(&mut self, inputs: &Buffer, outputs: &Buffer) {
-        let ubo = [vk::DescriptorBufferInfo {
-            buffer: self.camera.raw,
-            offset: 0,
-            range: vk::WHOLE_SIZE,
-        }];
-        let ins = [vk::DescriptorBufferInfo {
-            buffer: inputs.raw,
-            offset: 0,
-            range: vk::WHOLE_SIZE,
-        }];
-        let outs = [vk::DescriptorBufferInfo {
-            buffer: outputs.raw,
-            offset: 0,
-            range: vk::WHOLE_SIZE,
-        }];
-        let writes = [
-            vk::WriteDescriptorSet::default()
-                .dst_set(self.set)
-                .dst_binding(0)
-                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
-                .buffer_info(&ubo),
-            vk::WriteDescriptorSet::default()
-                .dst_set(self.set)
-                .dst_binding(1)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .buffer_info(&ins),
-            vk::WriteDescriptorSet::default()
-                .dst_set(self.set)
-                .dst_binding(2)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .buffer_info(&outs),
-        ];
-        unsafe { self.gpu.device().update_descriptor_sets(&writes, &[]) };
+        write_buffer_descriptors(
+            &self.gpu,
+            self.set,
+            &[
+                (0, vk::DescriptorType::UNIFORM_BUFFER, &self.camera),
+                (1, vk::DescriptorType::STORAGE_BUFFER, inputs),
+                (2, vk::DescriptorType::STORAGE_BUFFER, outputs),
+            ],
+        );
     }
 
     /// Records the dispatch over `count` points.

@@ -1,0 +1,59 @@
+//! `vklens bench ...`.
+
+use clap::Args;
+
+use super::{context, finish, CliError};
+use crate::bench::inverse::{self, InverseBenchOptions};
+use crate::io::reference::{load_reference, reference_path};
+
+#[derive(Args, Debug)]
+pub struct InverseArgs {
+    /// One JSON object per line instead of tables.
+    #[arg(long)]
+    json: bool,
+    /// CPU only (no Vulkan device needed).
+    #[arg(long)]
+    cpu_only: bool,
+    /// Comma-separated methods to measure (default: newton, heikkila and fixed-point with
+    /// 1, 2, 3, 5, 10, 20, 50, 200 iterations).
+    #[arg(long, value_delimiter = ',', value_parser = super::parse_method)]
+    methods: Vec<crate::model::InverseMethod>,
+}
+
+pub fn inverse(args: InverseArgs) -> Result<(), CliError> {
+    let reference = load_reference().map_err(|e| {
+        CliError::input(format!(
+            "{e}\n(the shared reference data is expected at {}; set VKLENS_SHARED to the shared folder)",
+            reference_path().display()
+        ))
+    })?;
+    let ctx = if args.cpu_only {
+        None
+    } else {
+        Some(context()?)
+    };
+    let mut options = InverseBenchOptions::default();
+    if !args.methods.is_empty() {
+        options.methods = args.methods.clone();
+    }
+    if let Some(ctx) = &ctx {
+        eprintln!("device: {}", ctx.gpu().device_name());
+    }
+    let rows = inverse::run(&reference, ctx.as_ref(), &options, super::progress_line)
+        .map_err(CliError::runtime)?;
+    super::progress_done(&format!("measured {} rows", rows.len()));
+    if let Some(ctx) = &ctx {
+        finish(ctx)?;
+    }
+    if args.json {
+        for r in &rows {
+            println!(
+                "{}",
+                serde_json::to_string(r).map_err(|e| CliError::runtime(e.to_string()))?
+            );
+        }
+    } else {
+        println!("{}", inverse::table(&rows));
+    }
+    Ok(())
+}

@@ -1,0 +1,134 @@
+//! Every calibration file in `../shared/reference/calibration-files/` loads and equals the
+//! camera `index.json` says it holds; bad files give one clear error naming the problem.
+
+use vklens::io::parse_camera;
+use vklens::io::reference::shared_dir;
+
+#[test]
+fn every_shared_calibration_file_loads_with_the_true_parameters() {
+    let dir = shared_dir().join("reference").join("calibration-files");
+    let index: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("index.json")).expect("index.json"))
+            .expect("valid JSON");
+    let mut loaded = 0;
+    for cam in index["cameras"].as_array().expect("cameras") {
+        let truth: Vec<f64> = cam["dist_coeffs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        for file in cam["files"].as_array().expect("files") {
+            let path = dir.join(file.as_str().unwrap());
+            let got = vklens::io::load_camera(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(
+                got.width as u64,
+                cam["width"].as_u64().unwrap(),
+                "{}",
+                path.display()
+            );
+            assert_eq!(got.height as u64, cam["height"].as_u64().unwrap());
+            for (name, v) in [
+                ("fx", got.intrinsics.fx),
+                ("fy", got.intrinsics.fy),
+                ("cx", got.intrinsics.cx),
+                ("cy", got.intrinsics.cy),
+            ] {
+                assert_eq!(v, cam[name].as_f64().unwrap(), "{} {name}", path.display());
+            }
+            let coeffs = got.distortion.to_coeffs();
+            for (i, t) in truth.iter().enumerate() {
+                assert!(
+                    (coeffs[i] - t).abs() <= 1e-15,
+                    "{} coefficient {i}: {} vs {t}",
+                    path.display(),
+                    coeffs[i]
+                );
+            }
+            assert!(coeffs[truth.len()..].iter().all(|&c| c == 0.0));
+            loaded += 1;
+        }
+    }
+    assert_eq!(loaded, 14);
+}
+
+#[test]
+fn reference_cases_are_camera_files_as_they_stand() {
+    let text = std::fs::read_to_string(vklens::io::reference::reference_path()).expect("reference");
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for case in v["cases"].as_array().unwrap() {
+        let cam = vklens::io::camera::camera_from_value(case).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(cam.distortion.to_coeffs().len(), 14);
+    }
+}
+
+fn err(text: &str) -> String {
+    parse_camera(text, "cam.json")
+        .expect_err("must be refused")
+        .to_string()
+}
+
+#[test]
+fn bad_camera_files_name_the_file_the_field_and_the_value() {
+    let base = r#""width": 800, "height": 600, "fx": 400, "fy": 400, "cx": 399.5, "cy": 299.5"#;
+    let e = err(&format!("{{{base}, \"dist_coeffs\": [0.1, 0.2, 0.3]}}"));
+    assert!(
+        e.starts_with("cam.json: ") && e.contains("4, 5, 8, 12 or 14") && e.contains('3'),
+        "{e}"
+    );
+    let e = err(r#"{"width": 800, "height": 600, "fx": -4, "fy": 400, "cx": 1, "cy": 1}"#);
+    assert!(e.contains("fx") && e.contains("-4"), "{e}");
+    let e = err(r#"{"width": 800, "height": 600, "fx": "abc", "fy": 400, "cx": 1, "cy": 1}"#);
+    assert!(e.contains("fx") && e.contains("abc"), "{e}");
+    let e = err(r#"{"width": 0, "height": 600, "fx": 4, "fy": 400, "cx": 1, "cy": 1}"#);
+    assert!(e.contains("width"), "{e}");
+    let e = err(r#"{"width": 800.5, "height": 600, "fx": 4, "fy": 400, "cx": 1, "cy": 1}"#);
+    assert!(e.contains("width") && e.contains("800.5"), "{e}");
+    let e = err(&format!("{{{base}, \"dist_coeffs\": [1e300, 0, 0, 0]}}"));
+    assert!(e.contains("k1") && e.contains("absurd"), "{e}");
+    let e = err(&format!(
+        "{{{base}, \"dist_coeffs\": [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1.6, 0]}}"
+    ));
+    assert!(e.contains("tau_x"), "{e}");
+    let e = err("{\"width\": 8");
+    assert!(e.contains("invalid JSON"), "{e}");
+    let e = err(r#"{"height": 600, "fx": 4, "fy": 400, "cx": 1, "cy": 1}"#);
+    assert!(e.contains("missing") && e.contains("width"), "{e}");
+    // NaN in YAML (FileStorage writes .Nan).
+    let e = parse_camera(
+        "image_width: 8\nimage_height: 8\ncamera_matrix:\n  data: [.Nan, 0, 4, 0, 4, 4, 0, 0, 1]\n",
+        "cam.yml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("fx") && e.contains("NaN"), "{e}");
+    // Skewed camera matrices are refused rather than silently mis-read.
+    let e = parse_camera(
+        "image_width: 8\nimage_height: 8\ncamera_matrix:\n  data: [4, 0.5, 4, 0, 4, 4, 0, 0, 1]\n",
+        "cam.yml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("skew"), "{e}");
+    let e = parse_camera(
+        "image_width: 8\nimage_height: 8\ndistortion_model: equidistant\ncamera_matrix:\n  data: [4, 0, 4, 0, 4, 4, 0, 0, 1]\n",
+        "cam.yaml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("equidistant"), "{e}");
+    let e = parse_camera("<opencv_storage><image_width>8</image_width>", "cam.xml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("cam.xml: invalid XML"), "{e}");
+}
+
+#[test]
+fn missing_distortion_means_a_pinhole() {
+    let cam = parse_camera(
+        r#"{"width": 8, "height": 8, "fx": 4, "fy": 4, "cx": 3.5, "cy": 3.5}"#,
+        "p.json",
+    )
+    .unwrap();
+    assert_eq!(cam.distortion.to_coeffs(), [0.0; 14]);
+}

@@ -318,30 +318,51 @@ unsafe fn compute_to_compute_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
     };
 }
 
-/// The rows as a Markdown table, one block per camera.
+/// The rows as one Markdown table: a row per camera and method, max error (median in
+/// brackets) and ns/point per backend side by side.
 pub fn table(rows: &[InverseRow]) -> String {
-    let mut out = String::new();
-    let mut camera = "";
+    let backends = ["cpu-f64", "gpu-f32", "gpu-f64"];
+    let mut out = String::from(
+        "| camera | method | cpu-f64 max (median) px | gpu-f32 max (median) px | gpu-f64 max (median) px | refused | ns/pt cpu | ns/pt gpu-f32 | ns/pt gpu-f64 |\n|---|---|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    let mut keys: Vec<(&str, &str)> = Vec::new();
     for r in rows {
-        if r.camera != camera {
-            camera = &r.camera;
-            out.push_str(&format!(
-                "\n### {camera}\n\n| method | backend | max err px | median err px | refused | ns/point |\n|---|---|---:|---:|---:|---:|\n"
-            ));
+        if !keys.contains(&(r.camera.as_str(), r.method.as_str())) {
+            keys.push((&r.camera, &r.method));
         }
-        let ns = r
-            .ns_per_point
-            .map(|n| format!("{n:.1}"))
-            .unwrap_or_else(|| "—".into());
+    }
+    for (camera, method) in keys {
+        let of = |b: &str| rows.iter().find(|r| r.camera == camera && r.method == method && r.backend == b);
+        let err = |r: Option<&InverseRow>| {
+            r.map(|r| format!("{} ({})", sci(r.max_err_px), sci(r.median_err_px)))
+                .unwrap_or_else(|| "—".into())
+        };
+        let ns = |r: Option<&InverseRow>| {
+            r.and_then(|r| r.ns_per_point).map(|n| format!("{n:.0}")).unwrap_or_else(|| "—".into())
+        };
+        if let Some(o) = of("opencv") {
+            out.push_str(&format!(
+                "| {camera} | {method} | {} (OpenCV) | | | {}/{} | | | |\n",
+                err(Some(o)),
+                o.refused,
+                o.points
+            ));
+            continue;
+        }
+        let refused: Vec<String> = backends
+            .iter()
+            .filter_map(|b| of(b).map(|r| r.refused.to_string()))
+            .collect();
+        let points = backends.iter().find_map(|b| of(b).map(|r| r.points)).unwrap_or(0);
         out.push_str(&format!(
-            "| {} | {} | {} | {} | {}/{} | {} |\n",
-            r.method,
-            r.backend,
-            sci(r.max_err_px),
-            sci(r.median_err_px),
-            r.refused,
-            r.points,
-            ns
+            "| {camera} | {method} | {} | {} | {} | {}/{points} | {} | {} | {} |\n",
+            err(of(backends[0])),
+            err(of(backends[1])),
+            err(of(backends[2])),
+            refused.join("·"),
+            ns(of(backends[0])),
+            ns(of(backends[1])),
+            ns(of(backends[2])),
         ));
     }
     out

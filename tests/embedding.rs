@@ -8,9 +8,9 @@ use ash::vk;
 use glam::DVec2;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
+use vklens::gpu::host_read_barrier;
 use vklens::gpu::{Buffer, Gpu};
 use vklens::model::InverseMethod;
-use vklens::pass::points::host_read_barrier;
 use vklens::pass::{PointsMode, PointsPass, Precision};
 
 #[test]

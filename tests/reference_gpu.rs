@@ -189,8 +189,8 @@ fn gpu_approximations_agree_with_their_cpu_twins() {
 fn specialization_constants_compile_out_unused_terms() {
     use ash::vk;
     use gpu_allocator::MemoryLocation;
+    use vklens::gpu::host_read_barrier;
     use vklens::gpu::{shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool};
-    use vklens::pass::points::host_read_barrier;
     use vklens::pass::{CameraParams, PointsPass};
 
     let ctx = common::validated_context();

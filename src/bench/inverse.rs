@@ -15,10 +15,9 @@ use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
-use crate::gpu::{Buffer, Context, QueryPool};
+use crate::gpu::{host_read_barrier, memory_barrier, Buffer, Context, QueryPool};
 use crate::io::reference::{ReferenceCase, ReferenceFile};
 use crate::model::{CameraModel, InverseMethod, OpenCvCamera};
-use crate::pass::points::host_read_barrier;
 use crate::pass::{PointsMode, PointsPass, Precision};
 
 /// The methods measured by default.
@@ -286,7 +285,11 @@ fn gpu_run(
                         pass.record(cmd, n as u32);
                         if i + 1 < options.gpu_repeats {
                             // Each dispatch rewrites the outputs: order the writes.
-                            compute_to_compute_barrier(ctx, cmd);
+                            let write = (
+                                vk::PipelineStageFlags::COMPUTE_SHADER,
+                                vk::AccessFlags::SHADER_WRITE,
+                            );
+                            memory_barrier(gpu, cmd, write, write);
                         }
                     }
                 }
@@ -299,23 +302,6 @@ fn gpu_run(
         Err(_) => None,
     };
     Ok((got, ns))
-}
-
-unsafe fn compute_to_compute_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
-    let barrier = [vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::SHADER_WRITE)
-        .dst_access_mask(vk::AccessFlags::SHADER_WRITE)];
-    unsafe {
-        ctx.gpu().device().cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::DependencyFlags::empty(),
-            &barrier,
-            &[],
-            &[],
-        )
-    };
 }
 
 /// The rows as one Markdown table: a row per camera and method, max error (median in
@@ -332,13 +318,18 @@ pub fn table(rows: &[InverseRow]) -> String {
         }
     }
     for (camera, method) in keys {
-        let of = |b: &str| rows.iter().find(|r| r.camera == camera && r.method == method && r.backend == b);
+        let of = |b: &str| {
+            rows.iter()
+                .find(|r| r.camera == camera && r.method == method && r.backend == b)
+        };
         let err = |r: Option<&InverseRow>| {
             r.map(|r| format!("{} ({})", sci(r.max_err_px), sci(r.median_err_px)))
                 .unwrap_or_else(|| "—".into())
         };
         let ns = |r: Option<&InverseRow>| {
-            r.and_then(|r| r.ns_per_point).map(|n| format!("{n:.0}")).unwrap_or_else(|| "—".into())
+            r.and_then(|r| r.ns_per_point)
+                .map(|n| format!("{n:.0}"))
+                .unwrap_or_else(|| "—".into())
         };
         if let Some(o) = of("opencv") {
             out.push_str(&format!(
@@ -353,7 +344,10 @@ pub fn table(rows: &[InverseRow]) -> String {
             .iter()
             .filter_map(|b| of(b).map(|r| r.refused.to_string()))
             .collect();
-        let points = backends.iter().find_map(|b| of(b).map(|r| r.points)).unwrap_or(0);
+        let points = backends
+            .iter()
+            .find_map(|b| of(b).map(|r| r.points))
+            .unwrap_or(0);
         out.push_str(&format!(
             "| {camera} | {method} | {} | {} | {} | {}/{points} | {} | {} | {} |\n",
             err(of(backends[0])),

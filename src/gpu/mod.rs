@@ -8,6 +8,7 @@
 //! * [`Context`] — headless: instance (validation layer on request), device selection
 //!   (`VKLENS_DEVICE`), one queue, submission and timing for tests and the CLI.
 
+mod barriers;
 mod context;
 mod pipeline;
 pub mod reflect;
@@ -20,6 +21,7 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::Allocator;
 
+pub use barriers::{host_read_barrier, memory_barrier};
 pub use context::{Context, ContextOptions};
 pub use pipeline::{write_buffer_descriptors, ComputePipeline, DescriptorPool, SpecConstants};
 pub use resources::{Buffer, Image, QueryPool};

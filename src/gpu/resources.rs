@@ -31,31 +31,10 @@ impl Buffer {
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&info, None)? };
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
-        let allocation = gpu
-            .allocator()
-            .lock()
-            .map_err(|_| GpuError::Invalid("allocator lock poisoned".into()))?
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
-        let allocation = match allocation {
-            Ok(a) => a,
-            Err(e) => {
-                unsafe { device.destroy_buffer(raw, None) };
-                return Err(e.into());
-            }
-        };
-        if let Err(e) =
-            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
-        {
-            let _ = gpu.allocator().lock().map(|mut a| a.free(allocation));
-            unsafe { device.destroy_buffer(raw, None) };
-            return Err(e.into());
-        }
+        let allocation = allocate(gpu, name, requirements, location, true, |a| unsafe {
+            device.bind_buffer_memory(raw, a.memory(), a.offset())
+        })
+        .inspect_err(|_| unsafe { device.destroy_buffer(raw, None) })?;
         Ok(Buffer {
             gpu: gpu.clone(),
             raw,
@@ -127,12 +106,44 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
-        if let Some(a) = self.allocation.take() {
-            if let Ok(mut allocator) = self.gpu.allocator().lock() {
-                let _ = allocator.free(a);
-            }
-        }
+        free(&self.gpu, self.allocation.take());
         unsafe { self.gpu.device().destroy_buffer(self.raw, None) };
+    }
+}
+
+/// Allocates memory for `requirements` and binds it with `bind`; frees it again if binding fails.
+fn allocate(
+    gpu: &Gpu,
+    name: &str,
+    requirements: vk::MemoryRequirements,
+    location: MemoryLocation,
+    linear: bool,
+    bind: impl FnOnce(&Allocation) -> std::result::Result<(), vk::Result>,
+) -> Result<Allocation> {
+    let mut allocator = gpu
+        .allocator()
+        .lock()
+        .map_err(|_| GpuError::Invalid("allocator lock poisoned".into()))?;
+    let allocation = allocator.allocate(&AllocationCreateDesc {
+        name,
+        requirements,
+        location,
+        linear,
+        allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+    })?;
+    if let Err(e) = bind(&allocation) {
+        let _ = allocator.free(allocation);
+        return Err(e.into());
+    }
+    Ok(allocation)
+}
+
+/// Returns an allocation to the allocator (used by `Drop`).
+fn free(gpu: &Gpu, allocation: Option<Allocation>) {
+    if let Some(a) = allocation {
+        if let Ok(mut allocator) = gpu.allocator().lock() {
+            let _ = allocator.free(a);
+        }
     }
 }
 
@@ -173,24 +184,16 @@ impl Image {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         let raw = unsafe { device.create_image(&info, None)? };
         let requirements = unsafe { device.get_image_memory_requirements(raw) };
-        let allocation = gpu
-            .allocator()
-            .lock()
-            .map_err(|_| GpuError::Invalid("allocator lock poisoned".into()))?
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
-        let allocation = match allocation {
-            Ok(a) => a,
-            Err(e) => {
-                unsafe { device.destroy_image(raw, None) };
-                return Err(e.into());
-            }
-        };
+        let allocation = allocate(
+            gpu,
+            name,
+            requirements,
+            MemoryLocation::GpuOnly,
+            false,
+            |a| unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) },
+        )
+        .inspect_err(|_| unsafe { device.destroy_image(raw, None) })?;
+        // From here on `image` owns the handle and the memory: Drop cleans up on early return.
         let mut image = Image {
             gpu: gpu.clone(),
             raw,
@@ -199,8 +202,6 @@ impl Image {
             format,
             extent: vk::Extent2D { width, height },
         };
-        let alloc = image.allocation.as_ref().expect("just set");
-        unsafe { device.bind_image_memory(raw, alloc.memory(), alloc.offset())? };
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
             .view_type(vk::ImageViewType::TYPE_2D)
@@ -230,11 +231,7 @@ impl Drop for Image {
                 device.destroy_image_view(self.view, None);
             }
         }
-        if let Some(a) = self.allocation.take() {
-            if let Ok(mut allocator) = self.gpu.allocator().lock() {
-                let _ = allocator.free(a);
-            }
-        }
+        free(&self.gpu, self.allocation.take());
         unsafe { device.destroy_image(self.raw, None) };
     }
 }

@@ -10,6 +10,7 @@
 use glam::{DMat2, DVec2};
 
 use super::domain::ValidDomain;
+use super::solve::solve_increasing;
 use super::{check_finite, check_size, CameraModel, InverseMethod, ModelError, ABSURD_MAGNITUDE};
 
 /// Brown radial distortion over a `width × height` image.
@@ -124,37 +125,20 @@ impl BrownRadial {
                 d * (r / rd)
             }
             InverseMethod::Newton => {
-                // 1D safeguarded Newton on f(r) = r + c1 r³ + c2 r⁵ = r_d over [0, r_max],
-                // where f is monotone by construction of the domain.
-                let mut lo = 0.0;
-                let mut hi = self.domain.ideal_radius(d.y.atan2(d.x));
-                let mut r = rd.min(hi);
-                for _ in 0..100 {
-                    let s = r * r;
-                    let v = r * (1.0 + self.c1 * s + self.c2 * s * s) - rd;
-                    let dv = 1.0 + 3.0 * self.c1 * s + 5.0 * self.c2 * s * s;
-                    if v == 0.0 {
-                        break;
-                    }
-                    if v < 0.0 {
-                        lo = r;
-                    } else {
-                        hi = r;
-                    }
-                    let next = r - v / dv;
-                    if next == r {
-                        // Converged from one side (the bracket need not shrink then).
-                        break;
-                    }
-                    r = if dv > 0.0 && next > lo && next < hi {
-                        next
-                    } else {
-                        0.5 * (lo + hi)
-                    };
-                    if hi - lo < 1e-15 * hi {
-                        break;
-                    }
-                }
+                // f(r) = r + c1 r³ + c2 r⁵ = r_d on [0, r_max], increasing by construction of
+                // the domain.
+                let (c1, c2) = (self.c1, self.c2);
+                let r = solve_increasing(
+                    |r| {
+                        let s = r * r;
+                        (
+                            r * (1.0 + c1 * s + c2 * s * s),
+                            1.0 + 3.0 * c1 * s + 5.0 * c2 * s * s,
+                        )
+                    },
+                    rd,
+                    self.domain.ideal_radius(d.y.atan2(d.x)),
+                );
                 d * (r / rd)
             }
         };

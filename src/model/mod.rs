@@ -14,6 +14,7 @@
 //! * [`brown`] — seed 002's Brown radial model for headset lenses (Eq. 1, Eq. 2).
 //! * [`domain`] — the valid (invertible) domain of a distortion, computed once per camera.
 //! * [`projection`] — the Sec. 3.1 frustum as a Vulkan projection matrix.
+//! * [`solve`] — the safeguarded 1D Newton both models' inverses start from.
 //! * [`CameraModel`] — the interface both models share: maps between the ideal (pinhole)
 //!   pixel and the distorted pixel, in both directions, with an explicit "invalid".
 
@@ -21,6 +22,7 @@ pub mod brown;
 pub mod domain;
 pub mod opencv;
 pub mod projection;
+pub mod solve;
 
 use std::fmt;
 use std::str::FromStr;

@@ -20,6 +20,7 @@
 use glam::{DMat2, DMat3, DVec2, DVec3};
 
 use super::domain::ValidDomain;
+use super::solve::solve_increasing;
 use super::{check_finite, check_size, CameraModel, InverseMethod, ModelError, ABSURD_MAGNITUDE};
 
 /// Names of the 14 coefficients in OpenCV's order (`distCoeffs`).
@@ -437,7 +438,7 @@ impl OpenCvCamera {
     }
 
     /// Start for Newton: solve the radial part r·R(r²) = |target| along the target's direction
-    /// by safeguarded Newton/bisection on [0, boundary radius] (monotone there by construction).
+    /// on [0, boundary radius], where it is increasing by construction of the domain.
     fn radial_start(&self, target: DVec2) -> DVec2 {
         let d = &self.distortion;
         let rho = target.length();
@@ -445,43 +446,18 @@ impl OpenCvCamera {
             return DVec2::ZERO;
         }
         let dir = target / rho;
-        let mut hi = self.domain.ideal_radius(dir.y.atan2(dir.x));
-        let g = |r: f64| {
-            let s = r * r;
-            let (num, den, dnum, dden) = d.radial(s);
-            let rr = num / den;
-            let drr = (dnum * den - num * dden) / (den * den);
-            (r * rr - rho, rr + 2.0 * s * drr)
-        };
-        let mut lo = 0.0;
-        if g(hi).0 <= 0.0 {
-            return dir * hi;
-        }
-        let mut r = rho.min(hi);
-        for _ in 0..100 {
-            let (v, dv) = g(r);
-            if v == 0.0 {
-                break;
-            }
-            if v < 0.0 {
-                lo = r;
-            } else {
-                hi = r;
-            }
-            let next = r - v / dv;
-            if next == r {
-                // Converged from one side (the bracket need not shrink then).
-                break;
-            }
-            r = if dv > 0.0 && next > lo && next < hi {
-                next
-            } else {
-                0.5 * (lo + hi)
-            };
-            if hi - lo < 1e-15 * hi {
-                break;
-            }
-        }
+        let hi = self.domain.ideal_radius(dir.y.atan2(dir.x));
+        let r = solve_increasing(
+            |r| {
+                let s = r * r;
+                let (num, den, dnum, dden) = d.radial(s);
+                let rr = num / den;
+                let drr = (dnum * den - num * dden) / (den * den);
+                (r * rr, rr + 2.0 * s * drr)
+            },
+            rho,
+            hi,
+        );
         dir * r
     }
 }

@@ -5,9 +5,9 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
-use super::points::host_read_barrier;
 use crate::gpu::{
-    shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context, DescriptorPool, Result,
+    host_read_barrier, shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context,
+    DescriptorPool, Result,
 };
 use crate::model::OpenCvCamera;
 

@@ -5,8 +5,8 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::{CameraParams, CameraParams64};
 use crate::gpu::{
-    shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context, DescriptorPool, Gpu,
-    GpuError, Result,
+    host_read_barrier, shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context,
+    DescriptorPool, Gpu, GpuError, Result,
 };
 use crate::model::{InverseMethod, OpenCvCamera};
 
@@ -247,25 +247,4 @@ pub fn run_points(
         out.extend(results.iter().map(|r| (r[2] > 0.5).then_some([r[0], r[1]])));
     }
     Ok(out)
-}
-
-/// A barrier making compute-shader writes visible to host reads.
-///
-/// # Safety
-/// `cmd` must be recording.
-pub unsafe fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
-    let barrier = [vk::MemoryBarrier::default()
-        .src_access_mask(vk::AccessFlags::SHADER_WRITE)
-        .dst_access_mask(vk::AccessFlags::HOST_READ)];
-    unsafe {
-        gpu.device().cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::PipelineStageFlags::HOST,
-            vk::DependencyFlags::empty(),
-            &barrier,
-            &[],
-            &[],
-        )
-    };
 }

@@ -1,0 +1,49 @@
+//! Memory barriers. Every call site says why it needs one.
+
+use ash::vk;
+
+use super::Gpu;
+
+/// A global memory barrier: `src` work's `src_access` made visible to `dst` work's `dst_access`.
+///
+/// # Safety
+/// `cmd` must be recording, outside a render pass (or in one with a matching self-dependency).
+pub unsafe fn memory_barrier(
+    gpu: &Gpu,
+    cmd: vk::CommandBuffer,
+    src: (vk::PipelineStageFlags, vk::AccessFlags),
+    dst: (vk::PipelineStageFlags, vk::AccessFlags),
+) {
+    let barrier = [vk::MemoryBarrier::default()
+        .src_access_mask(src.1)
+        .dst_access_mask(dst.1)];
+    unsafe {
+        gpu.device().cmd_pipeline_barrier(
+            cmd,
+            src.0,
+            dst.0,
+            vk::DependencyFlags::empty(),
+            &barrier,
+            &[],
+            &[],
+        )
+    };
+}
+
+/// Compute-shader writes made visible to host reads (after the fence).
+///
+/// # Safety
+/// As [`memory_barrier`].
+pub unsafe fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
+    unsafe {
+        memory_barrier(
+            gpu,
+            cmd,
+            (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_WRITE,
+            ),
+            (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
+        )
+    };
+}

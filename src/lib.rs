@@ -3,6 +3,7 @@
 //! * [`model`] — camera models in plain f64 (OpenCV's 14-coefficient standard model, Brown
 //!   radial), their Jacobians, inverses and valid domains. No Vulkan.
 //! * [`io`] — camera files (JSON, OpenCV FileStorage YAML/XML/JSON, ROS camera_info).
+//! * [`imaging`] — host images (PNG, EXR) and the f64 reference warp.
 //! * [`gpu`] — Vulkan plumbing: a [`gpu::Gpu`] built from the caller's device, queue and
 //!   allocator, the headless [`gpu::Context`] that tests and the CLI use, owned resources.
 //! * [`pass`] — GPU passes that record into a command buffer the caller owns.
@@ -11,6 +12,7 @@
 pub mod bench;
 pub mod cli;
 pub mod gpu;
+pub mod imaging;
 pub mod io;
 pub mod model;
 pub mod pass;

@@ -66,7 +66,12 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     finish(&ctx)?;
     let image = image::RgbaImage::from_raw(camera.width, camera.height, pixels)
         .ok_or_else(|| CliError::runtime("internal: pixel count does not match the image size"))?;
-    crate::io::image_out::save_atomically(&image, &args.output)?;
+    crate::imaging::io::write_atomically(&args.output, |tmp| {
+        image
+            .save_with_format(tmp, image::ImageFormat::Png)
+            .map_err(|e| e.to_string())
+    })
+    .map_err(CliError::input)?;
     let invalid = image.pixels().filter(|p| p[3] == 0).count();
     eprintln!(
         "wrote {} ({} px outside the lens's valid domain, left transparent)",

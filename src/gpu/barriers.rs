@@ -47,3 +47,37 @@ pub unsafe fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
         )
     };
 }
+
+/// A layout transition (and memory dependency) for the whole colour subresource of `image`.
+///
+/// # Safety
+/// As [`memory_barrier`]; `image` must be in layout `from` (or `from` is `UNDEFINED`).
+pub unsafe fn image_barrier(
+    gpu: &Gpu,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    (from, to): (vk::ImageLayout, vk::ImageLayout),
+    src: (vk::PipelineStageFlags, vk::AccessFlags),
+    dst: (vk::PipelineStageFlags, vk::AccessFlags),
+) {
+    let barrier = [vk::ImageMemoryBarrier::default()
+        .image(image)
+        .old_layout(from)
+        .new_layout(to)
+        .src_access_mask(src.1)
+        .dst_access_mask(dst.1)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .subresource_range(super::Image::color_range())];
+    unsafe {
+        gpu.device().cmd_pipeline_barrier(
+            cmd,
+            src.0,
+            dst.0,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &barrier,
+        )
+    };
+}

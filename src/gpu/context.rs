@@ -190,7 +190,16 @@ impl Context {
         // where the device has it (lavapipe does) and fall back to f32 elsewhere.
         let supported = unsafe { instance.get_physical_device_features(physical) };
         let float64 = supported.shader_float64 == vk::TRUE;
-        let features = vk::PhysicalDeviceFeatures::default().shader_float64(float64);
+        // rg32f coordinate maps and r8 masks are "extended" storage-image formats.
+        if supported.shader_storage_image_extended_formats != vk::TRUE {
+            return Err(fail(
+                &mut owned,
+                GpuError::NoDevice("the device lacks shaderStorageImageExtendedFormats".into()),
+            ));
+        }
+        let features = vk::PhysicalDeviceFeatures::default()
+            .shader_float64(float64)
+            .shader_storage_image_extended_formats(true);
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&features);

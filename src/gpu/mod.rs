@@ -21,9 +21,12 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::Allocator;
 
-pub use barriers::{host_read_barrier, memory_barrier};
+pub use barriers::{host_read_barrier, image_barrier, memory_barrier};
 pub use context::{Context, ContextOptions};
-pub use pipeline::{write_buffer_descriptors, ComputePipeline, DescriptorPool, SpecConstants};
+pub use pipeline::{
+    write_buffer_descriptors, write_storage_image_descriptors, ComputePipeline, DescriptorPool,
+    SpecConstants,
+};
 pub use resources::{Buffer, Image, QueryPool};
 
 /// Errors from the GPU layer.

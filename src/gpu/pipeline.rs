@@ -239,3 +239,33 @@ pub fn write_buffer_descriptors(
         .collect();
     unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
 }
+
+/// Points the bindings of `set` at storage images in `GENERAL` layout: `(binding, view)`.
+pub fn write_storage_image_descriptors(
+    gpu: &Gpu,
+    set: vk::DescriptorSet,
+    bindings: &[(u32, vk::ImageView)],
+) {
+    let infos: Vec<[vk::DescriptorImageInfo; 1]> = bindings
+        .iter()
+        .map(|(_, view)| {
+            [vk::DescriptorImageInfo {
+                sampler: vk::Sampler::null(),
+                image_view: *view,
+                image_layout: vk::ImageLayout::GENERAL,
+            }]
+        })
+        .collect();
+    let writes: Vec<vk::WriteDescriptorSet> = bindings
+        .iter()
+        .zip(&infos)
+        .map(|((binding, _), info)| {
+            vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(*binding)
+                .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+                .image_info(info)
+        })
+        .collect();
+    unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
+}

@@ -6,3 +6,14 @@ pub const POINTS_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/points.
 pub const POINTS_COMP_F64: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/points.comp.f64.spv"));
 /// `glsl/grid_demo.comp`: a procedural grid seen through a lens (analytic inverse per pixel).
 pub const GRID_DEMO_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/grid_demo.comp.spv"));
+/// `glsl/warp.comp`, rgba32f images (16-bit and float data).
+pub const WARP_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.spv"));
+/// `glsl/warp.comp`, rgba8 images (8-bit data).
+pub const WARP_COMP_RGBA8: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.rgba8.spv"));
+/// `glsl/warp.comp`, r32ui images (object IDs, nearest only).
+pub const WARP_COMP_R32UI: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.r32ui.spv"));
+/// `glsl/inverse_map.comp`: a coordinate map per camera and channel.
+pub const INVERSE_MAP_COMP: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/inverse_map.comp.spv"));
+/// `glsl/copy.comp`: the copy pass the warp is measured against.
+pub const COPY_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/copy.comp.spv"));

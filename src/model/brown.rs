@@ -50,6 +50,24 @@ impl BrownRadial {
         Ok(model)
     }
 
+    /// The same lens as an OpenCV camera: per-axis [-1, 1] normalisation is OpenCV's with
+    /// `fx = w/2, fy = h/2, cx = (w-1)/2, cy = (h-1)/2`, and Eq. 1 is `k1 = c1, k2 = c2`.
+    /// This is how the GPU warp runs the Brown model (seed 002 pre-correction).
+    pub fn to_opencv(&self) -> Result<super::OpenCvCamera, ModelError> {
+        let (w, h) = (self.width as f64, self.height as f64);
+        super::OpenCvCamera::from_coeffs(
+            self.width,
+            self.height,
+            super::Intrinsics {
+                fx: w / 2.0,
+                fy: h / 2.0,
+                cx: (w - 1.0) / 2.0,
+                cy: (h - 1.0) / 2.0,
+            },
+            &[self.c1, self.c2, 0.0, 0.0],
+        )
+    }
+
     /// The valid domain in normalized [-1, 1] coordinates.
     pub fn domain(&self) -> &ValidDomain {
         &self.domain

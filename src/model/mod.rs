@@ -23,6 +23,7 @@ pub mod domain;
 pub mod opencv;
 pub mod projection;
 pub mod solve;
+pub mod warp;
 
 use std::fmt;
 use std::str::FromStr;

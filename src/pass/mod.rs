@@ -5,6 +5,7 @@
 pub mod camera_params;
 pub mod grid_demo;
 pub mod points;
+pub mod warp;
 
 pub use camera_params::{CameraParams, CameraParams64, CAMERA_SPEC_IDS};
 pub use points::{PointsMode, PointsPass, Precision};

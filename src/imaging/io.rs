@@ -1,0 +1,151 @@
+//! PNG (8- and 16-bit; grey, grey+alpha, RGB, RGBA) and OpenEXR (32-bit float) in and out.
+//! Writes go to a temporary file beside the target and are renamed over it, so a failure
+//! never leaves a half-written file.
+
+use std::path::Path;
+
+use image::{DynamicImage, ImageBuffer, Rgba};
+
+use super::{Depth, Pixels, Raster};
+
+/// Reads an image; errors are one line naming the file.
+pub fn load(path: &Path) -> Result<Raster, String> {
+    let shown = path.display();
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| format!("{shown}: cannot read: {e}"))?
+        .with_guessed_format()
+        .map_err(|e| format!("{shown}: cannot read: {e}"))?;
+    match reader.format() {
+        Some(image::ImageFormat::Png) | Some(image::ImageFormat::OpenExr) => {}
+        Some(f) => {
+            return Err(format!(
+                "{shown}: {f:?} images are not supported (vklens reads PNG and OpenEXR)"
+            ))
+        }
+        None => {
+            return Err(format!(
+                "{shown}: not an image vklens can read (PNG or OpenEXR)"
+            ))
+        }
+    }
+    let img = reader
+        .decode()
+        .map_err(|e| format!("{shown}: cannot decode: {e}"))?;
+    let (width, height) = (img.width(), img.height());
+    let raster = match img {
+        DynamicImage::ImageLuma8(_)
+        | DynamicImage::ImageLumaA8(_)
+        | DynamicImage::ImageRgb8(_)
+        | DynamicImage::ImageRgba8(_) => {
+            let rgba = img.to_rgba8();
+            Raster {
+                width,
+                height,
+                pixels: Pixels::Rgba8(rgba.pixels().map(|p| p.0).collect()),
+                depth: Depth::U8,
+            }
+        }
+        DynamicImage::ImageLuma16(_)
+        | DynamicImage::ImageLumaA16(_)
+        | DynamicImage::ImageRgb16(_)
+        | DynamicImage::ImageRgba16(_) => {
+            let rgba = img.to_rgba16();
+            Raster {
+                width,
+                height,
+                pixels: Pixels::Rgba32F(
+                    rgba.pixels()
+                        .map(|p| p.0.map(|c| c as f32 / 65535.0))
+                        .collect(),
+                ),
+                depth: Depth::U16,
+            }
+        }
+        other => {
+            let rgba = other.to_rgba32f();
+            Raster {
+                width,
+                height,
+                pixels: Pixels::Rgba32F(rgba.pixels().map(|p| p.0).collect()),
+                depth: Depth::F32,
+            }
+        }
+    };
+    Ok(raster)
+}
+
+/// Writes `raster` to `path` (`.png` or `.exr`), keeping its depth where the format allows
+/// (8-bit or 16-bit PNG; float data becomes 16-bit PNG or float EXR).
+pub fn save(raster: &Raster, path: &Path) -> Result<(), String> {
+    let shown = path.display();
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    let exr = match ext.as_deref() {
+        Some("png") => false,
+        Some("exr") => true,
+        _ => return Err(format!("{shown}: the output must be a .png or .exr file")),
+    };
+    let (w, h) = (raster.width, raster.height);
+    let image: DynamicImage = match (&raster.pixels, exr) {
+        (Pixels::Rgba8(p), false) => DynamicImage::ImageRgba8(
+            ImageBuffer::from_raw(w, h, p.iter().flatten().copied().collect()).ok_or("size")?,
+        ),
+        (Pixels::R32Uint(p), false) => {
+            let v: Vec<u16> = p.iter().map(|&id| id.min(u16::MAX as u32) as u16).collect();
+            DynamicImage::ImageLuma16(ImageBuffer::from_raw(w, h, v).ok_or("size")?)
+        }
+        (Pixels::Rgba32F(p), false) => {
+            let v: Vec<u16> = p
+                .iter()
+                .flatten()
+                .map(|&c| (c.clamp(0.0, 1.0) * 65535.0).round() as u16)
+                .collect();
+            DynamicImage::ImageRgba16(ImageBuffer::<Rgba<u16>, _>::from_raw(w, h, v).ok_or("size")?)
+        }
+        (_, true) => {
+            let v: Vec<f32> = (0..raster.len()).flat_map(|i| raster.rgba_f32(i)).collect();
+            DynamicImage::ImageRgba32F(ImageBuffer::from_raw(w, h, v).ok_or("size")?)
+        }
+    };
+    write_atomically(path, |tmp| {
+        let format = if exr {
+            image::ImageFormat::OpenExr
+        } else {
+            image::ImageFormat::Png
+        };
+        image
+            .save_with_format(tmp, format)
+            .map_err(|e| e.to_string())
+    })
+}
+
+/// Runs `write` on a temporary path beside `path`, then renames it into place.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), String> {
+    let shown = path.display();
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(format!("{shown}: folder {} does not exist", dir.display()));
+    }
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or("output");
+    let tmp = dir.join(format!(".{name}.vklens-tmp"));
+    let result = write(&tmp)
+        .map_err(|e| format!("{shown}: cannot write: {e}"))
+        .and_then(|_| {
+            std::fs::rename(&tmp, path).map_err(|e| format!("{shown}: cannot write: {e}"))
+        });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}

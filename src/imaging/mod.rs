@@ -1,0 +1,55 @@
+//! Host-side images: loading and saving (PNG 8/16-bit, OpenEXR 32-bit float) and the f64
+//! reference warp the GPU is tested against. No Vulkan here.
+//!
+//! Pixel values are kept as stored: interpolation happens on the encoded values (sRGB or
+//! linear alike), as `cv2.remap` does; vklens converts nothing behind the user's back.
+
+pub mod cpu_warp;
+pub mod io;
+
+/// Pixels of a host image, row-major.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Pixels {
+    /// 8-bit RGBA (from 8-bit PNG).
+    Rgba8(Vec<[u8; 4]>),
+    /// Float RGBA (from 16-bit PNG, scaled to 0..1, or from EXR).
+    Rgba32F(Vec<[f32; 4]>),
+    /// Unsigned integers (object IDs): never interpolated.
+    R32Uint(Vec<u32>),
+}
+
+/// What the image was read from, so that it is written back the same way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Depth {
+    U8,
+    U16,
+    F32,
+}
+
+/// A host image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Raster {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Pixels,
+    pub depth: Depth,
+}
+
+impl Raster {
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+    /// Whether it has no pixels.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Pixel `i` as float RGBA (8-bit scaled to 0..1; IDs as numbers in .r).
+    pub fn rgba_f32(&self, i: usize) -> [f32; 4] {
+        match &self.pixels {
+            Pixels::Rgba8(p) => p[i].map(|c| c as f32 / 255.0),
+            Pixels::Rgba32F(p) => p[i],
+            Pixels::R32Uint(p) => [p[i] as f32, 0.0, 0.0, 1.0],
+        }
+    }
+}

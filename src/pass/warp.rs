@@ -1,0 +1,668 @@
+//! The post-processing warp (`glsl/warp.comp`) and its coordinate maps
+//! (`glsl/inverse_map.comp`).
+//!
+//! Build a [`WarpPass`] once per camera and format. Then, in the caller's command buffer:
+//! [`WarpPass::record_prepare`] once (builds the maps in map mode), then
+//! [`WarpPass::record`] every frame. Images are the caller's: storage images in `GENERAL`
+//! layout, bound with [`WarpPass::bind`].
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use gpu_allocator::MemoryLocation;
+
+use super::camera_params::CameraParams;
+use crate::gpu::{
+    host_read_barrier, image_barrier, memory_barrier, shaders, write_buffer_descriptors,
+    write_storage_image_descriptors, Buffer, ComputePipeline, Context, DescriptorPool, Gpu,
+    GpuError, Image, Result,
+};
+use crate::imaging::cpu_warp::Sampling;
+use crate::imaging::{Depth, Pixels, Raster};
+use crate::model::warp::{Direction, WarpGeometry};
+use crate::model::{InverseMethod, OpenCvCamera};
+
+/// How output pixels get their source coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coordinates {
+    /// Solve the model per pixel every frame.
+    Analytic,
+    /// Sample a map built once per camera (RG32F per channel) with the same code.
+    Map,
+}
+
+/// The pixel format of the source and output images.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PixelFormat {
+    /// `R8G8B8A8_UNORM` (8-bit data).
+    Rgba8,
+    /// `R32G32B32A32_SFLOAT` (16-bit and float data).
+    Rgba32F,
+    /// `R32_UINT` (object IDs; nearest only, never blended).
+    R32Uint,
+}
+
+impl PixelFormat {
+    /// The Vulkan format.
+    pub fn vk(self) -> vk::Format {
+        match self {
+            PixelFormat::Rgba8 => vk::Format::R8G8B8A8_UNORM,
+            PixelFormat::Rgba32F => vk::Format::R32G32B32A32_SFLOAT,
+            PixelFormat::R32Uint => vk::Format::R32_UINT,
+        }
+    }
+    /// Bytes per pixel.
+    pub fn bytes(self) -> usize {
+        match self {
+            PixelFormat::Rgba8 | PixelFormat::R32Uint => 4,
+            PixelFormat::Rgba32F => 16,
+        }
+    }
+    /// The format that holds `raster` without loss.
+    pub fn of(raster: &Raster) -> Self {
+        match raster.pixels {
+            Pixels::Rgba8(_) => PixelFormat::Rgba8,
+            Pixels::Rgba32F(_) => PixelFormat::Rgba32F,
+            Pixels::R32Uint(_) => PixelFormat::R32Uint,
+        }
+    }
+}
+
+/// Everything a warp pass is built from.
+#[derive(Debug, Clone)]
+pub struct WarpDesc {
+    pub geometry: WarpGeometry,
+    pub coordinates: Coordinates,
+    pub sampling: Sampling,
+    pub format: PixelFormat,
+    /// Value of pixels without a source (transparent black by default; for IDs, `.x` is the ID).
+    pub fill: [f32; 4],
+}
+
+/// `WarpPush` / `MapPush` of the shaders (same layout).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+pub struct WarpPush {
+    /// fx fy cx cy of the pinhole side.
+    pub ideal: [f32; 4],
+    /// Per-channel magnification R G B (map builds: .x is this channel's).
+    pub chromatic: [f32; 4],
+    /// Fill value.
+    pub fill: [f32; 4],
+    /// Source w h, output w h.
+    pub sizes: [u32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<WarpPush>() == 64);
+
+const MAP_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
+/// Map images per channel in shader binding order: R (5), G (4), B (6) → stored as [R, G, B].
+const MAP_BINDINGS: [u32; 3] = [5, 4, 6];
+
+/// One map build: a channel's camera and the map it writes.
+struct MapBuild {
+    set: vk::DescriptorSet,
+    _camera: Buffer,
+    push: WarpPush,
+}
+
+/// The warp, built for one geometry, format and sampling.
+pub struct WarpPass {
+    gpu: Gpu,
+    desc: WarpDesc,
+    pipeline: ComputePipeline,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    _camera: Buffer,
+    /// [R, G, B] maps (1×1 placeholders in analytic mode; only G without chromatic).
+    maps: Vec<Image>,
+    map_pipeline: Option<ComputePipeline>,
+    _map_pool: Option<DescriptorPool>,
+    map_builds: Vec<MapBuild>,
+    push: WarpPush,
+}
+
+fn method_constants(method: InverseMethod) -> (u32, u32) {
+    match method {
+        InverseMethod::Newton => (0, 1),
+        InverseMethod::Heikkila => (1, 1),
+        InverseMethod::FixedPoint(n) => (2, n),
+    }
+}
+
+fn f4(v: [f64; 4]) -> [f32; 4] {
+    v.map(|x| x as f32)
+}
+
+impl WarpPass {
+    /// Builds the pipelines (terms the camera does not use are compiled out; the single-fetch
+    /// variant when there is no chromatic aberration) and, in map mode, the map images.
+    pub fn new(gpu: &Gpu, desc: WarpDesc) -> Result<Self> {
+        let g = &desc.geometry;
+        if desc.format == PixelFormat::R32Uint
+            && (desc.sampling != Sampling::Nearest || g.is_chromatic())
+        {
+            return Err(GpuError::Invalid(
+                "object IDs (R32_UINT) are sampled nearest and without chromatic aberration".into(),
+            ));
+        }
+        if g.channel_cameras.is_some() && desc.coordinates == Coordinates::Analytic {
+            return Err(GpuError::Invalid(
+                "per-channel cameras need precomputed maps (Coordinates::Map)".into(),
+            ));
+        }
+        let chromatic = g.is_chromatic();
+        let (method, iterations) = method_constants(g.method);
+        let mode = match g.direction {
+            Direction::Distort => 0,
+            Direction::Undistort => 1,
+        };
+        let with_model = |cam: &OpenCvCamera| {
+            CameraParams::spec_constants(cam.distortion.terms())
+                .u32(8, mode)
+                .u32(9, method)
+                .u32(10, iterations)
+        };
+        let constants = with_model(&g.camera)
+            .bool(11, chromatic)
+            .bool(12, desc.coordinates == Coordinates::Map)
+            .bool(13, desc.sampling == Sampling::Nearest);
+        let spirv = match desc.format {
+            PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,
+            PixelFormat::Rgba32F => shaders::WARP_COMP,
+            PixelFormat::R32Uint => shaders::WARP_COMP_R32UI,
+        };
+        let storage = vk::DescriptorType::STORAGE_IMAGE;
+        let pipeline = ComputePipeline::new(
+            gpu,
+            spirv,
+            &[
+                vk::DescriptorType::UNIFORM_BUFFER,
+                storage,
+                storage,
+                storage,
+                storage,
+                storage,
+                storage,
+            ],
+            std::mem::size_of::<WarpPush>() as u32,
+            constants,
+        )?;
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
+        let set = pool.allocate(&pipeline)?;
+        let camera = Buffer::from_pod(
+            gpu,
+            "warp.camera",
+            &[CameraParams::from_camera(&g.camera)],
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+        )?;
+        write_buffer_descriptors(
+            gpu,
+            set,
+            &[(0, vk::DescriptorType::UNIFORM_BUFFER, &camera)],
+        );
+        let scales = g.chromatic.unwrap_or([1.0; 3]);
+        let k = &g.ideal;
+        let push = WarpPush {
+            ideal: f4([k.fx, k.fy, k.cx, k.cy]),
+            chromatic: f4([scales[0], scales[1], scales[2], 1.0]),
+            fill: desc.fill,
+            sizes: [
+                g.source_size.0,
+                g.source_size.1,
+                g.output_size.0,
+                g.output_size.1,
+            ],
+        };
+
+        // Maps: real ones in map mode (one per channel that differs), 1×1 placeholders
+        // otherwise (the bindings exist in every variant).
+        let (mw, mh) = match desc.coordinates {
+            Coordinates::Map => g.output_size,
+            Coordinates::Analytic => (1, 1),
+        };
+        let usage = vk::ImageUsageFlags::STORAGE;
+        let mut maps = Vec::new();
+        for c in 0..3 {
+            let real = desc.coordinates == Coordinates::Map && (c == 1 || chromatic);
+            let (w, h) = if real { (mw, mh) } else { (1, 1) };
+            maps.push(Image::new_2d(gpu, "warp.map", MAP_FORMAT, w, h, usage)?);
+        }
+        let map_views: Vec<(u32, vk::ImageView)> =
+            (0..3).map(|c| (MAP_BINDINGS[c], maps[c].view)).collect();
+        write_storage_image_descriptors(gpu, set, &map_views);
+
+        let mut map_pipeline = None;
+        let mut map_pool = None;
+        let mut map_builds = Vec::new();
+        if desc.coordinates == Coordinates::Map {
+            let channels: Vec<usize> = if chromatic { vec![0, 1, 2] } else { vec![1] };
+            // One pipeline serves every channel when all use the same term groups.
+            let cam_terms = |c: usize| g.channel_camera(c).distortion.terms();
+            let mut terms = cam_terms(1);
+            for &c in &channels {
+                let t = cam_terms(c);
+                terms.radial |= t.radial;
+                terms.rational |= t.rational;
+                terms.tangential |= t.tangential;
+                terms.prism |= t.prism;
+                terms.tilt |= t.tilt;
+            }
+            let constants = CameraParams::spec_constants(terms)
+                .u32(8, mode)
+                .u32(9, method)
+                .u32(10, iterations);
+            let mp = ComputePipeline::new(
+                gpu,
+                shaders::INVERSE_MAP_COMP,
+                &[vk::DescriptorType::UNIFORM_BUFFER, storage],
+                std::mem::size_of::<WarpPush>() as u32,
+                constants,
+            )?;
+            let mpool = DescriptorPool::for_pipeline(gpu, &mp, channels.len() as u32)?;
+            for &c in &channels {
+                let set = mpool.allocate(&mp)?;
+                let cam = Buffer::from_pod(
+                    gpu,
+                    "warp.map.camera",
+                    &[CameraParams::from_camera(g.channel_camera(c))],
+                    vk::BufferUsageFlags::UNIFORM_BUFFER,
+                )?;
+                write_buffer_descriptors(
+                    gpu,
+                    set,
+                    &[(0, vk::DescriptorType::UNIFORM_BUFFER, &cam)],
+                );
+                write_storage_image_descriptors(gpu, set, &[(1, maps[c].view)]);
+                let mut p = push;
+                p.chromatic = [g.channel_scale(c) as f32, 0.0, 0.0, 0.0];
+                map_builds.push(MapBuild {
+                    set,
+                    _camera: cam,
+                    push: p,
+                });
+            }
+            map_pipeline = Some(mp);
+            map_pool = Some(mpool);
+        }
+        Ok(WarpPass {
+            gpu: gpu.clone(),
+            desc,
+            pipeline,
+            _pool: pool,
+            set,
+            _camera: camera,
+            maps,
+            map_pipeline,
+            _map_pool: map_pool,
+            map_builds,
+            push,
+        })
+    }
+
+    /// What the pass was built from.
+    pub fn desc(&self) -> &WarpDesc {
+        &self.desc
+    }
+
+    /// The warp pipeline (its specialization constants show what was compiled in).
+    pub fn pipeline(&self) -> &ComputePipeline {
+        &self.pipeline
+    }
+
+    /// Points the pass at the caller's images (views of storage images that will be in
+    /// `GENERAL` layout when the recorded work runs): the source (`source_size`, this pass's
+    /// format), the output (`output_size`, same format) and the mask (`output_size`,
+    /// `R8_UNORM`: 1 valid, 0 filled). Not while recorded work using the pass is pending.
+    pub fn bind(&mut self, source: vk::ImageView, output: vk::ImageView, mask: vk::ImageView) {
+        write_storage_image_descriptors(
+            &self.gpu,
+            self.set,
+            &[(1, source), (2, output), (3, mask)],
+        );
+    }
+
+    /// Records the one-off work: the map images' transition to `GENERAL` and, in map mode, the
+    /// map builds (one dispatch per channel), followed by the barrier the warp needs.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass on a compute queue; record this once,
+    /// before the first [`WarpPass::record`], and not again while that work is pending.
+    pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
+        let d = self.gpu.device();
+        let none = (
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+            vk::AccessFlags::empty(),
+        );
+        let write = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_WRITE,
+        );
+        let read = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_READ,
+        );
+        unsafe {
+            for map in &self.maps {
+                // Maps are written (map builds) then read (warp) as storage images.
+                image_barrier(
+                    &self.gpu,
+                    cmd,
+                    map.raw,
+                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                    none,
+                    write,
+                );
+            }
+            if let Some(mp) = &self.map_pipeline {
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, mp.raw);
+                let (w, h) = self.desc.geometry.output_size;
+                for build in &self.map_builds {
+                    d.cmd_bind_descriptor_sets(
+                        cmd,
+                        vk::PipelineBindPoint::COMPUTE,
+                        mp.layout,
+                        0,
+                        &[build.set],
+                        &[],
+                    );
+                    d.cmd_push_constants(
+                        cmd,
+                        mp.layout,
+                        vk::ShaderStageFlags::COMPUTE,
+                        0,
+                        bytemuck::bytes_of(&build.push),
+                    );
+                    d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
+                }
+            }
+            // The warp reads the maps the builds wrote.
+            memory_barrier(&self.gpu, cmd, write, read);
+        }
+    }
+
+    /// Records the warp.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass on a compute queue, after
+    /// [`WarpPass::record_prepare`] and [`WarpPass::bind`]. On entry the source must be in
+    /// `GENERAL` layout with its writes visible to `COMPUTE_SHADER` reads, and the output and
+    /// mask in `GENERAL` layout; they stay in `GENERAL`. The caller makes the output's
+    /// `SHADER_WRITE`s visible to whatever reads them next.
+    pub unsafe fn record(&self, cmd: vk::CommandBuffer) {
+        let d = self.gpu.device();
+        let (w, h) = self.desc.geometry.output_size;
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.pipeline.layout,
+                0,
+                &[self.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                self.pipeline.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::bytes_of(&self.push),
+            );
+            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
+        }
+    }
+}
+
+/// Images and staging buffers for running a warp headlessly (CLI, tests, benches).
+pub struct WarpImages {
+    gpu: Gpu,
+    pub source: Image,
+    pub output: Image,
+    pub mask: Image,
+    upload: Buffer,
+    download: Buffer,
+    download_mask: Buffer,
+    format: PixelFormat,
+    output_size: (u32, u32),
+}
+
+impl WarpImages {
+    /// Allocates images for `desc` and stages `source` for upload.
+    pub fn new(gpu: &Gpu, desc: &WarpDesc, source: &Raster) -> Result<Self> {
+        let g = &desc.geometry;
+        if (source.width, source.height) != g.source_size {
+            return Err(GpuError::Invalid(format!(
+                "the source is {}×{} but the warp expects {}×{}",
+                source.width, source.height, g.source_size.0, g.source_size.1
+            )));
+        }
+        let bytes: Vec<u8> = match (&source.pixels, desc.format) {
+            (Pixels::Rgba8(p), PixelFormat::Rgba8) => p.iter().flatten().copied().collect(),
+            (Pixels::R32Uint(p), PixelFormat::R32Uint) => bytemuck::cast_slice(p).to_vec(),
+            (_, PixelFormat::Rgba32F) => {
+                let v: Vec<[f32; 4]> = (0..source.len()).map(|i| source.rgba_f32(i)).collect();
+                bytemuck::cast_slice(&v).to_vec()
+            }
+            _ => {
+                return Err(GpuError::Invalid(
+                    "the source's pixels do not match the warp's format".into(),
+                ))
+            }
+        };
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        let (ow, oh) = g.output_size;
+        let fmt = desc.format.vk();
+        let out_bytes = ow as u64 * oh as u64 * desc.format.bytes() as u64;
+        Ok(WarpImages {
+            source: Image::new_2d(gpu, "warp.source", fmt, source.width, source.height, usage)?,
+            output: Image::new_2d(gpu, "warp.output", fmt, ow, oh, usage)?,
+            mask: Image::new_2d(gpu, "warp.mask", vk::Format::R8_UNORM, ow, oh, usage)?,
+            upload: Buffer::from_pod(
+                gpu,
+                "warp.upload",
+                &bytes,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+            )?,
+            download: Buffer::new(
+                gpu,
+                "warp.download",
+                out_bytes,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?,
+            download_mask: Buffer::new(
+                gpu,
+                "warp.download.mask",
+                ow as u64 * oh as u64,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?,
+            gpu: gpu.clone(),
+            format: desc.format,
+            output_size: (ow, oh),
+        })
+    }
+
+    fn copy_region(w: u32, h: u32) -> [vk::BufferImageCopy; 1] {
+        [vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: vk::Extent3D {
+                width: w,
+                height: h,
+                depth: 1,
+            },
+        }]
+    }
+
+    /// Records the upload of the source and the layout transitions the warp expects.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass.
+    pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
+        let d = self.gpu.device();
+        let none = (
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+            vk::AccessFlags::empty(),
+        );
+        let transfer_write = (
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::TRANSFER_WRITE,
+        );
+        let shader_read = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_READ,
+        );
+        let shader_write = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_WRITE,
+        );
+        let e = self.source.extent;
+        unsafe {
+            // Source: fill it by copy, then hand it to the shader for reading.
+            image_barrier(
+                &self.gpu,
+                cmd,
+                self.source.raw,
+                (
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                ),
+                none,
+                transfer_write,
+            );
+            d.cmd_copy_buffer_to_image(
+                cmd,
+                self.upload.raw,
+                self.source.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &Self::copy_region(e.width, e.height),
+            );
+            image_barrier(
+                &self.gpu,
+                cmd,
+                self.source.raw,
+                (
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::ImageLayout::GENERAL,
+                ),
+                transfer_write,
+                shader_read,
+            );
+            // Output and mask: the shader writes every pixel, old contents are irrelevant.
+            for img in [&self.output, &self.mask] {
+                image_barrier(
+                    &self.gpu,
+                    cmd,
+                    img.raw,
+                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                    none,
+                    shader_write,
+                );
+            }
+        }
+    }
+
+    /// Records the download of output and mask after the warp.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass, after the warp.
+    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        let d = self.gpu.device();
+        let shader_write = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_WRITE,
+        );
+        let transfer_read = (
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::TRANSFER_READ,
+        );
+        let (w, h) = self.output_size;
+        unsafe {
+            for (img, buf) in [
+                (&self.output, &self.download),
+                (&self.mask, &self.download_mask),
+            ] {
+                // The copy reads what the warp wrote.
+                image_barrier(
+                    &self.gpu,
+                    cmd,
+                    img.raw,
+                    (
+                        vk::ImageLayout::GENERAL,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    ),
+                    shader_write,
+                    transfer_read,
+                );
+                d.cmd_copy_image_to_buffer(
+                    cmd,
+                    img.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    buf.raw,
+                    &Self::copy_region(w, h),
+                );
+            }
+            // The host reads the buffers after the fence.
+            memory_barrier(
+                &self.gpu,
+                cmd,
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
+            );
+        }
+    }
+
+    /// Reads output and mask back (after the submission completed).
+    pub fn read(&self, depth: Depth) -> Result<(Raster, Vec<u8>)> {
+        let (w, h) = self.output_size;
+        let n = w as usize * h as usize;
+        let pixels = match self.format {
+            PixelFormat::Rgba8 => Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
+            PixelFormat::Rgba32F => Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
+            PixelFormat::R32Uint => Pixels::R32Uint(self.download.read_pod::<u32>(n)?),
+        };
+        let mask = self.download_mask.read_pod::<u8>(n)?;
+        Ok((
+            Raster {
+                width: w,
+                height: h,
+                pixels,
+                depth,
+            },
+            mask,
+        ))
+    }
+}
+
+/// Runs a warp once through a headless context: upload, prepare, warp, download.
+pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raster, Vec<u8>)> {
+    let gpu = ctx.gpu();
+    let images = WarpImages::new(gpu, &desc, source)?;
+    let mut pass = WarpPass::new(gpu, desc)?;
+    pass.bind(images.source.view, images.output.view, images.mask.view);
+    ctx.submit(|cmd| {
+        unsafe {
+            images.record_upload(cmd);
+            pass.record_prepare(cmd);
+            pass.record(cmd);
+            images.record_download(cmd);
+            host_read_barrier(gpu, cmd);
+        }
+        Ok(())
+    })?;
+    images.read(source.depth)
+}

@@ -7,11 +7,13 @@
 mod bench;
 mod demo;
 mod points;
+mod warp;
 
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+use crate::model::warp::Direction;
 use crate::model::{InverseMethod, OpenCvCamera};
 use crate::pass::Precision;
 
@@ -63,6 +65,9 @@ Examples:
   vklens demo --output grid.png
   echo '[[0.1, 0.2], [0.5, -0.3]]' | vklens points distort --camera cam.yml
   echo '[[400, 300]]' | vklens points undistort --camera cam.yml --method fixed-point:5
+  vklens distort --camera cam.yml --input pinhole.png --output lens.png --mask valid.png
+  vklens undistort --camera cam.yml --input photo.png --output rectified.png
+  vklens overscan --camera cam.yml > source.json
   vklens bench inverse --json";
 
 #[derive(Parser, Debug)]
@@ -82,6 +87,17 @@ enum Command {
     Bench(BenchCommand),
     /// Render a procedural grid through a lens to a PNG (no input image needed).
     Demo(demo::DemoArgs),
+    /// Simulate the lens on a pinhole image: every output pixel samples the input where the
+    /// inverse model says its light came from (seed 000 Sec. 3.3).
+    Distort(warp::WarpArgs),
+    /// Rectify an image taken through the lens into a pinhole image (forward model per pixel,
+    /// as OpenCV's initUndistortRectifyMap + remap).
+    Undistort(warp::WarpArgs),
+    /// Pre-distort an image for a headset lens (seed 002): the screen shows what the lens will
+    /// undo; with --chromatic, lateral colour is pre-corrected per channel.
+    Precorrect(warp::WarpArgs),
+    /// Print the pinhole source camera (JSON) that covers every valid distorted pixel.
+    Overscan(warp::OverscanArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -194,5 +210,9 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         }) => points::undistort(&camera, method, backend, precision),
         Command::Bench(BenchCommand::Inverse(args)) => bench::inverse(args),
         Command::Demo(args) => demo::run(args),
+        Command::Distort(args) => warp::run(args, Direction::Distort, false),
+        Command::Undistort(args) => warp::run(args, Direction::Undistort, false),
+        Command::Precorrect(args) => warp::run(args, Direction::Undistort, true),
+        Command::Overscan(args) => warp::overscan_command(args),
     }
 }

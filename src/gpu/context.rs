@@ -233,6 +233,7 @@ impl Context {
             timestamps: families[family as usize].timestamp_valid_bits > 0,
             device_name: device_name(&props),
             float64,
+            max_image_side: props.limits.max_image_dimension2_d,
             owner: owned,
         });
         let pool_info = vk::CommandPoolCreateInfo::default()

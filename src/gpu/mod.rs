@@ -69,6 +69,8 @@ pub(crate) struct GpuInner {
     pub(crate) device_name: String,
     /// Whether `shaderFloat64` is enabled on the device (f64 shader variants).
     pub(crate) float64: bool,
+    /// `maxImageDimension2D`.
+    pub(crate) max_image_side: u32,
     /// Present when vklens created the device (headless [`Context`]); destroys it last.
     pub(crate) owner: Option<context::Owned>,
 }
@@ -110,6 +112,7 @@ impl Gpu {
                 timestamps: family.timestamp_valid_bits > 0,
                 device_name: device_name(&props),
                 float64: float64_enabled,
+                max_image_side: props.limits.max_image_dimension2_d,
                 owner: None,
             }),
         })
@@ -142,6 +145,10 @@ impl Gpu {
         self.inner
             .timestamps
             .then_some(self.inner.timestamp_period_ns)
+    }
+    /// The largest image side the device supports.
+    pub fn max_image_side(&self) -> u32 {
+        self.inner.max_image_side
     }
     /// Whether f64 shader variants can run (`shaderFloat64` enabled).
     pub fn supports_float64(&self) -> bool {

@@ -96,6 +96,14 @@ pub fn save(raster: &Raster, path: &Path) -> Result<(), String> {
             let v: Vec<u16> = p.iter().map(|&id| id.min(u16::MAX as u32) as u16).collect();
             DynamicImage::ImageLuma16(ImageBuffer::from_raw(w, h, v).ok_or("size")?)
         }
+        (Pixels::Rgba32F(p), false) if raster.depth == Depth::U8 => {
+            let v: Vec<u8> = p
+                .iter()
+                .flatten()
+                .map(|&c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
+                .collect();
+            DynamicImage::ImageRgba8(ImageBuffer::from_raw(w, h, v).ok_or("size")?)
+        }
         (Pixels::Rgba32F(p), false) => {
             let v: Vec<u16> = p
                 .iter()

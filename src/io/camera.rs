@@ -8,6 +8,8 @@
 //!   `image_height`.
 //! * ROS `camera_info` YAML (`plumb_bob`, `rational_polynomial`).
 //!
+//! * A Brown radial lens (seed 002): `{"model": "brown", "width", "height", "c1", "c2"}`.
+//!
 //! Every format is first turned into a JSON tree, then read by one function, so every format
 //! gets the same checks and the same error messages (file, field, value).
 
@@ -16,7 +18,24 @@ use std::path::Path;
 
 use serde_json::{Map, Value};
 
-use crate::model::{Intrinsics, ModelError, OpenCvCamera};
+use crate::model::{BrownRadial, Intrinsics, ModelError, OpenCvCamera};
+
+/// A lens as a file describes it.
+#[derive(Debug, Clone)]
+pub enum Lens {
+    OpenCv(OpenCvCamera),
+    Brown(BrownRadial),
+}
+
+impl Lens {
+    /// The lens as an OpenCV camera (Brown is the OpenCV model with fx = w/2, k1 = c1, k2 = c2).
+    pub fn to_opencv(&self) -> Result<OpenCvCamera, ModelError> {
+        match self {
+            Lens::OpenCv(c) => Ok(c.clone()),
+            Lens::Brown(b) => b.to_opencv(),
+        }
+    }
+}
 
 /// A camera file that could not be used: which file, and what is wrong with it.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,18 +52,37 @@ impl fmt::Display for CameraFileError {
 
 impl std::error::Error for CameraFileError {}
 
-/// Reads a camera file (format detected from its content).
+/// Reads a camera file (format detected from its content) as an OpenCV camera.
 pub fn load_camera(path: &Path) -> Result<OpenCvCamera, CameraFileError> {
+    let file = path.display().to_string();
+    load_lens(path)?.to_opencv().map_err(|e| CameraFileError {
+        file,
+        message: e.to_string(),
+    })
+}
+
+/// Reads a camera or lens file, keeping a Brown lens as such.
+pub fn load_lens(path: &Path) -> Result<Lens, CameraFileError> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| CameraFileError {
         file: file.clone(),
         message: format!("cannot read camera file: {e}"),
     })?;
-    parse_camera(&text, &file)
+    parse_lens(&text, &file)
 }
 
 /// Parses the text of a camera file; `origin` names it in errors.
 pub fn parse_camera(text: &str, origin: &str) -> Result<OpenCvCamera, CameraFileError> {
+    parse_lens(text, origin)?
+        .to_opencv()
+        .map_err(|e| CameraFileError {
+            file: origin.to_string(),
+            message: e.to_string(),
+        })
+}
+
+/// Parses the text of a camera or lens file.
+pub fn parse_lens(text: &str, origin: &str) -> Result<Lens, CameraFileError> {
     let err = |message: String| CameraFileError {
         file: origin.to_string(),
         message,
@@ -57,7 +95,23 @@ pub fn parse_camera(text: &str, origin: &str) -> Result<OpenCvCamera, CameraFile
     } else {
         yaml_to_tree(trimmed).map_err(err)?
     };
-    camera_from_tree(&tree).map_err(err)
+    if tree.get("model").and_then(Value::as_str) == Some("brown") {
+        return brown_from_tree(&tree).map(Lens::Brown).map_err(err);
+    }
+    camera_from_tree(&tree).map(Lens::OpenCv).map_err(err)
+}
+
+fn brown_from_tree(tree: &Value) -> Result<BrownRadial, String> {
+    let obj = tree.as_object().ok_or("expected an object")?;
+    let width = dimension(obj, &["width", "image_width"])?;
+    let height = dimension(obj, &["height", "image_height"])?;
+    BrownRadial::new(
+        width,
+        height,
+        number_field(obj, "c1")?,
+        number_field(obj, "c2")?,
+    )
+    .map_err(|e| e.to_string())
 }
 
 /// Reads a camera from a parsed JSON object (any of the layouts above).

@@ -21,6 +21,7 @@
 pub mod brown;
 pub mod domain;
 pub mod opencv;
+pub mod overscan;
 pub mod projection;
 pub mod solve;
 pub mod warp;

@@ -150,6 +150,7 @@ impl WarpPass {
                 "per-channel cameras need precomputed maps (Coordinates::Map)".into(),
             ));
         }
+        check_sizes(gpu, g)?;
         let chromatic = g.is_chromatic();
         let (method, iterations) = method_constants(g.method);
         let mode = match g.direction {
@@ -413,6 +414,20 @@ impl WarpPass {
     }
 }
 
+/// Refuses images the device cannot hold, before any is created.
+fn check_sizes(gpu: &Gpu, g: &WarpGeometry) -> Result<()> {
+    let max = gpu.max_image_side();
+    for (what, (w, h)) in [("source", g.source_size), ("output", g.output_size)] {
+        if w > max || h > max {
+            return Err(GpuError::Invalid(format!(
+                "the {what} is {w}×{h}, larger than {} supports ({max} px per side)",
+                gpu.device_name()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Images and staging buffers for running a warp headlessly (CLI, tests, benches).
 pub struct WarpImages {
     gpu: Gpu,
@@ -430,6 +445,7 @@ impl WarpImages {
     /// Allocates images for `desc` and stages `source` for upload.
     pub fn new(gpu: &Gpu, desc: &WarpDesc, source: &Raster) -> Result<Self> {
         let g = &desc.geometry;
+        check_sizes(gpu, g)?;
         if (source.width, source.height) != g.source_size {
             return Err(GpuError::Invalid(format!(
                 "the source is {}×{} but the warp expects {}×{}",

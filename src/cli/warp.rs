@@ -125,7 +125,7 @@ fn check_output(path: &Path, what: &str, allowed: &[&str]) -> Result<(), CliErro
         .unwrap_or_default();
     if !allowed.contains(&ext.as_str()) {
         return Err(CliError::input(format!(
-            "{}: the {what} must be a {} file",
+            "{}: the {what} must be a .{} file",
             path.display(),
             allowed.join(" or .")
         )));

@@ -1,0 +1,346 @@
+//! `vklens distort | undistort | precorrect | overscan` as scripts use them.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use vklens::imaging::{io as image_io, Depth, Pixels, Raster};
+use vklens::io::reference::shared_dir;
+
+fn vklens(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args(args)
+        .env("VKLENS_VALIDATION", "1")
+        .output()
+        .unwrap()
+}
+
+fn cam(name: &str) -> String {
+    shared_dir()
+        .join("reference/calibration-files")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vklens-cliwarp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn write_png(path: &Path, w: u32, h: u32, sixteen: bool) {
+    let pixels: Vec<[f32; 4]> = (0..w * h)
+        .map(|i| {
+            [
+                (i % w) as f32 / w as f32,
+                (i / w) as f32 / h as f32,
+                0.5,
+                1.0,
+            ]
+        })
+        .collect();
+    let raster = Raster {
+        width: w,
+        height: h,
+        pixels: Pixels::Rgba32F(pixels),
+        depth: if sixteen { Depth::U16 } else { Depth::U8 },
+    };
+    image_io::save(&raster, path).unwrap();
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn every_direction_writes_the_right_size_and_depth() {
+    let fig2 = cam("seed_fig2.opencv4.yml");
+    let input8 = tmp("in8.png");
+    let input16 = tmp("in16.png");
+    write_png(&input8, 800, 600, false);
+    write_png(&input16, 800, 600, true);
+    for (cmd, extra) in [
+        (
+            "distort",
+            vec!["--method", "lut", "--chromatic", "1.01,1,0.99"],
+        ),
+        (
+            "distort",
+            vec!["--method", "fixed-point:5", "--backend", "cpu"],
+        ),
+        ("undistort", vec![]),
+        ("precorrect", vec!["--chromatic", "1.005,1,0.995"]),
+    ] {
+        for (input, depth) in [
+            (&input8, image::ColorType::Rgba8),
+            (&input16, image::ColorType::Rgba16),
+        ] {
+            let out = tmp(&format!("{cmd}.png"));
+            let mask = tmp(&format!("{cmd}.mask.png"));
+            let mut args = vec![
+                cmd,
+                "--camera",
+                &fig2,
+                "--input",
+                s(input),
+                "--output",
+                s(&out),
+                "--mask",
+                s(&mask),
+            ];
+            args.extend(extra.iter());
+            let r = vklens(&args);
+            assert!(
+                r.status.success(),
+                "{args:?}: {}",
+                String::from_utf8_lossy(&r.stderr)
+            );
+            let img = image::open(&out).unwrap();
+            assert_eq!(
+                (img.width(), img.height(), img.color()),
+                (800, 600, depth),
+                "{args:?}"
+            );
+            assert_eq!(image::open(&mask).unwrap().width(), 800);
+        }
+    }
+    // EXR out.
+    let exr = tmp("out.exr");
+    let r = vklens(&[
+        "undistort",
+        "--camera",
+        &fig2,
+        "--input",
+        s(&input16),
+        "--output",
+        s(&exr),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert_eq!(image_io::load(&exr).unwrap().depth, Depth::F32);
+}
+
+#[test]
+fn overscan_prints_a_camera_that_distort_accepts_as_source() {
+    let fig1 = shared_dir().join("reference/calibration-files/seed_fig2.opencv.json");
+    let r = vklens(&["overscan", "--camera", s(&fig1), "--density", "1.0"]);
+    assert!(r.status.success());
+    let json: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    let (w, h) = (
+        json["width"].as_u64().unwrap() as u32,
+        json["height"].as_u64().unwrap() as u32,
+    );
+    assert!(w > 800 && h > 600, "{json}");
+    let src = tmp("src.json");
+    std::fs::write(&src, r.stdout).unwrap();
+    let input = tmp("over.png");
+    write_png(&input, w, h, false);
+    let (out, mask) = (tmp("over_out.png"), tmp("over_mask.png"));
+    let r = vklens(&[
+        "distort",
+        "--camera",
+        s(&fig1),
+        "--source-camera",
+        s(&src),
+        "--input",
+        s(&input),
+        "--output",
+        s(&out),
+        "--mask",
+        s(&mask),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    // With the overscanned source, no pixel of this fold-free lens is left unfilled.
+    let m = image::open(&mask).unwrap().to_luma8();
+    assert!(m.pixels().all(|p| p[0] == 255));
+    // The pinhole image of CAM's own size is now the wrong size: said so, exit 2.
+    let small = tmp("small.png");
+    write_png(&small, 800, 600, false);
+    let r = vklens(&[
+        "distort",
+        "--camera",
+        s(&fig1),
+        "--source-camera",
+        s(&src),
+        "--input",
+        s(&small),
+        "--output",
+        s(&tmp("never.png")),
+    ]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("800×600"));
+}
+
+#[test]
+fn bad_input_is_one_line_exit_2_and_leaves_no_file() {
+    let fig2 = cam("seed_fig2.ros.yaml");
+    let input = tmp("ok.png");
+    write_png(&input, 800, 600, false);
+    let jpeg = tmp("photo.jpg");
+    std::fs::write(&jpeg, b"\xff\xd8\xff\xe0 not really a jpeg").unwrap();
+    let nan_cam = tmp("nan.yml");
+    std::fs::write(&nan_cam, "image_width: 800\nimage_height: 600\ncamera_matrix:\n  data: [400, 0, 399.5, 0, .Nan, 299.5, 0, 0, 1]\n").unwrap();
+    let distorted_src = cam("seed_fig2.opencv.yml");
+    let wide = cam("rational_wide.ros.yaml");
+    let out = tmp("must_not_exist.png");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                "/no/such.png",
+                "--output",
+                s(&out),
+            ],
+            "/no/such.png",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &wide,
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+            ],
+            "1920×1080",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&jpeg),
+                "--output",
+                s(&out),
+            ],
+            "photo.jpg",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&input),
+                "--output",
+                "/tmp/x.bmp",
+            ],
+            ".png or .exr",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&input),
+                "--output",
+                "/no/such/dir/x.png",
+            ],
+            "does not exist",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                s(&nan_cam),
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+            ],
+            "NaN",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--source-camera",
+                &distorted_src,
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+            ],
+            "no distortion",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+                "--chromatic",
+                "1,1",
+            ],
+            "3 comma-separated",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+                "--fill",
+                "0,0,x,1",
+            ],
+            "not a number",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+                "--method",
+                "bogus",
+            ],
+            "bogus",
+        ),
+        (
+            vec![
+                "undistort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+                "--method",
+                "heikkila",
+            ],
+            "forward model",
+        ),
+        (
+            vec!["overscan", "--camera", &fig2, "--density", "0"],
+            "density",
+        ),
+    ];
+    for (args, needle) in cases {
+        let r = vklens(&args);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?} left an output behind");
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(out.parent().unwrap())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("vklens-tmp"))
+        .collect();
+    assert!(leftovers.is_empty());
+}

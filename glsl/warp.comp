@@ -21,6 +21,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 11) const bool CHROMATIC = false;
 layout(constant_id = 12) const bool USE_MAP = false;
 layout(constant_id = 13) const bool NEAREST = false;
+// The validity mask costs a full imageStore per pixel: only when someone asked for it.
+layout(constant_id = 14) const bool WRITE_MASK = true;
 
 #if defined(VKL_R32UI)
 layout(set = 0, binding = 1, r32ui) uniform readonly uimage2D source;
@@ -116,5 +118,5 @@ void main() {
 #else
     imageStore(target, id, ok ? value : pc.fill);
 #endif
-    imageStore(mask, id, vec4(ok ? 1.0 : 0.0));
+    if (WRITE_MASK) imageStore(mask, id, vec4(ok ? 1.0 : 0.0));
 }

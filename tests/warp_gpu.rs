@@ -95,6 +95,7 @@ fn check(
         sampling: Sampling::Bilinear,
         format,
         fill,
+        write_mask: true,
     };
     let (gpu, gpu_mask) = run_warp(ctx, desc, &source).expect("gpu warp");
     let d = compare(&cpu, &cpu_mask, &gpu, &gpu_mask);

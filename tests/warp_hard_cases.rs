@@ -32,6 +32,7 @@ fn desc(
         sampling,
         format,
         fill,
+        write_mask: true,
     }
 }
 

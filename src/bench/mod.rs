@@ -2,3 +2,4 @@
 //! approximation, reported as tables (and JSON lines), never asserted as wall-clock limits.
 
 pub mod inverse;
+pub mod warp;

@@ -57,3 +57,51 @@ pub fn inverse(args: InverseArgs) -> Result<(), CliError> {
     }
     Ok(())
 }
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', '×'])
+        .ok_or_else(|| format!("--size {s}: expected WxH, e.g. 1920x1080"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| n > 0 && n <= 16384)
+    };
+    match (p(w), p(h)) {
+        (Some(w), Some(h)) => Ok((w, h)),
+        _ => Err(format!(
+            "--size {s}: width and height must be whole numbers in 1..=16384"
+        )),
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct WarpArgs {
+    /// Measure only this size (WxH); default 800x600, 1920x1080 and 3840x2160.
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// One JSON object per line instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn warp(args: WarpArgs) -> Result<(), CliError> {
+    let ctx = context()?;
+    eprintln!("device: {}", ctx.gpu().device_name());
+    let sizes: Vec<(u32, u32)> = match args.size {
+        Some(s) => vec![s],
+        None => crate::bench::warp::SIZES.to_vec(),
+    };
+    let rows = crate::bench::warp::run(&ctx, &sizes, super::progress_line)?;
+    super::progress_done(&format!("measured {} rows", rows.len()));
+    finish(&ctx)?;
+    if args.json {
+        for r in &rows {
+            println!("{r}");
+        }
+    } else {
+        println!("{}", crate::bench::warp::table(&rows));
+    }
+    Ok(())
+}

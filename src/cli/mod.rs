@@ -142,6 +142,9 @@ enum BenchCommand {
     /// Error and time of every inverse method and iteration count, CPU and GPU, on the shared
     /// reference cameras, beside OpenCV's own undistortPoints errors.
     Inverse(bench::InverseArgs),
+    /// Frame time of the warp (analytic vs map, with and without chromatic offsets) beside a
+    /// copy pass on the same driver, and the cost of building a full-frame inverse map.
+    Warp(bench::WarpArgs),
 }
 
 /// Where the model runs.
@@ -209,6 +212,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
             precision,
         }) => points::undistort(&camera, method, backend, precision),
         Command::Bench(BenchCommand::Inverse(args)) => bench::inverse(args),
+        Command::Bench(BenchCommand::Warp(args)) => bench::warp(args),
         Command::Demo(args) => demo::run(args),
         Command::Distort(args) => warp::run(args, Direction::Distort, false),
         Command::Undistort(args) => warp::run(args, Direction::Undistort, false),

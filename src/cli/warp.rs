@@ -221,6 +221,8 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
                 sampling: args.sampling,
                 format: PixelFormat::of(&source),
                 fill,
+                // The mask also tells how many pixels were filled (reported below).
+                write_mask: true,
             };
             let r = run_warp(&ctx, desc, &source)?;
             finish(&ctx)?;

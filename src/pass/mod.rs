@@ -3,6 +3,7 @@
 //! [`crate::gpu::Context`] is just one caller.
 
 pub mod camera_params;
+pub mod copy;
 pub mod grid_demo;
 pub mod points;
 pub mod warp;

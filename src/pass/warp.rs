@@ -76,6 +76,8 @@ pub struct WarpDesc {
     pub format: PixelFormat,
     /// Value of pixels without a source (transparent black by default; for IDs, `.x` is the ID).
     pub fill: [f32; 4],
+    /// Write the validity mask (an extra store per pixel; the mask image is bound either way).
+    pub write_mask: bool,
 }
 
 /// `WarpPush` / `MapPush` of the shaders (same layout).
@@ -166,7 +168,8 @@ impl WarpPass {
         let constants = with_model(&g.camera)
             .bool(11, chromatic)
             .bool(12, desc.coordinates == Coordinates::Map)
-            .bool(13, desc.sampling == Sampling::Nearest);
+            .bool(13, desc.sampling == Sampling::Nearest)
+            .bool(14, desc.write_mask);
         let spirv = match desc.format {
             PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,
             PixelFormat::Rgba32F => shaders::WARP_COMP,
@@ -681,4 +684,85 @@ pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raste
         Ok(())
     })?;
     images.read(source.depth)
+}
+
+/// Builds `geometry`'s coordinate maps on the GPU and reads them back: per built channel
+/// (G only without chromatic aberration; else R, G, B), row-major `[x, y]` source positions,
+/// NaN where there is none. The same code the warp runs per pixel in analytic mode.
+pub fn read_maps(ctx: &Context, geometry: &WarpGeometry) -> Result<Vec<Vec<[f32; 2]>>> {
+    let gpu = ctx.gpu();
+    let desc = WarpDesc {
+        geometry: geometry.clone(),
+        coordinates: Coordinates::Map,
+        sampling: Sampling::Bilinear,
+        format: PixelFormat::Rgba8,
+        fill: [0.0; 4],
+        write_mask: false,
+    };
+    let pass = WarpPass::new(gpu, desc)?;
+    let (w, h) = geometry.output_size;
+    let channels: Vec<usize> = if geometry.is_chromatic() {
+        vec![0, 1, 2]
+    } else {
+        vec![1]
+    };
+    let buffers = channels
+        .iter()
+        .map(|_| {
+            Buffer::new(
+                gpu,
+                "map.read",
+                w as u64 * h as u64 * 8,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    ctx.submit(|cmd| {
+        unsafe {
+            pass.record_prepare(cmd);
+            for (&c, buf) in channels.iter().zip(&buffers) {
+                let map = &pass.maps[c];
+                // The copy reads what the map build wrote.
+                image_barrier(
+                    gpu,
+                    cmd,
+                    map.raw,
+                    (
+                        vk::ImageLayout::GENERAL,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    ),
+                    (
+                        vk::PipelineStageFlags::COMPUTE_SHADER,
+                        vk::AccessFlags::SHADER_WRITE,
+                    ),
+                    (
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::AccessFlags::TRANSFER_READ,
+                    ),
+                );
+                gpu.device().cmd_copy_image_to_buffer(
+                    cmd,
+                    map.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    buf.raw,
+                    &WarpImages::copy_region(w, h),
+                );
+            }
+            memory_barrier(
+                gpu,
+                cmd,
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
+            );
+        }
+        Ok(())
+    })?;
+    buffers
+        .iter()
+        .map(|b| b.read_pod::<[f32; 2]>(w as usize * h as usize))
+        .collect()
 }

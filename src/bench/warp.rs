@@ -1,0 +1,293 @@
+//! `vklens bench warp`: what the post-processing warp costs per frame, analytic versus map,
+//! with and without chromatic offsets, beside a plain copy pass on the same driver (the floor),
+//! and what a full-frame inverse map costs to build — each with its coordinate error against
+//! the f64 model.
+//!
+//! Frame time is wall time over a batch of frames recorded back to back into one command
+//! buffer (a barrier between frames, as an engine would have), divided by the batch size, the
+//! median of 5 batches; GPU timestamps over the same batches are reported alongside.
+
+use std::time::Instant;
+
+use ash::vk;
+use glam::DVec2;
+use serde_json::{json, Value};
+
+use crate::gpu::{memory_barrier, Context, QueryPool, Result};
+use crate::imaging::cpu_warp::Sampling;
+use crate::imaging::{Depth, Pixels, Raster};
+use crate::model::warp::WarpGeometry;
+use crate::model::{Intrinsics, InverseMethod, OpenCvCamera};
+use crate::pass::copy::CopyPass;
+use crate::pass::warp::{read_maps, Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
+
+/// The sizes measured by default.
+pub const SIZES: [(u32, u32); 3] = [(800, 600), (1920, 1080), (3840, 2160)];
+
+/// The bench camera at a size: the shared `prism_tilt` case (all 14 coefficients) scaled to it.
+pub fn bench_camera(w: u32, h: u32) -> OpenCvCamera {
+    let s = w as f64 / 1024.0;
+    OpenCvCamera::from_coeffs(
+        w,
+        h,
+        Intrinsics {
+            fx: 800.0 * s,
+            fy: 790.0 * s,
+            cx: (w as f64 - 1.0) / 2.0,
+            cy: (h as f64 - 1.0) / 2.0,
+        },
+        &[
+            -0.12, 0.04, 0.002, -0.001, 0.0, 0.0, 0.0, 0.0, 0.003, -0.0005, -0.002, 0.0004, 0.01,
+            -0.015,
+        ],
+    )
+    .expect("valid bench camera")
+}
+
+/// Most frames per timed batch.
+pub const BATCH: u32 = 20;
+/// Batches per measurement (the median is reported; the machine is noisy).
+pub const REPEATS: usize = 5;
+/// Lateral colour used for the chromatic rows.
+pub const CHROMATIC: [f64; 3] = [1.003, 1.0, 0.997];
+
+fn test_source(w: u32, h: u32) -> Raster {
+    let pixels = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            [
+                (x * 255 / w) as u8,
+                (y * 255 / h) as u8,
+                (((x / 16) + (y / 16)) % 2 * 255) as u8,
+                255,
+            ]
+        })
+        .collect();
+    Raster {
+        width: w,
+        height: h,
+        pixels: Pixels::Rgba8(pixels),
+        depth: Depth::U8,
+    }
+}
+
+/// Records `frame` back to back in batches and returns the median over [`REPEATS`] batches of
+/// (wall ms, GPU ms) per frame. The batch is sized to about 300 ms from a warm-up frame (which
+/// also lets the driver compile the pipeline), between 3 and [`BATCH`] frames.
+fn time_batch(ctx: &Context, frame: &dyn Fn(vk::CommandBuffer)) -> Result<(f64, Option<f64>)> {
+    let gpu = ctx.gpu();
+    let queries = QueryPool::timestamps(gpu, 2).ok();
+    let write = (
+        vk::PipelineStageFlags::COMPUTE_SHADER,
+        vk::AccessFlags::SHADER_WRITE,
+    );
+    let record = |cmd: vk::CommandBuffer, n: u32| {
+        for i in 0..n {
+            frame(cmd);
+            if i + 1 < n {
+                // Successive frames write the same output: order them, as an engine would.
+                unsafe { memory_barrier(gpu, cmd, write, write) };
+            }
+        }
+    };
+    let start = Instant::now();
+    ctx.submit(|cmd| {
+        record(cmd, 1);
+        Ok(())
+    })?;
+    let estimate = start.elapsed().as_secs_f64() * 1e3;
+    let n = ((300.0 / estimate.max(0.01)).round() as u32).clamp(3, BATCH);
+    let mut walls = Vec::new();
+    let mut gpus = Vec::new();
+    for _ in 0..REPEATS {
+        let start = Instant::now();
+        ctx.submit(|cmd| {
+            if let Some(q) = &queries {
+                q.cmd_reset(cmd);
+                q.cmd_write(cmd, 0);
+            }
+            record(cmd, n);
+            if let Some(q) = &queries {
+                q.cmd_write(cmd, 1);
+            }
+            Ok(())
+        })?;
+        walls.push(start.elapsed().as_secs_f64() * 1e3 / n as f64);
+        if let Some(t) = queries.as_ref().and_then(|q| q.read_ns().ok()) {
+            gpus.push((t[1] - t[0]) / 1e6 / n as f64);
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    };
+    Ok((median(&mut walls).unwrap_or(f64::NAN), median(&mut gpus)))
+}
+
+/// Max distance between GPU map coordinates and the f64 model, over a grid of pixels
+/// (about 40,000), in source pixels; pixels one side calls invalid and the other not count
+/// separately.
+fn coordinate_error(ctx: &Context, g: &WarpGeometry) -> Result<(f64, usize)> {
+    let maps = read_maps(ctx, g)?;
+    let channels: Vec<usize> = if g.is_chromatic() {
+        vec![0, 1, 2]
+    } else {
+        vec![1]
+    };
+    let (w, h) = g.output_size;
+    let stride = ((w as usize * h as usize / 40_000) as f64).sqrt().max(1.0) as u32;
+    let (mut worst, mut disagree) = (0.0f64, 0usize);
+    for (map, &c) in maps.iter().zip(&channels) {
+        for y in (0..h).step_by(stride as usize) {
+            for x in (0..w).step_by(stride as usize) {
+                let m = map[(y * w + x) as usize];
+                let cpu = g.source_coordinate(DVec2::new(x as f64, y as f64), c);
+                match (m[0].is_nan(), cpu) {
+                    (false, Some(s)) => {
+                        worst = worst.max((DVec2::new(m[0] as f64, m[1] as f64) - s).length())
+                    }
+                    (true, None) => {}
+                    _ => disagree += 1,
+                }
+            }
+        }
+    }
+    Ok((worst, disagree))
+}
+
+/// Runs the benchmark at `sizes`; `progress` hears what is being measured. Returns JSON rows
+/// (`bench`: `warp`, `inverse_map`, `copy`).
+pub fn run(
+    ctx: &Context,
+    sizes: &[(u32, u32)],
+    mut progress: impl FnMut(&str),
+) -> Result<Vec<Value>> {
+    let gpu = ctx.gpu();
+    let mut rows = Vec::new();
+    for &(w, h) in sizes {
+        let cam = bench_camera(w, h);
+        let source = test_source(w, h);
+        let plain = WarpGeometry::distort(cam.clone(), InverseMethod::Newton);
+
+        progress(&format!("{w}×{h} copy"));
+        let desc = |g: &WarpGeometry, coordinates| WarpDesc {
+            geometry: g.clone(),
+            coordinates,
+            sampling: Sampling::Bilinear,
+            format: PixelFormat::Rgba8,
+            fill: [0.0; 4],
+            write_mask: false,
+        };
+        let images = WarpImages::new(gpu, &desc(&plain, Coordinates::Analytic), &source)?;
+        ctx.submit(|cmd| {
+            unsafe { images.record_upload(cmd) };
+            Ok(())
+        })?;
+        let mut copy = CopyPass::new(gpu, w, h)?;
+        copy.bind(images.source.view, images.output.view);
+        let (frame_ms, _) = time_batch(ctx, &|cmd| unsafe { copy.record(cmd) })?;
+        rows.push(json!({"bench": "copy", "width": w, "height": h, "frame_ms": frame_ms}));
+
+        progress(&format!("{w}×{h} inverse map"));
+        let mut build = WarpPass::new(gpu, desc(&plain, Coordinates::Map))?;
+        build.bind(images.source.view, images.output.view, images.mask.view);
+        // Build time: one map build per submission (it is a once-per-camera cost).
+        ctx.submit(|cmd| {
+            unsafe { build.record_prepare(cmd) };
+            Ok(())
+        })?;
+        let start = Instant::now();
+        ctx.submit(|cmd| {
+            unsafe { build.record_prepare(cmd) };
+            Ok(())
+        })?;
+        let map_ms = start.elapsed().as_secs_f64() * 1e3;
+        let (map_err, map_disagree) = coordinate_error(ctx, &plain)?;
+        rows.push(json!({"bench": "inverse_map", "width": w, "height": h, "method": "newton", "ms": map_ms, "max_err_px": map_err, "disagreeing_px": map_disagree}));
+
+        for chromatic in [false, true] {
+            let g = if chromatic {
+                plain
+                    .clone()
+                    .with_chromatic(CHROMATIC)
+                    .expect("valid scales")
+            } else {
+                plain.clone()
+            };
+            let (err, _) = coordinate_error(ctx, &g)?;
+            for (label, coordinates) in [
+                ("analytic", Coordinates::Analytic),
+                ("map", Coordinates::Map),
+            ] {
+                progress(&format!(
+                    "{w}×{h} {label}{}",
+                    if chromatic { " chromatic" } else { "" }
+                ));
+                let mut pass = WarpPass::new(gpu, desc(&g, coordinates))?;
+                pass.bind(images.source.view, images.output.view, images.mask.view);
+                ctx.submit(|cmd| {
+                    unsafe { pass.record_prepare(cmd) };
+                    Ok(())
+                })?;
+                let (frame_ms, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd) })?;
+                rows.push(json!({
+                    "bench": "warp", "width": w, "height": h, "method": label, "chromatic": chromatic,
+                    "frame_ms": frame_ms, "gpu_ms": gpu_ms, "max_err_px": err,
+                }));
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// The rows as a Markdown table, with each warp's ratio to the copy pass of its size.
+pub fn table(rows: &[Value]) -> String {
+    let mut out = String::from(
+        "| size | pass | chromatic | frame ms | GPU ms | × copy | max coord err px |\n|---|---|---|---:|---:|---:|---:|\n",
+    );
+    let copy_ms = |w: &Value, h: &Value| {
+        rows.iter()
+            .find(|r| r["bench"] == "copy" && &r["width"] == w && &r["height"] == h)
+            .and_then(|r| r["frame_ms"].as_f64())
+    };
+    for r in rows {
+        let size = format!("{}×{}", r["width"], r["height"]);
+        let f = |k: &str| {
+            r[k].as_f64()
+                .map(|v| format!("{v:.2}"))
+                .unwrap_or_else(|| "—".into())
+        };
+        let e = |k: &str| {
+            r[k].as_f64()
+                .map(|v| format!("{v:.1e}"))
+                .unwrap_or_else(|| "—".into())
+        };
+        match r["bench"].as_str() {
+            Some("copy") => out.push_str(&format!(
+                "| {size} | copy (floor) | — | {} | — | 1.00 | — |\n",
+                f("frame_ms")
+            )),
+            Some("inverse_map") => out.push_str(&format!(
+                "| {size} | inverse map build (once) | — | {} | — | — | {} |\n",
+                f("ms"),
+                e("max_err_px")
+            )),
+            Some("warp") => {
+                let ratio = match (r["frame_ms"].as_f64(), copy_ms(&r["width"], &r["height"])) {
+                    (Some(a), Some(b)) => format!("{:.2}", a / b),
+                    _ => "—".into(),
+                };
+                out.push_str(&format!(
+                    "| {size} | warp, {} | {} | {} | {} | {ratio} | {} |\n",
+                    r["method"].as_str().unwrap_or(""),
+                    if r["chromatic"] == true { "yes" } else { "no" },
+                    f("frame_ms"),
+                    f("gpu_ms"),
+                    e("max_err_px")
+                ));
+            }
+            _ => {}
+        }
+    }
+    out
+}

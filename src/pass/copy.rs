@@ -1,0 +1,74 @@
+//! The copy pass (`glsl/copy.comp`): imageLoad → imageStore of an RGBA8 image, the floor every
+//! warp is measured against on the same driver.
+
+use ash::vk;
+
+use crate::gpu::{
+    shaders, write_storage_image_descriptors, ComputePipeline, DescriptorPool, Gpu, Result,
+    SpecConstants,
+};
+
+/// Copies one RGBA8 storage image into another of the same size.
+pub struct CopyPass {
+    gpu: Gpu,
+    pipeline: ComputePipeline,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    size: (u32, u32),
+}
+
+impl CopyPass {
+    pub fn new(gpu: &Gpu, width: u32, height: u32) -> Result<Self> {
+        let storage = vk::DescriptorType::STORAGE_IMAGE;
+        let pipeline = ComputePipeline::new(
+            gpu,
+            shaders::COPY_COMP,
+            &[storage, storage],
+            16,
+            SpecConstants::new(),
+        )?;
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
+        let set = pool.allocate(&pipeline)?;
+        Ok(CopyPass {
+            gpu: gpu.clone(),
+            pipeline,
+            _pool: pool,
+            set,
+            size: (width, height),
+        })
+    }
+
+    /// Binds the source and destination (storage images in `GENERAL` layout).
+    pub fn bind(&mut self, source: vk::ImageView, target: vk::ImageView) {
+        write_storage_image_descriptors(&self.gpu, self.set, &[(0, source), (1, target)]);
+    }
+
+    /// Records the copy.
+    ///
+    /// # Safety
+    /// As [`crate::pass::warp::WarpPass::record`].
+    pub unsafe fn record(&self, cmd: vk::CommandBuffer) {
+        let d = self.gpu.device();
+        let (w, h) = self.size;
+        let sizes = [w, h, w, h];
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.pipeline.layout,
+                0,
+                &[self.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                self.pipeline.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::cast_slice(&sizes),
+            );
+            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
+        }
+    }
+}

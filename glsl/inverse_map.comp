@@ -9,20 +9,23 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "camera_model.glsl"
 #include "warp_coords.glsl"
 
+// Solve every STRIDE-th pixel only (a coarse map for upsample_map.comp); 1: every pixel.
+layout(constant_id = 11) const uint STRIDE = 1;
+
 layout(set = 0, binding = 1, rg32f) uniform writeonly image2D map;
 
 layout(push_constant) uniform MapPush {
     vec4 ideal;      // as WarpPush.ideal
     vec4 chromatic;  // x: this channel's magnification
     vec4 unused;
-    uvec4 sizes;     // source w h, output w h
+    uvec4 sizes;     // source w h, map w h
 } pc;
 
 void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
     if (id.x >= int(pc.sizes.z) || id.y >= int(pc.sizes.w)) return;
     vec2 s;
-    bool ok = vkl_warp_source(vec2(id), pc.ideal, pc.chromatic.x, s);
+    bool ok = vkl_warp_source(vec2(id * int(STRIDE)), pc.ideal, pc.chromatic.x, s);
     float nan = uintBitsToFloat(0x7fc00000u);
     imageStore(map, id, ok ? vec4(s, 0.0, 0.0) : vec4(nan, nan, 0.0, 0.0));
 }

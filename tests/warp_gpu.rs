@@ -198,3 +198,82 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
+    use glam::DVec2;
+    use vklens::model::CameraModel;
+    use vklens::pass::warp::read_maps;
+    let ctx = common::validated_context();
+    let reference = load_reference().unwrap();
+    for name in ["prism_tilt", "rational_wide"] {
+        let cam = reference
+            .cases
+            .iter()
+            .find(|c| c.name == name)
+            .unwrap()
+            .camera()
+            .unwrap();
+        let g = WarpGeometry::distort(cam.clone(), InverseMethod::Newton);
+        let exact = &read_maps(&ctx, &g, Coordinates::Map).unwrap()[0];
+        for (coords, bound) in [
+            (
+                Coordinates::CoarseMap {
+                    stride: 4,
+                    refine: 0,
+                },
+                3e-3,
+            ),
+            (
+                Coordinates::CoarseMap {
+                    stride: 16,
+                    refine: 1,
+                },
+                2e-3,
+            ),
+        ] {
+            let coarse = &read_maps(&ctx, &g, coords).unwrap()[0];
+            let (mut worst, mut residual, mut lost, mut gained) = (0.0f64, 0.0f64, 0usize, 0usize);
+            for (i, (e, c)) in exact.iter().zip(coarse).enumerate() {
+                let p = DVec2::new(
+                    (i % cam.width as usize) as f64,
+                    (i / cam.width as usize) as f64,
+                );
+                match (e[0].is_nan(), c[0].is_nan()) {
+                    (false, false) => {
+                        // Against the f64 model, not the f32 exact map.
+                        if let Some(t) = g.model_coordinate(p, 1) {
+                            worst = worst.max((DVec2::new(c[0] as f64, c[1] as f64) - t).length());
+                        }
+                        // Forward residual: where the model sends the coarse map's answer.
+                        let x = cam
+                            .intrinsics
+                            .to_normalized(DVec2::new(c[0] as f64, c[1] as f64));
+                        if let Some(back) = cam.distort_pixel(cam.intrinsics.to_pixel(x)) {
+                            residual = residual.max((back - p).length());
+                        }
+                    }
+                    (false, true) => lost += 1,
+                    (true, false) => gained += 1,
+                    (true, true) => {}
+                }
+            }
+            println!(
+                "{name} {coords:?}: max {worst:.1e} px from the f64 model, forward residual ≤ {residual:.1e} px; \
+                 {lost} px conservatively invalid, {gained} wrongly valid"
+            );
+            assert_eq!(
+                gained, 0,
+                "a coarse map must never call an invalid pixel valid"
+            );
+            // Every valid pixel passed the shader's forward check (0.05 px, f32).
+            assert!(residual < 0.06, "{name} {coords:?}: residual {residual}");
+            if name == "prism_tilt" {
+                // No fold inside this image: the error bound holds everywhere, nothing is lost.
+                assert!(worst < bound, "{name} {coords:?}: {worst}");
+                assert_eq!(lost, 0);
+            }
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}

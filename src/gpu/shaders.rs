@@ -17,3 +17,6 @@ pub const INVERSE_MAP_COMP: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/inverse_map.comp.spv"));
 /// `glsl/copy.comp`: the copy pass the warp is measured against.
 pub const COPY_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/copy.comp.spv"));
+/// `glsl/upsample_map.comp`: a full-resolution map from a coarse one (+ Newton refinement).
+pub const UPSAMPLE_MAP_COMP: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/upsample_map.comp.spv"));

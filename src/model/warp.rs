@@ -116,13 +116,20 @@ impl WarpGeometry {
     /// The source position of output pixel `p` for channel `c` (0 R, 1 G, 2 B), or `None` when
     /// the light has no valid source (outside the valid domain or the source frame).
     pub fn source_coordinate(&self, p: DVec2, c: usize) -> Option<DVec2> {
+        self.model_coordinate(p, c)
+            .filter(|&s| self.on_source_frame(s))
+    }
+
+    /// As [`WarpGeometry::source_coordinate`] without the source-frame check: what a coordinate
+    /// map stores (the warp checks the frame when it samples).
+    pub fn model_coordinate(&self, p: DVec2, c: usize) -> Option<DVec2> {
         let cam = self.channel_camera(c);
         let scale = self.channel_scale(c);
         let ideal = &self.ideal;
-        let s = match self.direction {
+        match self.direction {
             Direction::Distort => {
                 let d = cam.intrinsics.to_normalized(p) / scale;
-                ideal.to_pixel(cam.undistort_normalized(d, self.method)?)
+                Some(ideal.to_pixel(cam.undistort_normalized(d, self.method)?))
             }
             Direction::Undistort => {
                 let x = ideal.to_normalized(p);
@@ -130,9 +137,8 @@ impl WarpGeometry {
                 if !cam.domain().contains_ideal(x) {
                     return None;
                 }
-                cam.intrinsics.to_pixel(cam.distort_normalized(x)? * scale)
+                Some(cam.intrinsics.to_pixel(cam.distort_normalized(x)? * scale))
             }
-        };
-        self.on_source_frame(s).then_some(s)
+        }
     }
 }

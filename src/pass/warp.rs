@@ -28,6 +28,17 @@ pub enum Coordinates {
     Analytic,
     /// Sample a map built once per camera (RG32F per channel) with the same code.
     Map,
+    /// Sample a map built from a coarse one: every `stride`-th pixel solved exactly, the rest
+    /// interpolated bilinearly, then `refine` Newton steps (distort only). Next to a fold,
+    /// validity is conservative by up to one coarse cell (`Map` is exact there).
+    CoarseMap { stride: u32, refine: u32 },
+}
+
+impl Coordinates {
+    /// Whether the warp samples a map.
+    pub fn uses_map(self) -> bool {
+        !matches!(self, Coordinates::Analytic)
+    }
 }
 
 /// The pixel format of the source and output images.
@@ -100,11 +111,13 @@ const MAP_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 /// Map images per channel in shader binding order: R (5), G (4), B (6) → stored as [R, G, B].
 const MAP_BINDINGS: [u32; 3] = [5, 4, 6];
 
-/// One map build: a channel's camera and the map it writes.
-struct MapBuild {
+/// One dispatch of a map build; a barrier follows when the next step reads its output.
+struct MapStep {
+    pipeline: usize,
     set: vk::DescriptorSet,
-    _camera: Buffer,
     push: WarpPush,
+    groups: (u32, u32),
+    barrier_after: bool,
 }
 
 /// The warp, built for one geometry, format and sampling.
@@ -117,9 +130,11 @@ pub struct WarpPass {
     _camera: Buffer,
     /// [R, G, B] maps (1×1 placeholders in analytic mode; only G without chromatic).
     maps: Vec<Image>,
-    map_pipeline: Option<ComputePipeline>,
+    map_pipelines: Vec<ComputePipeline>,
     _map_pool: Option<DescriptorPool>,
-    map_builds: Vec<MapBuild>,
+    _map_cameras: Vec<Buffer>,
+    _coarse: Vec<Image>,
+    map_steps: Vec<MapStep>,
     push: WarpPush,
 }
 
@@ -147,6 +162,13 @@ impl WarpPass {
                 "object IDs (R32_UINT) are sampled nearest and without chromatic aberration".into(),
             ));
         }
+        if let Coordinates::CoarseMap { stride, refine } = desc.coordinates {
+            if !(2..=64).contains(&stride) || refine > 8 || g.direction != Direction::Distort {
+                return Err(GpuError::Invalid(
+                    "a coarse map needs the distort direction, a stride in 2..=64 and at most 8 refinement steps".into(),
+                ));
+            }
+        }
         if g.channel_cameras.is_some() && desc.coordinates == Coordinates::Analytic {
             return Err(GpuError::Invalid(
                 "per-channel cameras need precomputed maps (Coordinates::Map)".into(),
@@ -167,7 +189,7 @@ impl WarpPass {
         };
         let constants = with_model(&g.camera)
             .bool(11, chromatic)
-            .bool(12, desc.coordinates == Coordinates::Map)
+            .bool(12, desc.coordinates.uses_map())
             .bool(13, desc.sampling == Sampling::Nearest)
             .bool(14, desc.write_mask);
         let spirv = match desc.format {
@@ -220,14 +242,16 @@ impl WarpPass {
 
         // Maps: real ones in map mode (one per channel that differs), 1×1 placeholders
         // otherwise (the bindings exist in every variant).
-        let (mw, mh) = match desc.coordinates {
-            Coordinates::Map => g.output_size,
-            Coordinates::Analytic => (1, 1),
+        let (mw, mh) = if desc.coordinates.uses_map() {
+            g.output_size
+        } else {
+            (1, 1)
         };
-        let usage = vk::ImageUsageFlags::STORAGE;
+        // TRANSFER_SRC: `read_maps` copies maps out (for tests, benches and engines that cache them).
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let mut maps = Vec::new();
         for c in 0..3 {
-            let real = desc.coordinates == Coordinates::Map && (c == 1 || chromatic);
+            let real = desc.coordinates.uses_map() && (c == 1 || chromatic);
             let (w, h) = if real { (mw, mh) } else { (1, 1) };
             maps.push(Image::new_2d(gpu, "warp.map", MAP_FORMAT, w, h, usage)?);
         }
@@ -235,57 +259,108 @@ impl WarpPass {
             (0..3).map(|c| (MAP_BINDINGS[c], maps[c].view)).collect();
         write_storage_image_descriptors(gpu, set, &map_views);
 
-        let mut map_pipeline = None;
+        let mut map_pipelines = Vec::new();
         let mut map_pool = None;
-        let mut map_builds = Vec::new();
-        if desc.coordinates == Coordinates::Map {
+        let mut map_cameras = Vec::new();
+        let mut coarse_maps = Vec::new();
+        let mut map_steps = Vec::new();
+        if desc.coordinates.uses_map() {
             let channels: Vec<usize> = if chromatic { vec![0, 1, 2] } else { vec![1] };
-            // One pipeline serves every channel when all use the same term groups.
-            let cam_terms = |c: usize| g.channel_camera(c).distortion.terms();
-            let mut terms = cam_terms(1);
+            // One pipeline serves every channel: the union of their term groups.
+            let mut terms = g.channel_camera(1).distortion.terms();
             for &c in &channels {
-                let t = cam_terms(c);
+                let t = g.channel_camera(c).distortion.terms();
                 terms.radial |= t.radial;
                 terms.rational |= t.rational;
                 terms.tangential |= t.tangential;
                 terms.prism |= t.prism;
                 terms.tilt |= t.tilt;
             }
-            let constants = CameraParams::spec_constants(terms)
+            let base = CameraParams::spec_constants(terms)
                 .u32(8, mode)
                 .u32(9, method)
                 .u32(10, iterations);
-            let mp = ComputePipeline::new(
+            let (stride, refine) = match desc.coordinates {
+                Coordinates::CoarseMap { stride, refine } => (stride, refine),
+                _ => (1, 0),
+            };
+            let uniform = vk::DescriptorType::UNIFORM_BUFFER;
+            map_pipelines.push(ComputePipeline::new(
                 gpu,
                 shaders::INVERSE_MAP_COMP,
-                &[vk::DescriptorType::UNIFORM_BUFFER, storage],
+                &[uniform, storage],
                 std::mem::size_of::<WarpPush>() as u32,
-                constants,
+                base.clone().u32(11, stride),
+            )?);
+            if stride > 1 {
+                map_pipelines.push(ComputePipeline::new(
+                    gpu,
+                    shaders::UPSAMPLE_MAP_COMP,
+                    &[uniform, storage, storage],
+                    std::mem::size_of::<WarpPush>() as u32,
+                    base.u32(11, stride).u32(12, refine),
+                )?);
+            }
+            let steps_per_channel = if stride > 1 { 2 } else { 1 };
+            let mpool = DescriptorPool::for_pipeline(
+                gpu,
+                &map_pipelines[map_pipelines.len() - 1],
+                (channels.len() * steps_per_channel) as u32,
             )?;
-            let mpool = DescriptorPool::for_pipeline(gpu, &mp, channels.len() as u32)?;
+            let (ow, oh) = g.output_size;
+            let (cw, ch) = ((ow - 1) / stride + 2, (oh - 1) / stride + 2);
             for &c in &channels {
-                let set = mpool.allocate(&mp)?;
                 let cam = Buffer::from_pod(
                     gpu,
                     "warp.map.camera",
                     &[CameraParams::from_camera(g.channel_camera(c))],
                     vk::BufferUsageFlags::UNIFORM_BUFFER,
                 )?;
-                write_buffer_descriptors(
-                    gpu,
-                    set,
-                    &[(0, vk::DescriptorType::UNIFORM_BUFFER, &cam)],
-                );
-                write_storage_image_descriptors(gpu, set, &[(1, maps[c].view)]);
                 let mut p = push;
                 p.chromatic = [g.channel_scale(c) as f32, 0.0, 0.0, 0.0];
-                map_builds.push(MapBuild {
-                    set,
-                    _camera: cam,
-                    push: p,
-                });
+                if stride == 1 {
+                    let set = mpool.allocate(&map_pipelines[0])?;
+                    write_buffer_descriptors(gpu, set, &[(0, uniform, &cam)]);
+                    write_storage_image_descriptors(gpu, set, &[(1, maps[c].view)]);
+                    map_steps.push(MapStep {
+                        pipeline: 0,
+                        set,
+                        push: p,
+                        groups: (ow.div_ceil(8), oh.div_ceil(8)),
+                        barrier_after: false,
+                    });
+                } else {
+                    let coarse = Image::new_2d(gpu, "warp.map.coarse", MAP_FORMAT, cw, ch, usage)?;
+                    let solve = mpool.allocate(&map_pipelines[0])?;
+                    write_buffer_descriptors(gpu, solve, &[(0, uniform, &cam)]);
+                    write_storage_image_descriptors(gpu, solve, &[(1, coarse.view)]);
+                    let mut cp = p;
+                    cp.sizes = [p.sizes[0], p.sizes[1], cw, ch];
+                    map_steps.push(MapStep {
+                        pipeline: 0,
+                        set: solve,
+                        push: cp,
+                        groups: (cw.div_ceil(8), ch.div_ceil(8)),
+                        barrier_after: true,
+                    });
+                    let up = mpool.allocate(&map_pipelines[1])?;
+                    write_buffer_descriptors(gpu, up, &[(0, uniform, &cam)]);
+                    write_storage_image_descriptors(
+                        gpu,
+                        up,
+                        &[(1, coarse.view), (2, maps[c].view)],
+                    );
+                    map_steps.push(MapStep {
+                        pipeline: 1,
+                        set: up,
+                        push: p,
+                        groups: (ow.div_ceil(8), oh.div_ceil(8)),
+                        barrier_after: false,
+                    });
+                    coarse_maps.push(coarse);
+                }
+                map_cameras.push(cam);
             }
-            map_pipeline = Some(mp);
             map_pool = Some(mpool);
         }
         Ok(WarpPass {
@@ -296,9 +371,11 @@ impl WarpPass {
             set,
             _camera: camera,
             maps,
-            map_pipeline,
+            map_pipelines,
             _map_pool: map_pool,
-            map_builds,
+            _map_cameras: map_cameras,
+            _coarse: coarse_maps,
+            map_steps,
             push,
         })
     }
@@ -346,7 +423,7 @@ impl WarpPass {
             vk::AccessFlags::SHADER_READ,
         );
         unsafe {
-            for map in &self.maps {
+            for map in self.maps.iter().chain(&self._coarse) {
                 // Maps are written (map builds) then read (warp) as storage images.
                 image_barrier(
                     &self.gpu,
@@ -357,26 +434,28 @@ impl WarpPass {
                     write,
                 );
             }
-            if let Some(mp) = &self.map_pipeline {
+            for step in &self.map_steps {
+                let mp = &self.map_pipelines[step.pipeline];
                 d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, mp.raw);
-                let (w, h) = self.desc.geometry.output_size;
-                for build in &self.map_builds {
-                    d.cmd_bind_descriptor_sets(
-                        cmd,
-                        vk::PipelineBindPoint::COMPUTE,
-                        mp.layout,
-                        0,
-                        &[build.set],
-                        &[],
-                    );
-                    d.cmd_push_constants(
-                        cmd,
-                        mp.layout,
-                        vk::ShaderStageFlags::COMPUTE,
-                        0,
-                        bytemuck::bytes_of(&build.push),
-                    );
-                    d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    mp.layout,
+                    0,
+                    &[step.set],
+                    &[],
+                );
+                d.cmd_push_constants(
+                    cmd,
+                    mp.layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    bytemuck::bytes_of(&step.push),
+                );
+                d.cmd_dispatch(cmd, step.groups.0, step.groups.1, 1);
+                if step.barrier_after {
+                    // The upsampling reads the coarse map just written.
+                    memory_barrier(&self.gpu, cmd, write, read);
                 }
             }
             // The warp reads the maps the builds wrote.
@@ -689,11 +768,15 @@ pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raste
 /// Builds `geometry`'s coordinate maps on the GPU and reads them back: per built channel
 /// (G only without chromatic aberration; else R, G, B), row-major `[x, y]` source positions,
 /// NaN where there is none. The same code the warp runs per pixel in analytic mode.
-pub fn read_maps(ctx: &Context, geometry: &WarpGeometry) -> Result<Vec<Vec<[f32; 2]>>> {
+pub fn read_maps(
+    ctx: &Context,
+    geometry: &WarpGeometry,
+    coordinates: Coordinates,
+) -> Result<Vec<Vec<[f32; 2]>>> {
     let gpu = ctx.gpu();
     let desc = WarpDesc {
         geometry: geometry.clone(),
-        coordinates: Coordinates::Map,
+        coordinates,
         sampling: Sampling::Bilinear,
         format: PixelFormat::Rgba8,
         fill: [0.0; 4],

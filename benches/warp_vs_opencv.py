@@ -63,7 +63,7 @@ for r in rows:
     if r["bench"] == "copy":
         name, ms = "copy (floor)", r["frame_ms"]
     elif r["bench"] == "inverse_map":
-        name, ms = "inverse map build (14 coeffs, Newton)", r["ms"]
+        name, ms = f"inverse map build: {r['method']}", r["ms"]
     else:
         name, ms = f"warp {r['method']}{' chromatic' if r['chromatic'] else ''}", r["frame_ms"]
     print(f"| {w}×{h} | {name} | {ms:.1f} | {ms / copy:.2f} | {ms / remap:.1f} | {remap:.1f} | {undist:.0f} | {undist / ms:.2f} |")

@@ -148,6 +148,37 @@ impl ComputePipeline {
         Ok(pipeline)
     }
 
+    /// Records a dispatch of `groups` workgroups with descriptor set `set` bound at 0 and
+    /// `push` as the push constants.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass on a compute queue; `set` must match this
+    /// pipeline's layout and its resources must stay alive until the work completes.
+    pub unsafe fn record_dispatch(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: vk::DescriptorSet,
+        push: &[u8],
+        groups: (u32, u32),
+    ) {
+        let d = self.gpu.device();
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[set],
+                &[],
+            );
+            if !push.is_empty() {
+                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            }
+            d.cmd_dispatch(cmd, groups.0, groups.1, 1);
+        }
+    }
+
     /// Descriptor types of set 0, by binding.
     pub fn bindings(&self) -> &[vk::DescriptorType] {
         &self.bindings

@@ -48,27 +48,15 @@ impl CopyPass {
     /// # Safety
     /// As [`crate::pass::warp::WarpPass::record`].
     pub unsafe fn record(&self, cmd: vk::CommandBuffer) {
-        let d = self.gpu.device();
         let (w, h) = self.size;
         let sizes = [w, h, w, h];
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline.raw);
-            d.cmd_bind_descriptor_sets(
+            self.pipeline.record_dispatch(
                 cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.pipeline.layout,
-                0,
-                &[self.set],
-                &[],
-            );
-            d.cmd_push_constants(
-                cmd,
-                self.pipeline.layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
+                self.set,
                 bytemuck::cast_slice(&sizes),
-            );
-            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
-        }
+                (w.div_ceil(8), h.div_ceil(8)),
+            )
+        };
     }
 }

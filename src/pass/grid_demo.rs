@@ -51,26 +51,14 @@ pub fn render_grid(ctx: &Context, camera: &OpenCvCamera, grid: u32) -> Result<Ve
         ],
     );
     ctx.submit(|cmd| {
-        let d = gpu.device();
+        let size = [w, h];
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
-            d.cmd_bind_descriptor_sets(
+            pipeline.record_dispatch(
                 cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                pipeline.layout,
-                0,
-                &[set],
-                &[],
-            );
-            let size = [w, h];
-            d.cmd_push_constants(
-                cmd,
-                pipeline.layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
+                set,
                 bytemuck::cast_slice(&size),
+                (w.div_ceil(8), h.div_ceil(8)),
             );
-            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
             // The host reads the pixels after the fence.
             host_read_barrier(gpu, cmd);
         }

@@ -169,26 +169,14 @@ impl PointsPass {
     /// inputs must be visible to `COMPUTE_SHADER` reads, and reads of the outputs need a
     /// barrier from `COMPUTE_SHADER` / `SHADER_WRITE`.
     pub unsafe fn record(&self, cmd: vk::CommandBuffer, count: u32) {
-        let d = self.gpu.device();
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline.raw);
-            d.cmd_bind_descriptor_sets(
+            self.pipeline.record_dispatch(
                 cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.pipeline.layout,
-                0,
-                &[self.set],
-                &[],
-            );
-            d.cmd_push_constants(
-                cmd,
-                self.pipeline.layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
+                self.set,
                 &count.to_ne_bytes(),
-            );
-            d.cmd_dispatch(cmd, count.div_ceil(WORKGROUP), 1, 1);
-        }
+                (count.div_ceil(WORKGROUP), 1),
+            )
+        };
     }
 }
 

@@ -409,7 +409,6 @@ impl WarpPass {
     /// `cmd` must be recording outside a render pass on a compute queue; record this once,
     /// before the first [`WarpPass::record`], and not again while that work is pending.
     pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
-        let d = self.gpu.device();
         let none = (
             vk::PipelineStageFlags::TOP_OF_PIPE,
             vk::AccessFlags::empty(),
@@ -435,24 +434,12 @@ impl WarpPass {
                 );
             }
             for step in &self.map_steps {
-                let mp = &self.map_pipelines[step.pipeline];
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, mp.raw);
-                d.cmd_bind_descriptor_sets(
+                self.map_pipelines[step.pipeline].record_dispatch(
                     cmd,
-                    vk::PipelineBindPoint::COMPUTE,
-                    mp.layout,
-                    0,
-                    &[step.set],
-                    &[],
-                );
-                d.cmd_push_constants(
-                    cmd,
-                    mp.layout,
-                    vk::ShaderStageFlags::COMPUTE,
-                    0,
+                    step.set,
                     bytemuck::bytes_of(&step.push),
+                    step.groups,
                 );
-                d.cmd_dispatch(cmd, step.groups.0, step.groups.1, 1);
                 if step.barrier_after {
                     // The upsampling reads the coarse map just written.
                     memory_barrier(&self.gpu, cmd, write, read);
@@ -472,27 +459,15 @@ impl WarpPass {
     /// mask in `GENERAL` layout; they stay in `GENERAL`. The caller makes the output's
     /// `SHADER_WRITE`s visible to whatever reads them next.
     pub unsafe fn record(&self, cmd: vk::CommandBuffer) {
-        let d = self.gpu.device();
         let (w, h) = self.desc.geometry.output_size;
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline.raw);
-            d.cmd_bind_descriptor_sets(
+            self.pipeline.record_dispatch(
                 cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.pipeline.layout,
-                0,
-                &[self.set],
-                &[],
-            );
-            d.cmd_push_constants(
-                cmd,
-                self.pipeline.layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
+                self.set,
                 bytemuck::bytes_of(&self.push),
-            );
-            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
-        }
+                (w.div_ceil(8), h.div_ceil(8)),
+            )
+        };
     }
 }
 

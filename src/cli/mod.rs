@@ -56,7 +56,8 @@ in f32 or f64, and says explicitly where a lens folds over and no inverse can be
 
 Camera files (CAM): vklens JSON {\"width\", \"height\", \"fx\", \"fy\", \"cx\", \"cy\", \"dist_coeffs\": [...]},
 OpenCV FileStorage YAML/XML/JSON as calibrateCamera writes it (camera_matrix,
-distortion_coefficients, image_width, image_height; %YAML:1.0 headers welcome), or ROS camera_info.
+distortion_coefficients, image_width, image_height; %YAML:1.0 headers welcome), ROS camera_info,
+or a Brown headset lens {\"model\": \"brown\", \"width\", \"height\", \"c1\", \"c2\"} (seed 002).
 
 Environment: VKLENS_DEVICE picks the Vulkan device (cpu, gpu, an index, or part of its name);
 VKLENS_VALIDATION=1 turns the Khronos validation layer on (any message fails the command).

@@ -9,6 +9,10 @@
 //! * [`pass`] — GPU passes that record into a command buffer the caller owns.
 //! * [`bench`] — the accuracy-versus-time measurements behind `vklens bench`.
 
+// `!(x > 0.0)` is how this crate says "x is positive and not NaN": a NaN must fail every
+// check (the answer is an explicit invalid, never silent garbage). `partial_cmp` would hide that.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod bench;
 pub mod cli;
 pub mod gpu;

@@ -40,7 +40,10 @@ fn gpu_forward_within_2e3_px_of_opencv() {
 /// Newton on the GPU for every in-domain reference point: per point, the f32 forward error
 /// bound ε·(1 + |t|)·f / σ_min(J) in pixels (how far one ulp of residual moves the answer)
 /// and the error (None = refused).
-fn gpu_newton_errors(precision: Precision) -> Vec<(String, Vec<(f64, Option<f64>)>)> {
+/// Per case: (name, per in-domain point: (f32 error bound px, error px or None if refused)).
+type NewtonErrors = Vec<(String, Vec<(f64, Option<f64>)>)>;
+
+fn gpu_newton_errors(precision: Precision) -> NewtonErrors {
     let ctx = common::validated_context();
     let reference = load_reference().expect("shared reference");
     let mut all = Vec::new();

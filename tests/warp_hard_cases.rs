@@ -194,8 +194,7 @@ fn a_one_pixel_image_and_a_large_one() {
             ),
             &flat(max + 1, 8, 0),
         )
-        .err()
-        .expect("refused");
+        .expect_err("refused");
         assert!(e.to_string().contains("larger than"), "{e}");
     }
     common::assert_no_validation_messages(&ctx);

@@ -20,8 +20,10 @@ use serde_json::{Map, Value};
 
 use crate::model::{BrownRadial, Intrinsics, ModelError, OpenCvCamera};
 
-/// A lens as a file describes it.
+/// A lens as a file describes it. (Loaded once per command; the size difference between the
+/// variants does not matter.)
 #[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)]
 pub enum Lens {
     OpenCv(OpenCvCamera),
     Brown(BrownRadial),

@@ -55,6 +55,12 @@ fn s(p: &Path) -> &str {
 #[test]
 fn every_direction_writes_the_right_size_and_depth() {
     let fig2 = cam("seed_fig2.opencv4.yml");
+    let three = format!(
+        "{},{},{}",
+        cam("seed_fig2.opencv.json"),
+        fig2,
+        cam("seed_fig2.opencv.xml")
+    );
     let input8 = tmp("in8.png");
     let input16 = tmp("in16.png");
     write_png(&input8, 800, 600, false);
@@ -70,6 +76,10 @@ fn every_direction_writes_the_right_size_and_depth() {
         ),
         ("undistort", vec![]),
         ("precorrect", vec!["--chromatic", "1.005,1,0.995"]),
+        (
+            "distort",
+            vec!["--method", "lut", "--channel-cameras", &three],
+        ),
     ] {
         for (input, depth) in [
             (&input8, image::ColorType::Rgba8),
@@ -181,6 +191,7 @@ fn bad_input_is_one_line_exit_2_and_leaves_no_file() {
     std::fs::write(&nan_cam, "image_width: 800\nimage_height: 600\ncamera_matrix:\n  data: [400, 0, 399.5, 0, .Nan, 299.5, 0, 0, 1]\n").unwrap();
     let distorted_src = cam("seed_fig2.opencv.yml");
     let wide = cam("rational_wide.ros.yaml");
+    let three_bad = format!("{fig2},{fig2},{fig2}");
     let out = tmp("must_not_exist.png");
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (

@@ -87,6 +87,15 @@ pub struct WarpArgs {
     /// point (e.g. 1.002,1,0.998).
     #[arg(long, value_name = "R_SCALE,G_SCALE,B_SCALE", value_parser = parse_chromatic)]
     chromatic: Option<[f64; 3]>,
+    /// A full camera per channel, overriding CAM for R, G and B (three camera files, comma-
+    /// separated): the general form of lateral colour. Runs through a map (--method lut).
+    #[arg(
+        long,
+        value_name = "R_CAM,G_CAM,B_CAM",
+        value_delimiter = ',',
+        num_args = 1
+    )]
+    channel_cameras: Vec<PathBuf>,
     /// Value of pixels with no source (outside the valid domain or the source frame), in 0..1.
     #[arg(long, value_name = "R,G,B,A", value_parser = parse_fill)]
     fill: Option<[f64; 4]>,

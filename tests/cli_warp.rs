@@ -340,6 +340,34 @@ fn bad_input_is_one_line_exit_2_and_leaves_no_file() {
             vec!["overscan", "--camera", &fig2, "--density", "0"],
             "density",
         ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+                "--channel-cameras",
+                &fig2,
+            ],
+            "three camera files",
+        ),
+        (
+            vec![
+                "distort",
+                "--camera",
+                &fig2,
+                "--input",
+                s(&input),
+                "--output",
+                s(&out),
+                "--channel-cameras",
+                &three_bad,
+            ],
+            "--method lut",
+        ),
     ];
     for (args, needle) in cases {
         let r = vklens(&args);

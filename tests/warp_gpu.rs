@@ -326,3 +326,43 @@ fn a_full_camera_per_channel_matches_the_reference() {
     assert!(vklens::pass::warp::WarpPass::new(ctx.gpu(), desc).is_err());
     common::assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
+    use vklens::pass::warp::WarpPass;
+    let ctx = common::validated_context();
+    let reference = load_reference().unwrap();
+    for (name, expect_check) in [
+        ("prism_tilt", false),
+        ("seed_fig2", false),
+        ("rational_wide", true),
+    ] {
+        let cam = reference
+            .cases
+            .iter()
+            .find(|c| c.name == name)
+            .unwrap()
+            .camera()
+            .unwrap();
+        let g = WarpGeometry::distort(cam, InverseMethod::Newton);
+        let estimate = g.coarse_interpolation_error(8);
+        let desc = WarpDesc {
+            geometry: g,
+            coordinates: Coordinates::CoarseMap {
+                stride: 8,
+                refine: 0,
+            },
+            sampling: Sampling::Bilinear,
+            format: PixelFormat::Rgba8,
+            fill: [0.0; 4],
+            write_mask: false,
+        };
+        let pass = WarpPass::new(ctx.gpu(), desc).unwrap();
+        println!(
+            "{name}: f64 interpolation estimate {estimate:?} px; per-pixel check {:?}",
+            pass.coarse_map_checked()
+        );
+        assert_eq!(pass.coarse_map_checked(), Some(expect_check), "{name}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}

@@ -237,7 +237,7 @@ pub fn run(
             times.remove(0);
             times.sort_by(f64::total_cmp);
             let (map_err, map_disagree) = coordinate_error(ctx, &plain, coordinates)?;
-            rows.push(json!({"bench": "inverse_map", "width": w, "height": h, "method": label, "ms": times[1], "max_err_px": map_err, "disagreeing_px": map_disagree}));
+            rows.push(json!({"bench": "inverse_map", "width": w, "height": h, "method": label, "ms": times[1], "max_err_px": map_err, "disagreeing_px": map_disagree, "per_pixel_check": build.coarse_map_checked()}));
         }
 
         for chromatic in [false, true] {

@@ -187,6 +187,31 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
             .with_chromatic(c)
             .map_err(|e| CliError::input(format!("--chromatic: {e}")))?;
     }
+    if !args.channel_cameras.is_empty() {
+        let [r, g, b] = <[PathBuf; 3]>::try_from(args.channel_cameras.clone())
+            .map_err(|_| CliError::input("--channel-cameras: expected three camera files R,G,B"))?;
+        if args.method != WarpMethod::Lut {
+            return Err(CliError::input(
+                "--channel-cameras runs through a map: add --method lut",
+            ));
+        }
+        let cams = [
+            super::load_camera(&r)?,
+            super::load_camera(&g)?,
+            super::load_camera(&b)?,
+        ];
+        for (path, c) in [&r, &g, &b].into_iter().zip(&cams) {
+            if (c.width, c.height) != (cam.width, cam.height) {
+                return Err(CliError::input(format!(
+                    "{}: a channel camera must have CAM's size {}×{}",
+                    path.display(),
+                    cam.width,
+                    cam.height
+                )));
+            }
+        }
+        geometry.channel_cameras = Some(Box::new(cams));
+    }
     let source = image_io::load(&args.input).map_err(CliError::input)?;
     if (source.width, source.height) != geometry.source_size {
         let whose = match (direction, &args.source_camera) {

@@ -141,4 +141,36 @@ impl WarpGeometry {
             }
         }
     }
+
+    /// The worst error of interpolating this warp's coordinates bilinearly between samples every
+    /// `stride` pixels, estimated in f64 at every cell's centre (where bilinear interpolation's
+    /// leading-order error peaks), over all channels; `None` if any sample has no source (a
+    /// fold in view: there interpolation needs a per-pixel check).
+    pub fn coarse_interpolation_error(&self, stride: u32) -> Option<f64> {
+        let (w, h) = self.output_size;
+        let channels: &[usize] = if self.is_chromatic() {
+            &[0, 1, 2]
+        } else {
+            &[1]
+        };
+        let s = stride as f64;
+        let (cw, ch) = ((w - 1) / stride + 2, (h - 1) / stride + 2);
+        let mut worst = 0.0f64;
+        for &c in channels {
+            let at =
+                |i: u32, j: u32| self.model_coordinate(DVec2::new(i as f64 * s, j as f64 * s), c);
+            let mut row: Vec<Option<DVec2>> = (0..cw).map(|i| at(i, 0)).collect();
+            for j in 1..ch {
+                let next: Vec<Option<DVec2>> = (0..cw).map(|i| at(i, j)).collect();
+                for i in 0..(cw - 1) as usize {
+                    let (a, b, d, e) = (row[i]?, row[i + 1]?, next[i]?, next[i + 1]?);
+                    let centre = DVec2::new((i as f64 + 0.5) * s, (j as f64 - 0.5) * s);
+                    let exact = self.model_coordinate(centre, c)?;
+                    worst = worst.max(((a + b + d + e) * 0.25 - exact).length());
+                }
+                row = next;
+            }
+        }
+        Some(worst)
+    }
 }

@@ -108,6 +108,8 @@ pub struct WarpPush {
 const _: () = assert!(std::mem::size_of::<WarpPush>() == 64);
 
 const MAP_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
+/// Largest forward residual (px) a coarse-map pixel may have before it is marked invalid.
+pub const COARSE_MAX_RESIDUAL_PX: f32 = 0.05;
 /// Map images per channel in shader binding order: R (5), G (4), B (6) → stored as [R, G, B].
 const MAP_BINDINGS: [u32; 3] = [5, 4, 6];
 
@@ -293,12 +295,20 @@ impl WarpPass {
                 base.clone().u32(11, stride),
             )?);
             if stride > 1 {
+                // The per-pixel forward check is compiled out when the host's f64 estimate says
+                // interpolation cannot reach the tolerance (and no fold is in view).
+                let check = g
+                    .coarse_interpolation_error(stride)
+                    .is_none_or(|e| e > 0.5 * COARSE_MAX_RESIDUAL_PX as f64);
                 map_pipelines.push(ComputePipeline::new(
                     gpu,
                     shaders::UPSAMPLE_MAP_COMP,
                     &[uniform, storage, storage],
                     std::mem::size_of::<WarpPush>() as u32,
-                    base.u32(11, stride).u32(12, refine),
+                    base.u32(11, stride)
+                        .u32(12, refine)
+                        .f32(13, COARSE_MAX_RESIDUAL_PX)
+                        .bool(14, check),
                 )?);
             }
             let steps_per_channel = if stride > 1 { 2 } else { 1 };
@@ -383,6 +393,14 @@ impl WarpPass {
     /// What the pass was built from.
     pub fn desc(&self) -> &WarpDesc {
         &self.desc
+    }
+
+    /// Whether a coarse map's per-pixel forward check was compiled in (None without one).
+    pub fn coarse_map_checked(&self) -> Option<bool> {
+        self.map_pipelines
+            .get(1)
+            .and_then(|p| p.constants.get(14))
+            .map(|v| v != 0)
     }
 
     /// The warp pipeline (its specialization constants show what was compiled in).

@@ -71,6 +71,19 @@ fn write_results(results: &[Option<[f64; 2]>]) -> Result<(), CliError> {
         .map_err(|e| CliError::runtime(format!("stdout: {e}")))
 }
 
+/// Runs the points pass on a headless context, checking validation messages when enabled.
+fn on_gpu(
+    cam: &crate::model::OpenCvCamera,
+    mode: PointsMode,
+    precision: Precision,
+    points: &[[f64; 2]],
+) -> Result<Vec<Option<[f64; 2]>>, CliError> {
+    let ctx = context()?;
+    let r = run_points(&ctx, cam, mode, precision, points)?;
+    finish(&ctx)?;
+    Ok(r)
+}
+
 /// `points distort`: normalized ideal points → distorted pixels.
 pub fn distort(camera: &Path, backend: Backend, precision: Precision) -> Result<(), CliError> {
     let cam = load_camera(camera)?;
@@ -83,12 +96,7 @@ pub fn distort(camera: &Path, backend: Backend, precision: Precision) -> Result<
                     .map(|y| cam.intrinsics.to_pixel(y).to_array())
             })
             .collect(),
-        Backend::Gpu => {
-            let ctx = context()?;
-            let r = run_points(&ctx, &cam, PointsMode::Distort, precision, &points)?;
-            finish(&ctx)?;
-            r
-        }
+        Backend::Gpu => on_gpu(&cam, PointsMode::Distort, precision, &points)?,
     };
     write_results(&results)
 }
@@ -110,18 +118,7 @@ pub fn undistort(
                     .map(|x| x.to_array())
             })
             .collect(),
-        Backend::Gpu => {
-            let ctx = context()?;
-            let r = run_points(
-                &ctx,
-                &cam,
-                PointsMode::Undistort(method),
-                precision,
-                &points,
-            )?;
-            finish(&ctx)?;
-            r
-        }
+        Backend::Gpu => on_gpu(&cam, PointsMode::Undistort(method), precision, &points)?,
     };
     write_results(&results)
 }

@@ -200,13 +200,7 @@ fn specialization_constants_compile_out_unused_terms() {
     let gpu = ctx.gpu();
     let reference = load_reference().expect("shared reference");
     // A k1 k2 p1 p2 camera builds a pipeline with rational, prism and tilt switched off.
-    let fig2 = reference
-        .cases
-        .iter()
-        .find(|c| c.name == "seed_fig2")
-        .unwrap()
-        .camera()
-        .unwrap();
+    let fig2 = common::reference_camera("seed_fig2");
     let pass = PointsPass::new(gpu, &fig2, PointsMode::Distort, Precision::F32).unwrap();
     let c = &pass.pipeline().constants;
     assert_eq!(

@@ -144,14 +144,7 @@ fn gpu_warp_matches_the_f64_reference_on_every_shared_camera() {
 #[test]
 fn chromatic_undistort_and_8bit_variants_match_the_reference() {
     let ctx = common::validated_context();
-    let reference = load_reference().unwrap();
-    let fig2 = reference
-        .cases
-        .iter()
-        .find(|c| c.name == "seed_fig2")
-        .unwrap()
-        .camera()
-        .unwrap();
+    let fig2 = common::reference_camera("seed_fig2");
     let total = (fig2.width * fig2.height) as usize;
     let chroma = WarpGeometry::distort(fig2.clone(), InverseMethod::Newton)
         .with_chromatic([1.01, 1.0, 0.99])
@@ -205,15 +198,8 @@ fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
     use vklens::model::CameraModel;
     use vklens::pass::warp::read_maps;
     let ctx = common::validated_context();
-    let reference = load_reference().unwrap();
     for name in ["prism_tilt", "rational_wide"] {
-        let cam = reference
-            .cases
-            .iter()
-            .find(|c| c.name == name)
-            .unwrap()
-            .camera()
-            .unwrap();
+        let cam = common::reference_camera(name);
         let g = WarpGeometry::distort(cam.clone(), InverseMethod::Newton);
         let exact = &read_maps(&ctx, &g, Coordinates::Map).unwrap()[0];
         for (coords, bound) in [
@@ -283,14 +269,7 @@ fn a_full_camera_per_channel_matches_the_reference() {
     // The general form of lateral colour: each channel its own calibrated camera (here the
     // seed's Fig. 2 lens with slightly different k1 and focal length for R and B).
     let ctx = common::validated_context();
-    let reference = load_reference().unwrap();
-    let g_cam = reference
-        .cases
-        .iter()
-        .find(|c| c.name == "seed_fig2")
-        .unwrap()
-        .camera()
-        .unwrap();
+    let g_cam = common::reference_camera("seed_fig2");
     let variant = |dk1: f64, df: f64| {
         let mut d = g_cam.distortion;
         d.k1 += dk1;
@@ -331,19 +310,12 @@ fn a_full_camera_per_channel_matches_the_reference() {
 fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
     use vklens::pass::warp::WarpPass;
     let ctx = common::validated_context();
-    let reference = load_reference().unwrap();
     for (name, expect_check) in [
         ("prism_tilt", false),
         ("seed_fig2", false),
         ("rational_wide", true),
     ] {
-        let cam = reference
-            .cases
-            .iter()
-            .find(|c| c.name == name)
-            .unwrap()
-            .camera()
-            .unwrap();
+        let cam = common::reference_camera(name);
         let g = WarpGeometry::distort(cam, InverseMethod::Newton);
         let estimate = g.coarse_interpolation_error(8);
         let desc = WarpDesc {

@@ -6,7 +6,6 @@ mod common;
 use glam::DVec2;
 use vklens::imaging::cpu_warp::Sampling;
 use vklens::imaging::{Depth, Pixels, Raster};
-use vklens::io::reference::load_reference;
 use vklens::model::warp::WarpGeometry;
 use vklens::model::{Intrinsics, InverseMethod, OpenCvCamera};
 use vklens::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
@@ -39,15 +38,8 @@ fn desc(
 #[test]
 fn folding_lenses_get_a_clean_masked_border_not_streaks() {
     let ctx = common::validated_context();
-    let reference = load_reference().unwrap();
     for name in ["rational_wide", "strong_pincushion"] {
-        let cam = reference
-            .cases
-            .iter()
-            .find(|c| c.name == name)
-            .unwrap()
-            .camera()
-            .unwrap();
+        let cam = common::reference_camera(name);
         // Overscanned source, so every pixel without a source is one the lens cannot invert.
         let o = vklens::model::overscan::overscan(&cam, 1.0).unwrap();
         let g = WarpGeometry::distort(cam.clone(), InverseMethod::Newton)

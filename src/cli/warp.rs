@@ -229,20 +229,8 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
     }
     let fill = args.fill.map(|f| f.map(|c| c as f32)).unwrap_or([0.0; 4]);
     let (out, mask) = match args.backend {
-        super::Backend::Cpu => {
-            let (mut out, mask) = cpu_warp::warp(&geometry, &source, args.sampling, fill);
-            if source.depth == Depth::U8 {
-                let Pixels::Rgba32F(p) = &out.pixels else {
-                    unreachable!("colour images stay float")
-                };
-                out.pixels = Pixels::Rgba8(
-                    p.iter()
-                        .map(|v| v.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
-                        .collect(),
-                );
-            }
-            (out, mask)
-        }
+        // imaging::io::save writes float data read from an 8-bit file back as 8-bit.
+        super::Backend::Cpu => cpu_warp::warp(&geometry, &source, args.sampling, fill),
         super::Backend::Gpu => {
             let ctx = context()?;
             let desc = WarpDesc {

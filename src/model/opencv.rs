@@ -92,6 +92,19 @@ pub struct Terms {
     pub tilt: bool,
 }
 
+impl Terms {
+    /// The groups used by either (one shader serving several cameras).
+    pub fn union(self, other: Terms) -> Terms {
+        Terms {
+            radial: self.radial || other.radial,
+            rational: self.rational || other.rational,
+            tangential: self.tangential || other.tangential,
+            prism: self.prism || other.prism,
+            tilt: self.tilt || other.tilt,
+        }
+    }
+}
+
 impl OpenCvDistortion {
     /// From an OpenCV coefficient vector of length 4, 5, 8, 12 or 14 (OpenCV's own rule).
     pub fn from_coeffs(c: &[f64]) -> Result<Self, ModelError> {

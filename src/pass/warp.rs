@@ -19,7 +19,7 @@ use crate::gpu::{
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::warp::{Direction, WarpGeometry};
-use crate::model::{InverseMethod, OpenCvCamera};
+use crate::model::{InverseMethod, OpenCvCamera, Terms};
 
 /// How output pixels get their source coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -269,15 +269,10 @@ impl WarpPass {
         if desc.coordinates.uses_map() {
             let channels: Vec<usize> = if chromatic { vec![0, 1, 2] } else { vec![1] };
             // One pipeline serves every channel: the union of their term groups.
-            let mut terms = g.channel_camera(1).distortion.terms();
-            for &c in &channels {
-                let t = g.channel_camera(c).distortion.terms();
-                terms.radial |= t.radial;
-                terms.rational |= t.rational;
-                terms.tangential |= t.tangential;
-                terms.prism |= t.prism;
-                terms.tilt |= t.tilt;
-            }
+            let terms = channels
+                .iter()
+                .map(|&c| g.channel_camera(c).distortion.terms())
+                .fold(Terms::default(), Terms::union);
             let base = CameraParams::spec_constants(terms)
                 .u32(8, mode)
                 .u32(9, method)

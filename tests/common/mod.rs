@@ -20,3 +20,15 @@ pub fn assert_no_validation_messages(ctx: &Context) {
         panic!("{e}");
     }
 }
+
+/// The shared reference case named `name`, as a camera.
+pub fn reference_camera(name: &str) -> vklens::model::OpenCvCamera {
+    let reference = vklens::io::reference::load_reference().expect("shared reference file");
+    reference
+        .cases
+        .iter()
+        .find(|c| c.name == name)
+        .unwrap_or_else(|| panic!("no reference case {name}"))
+        .camera()
+        .expect("reference cases are valid cameras")
+}

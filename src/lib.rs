@@ -20,3 +20,4 @@ pub mod imaging;
 pub mod io;
 pub mod model;
 pub mod pass;
+pub mod scene;

@@ -1,0 +1,174 @@
+//! Tessellation for Alg. 1 (seed 000 Sec. 3.2, first limitation): the vertex path moves only
+//! vertices, so a straight edge stays straight between them; edges must be short in the image
+//! for the curved lens image to be followed. This splits every edge whose pinhole image is
+//! longer than `max_edge_px`, repeatedly, until none is.
+//!
+//! Refinement is by edge (red-green): an edge is split or not by its own length alone, so the
+//! two triangles sharing it agree and the mesh stays watertight (no T-junction cracks). A
+//! triangle with 1, 2 or 3 split edges becomes 2, 3 or 4 triangles with its winding kept.
+
+use std::collections::HashMap;
+
+use glam::DVec2;
+
+use super::{Mesh, Pose, Vertex, MAX_TRIANGLES};
+use crate::model::Intrinsics;
+
+/// Depth below which a vertex is not measured (it is at or behind the camera, and the
+/// geometry path drops its triangles anyway).
+const MIN_DEPTH: f64 = 1e-6;
+
+/// Splits edges longer than `max_edge_px` (in the pinhole image of `intrinsics` at `pose`).
+pub fn tessellate(
+    mesh: &Mesh,
+    pose: &Pose,
+    intrinsics: &Intrinsics,
+    max_edge_px: f64,
+) -> Result<Mesh, String> {
+    if !(max_edge_px.is_finite() && max_edge_px >= 0.25) {
+        return Err(format!(
+            "tessellation edge length {max_edge_px} px: expected a number of pixels ≥ 0.25"
+        ));
+    }
+    let mut out = mesh.clone();
+    // Each round at least halves the longest edge; 40 rounds is far past any real need.
+    for _ in 0..40 {
+        let pixels: Vec<Option<DVec2>> = out
+            .vertices
+            .iter()
+            .map(|v| {
+                let p = pose.apply(v.position());
+                (p.z > MIN_DEPTH).then(|| intrinsics.to_pixel(DVec2::new(p.x / p.z, p.y / p.z)))
+            })
+            .collect();
+        let long = |a: u32, b: u32| match (pixels[a as usize], pixels[b as usize]) {
+            (Some(p), Some(q)) => p.distance(q) > max_edge_px,
+            _ => false,
+        };
+        let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut indices = Vec::with_capacity(out.indices.len());
+        let mut vertices = out.vertices.clone();
+        let mut mid = |a: u32, b: u32, vertices: &mut Vec<Vertex>| -> u32 {
+            let key = (a.min(b), a.max(b));
+            *midpoints.entry(key).or_insert_with(|| {
+                vertices.push(vertices[key.0 as usize].midpoint(&vertices[key.1 as usize]));
+                vertices.len() as u32 - 1
+            })
+        };
+        let mut changed = false;
+        for t in out.indices.chunks_exact(3) {
+            let split = [long(t[0], t[1]), long(t[1], t[2]), long(t[2], t[0])];
+            let count = split.iter().filter(|&&s| s).count();
+            // Rotate so that the pattern is canonical: 1 split → edge 0; 2 splits → edges
+            // 0 and 1 (edge 2 unsplit).
+            let r = match count {
+                1 => split.iter().position(|&s| s).unwrap_or(0),
+                2 => (split.iter().position(|&s| !s).unwrap_or(2) + 1) % 3,
+                _ => 0,
+            };
+            let v = [t[r], t[(r + 1) % 3], t[(r + 2) % 3]];
+            match count {
+                0 => indices.extend_from_slice(&v),
+                1 => {
+                    let m = mid(v[0], v[1], &mut vertices);
+                    indices.extend_from_slice(&[v[0], m, v[2], m, v[1], v[2]]);
+                }
+                2 => {
+                    let m01 = mid(v[0], v[1], &mut vertices);
+                    let m12 = mid(v[1], v[2], &mut vertices);
+                    indices.extend_from_slice(&[
+                        m01, v[1], m12, v[0], m01, m12, v[0], m12, v[2],
+                    ]);
+                }
+                _ => {
+                    let m01 = mid(v[0], v[1], &mut vertices);
+                    let m12 = mid(v[1], v[2], &mut vertices);
+                    let m20 = mid(v[2], v[0], &mut vertices);
+                    indices.extend_from_slice(&[
+                        v[0], m01, m20, m01, v[1], m12, m20, m12, v[2], m01, m12, m20,
+                    ]);
+                }
+            }
+            changed |= count > 0;
+            if indices.len() / 3 > MAX_TRIANGLES {
+                return Err(format!(
+                    "tessellating to {max_edge_px} px edges needs more than {MAX_TRIANGLES} triangles: choose a longer edge"
+                ));
+            }
+        }
+        out = Mesh { vertices, indices };
+        if !changed {
+            return Ok(out);
+        }
+    }
+    Ok(out)
+}
+
+/// The longest pinhole-image edge of the triangles in front of the camera (pixels).
+pub fn longest_edge_px(mesh: &Mesh, pose: &Pose, intrinsics: &Intrinsics) -> f64 {
+    let px = |i: u32| {
+        let p = pose.apply(mesh.vertices[i as usize].position());
+        (p.z > MIN_DEPTH).then(|| intrinsics.to_pixel(DVec2::new(p.x / p.z, p.y / p.z)))
+    };
+    mesh.indices
+        .chunks_exact(3)
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .filter_map(|(a, b)| Some(px(a)?.distance(px(b)?)))
+        .fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+    use glam::DVec3;
+
+    #[test]
+    fn splits_until_short_and_stays_watertight() {
+        let scene = builtin::grid(2);
+        let pose = Pose::look_at(DVec3::new(0.0, 0.0, -2.0), DVec3::ZERO, DVec3::Y);
+        let k = Intrinsics {
+            fx: 400.0,
+            fy: 400.0,
+            cx: 399.5,
+            cy: 299.5,
+        };
+        let before = longest_edge_px(&scene.mesh, &pose, &k);
+        let fine = tessellate(&scene.mesh, &pose, &k, 10.0).unwrap();
+        assert!(before > 100.0);
+        assert!(longest_edge_px(&fine, &pose, &k) <= 10.0);
+        fine.validate("tessellated").unwrap();
+        // Watertight: an edge without its reverse is on the boundary, and the boundary is
+        // as long as before (a T-junction crack would add its long edge and both halves).
+        let boundary = |m: &Mesh| -> f64 {
+            let mut directed = HashMap::new();
+            for t in m.indices.chunks_exact(3) {
+                for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                    *directed.entry((a, b)).or_insert(0) += 1;
+                }
+            }
+            assert!(directed.values().all(|&n| n == 1), "a repeated directed edge");
+            directed
+                .keys()
+                .filter(|(a, b)| !directed.contains_key(&(*b, *a)))
+                .map(|&(a, b)| {
+                    let p = |i: u32| m.vertices[i as usize].position();
+                    p(a).distance(p(b))
+                })
+                .sum()
+        };
+        assert!((boundary(&fine) - boundary(&scene.mesh)).abs() < 1e-6);
+        // ... the area is unchanged (each patch is split, not stretched).
+        let area = |m: &Mesh| -> f64 {
+            m.indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let p = |i: u32| m.vertices[i as usize].position();
+                    0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length()
+                })
+                .sum()
+        };
+        assert!((area(&fine) - area(&scene.mesh)).abs() < 1e-6);
+        assert!(tessellate(&scene.mesh, &pose, &k, f64::NAN).is_err());
+    }
+}

@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
-use vklens::gpu::{image_barrier, Buffer, Gpu, Image};
+use vklens::gpu::{image_barrier, Buffer, EnabledFeatures, Gpu, Image};
 use vklens::imaging::cpu_warp::Sampling;
 use vklens::model::warp::WarpGeometry;
 use vklens::model::{Intrinsics, InverseMethod, OpenCvCamera};
@@ -78,7 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 queue,
                 family,
                 allocator.clone(),
-                false,
+                EnabledFeatures::default(),
             )?;
             let camera = OpenCvCamera::from_coeffs(
                 w,

@@ -20,4 +20,5 @@ pub mod imaging;
 pub mod io;
 pub mod model;
 pub mod pass;
+pub mod render;
 pub mod scene;

@@ -9,7 +9,7 @@ use glam::DVec2;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
 use vklens::gpu::host_read_barrier;
-use vklens::gpu::{Buffer, Gpu};
+use vklens::gpu::{Buffer, EnabledFeatures, Gpu};
 use vklens::model::InverseMethod;
 use vklens::pass::{PointsMode, PointsPass, Precision};
 
@@ -78,7 +78,7 @@ fn a_pass_records_into_the_callers_command_buffer_on_the_callers_device() {
                 queue,
                 family,
                 allocator.clone(),
-                false,
+                EnabledFeatures::default(),
             )
             .unwrap();
             let reference = vklens::io::reference::load_reference().unwrap();

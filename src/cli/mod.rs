@@ -7,6 +7,7 @@
 mod bench;
 mod demo;
 mod points;
+mod render;
 mod warp;
 
 use std::path::PathBuf;
@@ -69,6 +70,8 @@ Examples:
   vklens distort --camera cam.yml --input pinhole.png --output lens.png --mask valid.png
   vklens undistort --camera cam.yml --input photo.png --output rectified.png
   vklens overscan --camera cam.yml > source.json
+  vklens render --camera cam.yml --scene checkerboard:9x6 --output board.png --ids ids.png
+  vklens render --camera cam.yml --scene boxes --output boxes.png --flow flow.exr --tessellate 8
   vklens bench inverse --json";
 
 #[derive(Parser, Debug)]
@@ -99,6 +102,9 @@ enum Command {
     Precorrect(warp::WarpArgs),
     /// Print the pinhole source camera (JSON) that covers every valid distorted pixel.
     Overscan(warp::OverscanArgs),
+    /// Render a scene through the lens (seed 000): per vertex with Alg. 1 (colour, IDs, flow,
+    /// depth, all exact) or as a pinhole render plus the compute warp.
+    Render(render::RenderArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -219,5 +225,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Undistort(args) => warp::run(args, Direction::Undistort, false),
         Command::Precorrect(args) => warp::run(args, Direction::Undistort, true),
         Command::Overscan(args) => warp::overscan_command(args),
+        Command::Render(args) => render::run(args),
     }
 }

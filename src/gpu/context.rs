@@ -197,8 +197,11 @@ impl Context {
                 GpuError::NoDevice("the device lacks shaderStorageImageExtendedFormats".into()),
             ));
         }
+        // The geometry path drops triangles in a geometry shader (lavapipe has them).
+        let geometry_shader = supported.geometry_shader == vk::TRUE;
         let features = vk::PhysicalDeviceFeatures::default()
             .shader_float64(float64)
+            .geometry_shader(geometry_shader)
             .shader_storage_image_extended_formats(true);
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
@@ -233,6 +236,7 @@ impl Context {
             timestamps: families[family as usize].timestamp_valid_bits > 0,
             device_name: device_name(&props),
             float64,
+            geometry_shader,
             max_image_side: props.limits.max_image_dimension2_d,
             owner: owned,
         });

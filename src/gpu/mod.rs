@@ -3,13 +3,14 @@
 //! * [`Gpu`] — the handles a pass needs (device, queue, allocator), built from the caller's
 //!   objects ([`Gpu::from_caller`]) or created by the headless [`Context`]. Cheap to clone; the
 //!   last clone of a [`Context`]-made `Gpu` destroys the device it created, never a caller's.
-//! * Owned objects: [`Buffer`], [`Image`], [`ComputePipeline`], [`DescriptorPool`],
-//!   [`QueryPool`], each destroying its handle (and freeing its allocation) in `Drop`.
+//! * Owned objects: [`Buffer`], [`Image`], [`ComputePipeline`], [`GraphicsPipeline`],
+//!   [`RenderPass`], [`Framebuffer`], [`Sampler`], [`DescriptorPool`], [`QueryPool`], each destroying its handle (and freeing its allocation) in `Drop`.
 //! * [`Context`] — headless: instance (validation layer on request), device selection
 //!   (`VKLENS_DEVICE`), one queue, submission and timing for tests and the CLI.
 
 mod barriers;
 mod context;
+mod graphics;
 mod pipeline;
 pub mod reflect;
 mod resources;
@@ -23,8 +24,11 @@ use gpu_allocator::vulkan::Allocator;
 
 pub use barriers::{host_read_barrier, image_barrier, memory_barrier};
 pub use context::{Context, ContextOptions};
+pub use graphics::{
+    Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,
+};
 pub use pipeline::{
-    write_buffer_descriptors, write_storage_image_descriptors, ComputePipeline, DescriptorPool,
+    write_buffer_descriptors, DescriptorLayout, write_storage_image_descriptors, ComputePipeline, DescriptorPool,
     SpecConstants,
 };
 pub use resources::{Buffer, Image, QueryPool};
@@ -52,6 +56,15 @@ pub enum GpuError {
 /// Crate result for GPU work.
 pub type Result<T, E = GpuError> = std::result::Result<T, E>;
 
+/// Optional device features vklens can use, as the caller enabled them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct EnabledFeatures {
+    /// `shaderFloat64`: the f64 model variants (the precise inverse near folds).
+    pub shader_float64: bool,
+    /// `geometryShader`: the geometry path (Alg. 1) drops triangles in a geometry shader.
+    pub geometry_shader: bool,
+}
+
 /// The handles every pass needs: a device, a queue it may use for one-off uploads, and a
 /// `gpu-allocator` allocator. Built from the caller's objects or by [`Context`].
 #[derive(Clone)]
@@ -69,6 +82,8 @@ pub(crate) struct GpuInner {
     pub(crate) device_name: String,
     /// Whether `shaderFloat64` is enabled on the device (f64 shader variants).
     pub(crate) float64: bool,
+    /// Whether `geometryShader` is enabled (the geometry path's triangle discard).
+    pub(crate) geometry_shader: bool,
     /// `maxImageDimension2D`.
     pub(crate) max_image_side: u32,
     /// Present when vklens created the device (headless [`Context`]); destroys it last.
@@ -82,8 +97,8 @@ impl Gpu {
     /// # Safety
     /// `device` must have been created from `physical_device` of `instance`, `queue` must be a
     /// queue of `queue_family` of that device supporting compute, and `allocator` must have
-    /// been created for that device. `float64_enabled` must be true only if the device was
-    /// created with the `shaderFloat64` feature enabled (it unlocks the f64 shader variants).
+    /// been created for that device. `features` must name only features the device was
+    /// created with (they unlock the f64 shader variants and the geometry path).
     pub unsafe fn from_caller(
         instance: &ash::Instance,
         physical_device: vk::PhysicalDevice,
@@ -91,7 +106,7 @@ impl Gpu {
         queue: vk::Queue,
         queue_family: u32,
         allocator: Arc<Mutex<Allocator>>,
-        float64_enabled: bool,
+        features: EnabledFeatures,
     ) -> Result<Self> {
         if device.handle() == vk::Device::null() || queue == vk::Queue::null() {
             return Err(GpuError::Invalid("null device or queue handle".into()));
@@ -111,7 +126,8 @@ impl Gpu {
                 timestamp_period_ns: props.limits.timestamp_period as f64,
                 timestamps: family.timestamp_valid_bits > 0,
                 device_name: device_name(&props),
-                float64: float64_enabled,
+                float64: features.shader_float64,
+                geometry_shader: features.geometry_shader,
                 max_image_side: props.limits.max_image_dimension2_d,
                 owner: None,
             }),
@@ -153,6 +169,10 @@ impl Gpu {
     /// Whether f64 shader variants can run (`shaderFloat64` enabled).
     pub fn supports_float64(&self) -> bool {
         self.inner.float64
+    }
+    /// Whether the geometry path can run (`geometryShader` enabled).
+    pub fn supports_geometry_shader(&self) -> bool {
+        self.inner.geometry_shader
     }
     /// The device's name (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
     pub fn device_name(&self) -> &str {

@@ -67,12 +67,7 @@ impl ComputePipeline {
         constants: SpecConstants,
     ) -> Result<Self> {
         let device = gpu.device();
-        let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
-            .map_err(|e| GpuError::Invalid(format!("bad SPIR-V: {e}")))?;
-        let module = unsafe {
-            device
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)?
-        };
+        let module = shader_module(gpu, spirv)?;
         // From here on, `pipeline` owns what is created, so an early return cleans up.
         let mut pipeline = ComputePipeline {
             gpu: gpu.clone(),
@@ -112,23 +107,7 @@ impl ComputePipeline {
         }
         pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None)? };
 
-        let map: Vec<vk::SpecializationMapEntry> = pipeline
-            .constants
-            .entries()
-            .iter()
-            .enumerate()
-            .map(|(i, (id, _))| vk::SpecializationMapEntry {
-                constant_id: *id,
-                offset: (i * 4) as u32,
-                size: 4,
-            })
-            .collect();
-        let data: Vec<u8> = pipeline
-            .constants
-            .entries()
-            .iter()
-            .flat_map(|(_, v)| v.to_ne_bytes())
-            .collect();
+        let (map, data) = specialization_data(&pipeline.constants);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&map)
             .data(&data);
@@ -197,6 +176,53 @@ impl Drop for ComputePipeline {
     }
 }
 
+/// A pipeline's descriptor set 0: its layout and the type of each binding.
+pub trait DescriptorLayout {
+    fn set_layout(&self) -> vk::DescriptorSetLayout;
+    fn binding_types(&self) -> &[vk::DescriptorType];
+}
+
+impl DescriptorLayout for ComputePipeline {
+    fn set_layout(&self) -> vk::DescriptorSetLayout {
+        self.set_layout
+    }
+    fn binding_types(&self) -> &[vk::DescriptorType] {
+        &self.bindings
+    }
+}
+
+/// A shader module from SPIR-V bytes.
+pub(crate) fn shader_module(gpu: &Gpu, spirv: &[u8]) -> Result<vk::ShaderModule> {
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+        .map_err(|e| GpuError::Invalid(format!("bad SPIR-V: {e}")))?;
+    Ok(unsafe {
+        gpu.device()
+            .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)?
+    })
+}
+
+/// `constants` as Vulkan specialization data: (map entries, bytes). Every constant is 4 bytes.
+pub(crate) fn specialization_data(
+    constants: &SpecConstants,
+) -> (Vec<vk::SpecializationMapEntry>, Vec<u8>) {
+    let map = constants
+        .entries()
+        .iter()
+        .enumerate()
+        .map(|(i, (id, _))| vk::SpecializationMapEntry {
+            constant_id: *id,
+            offset: (i * 4) as u32,
+            size: 4,
+        })
+        .collect();
+    let data = constants
+        .entries()
+        .iter()
+        .flat_map(|(_, v)| v.to_ne_bytes())
+        .collect();
+    (map, data)
+}
+
 /// A descriptor pool sized for `sets` sets of one pipeline's layout; sets are freed with it.
 pub struct DescriptorPool {
     gpu: Gpu,
@@ -204,9 +230,9 @@ pub struct DescriptorPool {
 }
 
 impl DescriptorPool {
-    pub fn for_pipeline(gpu: &Gpu, pipeline: &ComputePipeline, sets: u32) -> Result<Self> {
+    pub fn for_pipeline(gpu: &Gpu, pipeline: &impl DescriptorLayout, sets: u32) -> Result<Self> {
         let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
-        for &ty in pipeline.bindings() {
+        for &ty in pipeline.binding_types() {
             match sizes.iter_mut().find(|s| s.ty == ty) {
                 Some(s) => s.descriptor_count += sets,
                 None => sizes.push(vk::DescriptorPoolSize {
@@ -226,8 +252,8 @@ impl DescriptorPool {
     }
 
     /// Allocates one set of `pipeline`'s layout.
-    pub fn allocate(&self, pipeline: &ComputePipeline) -> Result<vk::DescriptorSet> {
-        let layouts = [pipeline.set_layout];
+    pub fn allocate(&self, pipeline: &impl DescriptorLayout) -> Result<vk::DescriptorSet> {
+        let layouts = [pipeline.set_layout()];
         let info = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.raw)
             .set_layouts(&layouts);

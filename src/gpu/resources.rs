@@ -158,7 +158,8 @@ pub struct Image {
 }
 
 impl Image {
-    /// Creates a device-local 2D image with one mip level and a colour view.
+    /// Creates a device-local 2D image with one mip level and a view of its colour (or, for a
+    /// depth format, depth) aspect.
     pub fn new_2d(
         gpu: &Gpu,
         name: &str,
@@ -206,9 +207,22 @@ impl Image {
             .image(raw)
             .view_type(vk::ImageViewType::TYPE_2D)
             .format(format)
-            .subresource_range(Self::color_range());
+            .subresource_range(vk::ImageSubresourceRange {
+                aspect_mask: Self::aspect_of(format),
+                ..Self::color_range()
+            });
         image.view = unsafe { device.create_image_view(&view_info, None)? };
         Ok(image)
+    }
+
+    /// The aspect a view of `format` shows (depth formats: DEPTH; everything else: COLOR).
+    pub fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
+        match format {
+            vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::X8_D24_UNORM_PACK32 => {
+                vk::ImageAspectFlags::DEPTH
+            }
+            _ => vk::ImageAspectFlags::COLOR,
+        }
     }
 
     /// The whole colour subresource.

@@ -4,6 +4,7 @@
 
 pub mod camera_params;
 pub mod copy;
+pub mod geometry;
 pub mod grid_demo;
 pub mod points;
 pub mod warp;

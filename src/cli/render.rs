@@ -1,0 +1,269 @@
+//! `vklens render`: a scene through a calibrated lens, by the vertex or the warp path.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, ValueEnum};
+
+use super::{context, finish, load_camera, progress_done, progress_line, CliError};
+use crate::imaging::{io as image_io, Depth, Pixels, Raster};
+use crate::model::{Frustum, InverseMethod, OpenCvCamera};
+use crate::pass::geometry::{ColorFormat, Outputs, Rendered, DEFAULT_DELTA};
+use crate::render::{render_scene, RenderPath, RenderRequest};
+use crate::scene::{builtin, Pose, Scene};
+
+/// Which of seed 000's two paths renders the lens.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PathArg {
+    /// Alg. 1 per vertex, triangles outside the frustum ± (δ + D) dropped: exact colour, IDs,
+    /// flow and depth, as long as the mesh is fine (see --tessellate).
+    Vertex,
+    /// A pinhole render of the overscanned frustum, then the compute warp (inverse model per
+    /// pixel): colour bilinear, IDs and depth nearest, no flow.
+    Warp,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// The lens: an OpenCV/ROS/vklens camera file. The output has its width × height.
+    #[arg(long, value_name = "CAM")]
+    camera: PathBuf,
+    /// checkerboard[:COLSxROWS[:SQUARE_M]] (OpenCV's board, inner corners, default 9x6 of
+    /// 0.04 m), grid[:N] (N×N textured quads, default 16), boxes, or an .obj/.gltf/.glb file.
+    #[arg(long, value_name = "SCENE")]
+    scene: String,
+    /// Colour output: .png (8-bit RGBA) or .exr (16-bit float RGBA).
+    #[arg(long, value_name = "OUT")]
+    output: PathBuf,
+    /// Object IDs: .png (16-bit grey, 0 = background) or .exr (IDs as floats).
+    #[arg(long, value_name = "IDS")]
+    ids: Option<PathBuf>,
+    /// 2D flow (.exr): R, G = pixel motion from --previous-pose to --pose, A = 1 where known;
+    /// NaN where the surface was not visible to the lens in both poses. Vertex path only.
+    #[arg(long, value_name = "F.exr")]
+    flow: Option<PathBuf>,
+    /// Camera depth (.exr): z in metres in R, G, B; +inf where nothing was drawn.
+    #[arg(long, value_name = "D.exr")]
+    depth: Option<PathBuf>,
+    #[arg(long, value_enum, default_value_t = PathArg::Vertex)]
+    path: PathArg,
+    /// Split mesh edges longer than L pixels (pinhole image) before the vertex path: Alg. 1
+    /// moves vertices only, so straight edges between them stay straight (seed 000's first
+    /// limitation). `vklens bench vertex` shows what L costs in error and time.
+    #[arg(long, value_name = "L")]
+    tessellate: Option<f64>,
+    /// Camera pose: OpenCV rvec and tvec (world → camera), rx,ry,rz,tx,ty,tz. Default: the
+    /// scene centred, filling about 80 % of the view.
+    #[arg(long, value_name = "POSE", allow_hyphen_values = true)]
+    pose: Option<String>,
+    /// The pose flow starts from (same form). Default: the camera moved sideways by 1 % of
+    /// its distance to the scene centre.
+    #[arg(long, value_name = "POSE", allow_hyphen_values = true)]
+    previous_pose: Option<String>,
+    /// Seed 000 Sec. 3.2's discard tolerance δ (D is added automatically).
+    #[arg(long, default_value_t = DEFAULT_DELTA)]
+    delta: f64,
+    /// Inverse method of the warp path: newton, heikkila or fixed-point:N.
+    #[arg(long, default_value = "newton", value_parser = super::parse_method)]
+    method: InverseMethod,
+    /// Render colour at S× per axis and box-filter down (anti-aliasing; 1 = off, max 8).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
+    supersample: u32,
+    /// Background colour R,G,B,A in 0..1.
+    #[arg(long, default_value = "0,0,0,0", value_parser = parse_background)]
+    background: Background,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct Background(pub [f32; 4]);
+
+fn parse_background(s: &str) -> Result<Background, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("background {s:?}: expected R,G,B,A"))?;
+    match <[f32; 4]>::try_from(v) {
+        Ok(a) if a.iter().all(|c| c.is_finite()) => Ok(Background(a)),
+        _ => Err(format!("background {s:?}: expected four finite numbers R,G,B,A")),
+    }
+}
+
+/// Frustum half-angle tangents (left, right, top, bottom) of a camera.
+pub(crate) fn half_tangents(camera: &OpenCvCamera) -> [f64; 4] {
+    let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
+    [-f.left, f.right, -f.top, f.bottom]
+}
+
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+}
+
+fn check_output(path: &Path, what: &str, allowed: &[&str]) -> Result<String, CliError> {
+    let ext = extension(path).unwrap_or_default();
+    if !allowed.contains(&ext.as_str()) {
+        return Err(CliError::input(format!(
+            "{}: the {what} output must be {}",
+            path.display(),
+            allowed
+                .iter()
+                .map(|e| format!(".{e}"))
+                .collect::<Vec<_>>()
+                .join(" or ")
+        )));
+    }
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(CliError::input(format!(
+            "{}: folder {} does not exist",
+            path.display(),
+            dir.display()
+        )));
+    }
+    Ok(ext)
+}
+
+/// The default previous pose: the camera moved sideways by 1 % of its distance to `target`.
+fn nudged(pose: &Pose, scene: &Scene) -> Pose {
+    let (lo, hi) = scene.mesh.bounds();
+    let centre = 0.5 * (lo + hi);
+    let distance = pose.apply(centre).length();
+    Pose {
+        translation: pose.translation + glam::DVec3::X * (0.01 * distance),
+        ..*pose
+    }
+}
+
+pub fn run(args: RenderArgs) -> Result<(), CliError> {
+    let camera = load_camera(&args.camera)?;
+    let color_ext = check_output(&args.output, "colour", &["png", "exr"])?;
+    let ids_ext = match &args.ids {
+        Some(p) => Some(check_output(p, "ID", &["png", "exr"])?),
+        None => None,
+    };
+    if let Some(p) = &args.flow {
+        check_output(p, "flow", &["exr"])?;
+    }
+    if let Some(p) = &args.depth {
+        check_output(p, "depth", &["exr"])?;
+    }
+    if args.flow.is_some() && args.path == PathArg::Warp {
+        return Err(CliError::input(
+            "--flow needs --path vertex: flow vectors live in the pinhole image and a warp cannot carry them (seed 000 Table 1)",
+        ));
+    }
+    if let Some(l) = args.tessellate {
+        if !(l.is_finite() && l >= 0.25) {
+            return Err(CliError::input(format!(
+                "--tessellate {l}: expected an edge length in pixels ≥ 0.25"
+            )));
+        }
+    }
+    if !(args.delta.is_finite() && args.delta >= 0.0) {
+        return Err(CliError::input(format!("--delta {}: expected a number ≥ 0", args.delta)));
+    }
+    let scene = builtin::parse(&args.scene).map_err(|e| CliError::input(e.to_string()))?;
+    let pose = match &args.pose {
+        Some(p) => Pose::parse(p).map_err(CliError::input)?,
+        None => scene.default_pose(half_tangents(&camera)),
+    };
+    let previous_pose = match &args.previous_pose {
+        Some(p) => Pose::parse(p).map_err(CliError::input)?,
+        None => nudged(&pose, &scene),
+    };
+    let outputs = Outputs {
+        color: Some(if color_ext == "exr" {
+            ColorFormat::Rgba16F
+        } else {
+            ColorFormat::Rgba8
+        }),
+        ids: args.ids.is_some(),
+        flow: args.flow.is_some(),
+        depth: args.depth.is_some(),
+    };
+    let request = RenderRequest {
+        camera,
+        pose,
+        previous_pose,
+        path: match args.path {
+            PathArg::Vertex => RenderPath::Vertex { delta: args.delta },
+            PathArg::Warp => RenderPath::Warp {
+                method: args.method,
+            },
+        },
+        outputs,
+        supersample: args.supersample,
+        tessellate: args.tessellate,
+        background: args.background.0,
+    };
+    let ctx = context()?;
+    progress_line(&format!(
+        "{}: {} triangles on {}",
+        scene.name,
+        scene.mesh.triangle_count(),
+        ctx.gpu().device_name()
+    ));
+    let rendered = render_scene(&ctx, &scene, &request, &mut |s| progress_line(s))
+        .map_err(|e| match e {
+            crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+            other => CliError::from(other),
+        })?;
+    finish(&ctx)?;
+    write_outputs(&args, &rendered, ids_ext.as_deref())?;
+    progress_done(&format!("wrote {}", args.output.display()));
+    Ok(())
+}
+
+fn write_outputs(args: &RenderArgs, r: &Rendered, ids_ext: Option<&str>) -> Result<(), CliError> {
+    let save = |raster: &Raster, path: &Path| {
+        image_io::save(raster, path).map_err(CliError::runtime)
+    };
+    let float_image = |pixels: Vec<[f32; 4]>| Raster {
+        width: r.width,
+        height: r.height,
+        pixels: Pixels::Rgba32F(pixels),
+        depth: Depth::F32,
+    };
+    if let Some(c) = &r.color {
+        save(c, &args.output)?;
+    }
+    if let (Some(path), Some(ids)) = (&args.ids, &r.ids) {
+        if ids_ext == Some("png") {
+            if let Some(&big) = ids.iter().find(|&&i| i > u16::MAX as u32) {
+                return Err(CliError::input(format!(
+                    "{}: object ID {big} does not fit a 16-bit PNG; write the IDs to .exr",
+                    path.display()
+                )));
+            }
+            save(
+                &Raster {
+                    width: r.width,
+                    height: r.height,
+                    pixels: Pixels::R32Uint(ids.clone()),
+                    depth: Depth::U16,
+                },
+                path,
+            )?;
+        } else {
+            save(&float_image(ids.iter().map(|&i| [i as f32, i as f32, i as f32, 1.0]).collect()), path)?;
+        }
+    }
+    if let (Some(path), Some(flow)) = (&args.flow, &r.flow) {
+        let pixels = flow
+            .iter()
+            .map(|f| {
+                let known = f[0].is_finite() && f[1].is_finite();
+                [f[0], f[1], 0.0, if known { 1.0 } else { 0.0 }]
+            })
+            .collect();
+        save(&float_image(pixels), path)?;
+    }
+    if let (Some(path), Some(depth)) = (&args.depth, &r.depth) {
+        save(&float_image(depth.iter().map(|&z| [z, z, z, 1.0]).collect()), path)?;
+    }
+    Ok(())
+}

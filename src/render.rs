@@ -7,29 +7,44 @@
 //!   Flow cannot be warped honestly (its vectors live in the pinhole image), so the warp path
 //!   refuses it (Table 1).
 //!
-//! Supersampling renders colour at `s×` the resolution with the scaled camera (the lens is
-//! the same: distortion acts on normalized coordinates) and box-filters down: anti-aliased
-//! edges for calibration, where corner positions must be sub-pixel exact. IDs, flow and depth
-//! are rendered at 1× (they must not be averaged).
+//! Anti-aliasing (colour only; IDs, flow and depth are rendered once at 1×, they must not be
+//! averaged): `supersample` renders at `s×` the resolution with the scaled camera (the lens is
+//! the same: distortion acts on normalized coordinates) and box-filters down; `jitter` repeats
+//! that with the sample grid shifted by sub-sample offsets (Halton 2, 3) and averages. A
+//! regular `s × s` grid measures the position of a near-axis-aligned edge only to `1/s` px —
+//! for checkerboard corners a systematic ±1/(2s) px error that calibration would fit as lens
+//! distortion; jittered passes make it `1/(s·passes)`. Shifting the principal point by δ
+//! translates the lens image by −δ exactly (Alg. 1 normalizes with the same cx, cy), so
+//! every pass is the same image sampled elsewhere.
 
-use crate::gpu::{Context, GpuError, Result};
+use ash::vk;
+use glam::DVec2;
+use gpu_allocator::MemoryLocation;
+
+use crate::gpu::{image_barrier, memory_barrier, Buffer, Context, GpuError, Image, Result};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
 use crate::model::{Intrinsics, InverseMethod, OpenCvCamera, OpenCvDistortion};
-use crate::pass::geometry::{render, ColorFormat, GeometryDesc, Outputs, Projection, Rendered};
-use crate::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
+use crate::pass::geometry::{
+    ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
+    Rendered,
+};
+use crate::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc, WarpPass};
 use crate::scene::tessellate::tessellate;
-use crate::scene::{Pose, Scene};
+use crate::scene::{Mesh, Pose, Scene};
 
 /// Which path renders the lens.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum RenderPath {
     /// Alg. 1 with discard tolerance δ.
     Vertex { delta: f64 },
-    /// Pinhole render of the overscanned frustum, then the compute warp with `method`.
-    Warp { method: InverseMethod },
+    /// Pinhole render of the overscanned frustum with `density` source pixels per output
+    /// pixel (seed 000 Sec. 3.3: "an enlarged frustum and increased resolution"), then the
+    /// compute warp with `method`. Bilinear resampling blurs and shifts edges by up to a few
+    /// hundredths of a source pixel; a denser source shrinks that in output pixels.
+    Warp { method: InverseMethod, density: f64 },
 }
 
 /// What to render.
@@ -43,6 +58,8 @@ pub struct RenderRequest {
     pub outputs: Outputs,
     /// Colour supersampling factor per axis (1 = none).
     pub supersample: u32,
+    /// Jittered colour passes averaged (1 = one pass, no jitter).
+    pub jitter: u32,
     /// Split mesh edges longer than this many pixels first (vertex path).
     pub tessellate: Option<f64>,
     pub background: [f32; 4],
@@ -67,30 +84,125 @@ pub fn scaled_camera(camera: &OpenCvCamera, s: u32) -> std::result::Result<OpenC
     .map_err(|e| e.to_string())
 }
 
+/// The camera whose image is `camera`'s translated by `-shift` px (principal point moved).
+fn shifted(camera: &OpenCvCamera, shift: DVec2) -> std::result::Result<OpenCvCamera, String> {
+    let mut k = camera.intrinsics;
+    k.cx -= shift.x;
+    k.cy -= shift.y;
+    OpenCvCamera::new(camera.width, camera.height, k, camera.distortion).map_err(|e| e.to_string())
+}
+
+/// Radical inverse of `i` in `base` (Halton sequence), in [0, 1).
+fn radical_inverse(mut i: u32, base: u32) -> f64 {
+    let (mut f, mut r) = (1.0, 0.0);
+    while i > 0 {
+        f /= base as f64;
+        r += f * (i % base) as f64;
+        i /= base;
+    }
+    r
+}
+
+/// Sub-sample offsets of `passes` jittered passes, in units of one sample (centred on 0).
+pub fn jitter_offsets(passes: u32) -> Vec<DVec2> {
+    if passes <= 1 {
+        return vec![DVec2::ZERO];
+    }
+    let raw: Vec<DVec2> = (0..passes)
+        .map(|i| DVec2::new(radical_inverse(i, 2), radical_inverse(i, 3)))
+        .collect();
+    // Centre exactly (the mean offset would shift the whole image).
+    let mean = raw.iter().sum::<DVec2>() / passes as f64;
+    raw.into_iter().map(|o| o - mean).collect()
+}
+
+/// The mean of equally sized images (8-bit results rounded).
+fn average(images: &[Raster]) -> Raster {
+    let n = images.len().max(1) as f32;
+    let first = &images[0];
+    let mut sums = vec![[0f32; 4]; first.len()];
+    for img in images {
+        for (i, o) in sums.iter_mut().enumerate() {
+            let v = img.rgba_f32(i);
+            for c in 0..4 {
+                o[c] += v[c] / n;
+            }
+        }
+    }
+    let pixels = match first.pixels {
+        Pixels::Rgba8(_) => Pixels::Rgba8(
+            sums.iter()
+                .map(|p| p.map(|c| (c * 255.0).round().clamp(0.0, 255.0) as u8))
+                .collect(),
+        ),
+        _ => Pixels::Rgba32F(sums),
+    };
+    Raster {
+        pixels,
+        ..first.clone()
+    }
+}
+
+/// Anti-aliased colour: for each jitter offset, `pass(big camera, shift)` renders `camera`
+/// scaled by `s` with its image translated by `-shift` (1× px); the results are box-filtered
+/// and averaged.
+fn antialiased(
+    camera: &OpenCvCamera,
+    s: u32,
+    passes: u32,
+    pass: &mut dyn FnMut(OpenCvCamera, DVec2) -> Result<Raster>,
+) -> Result<Raster> {
+    let mut images = Vec::new();
+    for offset in jitter_offsets(passes) {
+        let shift = offset / s as f64;
+        let big = scaled_camera(&shifted(camera, shift).map_err(invalid)?, s).map_err(invalid)?;
+        images.push(downsample(&pass(big, shift)?, s));
+    }
+    Ok(average(&images))
+}
+
 /// Box-filters an image by `s` per axis (its size must be a multiple of `s`).
 pub fn downsample(image: &Raster, s: u32) -> Raster {
     if s == 1 {
         return image.clone();
     }
     let (w, h) = (image.width / s, image.height / s);
-    let n = (s * s) as f32;
-    let mut sums = vec![[0f32; 4]; (w * h) as usize];
-    for y in 0..h * s {
-        for x in 0..w * s {
-            let v = image.rgba_f32((y * image.width + x) as usize);
-            let o = &mut sums[((y / s) * w + x / s) as usize];
-            for c in 0..4 {
-                o[c] += v[c];
+    let (s, iw) = (s as usize, image.width as usize);
+    let pixels = match &image.pixels {
+        // Integer sums, row by row: this runs on every supersampled pass.
+        Pixels::Rgba8(p) => {
+            let n = (s * s) as u32;
+            let mut out = Vec::with_capacity(w as usize * h as usize);
+            let mut sums = vec![[0u32; 4]; w as usize];
+            for y in 0..h as usize {
+                sums.iter_mut().for_each(|v| *v = [0; 4]);
+                for row in p[y * s * iw..(y + 1) * s * iw].chunks_exact(iw) {
+                    for (x, block) in row.chunks_exact(s).enumerate() {
+                        for px in block {
+                            for c in 0..4 {
+                                sums[x][c] += px[c] as u32;
+                            }
+                        }
+                    }
+                }
+                out.extend(sums.iter().map(|v| v.map(|c| ((c + n / 2) / n) as u8)));
             }
+            Pixels::Rgba8(out)
         }
-    }
-    let pixels = match image.pixels {
-        Pixels::Rgba8(_) => Pixels::Rgba8(
-            sums.iter()
-                .map(|p| p.map(|c| (c / n * 255.0).round().clamp(0.0, 255.0) as u8))
-                .collect(),
-        ),
-        _ => Pixels::Rgba32F(sums.iter().map(|p| p.map(|c| c / n)).collect()),
+        _ => {
+            let n = (s * s) as f32;
+            let mut out = vec![[0f32; 4]; w as usize * h as usize];
+            for y in 0..image.height as usize {
+                for x in 0..iw {
+                    let v = image.rgba_f32(y * iw + x);
+                    let o = &mut out[(y / s) * w as usize + x / s];
+                    for c in 0..4 {
+                        o[c] += v[c] / n;
+                    }
+                }
+            }
+            Pixels::Rgba32F(out)
+        }
     };
     Raster {
         width: w,
@@ -100,13 +212,260 @@ pub fn downsample(image: &Raster, s: u32) -> Raster {
     }
 }
 
+/// The warp path on the GPU in one submission: pinhole render (colour left in `GENERAL`) →
+/// compute warp reading it in place → readback. Nothing makes a round trip through the host.
+struct WarpStage {
+    pass: GeometryPass,
+    targets: GeometryTargets,
+    warp: WarpPass,
+    output: Image,
+    mask: Image,
+    download: Buffer,
+}
+
+/// Renders scenes through a headless context, keeping geometry passes (their compiled
+/// pipelines) across calls: a new camera of the same size and terms, a new pose or a new mesh
+/// reuses them. A calibration set's views and the jittered passes all share one.
+pub struct SceneRenderer<'a> {
+    ctx: &'a Context,
+    passes: Vec<(GeometryPass, GeometryTargets)>,
+    warp_stages: Vec<WarpStage>,
+}
+
+impl<'a> SceneRenderer<'a> {
+    pub fn new(ctx: &'a Context) -> Self {
+        SceneRenderer {
+            ctx,
+            passes: Vec::new(),
+            warp_stages: Vec::new(),
+        }
+    }
+
+    /// Draws `mesh` once with `desc`.
+    pub fn draw(
+        &mut self,
+        desc: GeometryDesc,
+        mesh: &Mesh,
+        texture: Option<&Raster>,
+        pose: &Pose,
+        previous: &Pose,
+    ) -> Result<Rendered> {
+        let gpu = self.ctx.gpu();
+        let reusable = |p: &GeometryPass| {
+            let d = p.desc();
+            d.projection == desc.projection
+                && d.outputs == desc.outputs
+                && d.background == desc.background
+                && (d.near, d.far) == (desc.near, desc.far)
+                && d.final_layout == desc.final_layout
+                && p.accepts_camera(&desc.camera)
+        };
+        let index = match self.passes.iter().position(|(p, _)| reusable(p)) {
+            Some(i) => {
+                self.passes[i].0.set_camera(&desc.camera)?;
+                i
+            }
+            None => {
+                let pass = GeometryPass::new(gpu, desc)?;
+                let targets = GeometryTargets::new(gpu, &pass)?;
+                self.passes.push((pass, targets));
+                self.passes.len() - 1
+            }
+        };
+        let buffers = MeshBuffers::new(gpu, mesh, texture)?;
+        let (pass, targets) = &mut self.passes[index];
+        pass.bind_mesh(&buffers);
+        pass.set_frame(pose, previous)?;
+        let (pass, targets) = (&*pass, &*targets);
+        self.ctx.submit(|cmd| {
+            unsafe {
+                buffers.record_upload(cmd);
+                pass.record(cmd, targets, &buffers);
+                targets.record_download(cmd);
+            }
+            Ok(())
+        })?;
+        targets.read()
+    }
+
+    /// The warp path's colour: `scene` rendered with the pinhole `source` camera, warped by
+    /// `geometry` (analytic, bilinear) — all on the GPU.
+    pub fn draw_warped(
+        &mut self,
+        scene: &Scene,
+        pose: &Pose,
+        source: OpenCvCamera,
+        geometry: WarpGeometry,
+        format: ColorFormat,
+        background: [f32; 4],
+    ) -> Result<Raster> {
+        let gpu = self.ctx.gpu();
+        let pixel_format = match format {
+            ColorFormat::Rgba8 => PixelFormat::Rgba8,
+            ColorFormat::Rgba32F => PixelFormat::Rgba32F,
+            ColorFormat::Rgba16F => {
+                return Err(invalid("the warp reads RGBA8 or RGBA32F sources"));
+            }
+        };
+        let reusable = |st: &WarpStage| {
+            let d = st.pass.desc();
+            d.outputs.color == Some(format)
+                && d.background == background
+                && st.pass.accepts_camera(&source)
+                && st.warp.desc().geometry.output_size == geometry.output_size
+        };
+        let index = match self.warp_stages.iter().position(reusable) {
+            Some(i) => {
+                let st = &mut self.warp_stages[i];
+                st.pass.set_camera(&source)?;
+                st.warp.retarget(geometry)?;
+                i
+            }
+            None => {
+                let mut desc = GeometryDesc::new(source, Projection::Pinhole, Outputs::color_only(Some(format)));
+                desc.background = background;
+                desc.final_layout = vk::ImageLayout::GENERAL;
+                let pass = GeometryPass::new(gpu, desc)?;
+                let targets = GeometryTargets::new(gpu, &pass)?;
+                let (ow, oh) = geometry.output_size;
+                let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+                let output = Image::new_2d(gpu, "warp_path.output", pixel_format.vk(), ow, oh, usage)?;
+                let mask = Image::new_2d(gpu, "warp_path.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
+                let download = Buffer::new(
+                    gpu,
+                    "warp_path.download",
+                    ow as u64 * oh as u64 * pixel_format.bytes() as u64,
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryLocation::GpuToCpu,
+                )?;
+                let mut warp = WarpPass::new(
+                    gpu,
+                    WarpDesc {
+                        geometry,
+                        coordinates: Coordinates::Analytic,
+                        sampling: Sampling::Bilinear,
+                        format: pixel_format,
+                        fill: background,
+                        write_mask: false,
+                    },
+                )?;
+                let color = targets.color().ok_or_else(|| invalid("no colour target"))?;
+                warp.bind(color.view, output.view, mask.view);
+                self.warp_stages.push(WarpStage {
+                    pass,
+                    targets,
+                    warp,
+                    output,
+                    mask,
+                    download,
+                });
+                self.warp_stages.len() - 1
+            }
+        };
+        let buffers = MeshBuffers::new(gpu, &scene.mesh, scene.texture.as_ref())?;
+        let st = &mut self.warp_stages[index];
+        st.pass.bind_mesh(&buffers);
+        st.pass.set_frame(pose, pose)?;
+        let st = &*st;
+        let (ow, oh) = st.warp.desc().geometry.output_size;
+        self.ctx.submit(|cmd| {
+            let none = (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty());
+            let write = (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE);
+            let read = (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ);
+            unsafe {
+                buffers.record_upload(cmd);
+                // The render pass leaves the colour in GENERAL, its writes visible to compute.
+                st.pass.record(cmd, &st.targets, &buffers);
+                for img in [&st.output, &st.mask] {
+                    image_barrier(gpu, cmd, img.raw, (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL), none, write);
+                }
+                st.warp.record_prepare(cmd);
+                st.warp.record(cmd);
+                image_barrier(
+                    gpu,
+                    cmd,
+                    st.output.raw,
+                    (vk::ImageLayout::GENERAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL),
+                    write,
+                    read,
+                );
+                gpu.device().cmd_copy_image_to_buffer(
+                    cmd,
+                    st.output.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    st.download.raw,
+                    &[color_copy(ow, oh)],
+                );
+                memory_barrier(
+                    gpu,
+                    cmd,
+                    (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                    (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
+                );
+            }
+            Ok(())
+        })?;
+        let n = ow as usize * oh as usize;
+        let (pixels, depth) = match pixel_format {
+            PixelFormat::Rgba8 => (Pixels::Rgba8(st.download.read_pod::<[u8; 4]>(n)?), Depth::U8),
+            _ => (Pixels::Rgba32F(st.download.read_pod::<[f32; 4]>(n)?), Depth::F32),
+        };
+        Ok(Raster {
+            width: ow,
+            height: oh,
+            pixels,
+            depth,
+        })
+    }
+
+    /// Renders `scene` as `request` asks; `progress` hears each step.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        request: &RenderRequest,
+        progress: &mut dyn FnMut(&str),
+    ) -> Result<Rendered> {
+        render_with(self, scene, request, progress)
+    }
+}
+
+fn color_copy(w: u32, h: u32) -> vk::BufferImageCopy {
+    vk::BufferImageCopy {
+        buffer_offset: 0,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        },
+        image_offset: vk::Offset3D::default(),
+        image_extent: vk::Extent3D {
+            width: w,
+            height: h,
+            depth: 1,
+        },
+    }
+}
+
 fn invalid(e: impl ToString) -> GpuError {
     GpuError::Invalid(e.to_string())
 }
 
-/// Renders `scene` as `request` asks; `progress` hears each step.
+/// Renders `scene` as `request` asks (a one-off [`SceneRenderer`]); `progress` hears each
+/// step.
 pub fn render_scene(
     ctx: &Context,
+    scene: &Scene,
+    request: &RenderRequest,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Rendered> {
+    SceneRenderer::new(ctx).render(scene, request, progress)
+}
+
+fn render_with(
+    renderer: &mut SceneRenderer,
     scene: &Scene,
     request: &RenderRequest,
     progress: &mut dyn FnMut(&str),
@@ -127,11 +486,10 @@ pub fn render_scene(
             let projection = Projection::Lens { delta };
             let o = request.outputs;
             let data = Outputs { color: None, ..o };
-            let run = |camera: OpenCvCamera, outputs: Outputs| {
+            let mut run = |camera: OpenCvCamera, outputs: Outputs| {
                 let mut desc = GeometryDesc::new(camera, projection, outputs);
                 desc.background = request.background;
-                render(
-                    ctx,
+                renderer.draw(
                     desc,
                     &mesh,
                     scene.texture.as_ref(),
@@ -139,20 +497,19 @@ pub fn render_scene(
                     &request.previous_pose,
                 )
             };
-            if s == 1 || o.color.is_none() {
+            if (s == 1 && request.jitter <= 1) || o.color.is_none() {
                 progress("rendering (vertex path)");
                 return run(request.camera.clone(), o);
             }
-            progress(&format!("rendering colour at {s}× (vertex path)"));
-            let big = run(
-                scaled_camera(&request.camera, s).map_err(invalid)?,
-                Outputs {
-                    color: o.color,
-                    ids: false,
-                    flow: false,
-                    depth: false,
-                },
-            )?;
+            progress(&format!(
+                "rendering colour at {s}× in {} pass(es) (vertex path)",
+                request.jitter.max(1)
+            ));
+            let color = antialiased(&request.camera, s, request.jitter, &mut |big, _| {
+                run(big, Outputs::color_only(o.color))?
+                    .color
+                    .ok_or_else(|| invalid("the render produced no colour"))
+            })?;
             let mut out = if data.ids || data.flow || data.depth {
                 progress("rendering data outputs at 1×");
                 run(request.camera.clone(), data)?
@@ -163,18 +520,21 @@ pub fn render_scene(
                     ..Default::default()
                 }
             };
-            out.color = big.color.map(|c| downsample(&c, s));
+            out.color = Some(color);
             Ok(out)
         }
-        RenderPath::Warp { method } => render_warp_path(ctx, scene, request, method, s, progress),
+        RenderPath::Warp { method, density } => {
+            render_warp_path(renderer, scene, request, method, density, s, progress)
+        }
     }
 }
 
 fn render_warp_path(
-    ctx: &Context,
+    renderer: &mut SceneRenderer,
     scene: &Scene,
     request: &RenderRequest,
     method: InverseMethod,
+    density: f64,
     s: u32,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Rendered> {
@@ -185,22 +545,18 @@ fn render_warp_path(
         ));
     }
     let cam = &request.camera;
-    let ov = overscan(cam, 1.0).map_err(invalid)?;
+    let ov = overscan(cam, density).map_err(invalid)?;
     let pinhole = OpenCvCamera::new(ov.width, ov.height, ov.intrinsics, OpenCvDistortion::default())
         .map_err(invalid)?;
     let geometry = WarpGeometry::distort(cam.clone(), method)
         .with_ideal(ov.intrinsics, (ov.width, ov.height))
         .map_err(invalid)?;
-    let pinhole_render = |camera: OpenCvCamera, outputs: Outputs| {
-        let mut desc = GeometryDesc::new(camera, Projection::Pinhole, outputs);
-        desc.background = request.background;
-        render(ctx, desc, &scene.mesh, scene.texture.as_ref(), &request.pose, &request.pose)
-    };
-    let warp = |source: &Raster, format: PixelFormat, sampling: Sampling, fill: [f32; 4]| {
+    let ctx = renderer.ctx;
+    let warp = |geometry: WarpGeometry, source: &Raster, format: PixelFormat, sampling: Sampling, fill: [f32; 4]| {
         run_warp(
             ctx,
             WarpDesc {
-                geometry: geometry.clone(),
+                geometry,
                 coordinates: Coordinates::Analytic,
                 sampling,
                 format,
@@ -218,37 +574,44 @@ fn render_warp_path(
     };
     if let Some(format) = o.color {
         progress(&format!(
-            "rendering the pinhole source {}×{} at {s}× (warp path)",
-            ov.width, ov.height
+            "pinhole render + warp at {s}× in {} pass(es) (warp path)",
+            request.jitter.max(1)
         ));
-        let big = pinhole_render(
-            scaled_camera(&pinhole, s).map_err(invalid)?,
-            Outputs {
-                color: Some(format),
-                ids: false,
-                flow: false,
-                depth: false,
-            },
-        )?;
-        let source = downsample(big.color.as_ref().ok_or_else(|| invalid("no colour"))?, s);
-        progress("warping colour (bilinear)");
-        let pixel_format = match format {
-            ColorFormat::Rgba8 => PixelFormat::Rgba8,
-            ColorFormat::Rgba16F => PixelFormat::Rgba32F,
+        // Float output goes through an RGBA32F source (a format the warp reads and writes).
+        let format = match format {
+            ColorFormat::Rgba8 => ColorFormat::Rgba8,
+            _ => ColorFormat::Rgba32F,
         };
-        out.color = Some(warp(&source, pixel_format, Sampling::Bilinear, request.background)?);
+        // The warp runs at s× too (output and overscanned source), so its bilinear
+        // resampling errors shrink with s like the rasterization's. The overscan is computed
+        // once; each jittered pass translates source and lens image together.
+        let big_ov = overscan(&scaled_camera(cam, s).map_err(invalid)?, density).map_err(invalid)?;
+        let background = request.background;
+        out.color = Some(antialiased(cam, s, request.jitter, &mut |big, shift| {
+            let mut k = big_ov.intrinsics;
+            k.cx -= shift.x * s as f64;
+            k.cy -= shift.y * s as f64;
+            let source = OpenCvCamera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
+                .map_err(invalid)?;
+            let geometry = WarpGeometry::distort(big, method)
+                .with_ideal(k, (big_ov.width, big_ov.height))
+                .map_err(invalid)?;
+            renderer.draw_warped(scene, &request.pose, source, geometry, format, background)
+        })?);
     }
     if o.ids || o.depth {
         progress("rendering pinhole IDs/depth at 1× (warp path)");
-        let data = pinhole_render(
+        let desc = GeometryDesc::new(
             pinhole.clone(),
+            Projection::Pinhole,
             Outputs {
                 color: None,
                 ids: o.ids,
                 flow: false,
                 depth: o.depth,
             },
-        )?;
+        );
+        let data = renderer.draw(desc, &scene.mesh, scene.texture.as_ref(), &request.pose, &request.pose)?;
         let raster = |pixels: Pixels| Raster {
             width: ov.width,
             height: ov.height,
@@ -257,7 +620,7 @@ fn render_warp_path(
         };
         if let Some(ids) = data.ids {
             progress("warping IDs (nearest)");
-            let r = warp(&raster(Pixels::R32Uint(ids)), PixelFormat::R32Uint, Sampling::Nearest, [0.0; 4])?;
+            let r = warp(geometry.clone(), &raster(Pixels::R32Uint(ids)), PixelFormat::R32Uint, Sampling::Nearest, [0.0; 4])?;
             if let Pixels::R32Uint(p) = r.pixels {
                 out.ids = Some(p);
             }
@@ -265,6 +628,7 @@ fn render_warp_path(
         if let Some(depth) = data.depth {
             progress("warping depth (nearest)");
             let r = warp(
+                geometry.clone(),
                 &raster(Pixels::Rgba32F(depth.iter().map(|&z| [z, z, z, 1.0]).collect())),
                 PixelFormat::Rgba32F,
                 Sampling::Nearest,

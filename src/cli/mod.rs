@@ -5,6 +5,7 @@
 //! validation messages when `VKLENS_VALIDATION=1`).
 
 mod bench;
+mod calibration;
 mod demo;
 mod points;
 mod render;
@@ -105,6 +106,10 @@ enum Command {
     /// Render a scene through the lens (seed 000): per vertex with Alg. 1 (colour, IDs, flow,
     /// depth, all exact) or as a pinhole render plus the compute warp.
     Render(render::RenderArgs),
+    /// Render checkerboard views through the lens in varied poses (seed 000 Sec. 4), for
+    /// OpenCV to calibrate from: DIR/view_NN.png and DIR/poses.json. tests/calibrate.py
+    /// runs the calibration and reports how well the parameters come back.
+    CalibrationSet(calibration::CalibrationSetArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -226,5 +231,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Precorrect(args) => warp::run(args, Direction::Undistort, true),
         Command::Overscan(args) => warp::overscan_command(args),
         Command::Render(args) => render::run(args),
+        Command::CalibrationSet(args) => calibration::run(args),
     }
 }

@@ -68,6 +68,13 @@ pub struct RenderArgs {
     /// Render colour at S× per axis and box-filter down (anti-aliasing; 1 = off, max 8).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
     supersample: u32,
+    /// Warp path: source pixels per output pixel of the overscanned pinhole render.
+    #[arg(long, default_value_t = 1.0)]
+    density: f64,
+    /// Anti-aliasing: this many jittered passes averaged (sub-sample offsets), so edge
+    /// positions are not quantized to the 1/S grid.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    jitter: u32,
     /// Background colour R,G,B,A in 0..1.
     #[arg(long, default_value = "0,0,0,0", value_parser = parse_background)]
     background: Background,
@@ -193,10 +200,12 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             PathArg::Vertex => RenderPath::Vertex { delta: args.delta },
             PathArg::Warp => RenderPath::Warp {
                 method: args.method,
+                density: args.density,
             },
         },
         outputs,
         supersample: args.supersample,
+        jitter: args.jitter,
         tessellate: args.tessellate,
         background: args.background.0,
     };

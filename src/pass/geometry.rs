@@ -41,6 +41,8 @@ pub enum Projection {
 pub enum ColorFormat {
     Rgba8,
     Rgba16F,
+    /// Full float (the warp path's pinhole source for float output: a warp format).
+    Rgba32F,
 }
 
 /// Which outputs to render.
@@ -60,12 +62,23 @@ impl Outputs {
         depth: false,
     };
 
+    /// Colour in `format` only (no output when `None`).
+    pub fn color_only(format: Option<ColorFormat>) -> Outputs {
+        Outputs {
+            color: format,
+            ids: false,
+            flow: false,
+            depth: false,
+        }
+    }
+
     /// Attachment formats by fragment-output location (0 colour, 1 ID, 2 flow, 3 depth).
     fn formats(&self) -> [Option<vk::Format>; 4] {
         [
             self.color.map(|c| match c {
                 ColorFormat::Rgba8 => vk::Format::R8G8B8A8_UNORM,
                 ColorFormat::Rgba16F => vk::Format::R16G16B16A16_SFLOAT,
+                ColorFormat::Rgba32F => vk::Format::R32G32B32A32_SFLOAT,
             }),
             self.ids.then_some(vk::Format::R32_UINT),
             self.flow.then_some(vk::Format::R32G32_SFLOAT),
@@ -135,6 +148,21 @@ pub fn discard_margin(camera: &OpenCvCamera) -> f64 {
             ndc.x.abs().max(ndc.y.abs()) - 1.0
         })
         .fold(0.0, f64::max)
+}
+
+/// 1 + δ + D for a projection (infinite for a pinhole render).
+fn discard_bound(projection: &Projection, camera: &OpenCvCamera) -> Result<f64> {
+    match *projection {
+        Projection::Lens { delta } => {
+            if !(delta.is_finite() && delta >= 0.0) {
+                return Err(GpuError::Invalid(format!(
+                    "δ = {delta}: the discard tolerance must be ≥ 0"
+                )));
+            }
+            Ok(1.0 + delta + discard_margin(camera))
+        }
+        Projection::Pinhole => Ok(f64::INFINITY),
+    }
 }
 
 /// The vertex layout of [`Vertex`].
@@ -264,7 +292,7 @@ pub struct GeometryPass {
     set: vk::DescriptorSet,
     pipeline: GraphicsPipeline,
     render_pass: RenderPass,
-    _camera: Buffer,
+    camera: Buffer,
     frame: Buffer,
     sampler: Sampler,
     discard_bound: f64,
@@ -288,17 +316,7 @@ impl GeometryPass {
             )));
         }
         let lens = matches!(desc.projection, Projection::Lens { .. });
-        let discard_bound = match desc.projection {
-            Projection::Lens { delta } => {
-                if !(delta.is_finite() && delta >= 0.0) {
-                    return Err(GpuError::Invalid(format!(
-                        "δ = {delta}: the discard tolerance must be ≥ 0"
-                    )));
-                }
-                1.0 + delta + discard_margin(cam)
-            }
-            Projection::Pinhole => f64::INFINITY,
-        };
+        let discard_bound = discard_bound(&desc.projection, cam)?;
         let formats = desc.outputs.formats();
         if formats.iter().all(|f| f.is_none()) {
             return Err(GpuError::Invalid("no output was asked for".into()));
@@ -379,7 +397,7 @@ impl GeometryPass {
             set,
             pipeline,
             render_pass,
-            _camera: camera,
+            camera,
             frame,
             discard_bound,
         };
@@ -410,6 +428,30 @@ impl GeometryPass {
             self.desc.near,
             self.desc.far,
         )
+    }
+
+    /// Whether [`Self::set_camera`] can switch this pass to `camera` (same image size and the
+    /// same distortion terms, which are compiled in).
+    pub fn accepts_camera(&self, camera: &OpenCvCamera) -> bool {
+        let c = &self.desc.camera;
+        (c.width, c.height) == (camera.width, camera.height)
+            && c.distortion.terms() == camera.distortion.terms()
+    }
+
+    /// Switches to another camera of the same size and terms without rebuilding the pipeline
+    /// (jittered passes, a calibration set's views, a zoom). Call [`Self::set_frame`] after
+    /// it: the projection changes with the intrinsics. Host write, like `set_frame`.
+    pub fn set_camera(&mut self, camera: &OpenCvCamera) -> Result<()> {
+        if !self.accepts_camera(camera) {
+            return Err(GpuError::Invalid(
+                "set_camera needs the same image size and distortion terms; build a new pass".into(),
+            ));
+        }
+        self.discard_bound = discard_bound(&self.desc.projection, camera)?;
+        self.camera
+            .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))?;
+        self.desc.camera = camera.clone();
+        Ok(())
     }
 
     /// Sets the pose to render from and the pose flow is measured from. Host write: call it
@@ -536,6 +578,7 @@ impl GeometryTargets {
             if let Some(format) = *f {
                 let bytes_per_pixel = match format {
                     vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
+                    vk::Format::R32G32B32A32_SFLOAT => 16,
                     _ => 4,
                 };
                 // RGBA16F is not a required storage format; it need not be one.
@@ -625,6 +668,7 @@ impl GeometryTargets {
         };
         if let Some(t) = &self.targets[0] {
             let pixels = match self.outputs.color {
+                Some(ColorFormat::Rgba32F) => Pixels::Rgba32F(t.download.read_pod::<[f32; 4]>(n)?),
                 Some(ColorFormat::Rgba16F) => {
                     let halves = t.download.read_pod::<[u16; 4]>(n)?;
                     Pixels::Rgba32F(halves.iter().map(|p| p.map(f16_to_f32)).collect())

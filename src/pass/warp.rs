@@ -385,6 +385,32 @@ impl WarpPass {
         })
     }
 
+    /// Switches an analytic warp to another geometry with the same sizes, direction,
+    /// method, chromatic scales and distortion terms (all compiled in) — e.g. the same lens
+    /// with its image translated (jittered passes) — without rebuilding the pipeline. Host
+    /// write: not while recorded work using the pass is pending.
+    pub fn retarget(&mut self, geometry: WarpGeometry) -> Result<()> {
+        let g = &self.desc.geometry;
+        let same = self.desc.coordinates == Coordinates::Analytic
+            && geometry.channel_cameras.is_none()
+            && (g.source_size, g.output_size) == (geometry.source_size, geometry.output_size)
+            && g.direction == geometry.direction
+            && g.method == geometry.method
+            && g.chromatic == geometry.chromatic
+            && g.camera.distortion.terms() == geometry.camera.distortion.terms();
+        if !same {
+            return Err(GpuError::Invalid(
+                "retarget needs an analytic warp of the same sizes, direction, method, chromatic scales and terms".into(),
+            ));
+        }
+        self._camera
+            .write(0, bytemuck::bytes_of(&CameraParams::from_camera(&geometry.camera)))?;
+        let k = &geometry.ideal;
+        self.push.ideal = f4([k.fx, k.fy, k.cx, k.cy]);
+        self.desc.geometry = geometry;
+        Ok(())
+    }
+
     /// What the pass was built from.
     pub fn desc(&self) -> &WarpDesc {
         &self.desc

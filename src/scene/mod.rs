@@ -4,6 +4,7 @@
 //! Alg. 1 needs ([`tessellate`]). Pure CPU, no Vulkan.
 
 pub mod builtin;
+pub mod calibration;
 pub mod load;
 pub mod pose;
 pub mod tessellate;

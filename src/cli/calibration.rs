@@ -1,0 +1,140 @@
+//! `vklens calibration-set`: seed 000 Sec. 4's proof set — checkerboard views through the
+//! lens, by either path, for OpenCV to calibrate from (`tests/calibrate.py`).
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::render::PathArg;
+use super::{context, finish, load_camera, progress_done, progress_line, CliError};
+use crate::imaging::io as image_io;
+use crate::pass::geometry::{Outputs, DEFAULT_DELTA};
+use crate::render::{RenderPath, RenderRequest, SceneRenderer};
+use crate::scene::builtin::{self, parse_board_size, Board};
+use crate::scene::calibration::board_poses;
+
+#[derive(Args, Debug)]
+pub struct CalibrationSetArgs {
+    /// The lens to be recovered: an OpenCV/ROS/vklens camera file. Views have its size.
+    #[arg(long, value_name = "CAM")]
+    camera: PathBuf,
+    /// Folder for view_NN.png and poses.json (created if missing).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Number of views (the seed used 17).
+    #[arg(long, default_value_t = 17, value_parser = clap::value_parser!(u32).range(3..=100))]
+    count: u32,
+    #[arg(long, value_enum, default_value_t = PathArg::Vertex)]
+    path: PathArg,
+    /// Inner corners per row × per column (OpenCV's patternSize).
+    #[arg(long, default_value = "9x6")]
+    board: String,
+    /// Square side in metres (any positive value; calibration is scale-free).
+    #[arg(long, default_value_t = 0.04)]
+    square: f64,
+    /// Anti-aliasing: colour rendered at S× per axis and box-filtered, so corners are
+    /// located to a small fraction of a pixel.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=8))]
+    supersample: u32,
+    /// Warp path: source pixels per output pixel of the overscanned pinhole render.
+    #[arg(long, default_value_t = 2.0)]
+    density: f64,
+    /// Anti-aliasing: this many jittered passes averaged (sub-sample offsets), so edge
+    /// positions are not quantized to the 1/S grid (which calibration would mistake for lens distortion).
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    jitter: u32,
+    /// Vertex path: split board edges longer than L pixels (Alg. 1 needs fine geometry).
+    #[arg(long, default_value_t = 4.0)]
+    tessellate: f64,
+}
+
+pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
+    let camera = load_camera(&args.camera)?;
+    let (columns, rows) = parse_board_size(&args.board).map_err(CliError::input)?;
+    if !(args.square.is_finite() && args.square > 0.0) {
+        return Err(CliError::input(format!(
+            "--square {}: expected a positive number of metres",
+            args.square
+        )));
+    }
+    if !(args.tessellate.is_finite() && args.tessellate >= 0.25) {
+        return Err(CliError::input(format!(
+            "--tessellate {}: expected an edge length in pixels ≥ 0.25",
+            args.tessellate
+        )));
+    }
+    let board = Board {
+        columns,
+        rows,
+        square: args.square,
+    };
+    let poses = board_poses(&camera, &board, args.count)
+        .map_err(|e| CliError::input(format!("{}: {e}", args.camera.display())))?;
+    std::fs::create_dir_all(&args.out).map_err(|e| {
+        CliError::input(format!("{}: cannot create the folder: {e}", args.out.display()))
+    })?;
+    let scene = builtin::checkerboard(board, 4);
+    let ctx = context()?;
+    let mut renderer = SceneRenderer::new(&ctx);
+    let mut views = Vec::new();
+    for (i, pose) in poses.iter().enumerate() {
+        let file = format!("view_{i:02}.png");
+        progress_line(&format!("view {}/{}: {file}", i + 1, poses.len()));
+        let request = RenderRequest {
+            camera: camera.clone(),
+            pose: *pose,
+            previous_pose: *pose,
+            path: match args.path {
+                PathArg::Vertex => RenderPath::Vertex {
+                    delta: DEFAULT_DELTA,
+                },
+                PathArg::Warp => RenderPath::Warp {
+                    method: crate::model::InverseMethod::Newton,
+                    density: args.density,
+                },
+            },
+            outputs: Outputs::COLOR,
+            supersample: args.supersample,
+            jitter: args.jitter,
+            tessellate: (args.path == PathArg::Vertex).then_some(args.tessellate),
+            background: [0.5, 0.5, 0.5, 1.0],
+        };
+        let rendered = renderer.render(&scene, &request, &mut |_| {})?;
+        let color = rendered
+            .color
+            .ok_or_else(|| CliError::runtime("the render produced no colour image"))?;
+        image_io::save(&color, &args.out.join(&file)).map_err(CliError::runtime)?;
+        let r = pose.rvec();
+        let t = pose.translation;
+        views.push(serde_json::json!({
+            "file": file,
+            "rvec": [r.x, r.y, r.z],
+            "tvec": [t.x, t.y, t.z],
+        }));
+    }
+    finish(&ctx)?;
+    let k = camera.intrinsics;
+    let json = serde_json::json!({
+        "board": {"columns": columns, "rows": rows, "square_m": args.square},
+        "image_size": [camera.width, camera.height],
+        "path": match args.path { PathArg::Vertex => "vertex", PathArg::Warp => "warp" },
+        "camera": {
+            "width": camera.width, "height": camera.height,
+            "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy,
+            "dist_coeffs": camera.distortion.to_coeffs(),
+        },
+        "pose_convention": "OpenCV: p_camera = R(rvec) p_board + tvec; board corner (i, j) at (i·square, j·square, 0)",
+        "views": views,
+    });
+    let path = args.out.join("poses.json");
+    image_io::write_atomically(&path, |tmp| {
+        std::fs::write(tmp, format!("{json:#}\n")).map_err(|e| e.to_string())
+    })
+    .map_err(CliError::runtime)?;
+    progress_done(&format!(
+        "wrote {} views and poses.json to {}",
+        poses.len(),
+        args.out.display()
+    ));
+    Ok(())
+}

@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Seed 000 Sec. 4's proof: calibrate from a `vklens calibration-set` with OpenCV and report how
+well the lens comes back.
+
+    python3 tests/calibrate.py DIR [--json] [--limit PERCENT] [--floor F]
+
+Reads DIR/poses.json (board size, the true camera) and DIR/view_NN.png; runs
+cv2.findChessboardCorners, cv2.cornerSubPix and cv2.calibrateCamera estimating fx fy cx cy
+k1 k2 p1 p2 (and k3 when the true camera has one; otherwise CALIB_FIX_K3 — the seed's
+four-coefficient model). Reports, for fx fy cx cy k1 k2 p1 p2, the error in percent:
+
+  * fx fy cx cy: relative to the true value;
+  * distortion coefficients: relative to max(|true|, FLOOR) — for a coefficient that is zero
+    (or smaller than FLOOR) a relative error means nothing, so the error is absolute, in units
+    of FLOOR (default 0.01, the size of the seed's smallest non-zero coefficient, p2 = -0.01).
+
+Exit 0 when every error is below --limit percent (default 0.5), 1 otherwise, 2 on bad input.
+"""
+import argparse
+import json
+import os
+import sys
+
+import cv2
+import numpy as np
+
+
+def fail(msg):
+    print(f"calibrate.py: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("dir")
+    ap.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    ap.add_argument("--limit", type=float, default=0.5, help="pass threshold, percent")
+    ap.add_argument("--blur", type=float, default=1.5,
+                    help="Gaussian sigma (px) applied before cornerSubPix, which locates corners on "
+                         "slightly soft edges about 2.5x better than on perfectly sharp ones (0: off)")
+    ap.add_argument("--window", type=int, default=5, help="cornerSubPix half window (px)")
+    ap.add_argument("--floor", type=float, default=0.01, help="scale below which coefficient errors are absolute")
+    args = ap.parse_args()
+
+    poses_path = os.path.join(args.dir, "poses.json")
+    try:
+        with open(poses_path) as f:
+            poses = json.load(f)
+    except (OSError, ValueError) as e:
+        fail(f"{poses_path}: {e}")
+    board = poses["board"]
+    size = (board["columns"], board["rows"])
+    square = board["square_m"]
+    cam = poses["camera"]
+    true_coeffs = list(cam["dist_coeffs"]) + [0.0] * 14
+    w, h = poses["image_size"]
+
+    objp = np.zeros((size[0] * size[1], 3), np.float32)
+    objp[:, :2] = np.mgrid[0 : size[0], 0 : size[1]].T.reshape(-1, 2) * square
+    obj_points, img_points, missed = [], [], []
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 100, 1e-4)
+    for view in poses["views"]:
+        path = os.path.join(args.dir, view["file"])
+        gray = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
+        if gray is None:
+            fail(f"{path}: cannot read")
+        found, corners = cv2.findChessboardCorners(
+            gray, size, flags=cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+        )
+        if not found:
+            missed.append(view["file"])
+            continue
+        if args.blur > 0:
+            gray = cv2.GaussianBlur(gray, (0, 0), args.blur)
+        corners = cv2.cornerSubPix(gray, corners, (args.window, args.window), (-1, -1), criteria)
+        obj_points.append(objp)
+        img_points.append(corners)
+    if len(img_points) < 3:
+        fail(f"the board was found in only {len(img_points)} views (missed: {missed})")
+
+    flags = 0 if abs(true_coeffs[4]) > 0 else cv2.CALIB_FIX_K3
+    rms, K, dist, _, _, std_intrinsics, _, _ = cv2.calibrateCameraExtended(
+        obj_points, img_points, (w, h), None, None, flags=flags
+    )
+    # OpenCV's standard deviations, in the order fx fy cx cy k1 k2 p1 p2 k3 ...
+    sigma = std_intrinsics.ravel().tolist()
+    dist = dist.ravel().tolist() + [0.0] * 14
+    names = ["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"]
+    truth = [cam["fx"], cam["fy"], cam["cx"], cam["cy"]] + [true_coeffs[i] for i in (0, 1, 2, 3)]
+    est = [K[0, 0], K[1, 1], K[0, 2], K[1, 2]] + [dist[i] for i in (0, 1, 2, 3)]
+    rows = []
+    for i, (n, t, e) in enumerate(zip(names, truth, est)):
+        if i < 4:
+            scale, kind = abs(t), "relative"
+        else:
+            scale = max(abs(t), args.floor)
+            kind = "relative" if abs(t) >= args.floor else f"absolute (units of {args.floor})"
+        err = 100.0 * abs(e - t) / scale
+        # How many of OpenCV's standard deviations the estimate is off: below ~3 the error is
+        # what corner-detection noise explains (an unbiased renderer), above it a bias.
+        z = abs(e - t) / sigma[i] if sigma[i] > 0 else float("inf")
+        rows.append({"name": n, "true": t, "estimate": e, "error_percent": err, "kind": kind,
+                     "sigma": sigma[i], "sigmas_off": z})
+    ok = all(r["error_percent"] < args.limit for r in rows)
+    result = {
+        "dir": args.dir,
+        "path": poses.get("path"),
+        "views_used": len(img_points),
+        "views_missed": missed,
+        "rms_reprojection_px": rms,
+        "flags": "CALIB_FIX_K3" if flags else "k3 estimated",
+        "blur_sigma_px": args.blur,
+        "limit_percent": args.limit,
+        "parameters": rows,
+        "max_error_percent": max(r["error_percent"] for r in rows),
+        "max_sigmas_off": max(r["sigmas_off"] for r in rows),
+        "pass": ok,
+    }
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"{args.dir} ({poses.get('path')} path): {len(img_points)} views, RMS {rms:.4f} px, {result['flags']}")
+        for r in rows:
+            mark = "ok " if r["error_percent"] < args.limit else "BAD"
+            print(f"  {mark} {r['name']:>2}: true {r['true']: .6g}  estimate {r['estimate']: .6g} ± {r['sigma']:.2g}"
+                  f"  error {r['error_percent']:.3f} % ({r['kind']}), {r['sigmas_off']:.1f} σ")
+        print("PASS" if ok else f"FAIL: an error is at or above {args.limit} %")
+    sys.exit(0 if ok else 1)
+
+
+if __name__ == "__main__":
+    main()

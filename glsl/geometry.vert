@@ -11,6 +11,8 @@
 // its undistorted NDC, and whether the model is defined there at all (in front of the camera,
 // inside the lens's valid domain, finite).
 #extension GL_GOOGLE_include_directive : require
+// The pinhole render (no geometry shader) is this shader without the discard data.
+// vklens:variant pinhole VKL_PINHOLE
 
 #include "camera_model.glsl"
 #include "geometry_frame.glsl"
@@ -28,7 +30,9 @@ layout(location = 1) out vec2 v_uv;
 layout(location = 2) flat out uint v_id;
 layout(location = 3) out vec3 v_flow;       // xy: pixel motion since the previous pose; z: valid
 layout(location = 4) out float v_depth;     // camera-frame z (metres)
+#ifndef VKL_PINHOLE
 layout(location = 5) out vec3 v_undistorted; // xy: undistorted NDC; z: 1 if the model applies
+#endif
 
 // Alg. 1 on one clip-space position: the distorted clip position, its OpenCV pixel, and
 // whether the model is defined there.
@@ -69,5 +73,7 @@ void main() {
     v_id = in_id;
     v_flow = vec3(pixel - previous_pixel, (ok && previous_ok) ? 1.0 : 0.0);
     v_depth = (frame.view * world).z;
+#ifndef VKL_PINHOLE
     v_undistorted = vec3(ndc, ok ? 1.0 : 0.0);
+#endif
 }

@@ -476,7 +476,7 @@ fn render_with(
             let mesh = match request.tessellate {
                 Some(l) => {
                     progress(&format!("tessellating to {l} px edges"));
-                    let m = tessellate(&scene.mesh, &request.pose, &request.camera.intrinsics, l)
+                    let m = tessellate(&scene.mesh, &request.pose, &request.camera, l)
                         .map_err(invalid)?;
                     progress(&format!("{} triangles", m.triangle_count()));
                     m

@@ -22,6 +22,9 @@ pub const UPSAMPLE_MAP_COMP: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/upsample_map.comp.spv"));
 /// `glsl/geometry.vert`: seed 000 Alg. 1 (or a pinhole projection) per vertex.
 pub const GEOMETRY_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.spv"));
+/// `glsl/geometry.vert` without the discard data: the pinhole render (no geometry shader).
+pub const GEOMETRY_VERT_PINHOLE: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pinhole.spv"));
 /// `glsl/geometry.geom`: seed 000 Sec. 3.2's triangle discard.
 pub const GEOMETRY_GEOM: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.geom.spv"));
 /// `glsl/geometry.frag`: colour, object ID, flow and depth outputs.

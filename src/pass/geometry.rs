@@ -337,7 +337,11 @@ impl GeometryPass {
             .bool(23, o.depth);
         let mut stages = vec![Stage {
             stage: vk::ShaderStageFlags::VERTEX,
-            spirv: shaders::GEOMETRY_VERT,
+            spirv: if lens {
+                shaders::GEOMETRY_VERT
+            } else {
+                shaders::GEOMETRY_VERT_PINHOLE
+            },
             constants: vertex_constants,
         }];
         if lens {

@@ -12,19 +12,28 @@ use std::collections::HashMap;
 use glam::DVec2;
 
 use super::{Mesh, Pose, Vertex, MAX_TRIANGLES};
-use crate::model::Intrinsics;
+use crate::model::{Intrinsics, OpenCvCamera};
 
 /// Depth below which a vertex is not measured (it is at or behind the camera, and the
 /// geometry path drops its triangles anyway).
 const MIN_DEPTH: f64 = 1e-6;
 
-/// Splits edges longer than `max_edge_px` (in the pinhole image of `intrinsics` at `pose`).
+/// Splits edges longer than `max_edge_px` in the pinhole image of `camera` at `pose`. Edges
+/// that lie wholly off the image (by more than the image's own size) are left alone: nothing
+/// of them is drawn, and near the camera plane they would otherwise split without end.
 pub fn tessellate(
     mesh: &Mesh,
     pose: &Pose,
-    intrinsics: &Intrinsics,
+    camera: &OpenCvCamera,
     max_edge_px: f64,
 ) -> Result<Mesh, String> {
+    let intrinsics = &camera.intrinsics;
+    let (w, h) = (camera.width as f64, camera.height as f64);
+    // Whether the edge's bounding box meets the image grown by its own size on every side.
+    let near_image = |p: DVec2, q: DVec2| {
+        let (lo, hi) = (p.min(q), p.max(q));
+        hi.x > -w && lo.x < 2.0 * w && hi.y > -h && lo.y < 2.0 * h
+    };
     if !(max_edge_px.is_finite() && max_edge_px >= 0.25) {
         return Err(format!(
             "tessellation edge length {max_edge_px} px: expected a number of pixels ≥ 0.25"
@@ -42,7 +51,9 @@ pub fn tessellate(
             })
             .collect();
         let long = |a: u32, b: u32| match (pixels[a as usize], pixels[b as usize]) {
-            (Some(p), Some(q)) => p.distance(q) > max_edge_px,
+            (Some(p), Some(q)) => {
+                near_image(p, q) && p.distance(q) > max_edge_px
+            }
             _ => false,
         };
         let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
@@ -133,8 +144,9 @@ mod tests {
             cx: 399.5,
             cy: 299.5,
         };
+        let camera = OpenCvCamera::from_coeffs(800, 600, k, &[0.0; 4]).unwrap();
         let before = longest_edge_px(&scene.mesh, &pose, &k);
-        let fine = tessellate(&scene.mesh, &pose, &k, 10.0).unwrap();
+        let fine = tessellate(&scene.mesh, &pose, &camera, 10.0).unwrap();
         assert!(before > 100.0);
         assert!(longest_edge_px(&fine, &pose, &k) <= 10.0);
         fine.validate("tessellated").unwrap();
@@ -169,6 +181,6 @@ mod tests {
                 .sum()
         };
         assert!((area(&fine) - area(&scene.mesh)).abs() < 1e-6);
-        assert!(tessellate(&scene.mesh, &pose, &k, f64::NAN).is_err());
+        assert!(tessellate(&scene.mesh, &pose, &camera, f64::NAN).is_err());
     }
 }

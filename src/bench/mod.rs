@@ -2,4 +2,5 @@
 //! approximation, reported as tables (and JSON lines), never asserted as wall-clock limits.
 
 pub mod inverse;
+pub mod vertex;
 pub mod warp;

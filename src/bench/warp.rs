@@ -77,7 +77,7 @@ pub const MAP_BUILDS: [(&str, Coordinates); 4] = [
 /// Lateral colour used for the chromatic rows.
 pub const CHROMATIC: [f64; 3] = [1.003, 1.0, 0.997];
 
-fn test_source(w: u32, h: u32) -> Raster {
+pub(crate) fn test_source(w: u32, h: u32) -> Raster {
     let pixels = (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);
@@ -100,7 +100,7 @@ fn test_source(w: u32, h: u32) -> Raster {
 /// Records `frame` back to back in batches and returns the median over [`REPEATS`] batches of
 /// (wall ms, GPU ms) per frame. The batch is sized to about 300 ms from a warm-up frame (which
 /// also lets the driver compile the pipeline), between 3 and [`BATCH`] frames.
-fn time_batch(ctx: &Context, frame: &dyn Fn(vk::CommandBuffer)) -> Result<(f64, Option<f64>)> {
+pub(crate) fn time_batch(ctx: &Context, frame: &dyn Fn(vk::CommandBuffer)) -> Result<(f64, Option<f64>)> {
     let gpu = ctx.gpu();
     let queries = QueryPool::timestamps(gpu, 2).ok();
     let write = (

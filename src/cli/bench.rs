@@ -105,3 +105,33 @@ pub fn warp(args: WarpArgs) -> Result<(), CliError> {
     }
     Ok(())
 }
+
+#[derive(Args, Debug)]
+pub struct VertexArgs {
+    /// Measure only this size (WxH); default 800x600 and 1920x1080.
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// One JSON object per line instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn vertex(args: VertexArgs) -> Result<(), CliError> {
+    let ctx = context()?;
+    eprintln!("device: {}", ctx.gpu().device_name());
+    let sizes: Vec<(u32, u32)> = match args.size {
+        Some(s) => vec![s],
+        None => crate::bench::vertex::SIZES.to_vec(),
+    };
+    let rows = crate::bench::vertex::run(&ctx, &sizes, &mut |s| super::progress_line(s))?;
+    super::progress_done(&format!("measured {} rows", rows.len()));
+    finish(&ctx)?;
+    if args.json {
+        for r in &rows {
+            println!("{r}");
+        }
+    } else {
+        println!("{}", crate::bench::vertex::table(&rows));
+    }
+    Ok(())
+}

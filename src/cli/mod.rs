@@ -157,6 +157,9 @@ enum BenchCommand {
     /// Frame time of the warp (analytic vs map, with and without chromatic offsets) beside a
     /// copy pass on the same driver, and the cost of building a full-frame inverse map.
     Warp(bench::WarpArgs),
+    /// The geometry path (Alg. 1) beside a plain pinhole render and pinhole + compute warp on
+    /// grids of growing size, what tessellation costs and leaves, and seed 002's mesh warp.
+    Vertex(bench::VertexArgs),
 }
 
 /// Where the model runs.
@@ -225,6 +228,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         }) => points::undistort(&camera, method, backend, precision),
         Command::Bench(BenchCommand::Inverse(args)) => bench::inverse(args),
         Command::Bench(BenchCommand::Warp(args)) => bench::warp(args),
+        Command::Bench(BenchCommand::Vertex(args)) => bench::vertex(args),
         Command::Demo(args) => demo::run(args),
         Command::Distort(args) => warp::run(args, Direction::Distort, false),
         Command::Undistort(args) => warp::run(args, Direction::Undistort, false),

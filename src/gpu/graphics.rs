@@ -216,6 +216,8 @@ pub struct GraphicsDesc<'a> {
     pub render_pass: &'a RenderPass,
     /// Depth test and write (less), when the render pass has a depth attachment.
     pub depth_test: bool,
+    /// Bytes of push constants, visible to every stage (0: none).
+    pub push_size: u32,
 }
 
 /// A graphics pipeline with its modules, set-0 layout and pipeline layout. Viewport and
@@ -229,6 +231,8 @@ pub struct GraphicsPipeline {
     bindings: Vec<vk::DescriptorType>,
     /// The specialization constants of each stage (what a plan can be checked against).
     pub constants: Vec<(vk::ShaderStageFlags, SpecConstants)>,
+    /// Stages that see the push constants.
+    pub push_stages: vk::ShaderStageFlags,
 }
 
 impl DescriptorLayout for GraphicsPipeline {
@@ -265,6 +269,7 @@ impl GraphicsPipeline {
                 .iter()
                 .map(|s| (s.stage, s.constants.clone()))
                 .collect(),
+            push_stages: all_stages,
         };
         for s in &desc.stages {
             let module = shader_module(gpu, s.spirv)?;
@@ -289,12 +294,16 @@ impl GraphicsPipeline {
             )?
         };
         let set_layouts = [pipeline.set_layout];
-        pipeline.layout = unsafe {
-            device.create_pipeline_layout(
-                &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts),
-                None,
-            )?
-        };
+        let ranges = [vk::PushConstantRange {
+            stage_flags: all_stages,
+            offset: 0,
+            size: desc.push_size,
+        }];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if desc.push_size > 0 {
+            layout_info = layout_info.push_constant_ranges(&ranges);
+        }
+        pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None)? };
 
         let spec_data: Vec<_> = desc
             .stages

@@ -29,3 +29,7 @@ pub const GEOMETRY_VERT_PINHOLE: &[u8] =
 pub const GEOMETRY_GEOM: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.geom.spv"));
 /// `glsl/geometry.frag`: colour, object ID, flow and depth outputs.
 pub const GEOMETRY_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.frag.spv"));
+/// `glsl/mesh_warp.vert`: seed 002's mesh-based warp (grid vertices with source coordinates).
+pub const MESH_WARP_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mesh_warp.vert.spv"));
+/// `glsl/mesh_warp.frag`: samples the source (or writes the interpolated coordinate).
+pub const MESH_WARP_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mesh_warp.frag.spv"));

@@ -173,14 +173,80 @@ const VERTEX_ATTRIBUTES: [Attribute; 4] = [
     (3, vk::Format::R32_UINT, 24),
 ];
 
+/// An RGBA8 texture for sampling, staged for upload ([`Texture::record_upload`]).
+pub struct Texture {
+    gpu: Gpu,
+    pub image: Image,
+    staging: Buffer,
+}
+
+impl Texture {
+    /// Stages `raster` (any pixel type, converted to 8-bit RGBA).
+    pub fn new(gpu: &Gpu, raster: &Raster) -> Result<Self> {
+        let bytes: Vec<u8> = match &raster.pixels {
+            Pixels::Rgba8(p) => p.iter().flatten().copied().collect(),
+            _ => (0..raster.len())
+                .flat_map(|i| raster.rgba_f32(i).map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
+                .collect(),
+        };
+        Ok(Texture {
+            image: Image::new_2d(
+                gpu,
+                "texture",
+                vk::Format::R8G8B8A8_UNORM,
+                raster.width,
+                raster.height,
+                vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+            )?,
+            staging: Buffer::from_pod(gpu, "texture.upload", &bytes, vk::BufferUsageFlags::TRANSFER_SRC)?,
+            gpu: gpu.clone(),
+        })
+    }
+
+    /// Records the upload; afterwards the image is in `SHADER_READ_ONLY_OPTIMAL`, visible to
+    /// fragment shaders. Record it once, before the first use.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass.
+    pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
+        let e = self.image.extent;
+        unsafe {
+            image_barrier(
+                &self.gpu,
+                cmd,
+                self.image.raw,
+                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+                (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+            );
+            self.gpu.device().cmd_copy_buffer_to_image(
+                cmd,
+                self.staging.raw,
+                self.image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[copy_region(e, vk::ImageAspectFlags::COLOR)],
+            );
+            image_barrier(
+                &self.gpu,
+                cmd,
+                self.image.raw,
+                (
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (vk::PipelineStageFlags::FRAGMENT_SHADER, vk::AccessFlags::SHADER_READ),
+            );
+        }
+    }
+}
+
 /// A mesh on the GPU: vertex and index buffers and its texture (white if it has none).
 pub struct MeshBuffers {
-    gpu: Gpu,
     pub vertices: Buffer,
     pub indices: Buffer,
     pub index_count: u32,
-    pub texture: Image,
-    staging: Buffer,
+    pub texture: Texture,
 }
 
 impl MeshBuffers {
@@ -194,10 +260,6 @@ impl MeshBuffers {
             pixels: Pixels::Rgba8(vec![[255; 4]]),
             depth: Depth::U8,
         };
-        let texture = texture.unwrap_or(&white);
-        let bytes: Vec<u8> = (0..texture.len())
-            .flat_map(|i| texture.rgba_f32(i).map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
-            .collect();
         Ok(MeshBuffers {
             vertices: Buffer::from_pod(
                 gpu,
@@ -212,58 +274,20 @@ impl MeshBuffers {
                 vk::BufferUsageFlags::INDEX_BUFFER,
             )?,
             index_count: mesh.indices.len() as u32,
-            texture: Image::new_2d(
-                gpu,
-                "mesh.texture",
-                vk::Format::R8G8B8A8_UNORM,
-                texture.width,
-                texture.height,
-                vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-            )?,
-            staging: Buffer::from_pod(gpu, "mesh.texture.upload", &bytes, vk::BufferUsageFlags::TRANSFER_SRC)?,
-            gpu: gpu.clone(),
+            texture: Texture::new(gpu, texture.unwrap_or(&white))?,
         })
     }
 
-    /// Records the texture upload; afterwards the texture is in `SHADER_READ_ONLY_OPTIMAL`.
-    /// Record it once, before the first draw.
+    /// Records the texture upload (see [`Texture::record_upload`]).
     ///
     /// # Safety
     /// `cmd` must be recording outside a render pass.
     pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
-        let e = self.texture.extent;
-        unsafe {
-            image_barrier(
-                &self.gpu,
-                cmd,
-                self.texture.raw,
-                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
-                (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-            );
-            self.gpu.device().cmd_copy_buffer_to_image(
-                cmd,
-                self.staging.raw,
-                self.texture.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[copy_region(e, vk::ImageAspectFlags::COLOR)],
-            );
-            image_barrier(
-                &self.gpu,
-                cmd,
-                self.texture.raw,
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-                (vk::PipelineStageFlags::FRAGMENT_SHADER, vk::AccessFlags::SHADER_READ),
-            );
-        }
+        unsafe { self.texture.record_upload(cmd) }
     }
 }
 
-fn copy_region(e: vk::Extent2D, aspect: vk::ImageAspectFlags) -> vk::BufferImageCopy {
+pub(crate) fn copy_region(e: vk::Extent2D, aspect: vk::ImageAspectFlags) -> vk::BufferImageCopy {
     vk::BufferImageCopy {
         buffer_offset: 0,
         buffer_row_length: 0,
@@ -369,6 +393,7 @@ impl GeometryPass {
                 vertex: Some((std::mem::size_of::<Vertex>() as u32, &VERTEX_ATTRIBUTES)),
                 render_pass: &render_pass,
                 depth_test: true,
+                push_size: 0,
             },
         )?;
         let camera = Buffer::from_pod(
@@ -482,7 +507,7 @@ impl GeometryPass {
     pub fn bind_mesh(&mut self, mesh: &MeshBuffers) {
         let info = [vk::DescriptorImageInfo {
             sampler: self.sampler.raw,
-            image_view: mesh.texture.view,
+            image_view: mesh.texture.image.view,
             image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
         }];
         let write = vk::WriteDescriptorSet::default()

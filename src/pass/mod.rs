@@ -6,6 +6,7 @@ pub mod camera_params;
 pub mod copy;
 pub mod geometry;
 pub mod grid_demo;
+pub mod mesh_warp;
 pub mod points;
 pub mod warp;
 

@@ -1,0 +1,367 @@
+//! `vklens bench vertex`: the geometry path's cost and error (seed 000 Sec. 3.4's
+//! "computational complexity" and first limitation; a seed-002 Table I analogue):
+//!
+//! * **paths** — textured grids of 8², 128² and 512² quads at 800×600 and 1920×1080: Alg. 1
+//!   (vertex shader + discard) beside a plain pinhole render of the same scene (the peer, ×
+//!   column) and beside pinhole render + compute warp (analytic Newton, and a precomputed
+//!   map): vertex cost grows with geometry, warp cost with pixels — where they cross;
+//! * **tessellation** — what splitting edges to L px costs in triangles and time, and the
+//!   straight-line error it leaves (the largest distance between a rendered edge, straight
+//!   between its moved vertices, and the true curved image of that edge);
+//! * **mesh_warp** — seed 002's n×n grid warp (n = 8 … 512): its coordinate error against
+//!   the f64 model and its time, beside the compute warp on the same image.
+//!
+//! Times are GPU work per frame recorded back to back (median of batches, see
+//! [`super::warp`]); errors are in output pixels.
+
+use ash::vk;
+use glam::DVec2;
+use serde_json::{json, Value};
+
+use super::warp::{bench_camera, test_source, time_batch};
+use crate::gpu::{image_barrier, Context, Image, Result};
+use crate::imaging::cpu_warp::Sampling;
+use crate::model::overscan::overscan;
+use crate::model::warp::WarpGeometry;
+use crate::model::{InverseMethod, OpenCvCamera, OpenCvDistortion};
+use crate::pass::geometry::{
+    ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
+    Texture, DEFAULT_DELTA,
+};
+use crate::pass::mesh_warp::{MeshWarpOutput, MeshWarpPass, MeshWarpTarget};
+use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
+use crate::scene::tessellate::tessellate;
+use crate::scene::{builtin, Mesh, Pose, Scene};
+
+/// Sizes of the paths and mesh-warp rows.
+pub const SIZES: [(u32, u32); 2] = [(800, 600), (1920, 1080)];
+/// Grid meshes (quads per side) of the paths rows.
+pub const GRIDS: [u32; 3] = [8, 128, 512];
+/// Tessellation edge lengths (px) measured on the 8×8 grid.
+pub const EDGES: [Option<f64>; 4] = [None, Some(32.0), Some(8.0), Some(2.0)];
+/// Mesh-warp grid sizes.
+pub const MESH_SIZES: [u32; 4] = [8, 32, 128, 512];
+
+/// The largest distance (px) between an edge's true image through the lens and the straight
+/// segment the rasterizer draws between its moved end points, over the edges whose image is
+/// inside the frame (sampled at t = 1/4, 1/2, 3/4).
+pub fn straight_line_error(camera: &OpenCvCamera, pose: &Pose, mesh: &Mesh) -> f64 {
+    let project = |i: u32| camera.project(pose.apply(mesh.vertices[i as usize].position()));
+    let inside = |p: DVec2| {
+        p.x >= -0.5 && p.y >= -0.5 && p.x <= camera.width as f64 - 0.5 && p.y <= camera.height as f64 - 0.5
+    };
+    let mut seen = std::collections::HashSet::new();
+    let mut worst = 0f64;
+    for t in mesh.indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            if !seen.insert((a.min(b), a.max(b))) {
+                continue;
+            }
+            let (Some(pa), Some(pb)) = (project(a), project(b)) else {
+                continue;
+            };
+            if !inside(pa) || !inside(pb) {
+                continue;
+            }
+            let (wa, wb) = (
+                mesh.vertices[a as usize].position(),
+                mesh.vertices[b as usize].position(),
+            );
+            for s in [0.25, 0.5, 0.75] {
+                if let Some(p) = camera.project(pose.apply(wa + (wb - wa) * s)) {
+                    let d = pb - pa;
+                    let u = ((p - pa).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
+                    worst = worst.max((pa + d * u).distance(p));
+                }
+            }
+        }
+    }
+    worst
+}
+
+fn half_tangents(camera: &OpenCvCamera) -> [f64; 4] {
+    let f = crate::model::Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
+    [-f.left, f.right, -f.top, f.bottom]
+}
+
+/// GPU-resident render of `mesh`: the pass, its targets and buffers, uploaded.
+struct Drawn {
+    pass: GeometryPass,
+    targets: GeometryTargets,
+    buffers: MeshBuffers,
+}
+
+fn prepare(
+    ctx: &Context,
+    camera: &OpenCvCamera,
+    projection: Projection,
+    scene: &Scene,
+    mesh: &Mesh,
+    pose: &Pose,
+    final_layout: vk::ImageLayout,
+) -> Result<Drawn> {
+    let gpu = ctx.gpu();
+    let mut desc = GeometryDesc::new(camera.clone(), projection, Outputs::color_only(Some(ColorFormat::Rgba8)));
+    desc.final_layout = final_layout;
+    let mut pass = GeometryPass::new(gpu, desc)?;
+    let targets = GeometryTargets::new(gpu, &pass)?;
+    let buffers = MeshBuffers::new(gpu, mesh, scene.texture.as_ref())?;
+    pass.bind_mesh(&buffers);
+    pass.set_frame(pose, pose)?;
+    ctx.submit(|cmd| {
+        unsafe { buffers.record_upload(cmd) };
+        Ok(())
+    })?;
+    Ok(Drawn {
+        pass,
+        targets,
+        buffers,
+    })
+}
+
+fn time_render(ctx: &Context, d: &Drawn) -> Result<f64> {
+    let (wall, gpu) = time_batch(ctx, &|cmd| unsafe { d.pass.record(cmd, &d.targets, &d.buffers) })?;
+    Ok(gpu.unwrap_or(wall))
+}
+
+/// Pinhole render of the overscanned frustum + compute warp, GPU-resident, per frame.
+fn time_pinhole_and_warp(
+    ctx: &Context,
+    camera: &OpenCvCamera,
+    scene: &Scene,
+    pose: &Pose,
+    coordinates: Coordinates,
+) -> Result<f64> {
+    let gpu = ctx.gpu();
+    let ov = overscan(camera, 1.0).map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
+    let source = OpenCvCamera::new(ov.width, ov.height, ov.intrinsics, OpenCvDistortion::default())
+        .map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
+    let drawn = prepare(ctx, &source, Projection::Pinhole, scene, &scene.mesh, pose, vk::ImageLayout::GENERAL)?;
+    let geometry = WarpGeometry::distort(camera.clone(), InverseMethod::Newton)
+        .with_ideal(ov.intrinsics, (ov.width, ov.height))
+        .map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
+    let usage = vk::ImageUsageFlags::STORAGE;
+    let output = Image::new_2d(gpu, "bench.output", vk::Format::R8G8B8A8_UNORM, camera.width, camera.height, usage)?;
+    let mask = Image::new_2d(gpu, "bench.mask", vk::Format::R8_UNORM, camera.width, camera.height, usage)?;
+    let mut warp = WarpPass::new(
+        gpu,
+        WarpDesc {
+            geometry,
+            coordinates,
+            sampling: Sampling::Bilinear,
+            format: PixelFormat::Rgba8,
+            fill: [0.0; 4],
+            write_mask: false,
+        },
+    )?;
+    let color = drawn.targets.color().ok_or_else(|| crate::gpu::GpuError::Invalid("no colour".into()))?;
+    warp.bind(color.view, output.view, mask.view);
+    ctx.submit(|cmd| {
+        let none = (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty());
+        let write = (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE);
+        unsafe {
+            for img in [&output, &mask] {
+                image_barrier(gpu, cmd, img.raw, (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL), none, write);
+            }
+            warp.record_prepare(cmd);
+        }
+        Ok(())
+    })?;
+    let (wall, gpu_ms) = time_batch(ctx, &|cmd| unsafe {
+        drawn.pass.record(cmd, &drawn.targets, &drawn.buffers);
+        warp.record(cmd);
+    })?;
+    Ok(gpu_ms.unwrap_or(wall))
+}
+
+/// Runs every row; `progress` hears each.
+pub fn run(ctx: &Context, sizes: &[(u32, u32)], progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
+    let mut rows = Vec::new();
+    for &(w, h) in sizes {
+        let camera = bench_camera(w, h);
+        for n in GRIDS {
+            progress(&format!("paths: {w}×{h}, grid {n}×{n}"));
+            let scene = builtin::grid(n);
+            let pose = scene.default_pose(half_tangents(&camera));
+            let pinhole = prepare(ctx, &camera, Projection::Pinhole, &scene, &scene.mesh, &pose, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+            let pinhole_ms = time_render(ctx, &pinhole)?;
+            drop(pinhole);
+            let lens = Projection::Lens { delta: DEFAULT_DELTA };
+            let vertex = prepare(ctx, &camera, lens, &scene, &scene.mesh, &pose, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+            let vertex_ms = time_render(ctx, &vertex)?;
+            drop(vertex);
+            let warp_ms = time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Analytic)?;
+            let map_ms = time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Map)?;
+            rows.push(json!({
+                "bench": "vertex", "kind": "paths", "width": w, "height": h,
+                "grid": n, "triangles": scene.mesh.triangle_count(),
+                "pinhole_ms": pinhole_ms, "vertex_ms": vertex_ms,
+                "pinhole_warp_analytic_ms": warp_ms, "pinhole_warp_map_ms": map_ms,
+                "vertex_x_pinhole": vertex_ms / pinhole_ms,
+                "warp_map_x_pinhole": map_ms / pinhole_ms,
+                "straight_line_error_px": straight_line_error(&camera, &pose, &scene.mesh),
+            }));
+        }
+    }
+    // Tessellation on the coarse grid at the first size.
+    let (w, h) = sizes[0];
+    let camera = bench_camera(w, h);
+    let scene = builtin::grid(8);
+    let pose = scene.default_pose(half_tangents(&camera));
+    let pinhole = prepare(ctx, &camera, Projection::Pinhole, &scene, &scene.mesh, &pose, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+    let pinhole_ms = time_render(ctx, &pinhole)?;
+    drop(pinhole);
+    for edge in EDGES {
+        progress(&format!("tessellation: {w}×{h}, L = {edge:?}"));
+        let mesh = match edge {
+            Some(l) => tessellate(&scene.mesh, &pose, &camera, l)
+                .map_err(crate::gpu::GpuError::Invalid)?,
+            None => scene.mesh.clone(),
+        };
+        let lens = Projection::Lens { delta: DEFAULT_DELTA };
+        let drawn = prepare(ctx, &camera, lens, &scene, &mesh, &pose, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+        let ms = time_render(ctx, &drawn)?;
+        rows.push(json!({
+            "bench": "vertex", "kind": "tessellation", "width": w, "height": h,
+            "max_edge_px": edge, "triangles": mesh.triangle_count(),
+            "vertex_ms": ms, "pinhole_ms": pinhole_ms, "vertex_x_pinhole": ms / pinhole_ms,
+            "straight_line_error_px": straight_line_error(&camera, &pose, &mesh),
+        }));
+    }
+    // Seed 002's mesh warp beside the compute warp.
+    for &(w, h) in sizes {
+        let camera = bench_camera(w, h);
+        let geometry = WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
+        let source = test_source(w, h);
+        // Exact coordinates on a sample of pixels (about 40,000).
+        let stride = ((w as usize * h as usize / 40_000) as f64).sqrt().max(1.0) as u32;
+        let exact: Vec<(u32, u32, Option<DVec2>)> = (0..h)
+            .step_by(stride as usize)
+            .flat_map(|y| (0..w).step_by(stride as usize).map(move |x| (x, y)))
+            .map(|(x, y)| (x, y, geometry.source_coordinate(DVec2::new(x as f64, y as f64), 1)))
+            .collect();
+        let gpu = ctx.gpu();
+        let texture = Texture::new(gpu, &source)?;
+        ctx.submit(|cmd| {
+            unsafe { texture.record_upload(cmd) };
+            Ok(())
+        })?;
+        for n in MESH_SIZES {
+            progress(&format!("mesh warp: {w}×{h}, {n}×{n}"));
+            let coords = crate::pass::mesh_warp::run_mesh_warp(ctx, &geometry, n, MeshWarpOutput::Coordinates, &source)?;
+            let (mut worst, mut sum, mut count, mut uncovered) = (0f64, 0f64, 0usize, 0usize);
+            for &(x, y, e) in &exact {
+                let m = coords.rgba_f32((y * w + x) as usize);
+                match e {
+                    Some(e) if m[3] > 0.5 => {
+                        let d = DVec2::new(m[0] as f64, m[1] as f64).distance(e);
+                        worst = worst.max(d);
+                        sum += d;
+                        count += 1;
+                    }
+                    Some(_) => uncovered += 1,
+                    None => {}
+                }
+            }
+            let mut pass = MeshWarpPass::new(gpu, &geometry, n, MeshWarpOutput::Image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+            pass.bind(texture.image.view);
+            let target = MeshWarpTarget::new(gpu, &pass)?;
+            let (wall, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd, &target.framebuffer) })?;
+            rows.push(json!({
+                "bench": "vertex", "kind": "mesh_warp", "width": w, "height": h, "n": n,
+                "ms": gpu_ms.unwrap_or(wall), "max_err_px": worst,
+                "mean_err_px": sum / count.max(1) as f64,
+                "uncovered_px_sampled": uncovered,
+            }));
+        }
+        // The compute warp on the same image, for comparison.
+        for (name, coordinates) in [("analytic", Coordinates::Analytic), ("map", Coordinates::Map)] {
+            let desc = WarpDesc {
+                geometry: geometry.clone(),
+                coordinates,
+                sampling: Sampling::Bilinear,
+                format: PixelFormat::Rgba8,
+                fill: [0.0; 4],
+                write_mask: false,
+            };
+            let images = WarpImages::new(gpu, &desc, &source)?;
+            let mut pass = WarpPass::new(gpu, desc)?;
+            pass.bind(images.source.view, images.output.view, images.mask.view);
+            ctx.submit(|cmd| {
+                unsafe {
+                    images.record_upload(cmd);
+                    pass.record_prepare(cmd);
+                }
+                Ok(())
+            })?;
+            let (wall, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd) })?;
+            rows.push(json!({
+                "bench": "vertex", "kind": "compute_warp", "width": w, "height": h,
+                "coordinates": name, "ms": gpu_ms.unwrap_or(wall),
+            }));
+        }
+    }
+    Ok(rows)
+}
+
+fn f(v: &Value, k: &str, digits: usize) -> String {
+    v[k].as_f64()
+        .map(|x| format!("{x:.digits$}"))
+        .unwrap_or_else(|| "—".into())
+}
+
+fn e(v: &Value, k: &str) -> String {
+    v[k].as_f64()
+        .map(|x| format!("{x:.1e}"))
+        .unwrap_or_else(|| "—".into())
+}
+
+/// The rows as Markdown tables.
+pub fn table(rows: &[Value]) -> String {
+    let kind = |k: &'static str| rows.iter().filter(move |r| r["kind"] == k);
+    let mut out = String::from(
+        "Paths (GPU ms per frame; × = over the plain pinhole render of the same scene)\n\n\
+         | size | grid | triangles | pinhole | vertex (Alg. 1) | × | pinhole + warp, analytic | pinhole + warp, map | × | straight-line error px |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for r in kind("paths") {
+        out.push_str(&format!(
+            "| {}×{} | {}² | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r["width"], r["height"], r["grid"], r["triangles"],
+            f(r, "pinhole_ms", 2), f(r, "vertex_ms", 2), f(r, "vertex_x_pinhole", 2),
+            f(r, "pinhole_warp_analytic_ms", 2), f(r, "pinhole_warp_map_ms", 2),
+            f(r, "warp_map_x_pinhole", 2), e(r, "straight_line_error_px"),
+        ));
+    }
+    out.push_str(
+        "\nTessellation of the 8² grid (Alg. 1 needs fine geometry)\n\n\
+         | size | max edge L px | triangles | vertex ms | × pinhole | straight-line error px |\n\
+         |---|---:|---:|---:|---:|---:|\n",
+    );
+    for r in kind("tessellation") {
+        let l = r["max_edge_px"].as_f64().map(|v| format!("{v}")).unwrap_or_else(|| "none".into());
+        out.push_str(&format!(
+            "| {}×{} | {l} | {} | {} | {} | {} |\n",
+            r["width"], r["height"], r["triangles"], f(r, "vertex_ms", 2),
+            f(r, "vertex_x_pinhole", 2), e(r, "straight_line_error_px"),
+        ));
+    }
+    out.push_str(
+        "\nMesh warp (seed 002 Sec. II-B) beside the compute warp\n\n\
+         | size | warp | ms | max coord err px | mean coord err px |\n|---|---|---:|---:|---:|\n",
+    );
+    for r in rows {
+        match r["kind"].as_str() {
+            Some("mesh_warp") => out.push_str(&format!(
+                "| {}×{} | mesh {}×{} | {} | {} | {} |\n",
+                r["width"], r["height"], r["n"], r["n"], f(r, "ms", 2), e(r, "max_err_px"), e(r, "mean_err_px"),
+            )),
+            Some("compute_warp") => out.push_str(&format!(
+                "| {}×{} | compute, {} | {} | — | — |\n",
+                r["width"], r["height"], r["coordinates"].as_str().unwrap_or(""), f(r, "ms", 2),
+            )),
+            _ => {}
+        }
+    }
+    out
+}

@@ -322,15 +322,21 @@ impl<'a> SceneRenderer<'a> {
                 i
             }
             None => {
-                let mut desc = GeometryDesc::new(source, Projection::Pinhole, Outputs::color_only(Some(format)));
+                let mut desc = GeometryDesc::new(
+                    source,
+                    Projection::Pinhole,
+                    Outputs::color_only(Some(format)),
+                );
                 desc.background = background;
                 desc.final_layout = vk::ImageLayout::GENERAL;
                 let pass = GeometryPass::new(gpu, desc)?;
                 let targets = GeometryTargets::new(gpu, &pass)?;
                 let (ow, oh) = geometry.output_size;
                 let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-                let output = Image::new_2d(gpu, "warp_path.output", pixel_format.vk(), ow, oh, usage)?;
-                let mask = Image::new_2d(gpu, "warp_path.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
+                let output =
+                    Image::new_2d(gpu, "warp_path.output", pixel_format.vk(), ow, oh, usage)?;
+                let mask =
+                    Image::new_2d(gpu, "warp_path.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
                 let download = Buffer::new(
                     gpu,
                     "warp_path.download",
@@ -369,15 +375,31 @@ impl<'a> SceneRenderer<'a> {
         let st = &*st;
         let (ow, oh) = st.warp.desc().geometry.output_size;
         self.ctx.submit(|cmd| {
-            let none = (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty());
-            let write = (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE);
-            let read = (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_READ);
+            let none = (
+                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::AccessFlags::empty(),
+            );
+            let write = (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_WRITE,
+            );
+            let read = (
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_READ,
+            );
             unsafe {
                 buffers.record_upload(cmd);
                 // The render pass leaves the colour in GENERAL, its writes visible to compute.
                 st.pass.record(cmd, &st.targets, &buffers);
                 for img in [&st.output, &st.mask] {
-                    image_barrier(gpu, cmd, img.raw, (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL), none, write);
+                    image_barrier(
+                        gpu,
+                        cmd,
+                        img.raw,
+                        (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                        none,
+                        write,
+                    );
                 }
                 st.warp.record_prepare(cmd);
                 st.warp.record(cmd);
@@ -385,7 +407,10 @@ impl<'a> SceneRenderer<'a> {
                     gpu,
                     cmd,
                     st.output.raw,
-                    (vk::ImageLayout::GENERAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL),
+                    (
+                        vk::ImageLayout::GENERAL,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    ),
                     write,
                     read,
                 );
@@ -399,7 +424,10 @@ impl<'a> SceneRenderer<'a> {
                 memory_barrier(
                     gpu,
                     cmd,
-                    (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                    (
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::AccessFlags::TRANSFER_WRITE,
+                    ),
                     (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
                 );
             }
@@ -407,8 +435,14 @@ impl<'a> SceneRenderer<'a> {
         })?;
         let n = ow as usize * oh as usize;
         let (pixels, depth) = match pixel_format {
-            PixelFormat::Rgba8 => (Pixels::Rgba8(st.download.read_pod::<[u8; 4]>(n)?), Depth::U8),
-            _ => (Pixels::Rgba32F(st.download.read_pod::<[f32; 4]>(n)?), Depth::F32),
+            PixelFormat::Rgba8 => (
+                Pixels::Rgba8(st.download.read_pod::<[u8; 4]>(n)?),
+                Depth::U8,
+            ),
+            _ => (
+                Pixels::Rgba32F(st.download.read_pod::<[f32; 4]>(n)?),
+                Depth::F32,
+            ),
         };
         Ok(Raster {
             width: ow,
@@ -546,13 +580,22 @@ fn render_warp_path(
     }
     let cam = &request.camera;
     let ov = overscan(cam, density).map_err(invalid)?;
-    let pinhole = OpenCvCamera::new(ov.width, ov.height, ov.intrinsics, OpenCvDistortion::default())
-        .map_err(invalid)?;
+    let pinhole = OpenCvCamera::new(
+        ov.width,
+        ov.height,
+        ov.intrinsics,
+        OpenCvDistortion::default(),
+    )
+    .map_err(invalid)?;
     let geometry = WarpGeometry::distort(cam.clone(), method)
         .with_ideal(ov.intrinsics, (ov.width, ov.height))
         .map_err(invalid)?;
     let ctx = renderer.ctx;
-    let warp = |geometry: WarpGeometry, source: &Raster, format: PixelFormat, sampling: Sampling, fill: [f32; 4]| {
+    let warp = |geometry: WarpGeometry,
+                source: &Raster,
+                format: PixelFormat,
+                sampling: Sampling,
+                fill: [f32; 4]| {
         run_warp(
             ctx,
             WarpDesc {
@@ -585,14 +628,16 @@ fn render_warp_path(
         // The warp runs at s× too (output and overscanned source), so its bilinear
         // resampling errors shrink with s like the rasterization's. The overscan is computed
         // once; each jittered pass translates source and lens image together.
-        let big_ov = overscan(&scaled_camera(cam, s).map_err(invalid)?, density).map_err(invalid)?;
+        let big_ov =
+            overscan(&scaled_camera(cam, s).map_err(invalid)?, density).map_err(invalid)?;
         let background = request.background;
         out.color = Some(antialiased(cam, s, request.jitter, &mut |big, shift| {
             let mut k = big_ov.intrinsics;
             k.cx -= shift.x * s as f64;
             k.cy -= shift.y * s as f64;
-            let source = OpenCvCamera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
-                .map_err(invalid)?;
+            let source =
+                OpenCvCamera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
+                    .map_err(invalid)?;
             let geometry = WarpGeometry::distort(big, method)
                 .with_ideal(k, (big_ov.width, big_ov.height))
                 .map_err(invalid)?;
@@ -611,7 +656,13 @@ fn render_warp_path(
                 depth: o.depth,
             },
         );
-        let data = renderer.draw(desc, &scene.mesh, scene.texture.as_ref(), &request.pose, &request.pose)?;
+        let data = renderer.draw(
+            desc,
+            &scene.mesh,
+            scene.texture.as_ref(),
+            &request.pose,
+            &request.pose,
+        )?;
         let raster = |pixels: Pixels| Raster {
             width: ov.width,
             height: ov.height,
@@ -620,7 +671,13 @@ fn render_warp_path(
         };
         if let Some(ids) = data.ids {
             progress("warping IDs (nearest)");
-            let r = warp(geometry.clone(), &raster(Pixels::R32Uint(ids)), PixelFormat::R32Uint, Sampling::Nearest, [0.0; 4])?;
+            let r = warp(
+                geometry.clone(),
+                &raster(Pixels::R32Uint(ids)),
+                PixelFormat::R32Uint,
+                Sampling::Nearest,
+                [0.0; 4],
+            )?;
             if let Pixels::R32Uint(p) = r.pixels {
                 out.ids = Some(p);
             }
@@ -629,7 +686,9 @@ fn render_warp_path(
             progress("warping depth (nearest)");
             let r = warp(
                 geometry.clone(),
-                &raster(Pixels::Rgba32F(depth.iter().map(|&z| [z, z, z, 1.0]).collect())),
+                &raster(Pixels::Rgba32F(
+                    depth.iter().map(|&z| [z, z, z, 1.0]).collect(),
+                )),
                 PixelFormat::Rgba32F,
                 Sampling::Nearest,
                 [f32::INFINITY; 4],

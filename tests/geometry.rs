@@ -38,7 +38,8 @@ fn grid_oracle(
     p: DVec2,
     margin: f64,
 ) -> Option<(u32, DVec3, bool)> {
-    let x = camera.undistort_normalized(camera.intrinsics.to_normalized(p), InverseMethod::Newton)?;
+    let x =
+        camera.undistort_normalized(camera.intrinsics.to_normalized(p), InverseMethod::Newton)?;
     let dir_cam = x.extend(1.0);
     let r_t = pose.rotation.transpose();
     let origin = pose.centre();
@@ -51,7 +52,10 @@ fn grid_oracle(
         return Some((0, DVec3::ZERO, false));
     }
     let hit = origin + dir * t;
-    let (u, v) = ((hit.x + 0.8) / 1.6 * n as f64, (hit.y + 0.6) / 1.2 * n as f64);
+    let (u, v) = (
+        (hit.x + 0.8) / 1.6 * n as f64,
+        (hit.y + 0.6) / 1.2 * n as f64,
+    );
     let border = |w: f64| w.fract().min(1.0 - w.fract()) < margin;
     let near_edge = border(u) || border(v) || u.abs() < margin || v.abs() < margin;
     if u < 0.0 || v < 0.0 || u >= n as f64 || v >= n as f64 {
@@ -107,7 +111,15 @@ fn ids_depth_and_flow_match_a_ray_cast_through_the_f64_model() {
     let pose = Pose::look_at(DVec3::new(0.1, -0.05, -1.0), DVec3::ZERO, DVec3::Y);
     let previous = Pose::look_at(DVec3::new(0.13, -0.04, -1.02), DVec3::ZERO, DVec3::Y);
     let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
-    let r = render(&ctx, lens(&camera, DEFAULT_DELTA), &mesh, None, &pose, &previous).unwrap();
+    let r = render(
+        &ctx,
+        lens(&camera, DEFAULT_DELTA),
+        &mesh,
+        None,
+        &pose,
+        &previous,
+    )
+    .unwrap();
     assert_no_validation_messages(&ctx);
     let c = compare_ids(&camera, &pose, n, &r);
     assert!(c.checked > 300_000);
@@ -157,7 +169,10 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
         let half = 3.0 / camera.intrinsics.fx * z; // 6 px squares
         for (k, point) in case.points.iter().enumerate() {
             let [u, v] = point.distorted_pixel;
-            let inside = u > 12.0 && v > 12.0 && u < camera.width as f64 - 12.0 && v < camera.height as f64 - 12.0;
+            let inside = u > 12.0
+                && v > 12.0
+                && u < camera.width as f64 - 12.0
+                && v < camera.height as f64 - 12.0;
             let x = point.undistorted_normalized;
             if !inside || camera.distort_normalized(DVec2::new(x[0], x[1])).is_none() {
                 continue;
@@ -166,9 +181,15 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             let id = k as u32 + 1;
             let base = mesh.vertices.len() as u32;
             for (dx, dy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                mesh.vertices.push(Vertex::new(centre + DVec3::new(dx * half, dy * half, 0.0), [0.0; 2], [255; 4], id));
+                mesh.vertices.push(Vertex::new(
+                    centre + DVec3::new(dx * half, dy * half, 0.0),
+                    [0.0; 2],
+                    [255; 4],
+                    id,
+                ));
             }
-            mesh.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+            mesh.indices
+                .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
             expected.push((id, DVec2::new(u, v)));
         }
         // White squares on black, anti-aliased (4× supersampling, 4 jittered passes): the
@@ -195,7 +216,10 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             tessellate: None,
             background: [0.0, 0.0, 0.0, 1.0],
         };
-        let color = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap().color.unwrap();
+        let color = render_scene(&ctx, &scene, &request, &mut |_| {})
+            .unwrap()
+            .color
+            .unwrap();
         let mut worst = 0f64;
         for (_, px) in &expected {
             let (mut sum, mut weight) = (DVec2::ZERO, 0.0);
@@ -211,7 +235,10 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
         // Alg. 1 moves the corners exactly (f32: ~1e-4 px); what is left is rasterization:
         // edge positions sampled 16 times per pixel (4× supersampling, 4 jittered passes).
         // Measured: ≤ 0.064 px on these three cameras.
-        assert!(worst < 0.1, "{name}: marker centroid {worst} px from projectPoints");
+        assert!(
+            worst < 0.1,
+            "{name}: marker centroid {worst} px from projectPoints"
+        );
     }
     assert_no_validation_messages(&ctx);
 }
@@ -226,7 +253,15 @@ fn barrel_discard_shows_the_border_and_stretches_nothing() {
     let scene = builtin::grid(n);
     let pose = Pose::look_at(DVec3::new(0.0, 0.0, -0.25), DVec3::ZERO, DVec3::Y);
     let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
-    let r = render(&ctx, lens(&camera, DEFAULT_DELTA), &mesh, None, &pose, &pose).unwrap();
+    let r = render(
+        &ctx,
+        lens(&camera, DEFAULT_DELTA),
+        &mesh,
+        None,
+        &pose,
+        &pose,
+    )
+    .unwrap();
     let c = compare_ids(&camera, &pose, n, &r);
     assert_eq!((c.wrong, c.holes), (0, 0), "{} checked", c.checked);
     // The middles of the image's sides lie outside the pinhole frustum (their undistorted
@@ -261,10 +296,21 @@ fn geometry_behind_the_camera_gives_holes_never_garbage() {
     let eye = DVec3::new(0.0, 0.0, -0.03);
     let pose = Pose::look_at(eye, eye + DVec3::new(0.0, 1.0, 0.6), DVec3::Z);
     let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
-    let r = render(&ctx, lens(&camera, DEFAULT_DELTA), &mesh, None, &pose, &pose).unwrap();
+    let r = render(
+        &ctx,
+        lens(&camera, DEFAULT_DELTA),
+        &mesh,
+        None,
+        &pose,
+        &pose,
+    )
+    .unwrap();
     let c = compare_ids(&camera, &pose, n, &r);
     assert!(c.checked > 100_000);
-    assert_eq!(c.wrong, 0, "wrong IDs: geometry drawn where it does not belong");
+    assert_eq!(
+        c.wrong, 0,
+        "wrong IDs: geometry drawn where it does not belong"
+    );
     assert!(
         (c.holes as f64) < 0.02 * c.checked as f64,
         "{} holes of {} pixels",
@@ -288,9 +334,22 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
     };
     let scene = builtin::checkerboard(board, 4);
     let pose = scene.default_pose([1.0, 1.0, 0.75, 0.75]);
-    let valid: std::collections::HashSet<u32> =
-        scene.mesh.vertices.iter().map(|v| v.object_id).chain([0]).collect();
-    let r = render(&ctx, lens(&camera, DEFAULT_DELTA), &scene.mesh, None, &pose, &pose).unwrap();
+    let valid: std::collections::HashSet<u32> = scene
+        .mesh
+        .vertices
+        .iter()
+        .map(|v| v.object_id)
+        .chain([0])
+        .collect();
+    let r = render(
+        &ctx,
+        lens(&camera, DEFAULT_DELTA),
+        &scene.mesh,
+        None,
+        &pose,
+        &pose,
+    )
+    .unwrap();
     let ids = r.ids.unwrap();
     assert!(ids.iter().all(|i| valid.contains(i)));
     assert!(ids.iter().filter(|&&i| i > 0).count() > 100_000);
@@ -329,10 +388,18 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
     let as_float = Raster {
         width: camera.width,
         height: camera.height,
-        pixels: Pixels::Rgba32F(pinhole.ids.unwrap().iter().map(|&i| [i as f32, 0.0, 0.0, 1.0]).collect()),
+        pixels: Pixels::Rgba32F(
+            pinhole
+                .ids
+                .unwrap()
+                .iter()
+                .map(|&i| [i as f32, 0.0, 0.0, 1.0])
+                .collect(),
+        ),
         depth: Depth::F32,
     };
-    let geometry = vklens::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
+    let geometry =
+        vklens::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
     let (bilinear, _) = vklens::pass::warp::run_warp(
         &ctx,
         vklens::pass::warp::WarpDesc {
@@ -396,6 +463,9 @@ fn vertex_and_warp_paths_agree_on_a_finely_tessellated_scene() {
     // Both resample the same texture differently (trilinear-free texture sampling vs a
     // bilinear warp of it), so fine texture detail differs slightly; geometry agrees.
     assert!(mean < 0.02, "mean difference {mean}");
-    assert!((big as f64) < 0.002 * count as f64, "{big} pixels differ by > 25 %");
+    assert!(
+        (big as f64) < 0.002 * count as f64,
+        "{big} pixels differ by > 25 %"
+    );
     assert_no_validation_messages(&ctx);
 }

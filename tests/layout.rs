@@ -66,3 +66,88 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
         );
     }
 }
+
+#[test]
+fn geometry_frame_matches_the_glsl_block() {
+    use vklens::pass::geometry::GeometryFrame;
+    let host = vec![
+        (
+            "view_projection",
+            offset_of!(GeometryFrame, view_projection),
+        ),
+        (
+            "previous_view_projection",
+            offset_of!(GeometryFrame, previous_view_projection),
+        ),
+        ("view", offset_of!(GeometryFrame, view)),
+        ("viewport", offset_of!(GeometryFrame, viewport)),
+    ];
+    check(shaders::GEOMETRY_VERT, "GeometryFrame", host.clone());
+    check(shaders::GEOMETRY_GEOM, "GeometryFrame", host);
+    // The vertex shader also reads the camera, with the same layout as everywhere.
+    check(
+        shaders::GEOMETRY_VERT,
+        "CameraParams",
+        host_offsets!(CameraParams),
+    );
+}
+
+#[test]
+fn mesh_warp_push_matches_the_glsl_block() {
+    use vklens::pass::mesh_warp::MeshWarpPush;
+    let host = vec![("sizes", offset_of!(MeshWarpPush, sizes))];
+    check(shaders::MESH_WARP_VERT, "MeshWarpPush", host.clone());
+    check(shaders::MESH_WARP_FRAG, "MeshWarpPush", host);
+}
+
+#[test]
+fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
+    // Simulate only what is asked for: a k1 k2 camera rendering colour only builds a vertex
+    // stage with the rational/prism/tilt groups off and a fragment stage that writes no ID,
+    // flow or depth.
+    use ash::vk;
+    use vklens::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
+    let ctx = vklens::gpu::Context::new(vklens::gpu::ContextOptions {
+        validation: true,
+        device: None,
+    })
+    .unwrap();
+    let camera = vklens::model::OpenCvCamera::from_coeffs(
+        640,
+        480,
+        vklens::model::Intrinsics {
+            fx: 500.0,
+            fy: 500.0,
+            cx: 319.5,
+            cy: 239.5,
+        },
+        &[-0.2, 0.05, 0.0, 0.0],
+    )
+    .unwrap();
+    let pass = GeometryPass::new(
+        ctx.gpu(),
+        GeometryDesc::new(camera, Projection::Lens { delta: 0.1 }, Outputs::COLOR),
+    )
+    .unwrap();
+    let stages = &pass.pipeline().constants;
+    let get = |stage: vk::ShaderStageFlags, id: u32| {
+        stages
+            .iter()
+            .find(|(s, _)| *s == stage)
+            .and_then(|(_, c)| c.get(id))
+    };
+    let v = vk::ShaderStageFlags::VERTEX;
+    assert_eq!(get(v, 0), Some(1), "radial on");
+    for id in [1, 2, 3, 4] {
+        assert_eq!(get(v, id), Some(0), "term group {id} compiled out");
+    }
+    let f = vk::ShaderStageFlags::FRAGMENT;
+    assert_eq!(get(f, 20), Some(1));
+    for id in [21, 22, 23] {
+        assert_eq!(get(f, id), Some(0), "output {id} compiled out");
+    }
+    assert!(stages
+        .iter()
+        .any(|(s, _)| *s == vk::ShaderStageFlags::GEOMETRY));
+    ctx.check_validation().unwrap();
+}

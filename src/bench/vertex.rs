@@ -48,7 +48,10 @@ pub const MESH_SIZES: [u32; 4] = [8, 32, 128, 512];
 pub fn straight_line_error(camera: &OpenCvCamera, pose: &Pose, mesh: &Mesh) -> f64 {
     let project = |i: u32| camera.project(pose.apply(mesh.vertices[i as usize].position()));
     let inside = |p: DVec2| {
-        p.x >= -0.5 && p.y >= -0.5 && p.x <= camera.width as f64 - 0.5 && p.y <= camera.height as f64 - 0.5
+        p.x >= -0.5
+            && p.y >= -0.5
+            && p.x <= camera.width as f64 - 0.5
+            && p.y <= camera.height as f64 - 0.5
     };
     let mut seen = std::collections::HashSet::new();
     let mut worst = 0f64;
@@ -101,7 +104,11 @@ fn prepare(
     final_layout: vk::ImageLayout,
 ) -> Result<Drawn> {
     let gpu = ctx.gpu();
-    let mut desc = GeometryDesc::new(camera.clone(), projection, Outputs::color_only(Some(ColorFormat::Rgba8)));
+    let mut desc = GeometryDesc::new(
+        camera.clone(),
+        projection,
+        Outputs::color_only(Some(ColorFormat::Rgba8)),
+    );
     desc.final_layout = final_layout;
     let mut pass = GeometryPass::new(gpu, desc)?;
     let targets = GeometryTargets::new(gpu, &pass)?;
@@ -120,7 +127,9 @@ fn prepare(
 }
 
 fn time_render(ctx: &Context, d: &Drawn) -> Result<f64> {
-    let (wall, gpu) = time_batch(ctx, &|cmd| unsafe { d.pass.record(cmd, &d.targets, &d.buffers) })?;
+    let (wall, gpu) = time_batch(ctx, &|cmd| unsafe {
+        d.pass.record(cmd, &d.targets, &d.buffers)
+    })?;
     Ok(gpu.unwrap_or(wall))
 }
 
@@ -134,15 +143,42 @@ fn time_pinhole_and_warp(
 ) -> Result<f64> {
     let gpu = ctx.gpu();
     let ov = overscan(camera, 1.0).map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
-    let source = OpenCvCamera::new(ov.width, ov.height, ov.intrinsics, OpenCvDistortion::default())
-        .map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
-    let drawn = prepare(ctx, &source, Projection::Pinhole, scene, &scene.mesh, pose, vk::ImageLayout::GENERAL)?;
+    let source = OpenCvCamera::new(
+        ov.width,
+        ov.height,
+        ov.intrinsics,
+        OpenCvDistortion::default(),
+    )
+    .map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
+    let drawn = prepare(
+        ctx,
+        &source,
+        Projection::Pinhole,
+        scene,
+        &scene.mesh,
+        pose,
+        vk::ImageLayout::GENERAL,
+    )?;
     let geometry = WarpGeometry::distort(camera.clone(), InverseMethod::Newton)
         .with_ideal(ov.intrinsics, (ov.width, ov.height))
         .map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
     let usage = vk::ImageUsageFlags::STORAGE;
-    let output = Image::new_2d(gpu, "bench.output", vk::Format::R8G8B8A8_UNORM, camera.width, camera.height, usage)?;
-    let mask = Image::new_2d(gpu, "bench.mask", vk::Format::R8_UNORM, camera.width, camera.height, usage)?;
+    let output = Image::new_2d(
+        gpu,
+        "bench.output",
+        vk::Format::R8G8B8A8_UNORM,
+        camera.width,
+        camera.height,
+        usage,
+    )?;
+    let mask = Image::new_2d(
+        gpu,
+        "bench.mask",
+        vk::Format::R8_UNORM,
+        camera.width,
+        camera.height,
+        usage,
+    )?;
     let mut warp = WarpPass::new(
         gpu,
         WarpDesc {
@@ -154,14 +190,30 @@ fn time_pinhole_and_warp(
             write_mask: false,
         },
     )?;
-    let color = drawn.targets.color().ok_or_else(|| crate::gpu::GpuError::Invalid("no colour".into()))?;
+    let color = drawn
+        .targets
+        .color()
+        .ok_or_else(|| crate::gpu::GpuError::Invalid("no colour".into()))?;
     warp.bind(color.view, output.view, mask.view);
     ctx.submit(|cmd| {
-        let none = (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty());
-        let write = (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE);
+        let none = (
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+            vk::AccessFlags::empty(),
+        );
+        let write = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_WRITE,
+        );
         unsafe {
             for img in [&output, &mask] {
-                image_barrier(gpu, cmd, img.raw, (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL), none, write);
+                image_barrier(
+                    gpu,
+                    cmd,
+                    img.raw,
+                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                    none,
+                    write,
+                );
             }
             warp.record_prepare(cmd);
         }
@@ -175,7 +227,11 @@ fn time_pinhole_and_warp(
 }
 
 /// Runs every row; `progress` hears each.
-pub fn run(ctx: &Context, sizes: &[(u32, u32)], progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
+pub fn run(
+    ctx: &Context,
+    sizes: &[(u32, u32)],
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<Value>> {
     let mut rows = Vec::new();
     for &(w, h) in sizes {
         let camera = bench_camera(w, h);
@@ -183,14 +239,33 @@ pub fn run(ctx: &Context, sizes: &[(u32, u32)], progress: &mut dyn FnMut(&str)) 
             progress(&format!("paths: {w}×{h}, grid {n}×{n}"));
             let scene = builtin::grid(n);
             let pose = scene.default_pose(half_tangents(&camera));
-            let pinhole = prepare(ctx, &camera, Projection::Pinhole, &scene, &scene.mesh, &pose, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+            let pinhole = prepare(
+                ctx,
+                &camera,
+                Projection::Pinhole,
+                &scene,
+                &scene.mesh,
+                &pose,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )?;
             let pinhole_ms = time_render(ctx, &pinhole)?;
             drop(pinhole);
-            let lens = Projection::Lens { delta: DEFAULT_DELTA };
-            let vertex = prepare(ctx, &camera, lens, &scene, &scene.mesh, &pose, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+            let lens = Projection::Lens {
+                delta: DEFAULT_DELTA,
+            };
+            let vertex = prepare(
+                ctx,
+                &camera,
+                lens,
+                &scene,
+                &scene.mesh,
+                &pose,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )?;
             let vertex_ms = time_render(ctx, &vertex)?;
             drop(vertex);
-            let warp_ms = time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Analytic)?;
+            let warp_ms =
+                time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Analytic)?;
             let map_ms = time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Map)?;
             rows.push(json!({
                 "bench": "vertex", "kind": "paths", "width": w, "height": h,
@@ -208,18 +283,37 @@ pub fn run(ctx: &Context, sizes: &[(u32, u32)], progress: &mut dyn FnMut(&str)) 
     let camera = bench_camera(w, h);
     let scene = builtin::grid(8);
     let pose = scene.default_pose(half_tangents(&camera));
-    let pinhole = prepare(ctx, &camera, Projection::Pinhole, &scene, &scene.mesh, &pose, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+    let pinhole = prepare(
+        ctx,
+        &camera,
+        Projection::Pinhole,
+        &scene,
+        &scene.mesh,
+        &pose,
+        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+    )?;
     let pinhole_ms = time_render(ctx, &pinhole)?;
     drop(pinhole);
     for edge in EDGES {
         progress(&format!("tessellation: {w}×{h}, L = {edge:?}"));
         let mesh = match edge {
-            Some(l) => tessellate(&scene.mesh, &pose, &camera, l)
-                .map_err(crate::gpu::GpuError::Invalid)?,
+            Some(l) => {
+                tessellate(&scene.mesh, &pose, &camera, l).map_err(crate::gpu::GpuError::Invalid)?
+            }
             None => scene.mesh.clone(),
         };
-        let lens = Projection::Lens { delta: DEFAULT_DELTA };
-        let drawn = prepare(ctx, &camera, lens, &scene, &mesh, &pose, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+        let lens = Projection::Lens {
+            delta: DEFAULT_DELTA,
+        };
+        let drawn = prepare(
+            ctx,
+            &camera,
+            lens,
+            &scene,
+            &mesh,
+            &pose,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )?;
         let ms = time_render(ctx, &drawn)?;
         rows.push(json!({
             "bench": "vertex", "kind": "tessellation", "width": w, "height": h,
@@ -238,7 +332,13 @@ pub fn run(ctx: &Context, sizes: &[(u32, u32)], progress: &mut dyn FnMut(&str)) 
         let exact: Vec<(u32, u32, Option<DVec2>)> = (0..h)
             .step_by(stride as usize)
             .flat_map(|y| (0..w).step_by(stride as usize).map(move |x| (x, y)))
-            .map(|(x, y)| (x, y, geometry.source_coordinate(DVec2::new(x as f64, y as f64), 1)))
+            .map(|(x, y)| {
+                (
+                    x,
+                    y,
+                    geometry.source_coordinate(DVec2::new(x as f64, y as f64), 1),
+                )
+            })
             .collect();
         let gpu = ctx.gpu();
         let texture = Texture::new(gpu, &source)?;
@@ -248,7 +348,13 @@ pub fn run(ctx: &Context, sizes: &[(u32, u32)], progress: &mut dyn FnMut(&str)) 
         })?;
         for n in MESH_SIZES {
             progress(&format!("mesh warp: {w}×{h}, {n}×{n}"));
-            let coords = crate::pass::mesh_warp::run_mesh_warp(ctx, &geometry, n, MeshWarpOutput::Coordinates, &source)?;
+            let coords = crate::pass::mesh_warp::run_mesh_warp(
+                ctx,
+                &geometry,
+                n,
+                MeshWarpOutput::Coordinates,
+                &source,
+            )?;
             let (mut worst, mut sum, mut count, mut uncovered) = (0f64, 0f64, 0usize, 0usize);
             for &(x, y, e) in &exact {
                 let m = coords.rgba_f32((y * w + x) as usize);
@@ -263,10 +369,17 @@ pub fn run(ctx: &Context, sizes: &[(u32, u32)], progress: &mut dyn FnMut(&str)) 
                     None => {}
                 }
             }
-            let mut pass = MeshWarpPass::new(gpu, &geometry, n, MeshWarpOutput::Image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+            let mut pass = MeshWarpPass::new(
+                gpu,
+                &geometry,
+                n,
+                MeshWarpOutput::Image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )?;
             pass.bind(texture.image.view);
             let target = MeshWarpTarget::new(gpu, &pass)?;
-            let (wall, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd, &target.framebuffer) })?;
+            let (wall, gpu_ms) =
+                time_batch(ctx, &|cmd| unsafe { pass.record(cmd, &target.framebuffer) })?;
             rows.push(json!({
                 "bench": "vertex", "kind": "mesh_warp", "width": w, "height": h, "n": n,
                 "ms": gpu_ms.unwrap_or(wall), "max_err_px": worst,
@@ -275,7 +388,10 @@ pub fn run(ctx: &Context, sizes: &[(u32, u32)], progress: &mut dyn FnMut(&str)) 
             }));
         }
         // The compute warp on the same image, for comparison.
-        for (name, coordinates) in [("analytic", Coordinates::Analytic), ("map", Coordinates::Map)] {
+        for (name, coordinates) in [
+            ("analytic", Coordinates::Analytic),
+            ("map", Coordinates::Map),
+        ] {
             let desc = WarpDesc {
                 geometry: geometry.clone(),
                 coordinates,
@@ -327,10 +443,17 @@ pub fn table(rows: &[Value]) -> String {
     for r in kind("paths") {
         out.push_str(&format!(
             "| {}×{} | {}² | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            r["width"], r["height"], r["grid"], r["triangles"],
-            f(r, "pinhole_ms", 2), f(r, "vertex_ms", 2), f(r, "vertex_x_pinhole", 2),
-            f(r, "pinhole_warp_analytic_ms", 2), f(r, "pinhole_warp_map_ms", 2),
-            f(r, "warp_map_x_pinhole", 2), e(r, "straight_line_error_px"),
+            r["width"],
+            r["height"],
+            r["grid"],
+            r["triangles"],
+            f(r, "pinhole_ms", 2),
+            f(r, "vertex_ms", 2),
+            f(r, "vertex_x_pinhole", 2),
+            f(r, "pinhole_warp_analytic_ms", 2),
+            f(r, "pinhole_warp_map_ms", 2),
+            f(r, "warp_map_x_pinhole", 2),
+            e(r, "straight_line_error_px"),
         ));
     }
     out.push_str(
@@ -339,11 +462,18 @@ pub fn table(rows: &[Value]) -> String {
          |---|---:|---:|---:|---:|---:|\n",
     );
     for r in kind("tessellation") {
-        let l = r["max_edge_px"].as_f64().map(|v| format!("{v}")).unwrap_or_else(|| "none".into());
+        let l = r["max_edge_px"]
+            .as_f64()
+            .map(|v| format!("{v}"))
+            .unwrap_or_else(|| "none".into());
         out.push_str(&format!(
             "| {}×{} | {l} | {} | {} | {} | {} |\n",
-            r["width"], r["height"], r["triangles"], f(r, "vertex_ms", 2),
-            f(r, "vertex_x_pinhole", 2), e(r, "straight_line_error_px"),
+            r["width"],
+            r["height"],
+            r["triangles"],
+            f(r, "vertex_ms", 2),
+            f(r, "vertex_x_pinhole", 2),
+            e(r, "straight_line_error_px"),
         ));
     }
     out.push_str(
@@ -354,11 +484,20 @@ pub fn table(rows: &[Value]) -> String {
         match r["kind"].as_str() {
             Some("mesh_warp") => out.push_str(&format!(
                 "| {}×{} | mesh {}×{} | {} | {} | {} |\n",
-                r["width"], r["height"], r["n"], r["n"], f(r, "ms", 2), e(r, "max_err_px"), e(r, "mean_err_px"),
+                r["width"],
+                r["height"],
+                r["n"],
+                r["n"],
+                f(r, "ms", 2),
+                e(r, "max_err_px"),
+                e(r, "mean_err_px"),
             )),
             Some("compute_warp") => out.push_str(&format!(
                 "| {}×{} | compute, {} | {} | — | — |\n",
-                r["width"], r["height"], r["coordinates"].as_str().unwrap_or(""), f(r, "ms", 2),
+                r["width"],
+                r["height"],
+                r["coordinates"].as_str().unwrap_or(""),
+                f(r, "ms", 2),
             )),
             _ => {}
         }

@@ -100,7 +100,10 @@ pub(crate) fn test_source(w: u32, h: u32) -> Raster {
 /// Records `frame` back to back in batches and returns the median over [`REPEATS`] batches of
 /// (wall ms, GPU ms) per frame. The batch is sized to about 300 ms from a warm-up frame (which
 /// also lets the driver compile the pipeline), between 3 and [`BATCH`] frames.
-pub(crate) fn time_batch(ctx: &Context, frame: &dyn Fn(vk::CommandBuffer)) -> Result<(f64, Option<f64>)> {
+pub(crate) fn time_batch(
+    ctx: &Context,
+    frame: &dyn Fn(vk::CommandBuffer),
+) -> Result<(f64, Option<f64>)> {
     let gpu = ctx.gpu();
     let queries = QueryPool::timestamps(gpu, 2).ok();
     let write = (

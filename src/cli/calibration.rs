@@ -71,7 +71,10 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     let poses = board_poses(&camera, &board, args.count)
         .map_err(|e| CliError::input(format!("{}: {e}", args.camera.display())))?;
     std::fs::create_dir_all(&args.out).map_err(|e| {
-        CliError::input(format!("{}: cannot create the folder: {e}", args.out.display()))
+        CliError::input(format!(
+            "{}: cannot create the folder: {e}",
+            args.out.display()
+        ))
     })?;
     let scene = builtin::checkerboard(board, 4);
     let ctx = context()?;

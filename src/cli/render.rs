@@ -91,7 +91,9 @@ fn parse_background(s: &str) -> Result<Background, String> {
         .map_err(|_| format!("background {s:?}: expected R,G,B,A"))?;
     match <[f32; 4]>::try_from(v) {
         Ok(a) if a.iter().all(|c| c.is_finite()) => Ok(Background(a)),
-        _ => Err(format!("background {s:?}: expected four finite numbers R,G,B,A")),
+        _ => Err(format!(
+            "background {s:?}: expected four finite numbers R,G,B,A"
+        )),
     }
 }
 
@@ -171,7 +173,10 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         }
     }
     if !(args.delta.is_finite() && args.delta >= 0.0) {
-        return Err(CliError::input(format!("--delta {}: expected a number ≥ 0", args.delta)));
+        return Err(CliError::input(format!(
+            "--delta {}: expected a number ≥ 0",
+            args.delta
+        )));
     }
     let scene = builtin::parse(&args.scene).map_err(|e| CliError::input(e.to_string()))?;
     let pose = match &args.pose {
@@ -216,8 +221,8 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         scene.mesh.triangle_count(),
         ctx.gpu().device_name()
     ));
-    let rendered = render_scene(&ctx, &scene, &request, &mut |s| progress_line(s))
-        .map_err(|e| match e {
+    let rendered =
+        render_scene(&ctx, &scene, &request, &mut |s| progress_line(s)).map_err(|e| match e {
             crate::gpu::GpuError::Invalid(m) => CliError::input(m),
             other => CliError::from(other),
         })?;
@@ -228,9 +233,8 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
 }
 
 fn write_outputs(args: &RenderArgs, r: &Rendered, ids_ext: Option<&str>) -> Result<(), CliError> {
-    let save = |raster: &Raster, path: &Path| {
-        image_io::save(raster, path).map_err(CliError::runtime)
-    };
+    let save =
+        |raster: &Raster, path: &Path| image_io::save(raster, path).map_err(CliError::runtime);
     let float_image = |pixels: Vec<[f32; 4]>| Raster {
         width: r.width,
         height: r.height,
@@ -258,7 +262,14 @@ fn write_outputs(args: &RenderArgs, r: &Rendered, ids_ext: Option<&str>) -> Resu
                 path,
             )?;
         } else {
-            save(&float_image(ids.iter().map(|&i| [i as f32, i as f32, i as f32, 1.0]).collect()), path)?;
+            save(
+                &float_image(
+                    ids.iter()
+                        .map(|&i| [i as f32, i as f32, i as f32, 1.0])
+                        .collect(),
+                ),
+                path,
+            )?;
         }
     }
     if let (Some(path), Some(flow)) = (&args.flow, &r.flow) {
@@ -272,7 +283,10 @@ fn write_outputs(args: &RenderArgs, r: &Rendered, ids_ext: Option<&str>) -> Resu
         save(&float_image(pixels), path)?;
     }
     if let (Some(path), Some(depth)) = (&args.depth, &r.depth) {
-        save(&float_image(depth.iter().map(|&z| [z, z, z, 1.0]).collect()), path)?;
+        save(
+            &float_image(depth.iter().map(|&z| [z, z, z, 1.0]).collect()),
+            path,
+        )?;
     }
     Ok(())
 }

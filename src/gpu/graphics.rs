@@ -251,8 +251,7 @@ impl GraphicsPipeline {
             .stages
             .iter()
             .fold(vk::ShaderStageFlags::empty(), |a, s| a | s.stage);
-        if all_stages.contains(vk::ShaderStageFlags::GEOMETRY) && !gpu.supports_geometry_shader()
-        {
+        if all_stages.contains(vk::ShaderStageFlags::GEOMETRY) && !gpu.supports_geometry_shader() {
             return Err(GpuError::Invalid(
                 "the device was created without the geometryShader feature, which the geometry path needs".into(),
             ));
@@ -312,7 +311,11 @@ impl GraphicsPipeline {
             .collect();
         let spec_infos: Vec<_> = spec_data
             .iter()
-            .map(|(map, data)| vk::SpecializationInfo::default().map_entries(map).data(data))
+            .map(|(map, data)| {
+                vk::SpecializationInfo::default()
+                    .map_entries(map)
+                    .data(data)
+            })
             .collect();
         let stages: Vec<_> = desc
             .stages
@@ -337,12 +340,14 @@ impl GraphicsPipeline {
                 }],
                 attrs
                     .iter()
-                    .map(|&(location, format, offset)| vk::VertexInputAttributeDescription {
-                        location,
-                        binding: 0,
-                        format,
-                        offset,
-                    })
+                    .map(
+                        |&(location, format, offset)| vk::VertexInputAttributeDescription {
+                            location,
+                            binding: 0,
+                            format,
+                            offset,
+                        },
+                    )
                     .collect(),
             ),
             None => (Vec::new(), Vec::new()),

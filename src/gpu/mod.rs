@@ -28,8 +28,8 @@ pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,
 };
 pub use pipeline::{
-    write_buffer_descriptors, DescriptorLayout, write_storage_image_descriptors, ComputePipeline, DescriptorPool,
-    SpecConstants,
+    write_buffer_descriptors, write_storage_image_descriptors, ComputePipeline, DescriptorLayout,
+    DescriptorPool, SpecConstants,
 };
 pub use resources::{Buffer, Image, QueryPool};
 

@@ -18,8 +18,8 @@ use gpu_allocator::MemoryLocation;
 use super::camera_params::CameraParams;
 use crate::gpu::{
     image_barrier, memory_barrier, shaders, Attribute, Buffer, Context, DescriptorPool,
-    Framebuffer, Gpu, GpuError, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result,
-    Sampler, SpecConstants, Stage,
+    Framebuffer, Gpu, GpuError, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
+    SpecConstants, Stage,
 };
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
@@ -186,7 +186,11 @@ impl Texture {
         let bytes: Vec<u8> = match &raster.pixels {
             Pixels::Rgba8(p) => p.iter().flatten().copied().collect(),
             _ => (0..raster.len())
-                .flat_map(|i| raster.rgba_f32(i).map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
+                .flat_map(|i| {
+                    raster
+                        .rgba_f32(i)
+                        .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
+                })
                 .collect(),
         };
         Ok(Texture {
@@ -198,7 +202,12 @@ impl Texture {
                 raster.height,
                 vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
             )?,
-            staging: Buffer::from_pod(gpu, "texture.upload", &bytes, vk::BufferUsageFlags::TRANSFER_SRC)?,
+            staging: Buffer::from_pod(
+                gpu,
+                "texture.upload",
+                &bytes,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+            )?,
             gpu: gpu.clone(),
         })
     }
@@ -215,9 +224,18 @@ impl Texture {
                 &self.gpu,
                 cmd,
                 self.image.raw,
-                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
-                (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty()),
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                ),
+                (
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::AccessFlags::empty(),
+                ),
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
             );
             self.gpu.device().cmd_copy_buffer_to_image(
                 cmd,
@@ -234,8 +252,14 @@ impl Texture {
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                     vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 ),
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-                (vk::PipelineStageFlags::FRAGMENT_SHADER, vk::AccessFlags::SHADER_READ),
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+                (
+                    vk::PipelineStageFlags::FRAGMENT_SHADER,
+                    vk::AccessFlags::SHADER_READ,
+                ),
             );
         }
     }
@@ -351,8 +375,7 @@ impl GeometryPass {
             Some(vk::Format::D32_SFLOAT),
             desc.final_layout,
         )?;
-        let vertex_constants =
-            CameraParams::spec_constants(cam.distortion.terms()).bool(8, lens);
+        let vertex_constants = CameraParams::spec_constants(cam.distortion.terms()).bool(8, lens);
         let o = desc.outputs;
         let fragment_constants = SpecConstants::new()
             .bool(20, o.color.is_some())
@@ -473,7 +496,8 @@ impl GeometryPass {
     pub fn set_camera(&mut self, camera: &OpenCvCamera) -> Result<()> {
         if !self.accepts_camera(camera) {
             return Err(GpuError::Invalid(
-                "set_camera needs the same image size and distortion terms; build a new pass".into(),
+                "set_camera needs the same image size and distortion terms; build a new pass"
+                    .into(),
             ));
         }
         self.discard_bound = discard_bound(&self.desc.projection, camera)?;
@@ -526,7 +550,12 @@ impl GeometryPass {
     /// `cmd` must be recording outside a render pass on a graphics queue; `targets` must have
     /// been made for this pass; `mesh` must be bound ([`Self::bind_mesh`]) and uploaded; all
     /// must stay alive until the work completes.
-    pub unsafe fn record(&self, cmd: vk::CommandBuffer, targets: &GeometryTargets, mesh: &MeshBuffers) {
+    pub unsafe fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        targets: &GeometryTargets,
+        mesh: &MeshBuffers,
+    ) {
         let bg = self.desc.background;
         let mut clears = Vec::new();
         let o = self.desc.outputs;
@@ -562,8 +591,13 @@ impl GeometryPass {
         });
         let d = self.gpu.device();
         unsafe {
-            self.pipeline
-                .begin(cmd, &self.render_pass, &targets.framebuffer, &clears, self.set);
+            self.pipeline.begin(
+                cmd,
+                &self.render_pass,
+                &targets.framebuffer,
+                &clears,
+                self.set,
+            );
             d.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cmd, mesh.indices.raw, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
@@ -601,7 +635,12 @@ impl GeometryTargets {
             | vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::STORAGE;
         let formats = pass.desc.outputs.formats();
-        let names = ["geometry.color", "geometry.ids", "geometry.flow", "geometry.depth"];
+        let names = [
+            "geometry.color",
+            "geometry.ids",
+            "geometry.flow",
+            "geometry.depth",
+        ];
         let mut targets: [Option<Target>; 4] = Default::default();
         for (i, f) in formats.iter().enumerate() {
             if let Some(format) = *f {
@@ -617,7 +656,14 @@ impl GeometryTargets {
                     usage
                 };
                 targets[i] = Some(Target {
-                    image: Image::new_2d(gpu, names[i], format, extent.width, extent.height, usage)?,
+                    image: Image::new_2d(
+                        gpu,
+                        names[i],
+                        format,
+                        extent.width,
+                        extent.height,
+                        usage,
+                    )?,
                     download: Buffer::new(
                         gpu,
                         names[i],
@@ -680,7 +726,10 @@ impl GeometryTargets {
             memory_barrier(
                 &self.gpu,
                 cmd,
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
                 (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
             );
         }
@@ -704,7 +753,11 @@ impl GeometryTargets {
                 }
                 _ => Pixels::Rgba8(t.download.read_pod::<[u8; 4]>(n)?),
             };
-            let depth = if matches!(pixels, Pixels::Rgba8(_)) { Depth::U8 } else { Depth::F32 };
+            let depth = if matches!(pixels, Pixels::Rgba8(_)) {
+                Depth::U8
+            } else {
+                Depth::F32
+            };
             out.color = Some(Raster {
                 width: w,
                 height: h,

@@ -49,7 +49,9 @@ impl MeshWarpGrid {
     /// Vertices at the output image's pixel edges (−0.5 … w − 0.5), so the grid covers it.
     pub fn new(geometry: &WarpGeometry, n: u32) -> Result<Self> {
         if !(1..=4096).contains(&n) {
-            return Err(GpuError::Invalid(format!("mesh size {n}: expected 1..=4096")));
+            return Err(GpuError::Invalid(format!(
+                "mesh size {n}: expected 1..=4096"
+            )));
         }
         let (w, h) = geometry.output_size;
         let row = n + 1;
@@ -170,9 +172,23 @@ impl MeshWarpPass {
             set,
             pipeline,
             render_pass,
-            sampler: Sampler::new(gpu, vk::Filter::LINEAR, vk::SamplerAddressMode::CLAMP_TO_BORDER)?,
-            vertices: Buffer::from_pod(gpu, "mesh_warp.vertices", &grid.vertices, vk::BufferUsageFlags::VERTEX_BUFFER)?,
-            indices: Buffer::from_pod(gpu, "mesh_warp.indices", &grid.indices, vk::BufferUsageFlags::INDEX_BUFFER)?,
+            sampler: Sampler::new(
+                gpu,
+                vk::Filter::LINEAR,
+                vk::SamplerAddressMode::CLAMP_TO_BORDER,
+            )?,
+            vertices: Buffer::from_pod(
+                gpu,
+                "mesh_warp.vertices",
+                &grid.vertices,
+                vk::BufferUsageFlags::VERTEX_BUFFER,
+            )?,
+            indices: Buffer::from_pod(
+                gpu,
+                "mesh_warp.indices",
+                &grid.indices,
+                vk::BufferUsageFlags::INDEX_BUFFER,
+            )?,
             index_count: grid.indices.len() as u32,
             push: MeshWarpPush {
                 sizes: [ow as f32, oh as f32, sw as f32, sh as f32],
@@ -245,9 +261,16 @@ impl MeshWarpTarget {
             h,
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
         )?;
-        let extent = vk::Extent2D { width: w, height: h };
+        let extent = vk::Extent2D {
+            width: w,
+            height: h,
+        };
         let framebuffer = Framebuffer::new(gpu, &pass.render_pass, &[image.view], extent)?;
-        let bpp = if pass.format == vk::Format::R8G8B8A8_UNORM { 4 } else { 16 };
+        let bpp = if pass.format == vk::Format::R8G8B8A8_UNORM {
+            4
+        } else {
+            16
+        };
         Ok(MeshWarpTarget {
             download: Buffer::new(
                 gpu,
@@ -278,7 +301,10 @@ impl MeshWarpTarget {
             memory_barrier(
                 gpu,
                 cmd,
-                (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
                 (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
             );
         }
@@ -289,9 +315,15 @@ impl MeshWarpTarget {
         let e = self.image.extent;
         let n = e.width as usize * e.height as usize;
         let (pixels, depth) = if self.format == vk::Format::R8G8B8A8_UNORM {
-            (Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?), crate::imaging::Depth::U8)
+            (
+                Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
+                crate::imaging::Depth::U8,
+            )
         } else {
-            (Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?), crate::imaging::Depth::F32)
+            (
+                Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
+                crate::imaging::Depth::F32,
+            )
         };
         Ok(Raster {
             width: e.width,
@@ -320,7 +352,13 @@ pub fn run_mesh_warp(
         )));
     }
     let texture = Texture::new(gpu, source)?;
-    let mut pass = MeshWarpPass::new(gpu, geometry, n, output, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
+    let mut pass = MeshWarpPass::new(
+        gpu,
+        geometry,
+        n,
+        output,
+        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+    )?;
     pass.bind(texture.image.view);
     let target = MeshWarpTarget::new(gpu, &pass)?;
     ctx.submit(|cmd| {

@@ -403,8 +403,10 @@ impl WarpPass {
                 "retarget needs an analytic warp of the same sizes, direction, method, chromatic scales and terms".into(),
             ));
         }
-        self._camera
-            .write(0, bytemuck::bytes_of(&CameraParams::from_camera(&geometry.camera)))?;
+        self._camera.write(
+            0,
+            bytemuck::bytes_of(&CameraParams::from_camera(&geometry.camera)),
+        )?;
         let k = &geometry.ideal;
         self.push.ideal = f4([k.fx, k.fy, k.cx, k.cy]);
         self.desc.geometry = geometry;

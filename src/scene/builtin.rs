@@ -77,7 +77,11 @@ pub fn checkerboard(board: Board, subdivisions: u32) -> Scene {
     for b in 0..ny {
         for a in 0..nx {
             let frame = a == 0 || b == 0 || a == nx - 1 || b == ny - 1;
-            let color = if frame || (a + b) % 2 == 1 { WHITE } else { BLACK };
+            let color = if frame || (a + b) % 2 == 1 {
+                WHITE
+            } else {
+                BLACK
+            };
             let origin = DVec3::new((a as f64 - 2.0) * s, (b as f64 - 2.0) * s, 0.0);
             patch(
                 &mut mesh,
@@ -142,11 +146,7 @@ pub fn grid(n: u32) -> Scene {
                 1,
                 WHITE,
                 1 + b * n + a,
-                (
-                    [a as f32 * step, b as f32 * step],
-                    [step, 0.0],
-                    [0.0, step],
-                ),
+                ([a as f32 * step, b as f32 * step], [step, 0.0], [0.0, step]),
             );
         }
     }
@@ -189,7 +189,16 @@ pub fn boxes() -> Scene {
         let mut face = |origin, u, v, f: f64| {
             let mut c = shade(f);
             c[3] = 255;
-            patch(&mut mesh, origin, u, v, 8, c, id, ([0.0; 2], [0.0; 2], [0.0; 2]))
+            patch(
+                &mut mesh,
+                origin,
+                u,
+                v,
+                8,
+                c,
+                id,
+                ([0.0; 2], [0.0; 2], [0.0; 2]),
+            )
         };
         face(o, x, y, 1.0); // front (−z)
         face(o + z, x, y, 0.7); // back
@@ -229,7 +238,11 @@ pub fn parse(spec: &str) -> Result<Scene, SceneError> {
                     .parse::<f64>()
                     .ok()
                     .filter(|v| v.is_finite() && *v > 0.0 && *v < 1e3)
-                    .ok_or_else(|| err(format!("square size {s:?} is not a positive number of metres")))?,
+                    .ok_or_else(|| {
+                        err(format!(
+                            "square size {s:?} is not a positive number of metres"
+                        ))
+                    })?,
             };
             if rest.len() > 2 {
                 return Err(err("expected checkerboard[:COLSxROWS[:SQUARE_M]]".into()));
@@ -264,7 +277,12 @@ pub fn parse_board_size(s: &str) -> Result<(u32, u32), String> {
     let (a, b) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("board size {s:?}: expected COLSxROWS, e.g. 9x6"))?;
-    let parse = |t: &str| t.trim().parse::<u32>().ok().filter(|n| (2..=200).contains(n));
+    let parse = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|n| (2..=200).contains(n))
+    };
     match (parse(a), parse(b)) {
         (Some(c), Some(r)) => Ok((c, r)),
         _ => Err(format!(

@@ -17,11 +17,17 @@ fn sequence(i: u32, alpha: f64) -> f64 {
     (i as f64 * alpha).fract()
 }
 
-/// Points on the outline of the framed board (white frame included), in board coordinates.
+/// Points on the outline that must stay in the image: the squares plus `QUIET` squares of the
+/// white frame around them (the detector needs some quiet zone, not all of the frame), in
+/// board coordinates.
 fn outline(board: &Board) -> Vec<DVec3> {
+    const QUIET: f64 = 0.4;
     let s = board.square;
-    let (x0, y0) = (-2.0 * s, -2.0 * s);
-    let (x1, y1) = ((board.columns as f64 + 1.0) * s, (board.rows as f64 + 1.0) * s);
+    let (x0, y0) = (-(1.0 + QUIET) * s, -(1.0 + QUIET) * s);
+    let (x1, y1) = (
+        (board.columns as f64 + QUIET) * s,
+        (board.rows as f64 + QUIET) * s,
+    );
     let mut points = Vec::new();
     let n = 32;
     for k in 0..=n {
@@ -169,7 +175,9 @@ mod tests {
                 .flat_map(|i| (0..6).map(move |j| (i, j)))
                 .map(|(i, j)| camera.project(pose.apply(board.corner(i, j))).unwrap())
                 .collect();
-            assert!(px.iter().all(|p| p.x > 0.0 && p.y > 0.0 && p.x < 799.0 && p.y < 599.0));
+            assert!(px
+                .iter()
+                .all(|p| p.x > 0.0 && p.y > 0.0 && p.x < 799.0 && p.y < 599.0));
             let lo = px.iter().fold(DVec2::splat(f64::MAX), |a, &p| a.min(p));
             let hi = px.iter().fold(DVec2::splat(f64::MIN), |a, &p| a.max(p));
             spans.push((hi - lo).x / 800.0);

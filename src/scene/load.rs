@@ -55,7 +55,6 @@ fn load_obj(path: &Path) -> Result<Mesh, String> {
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let (models, materials) =
         tobj::load_obj(path, &options).map_err(|e| format!("cannot read the OBJ: {e}"))?;
@@ -87,7 +86,11 @@ fn load_obj(path: &Path) -> Result<Mesh, String> {
         }
         part.indices = m.indices.clone();
         // Check per model, so that a bad index names its model.
-        if let Some(&bad) = part.indices.iter().find(|&&i| i as usize >= part.vertices.len()) {
+        if let Some(&bad) = part
+            .indices
+            .iter()
+            .find(|&&i| i as usize >= part.vertices.len())
+        {
             return Err(format!(
                 "model {:?}: index {bad} past its {} vertices",
                 model.name,
@@ -118,7 +121,8 @@ fn load_gltf(path: &Path) -> Result<Mesh, String> {
         if visited > 1_000_000 {
             return Err("the glTF node tree does not end (a cycle?)".into());
         }
-        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|v| v as f64)));
+        let local =
+            DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|v| v as f64)));
         let world = parent * local;
         if let Some(m) = node.mesh() {
             for primitive in m.primitives() {
@@ -146,7 +150,8 @@ fn load_gltf(path: &Path) -> Result<Mesh, String> {
                 );
                 let mut part = Mesh::default();
                 for (i, p) in positions.iter().enumerate() {
-                    let q = world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64));
+                    let q =
+                        world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64));
                     part.vertices.push(Vertex::new(
                         q,
                         uvs.get(i).copied().unwrap_or([0.0; 2]),
@@ -203,7 +208,9 @@ mod tests {
         let e = load_file(&huge).unwrap_err().to_string();
         assert!(e.contains("huge.obj"), "{e}");
 
-        let missing = load_file(Path::new("/nonexistent/x.obj")).unwrap_err().to_string();
+        let missing = load_file(Path::new("/nonexistent/x.obj"))
+            .unwrap_err()
+            .to_string();
         assert!(missing.contains("no such file"), "{missing}");
     }
 
@@ -231,7 +238,11 @@ mod tests {
         const T: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
         let mut out = String::new();
         for chunk in data.chunks(3) {
-            let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+            let b = [
+                chunk[0],
+                *chunk.get(1).unwrap_or(&0),
+                *chunk.get(2).unwrap_or(&0),
+            ];
             let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
             for k in 0..4 {
                 if k <= chunk.len() {

@@ -50,7 +50,7 @@ impl Vertex {
             position: std::array::from_fn(|i| mid(self.position[i], other.position[i])),
             uv: std::array::from_fn(|i| mid(self.uv[i], other.uv[i])),
             color: std::array::from_fn(|i| {
-                ((self.color[i] as u16 + other.color[i] as u16 + 1) / 2) as u8
+                (self.color[i] as u16 + other.color[i] as u16).div_ceil(2) as u8
             }),
             object_id: self.object_id,
             _pad: 0,

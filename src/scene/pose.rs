@@ -78,7 +78,12 @@ impl Pose {
             r.x_axis.extend(0.0),
             r.y_axis.extend(0.0),
             r.z_axis.extend(0.0),
-            DVec4::new(self.translation.x, self.translation.y, self.translation.z, 1.0),
+            DVec4::new(
+                self.translation.x,
+                self.translation.y,
+                self.translation.z,
+                1.0,
+            ),
         )
     }
 

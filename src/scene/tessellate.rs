@@ -51,9 +51,7 @@ pub fn tessellate(
             })
             .collect();
         let long = |a: u32, b: u32| match (pixels[a as usize], pixels[b as usize]) {
-            (Some(p), Some(q)) => {
-                near_image(p, q) && p.distance(q) > max_edge_px
-            }
+            (Some(p), Some(q)) => near_image(p, q) && p.distance(q) > max_edge_px,
             _ => false,
         };
         let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
@@ -87,9 +85,7 @@ pub fn tessellate(
                 2 => {
                     let m01 = mid(v[0], v[1], &mut vertices);
                     let m12 = mid(v[1], v[2], &mut vertices);
-                    indices.extend_from_slice(&[
-                        m01, v[1], m12, v[0], m01, m12, v[0], m12, v[2],
-                    ]);
+                    indices.extend_from_slice(&[m01, v[1], m12, v[0], m01, m12, v[0], m12, v[2]]);
                 }
                 _ => {
                     let m01 = mid(v[0], v[1], &mut vertices);
@@ -159,7 +155,10 @@ mod tests {
                     *directed.entry((a, b)).or_insert(0) += 1;
                 }
             }
-            assert!(directed.values().all(|&n| n == 1), "a repeated directed edge");
+            assert!(
+                directed.values().all(|&n| n == 1),
+                "a repeated directed edge"
+            );
             directed
                 .keys()
                 .filter(|(a, b)| !directed.contains_key(&(*b, *a)))

@@ -1,0 +1,169 @@
+//! `vklens render` and `vklens calibration-set` as scripts use them: outputs, and one-line
+//! exit-2 errors that leave nothing behind.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use vklens::imaging::{io as image_io, Pixels};
+use vklens::io::reference::shared_dir;
+
+fn vklens(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args(args)
+        .env("VKLENS_VALIDATION", "1")
+        .output()
+        .unwrap()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vklens-clirender-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn fig2() -> String {
+    shared_dir()
+        .join("reference/calibration-files/seed_fig2.opencv.yml")
+        .display()
+        .to_string()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn render_writes_every_output_at_the_camera_size() {
+    let (color, ids, flow, depth) = (tmp("c.png"), tmp("ids.png"), tmp("f.exr"), tmp("d.exr"));
+    let cam = fig2();
+    let o = vklens(&[
+        "render",
+        "--camera",
+        &cam,
+        "--scene",
+        "boxes",
+        "--output",
+        color.to_str().unwrap(),
+        "--ids",
+        ids.to_str().unwrap(),
+        "--flow",
+        flow.to_str().unwrap(),
+        "--depth",
+        depth.to_str().unwrap(),
+        "--tessellate",
+        "16",
+        "--supersample",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for p in [&color, &ids, &flow, &depth] {
+        let r = image_io::load(p).unwrap();
+        assert_eq!((r.width, r.height), (800, 600), "{}", p.display());
+    }
+    // IDs: the floor (1) and the three boxes (2, 3, 4), nothing else.
+    let r = image_io::load(&ids).unwrap();
+    let Pixels::Rgba32F(px) = r.pixels else {
+        panic!("16-bit IDs load as float")
+    };
+    let mut seen: Vec<u32> = px.iter().map(|p| (p[0] * 65535.0).round() as u32).collect();
+    seen.sort();
+    seen.dedup();
+    assert_eq!(seen, vec![0, 1, 2, 3, 4]);
+    // Flow: known (A = 1) on the scene, and the default motion is not zero.
+    let f = image_io::load(&flow).unwrap();
+    let moving = (0..f.len())
+        .filter(|&i| f.rgba_f32(i)[3] == 1.0 && f.rgba_f32(i)[0].abs() > 0.1)
+        .count();
+    assert!(moving > 10_000, "{moving}");
+
+    // The warp path renders colour and IDs too, and refuses flow.
+    let o = vklens(&[
+        "render",
+        "--camera",
+        &cam,
+        "--scene",
+        "grid:4",
+        "--output",
+        color.to_str().unwrap(),
+        "--ids",
+        ids.to_str().unwrap(),
+        "--path",
+        "warp",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = vklens(&[
+        "render",
+        "--camera",
+        &cam,
+        "--scene",
+        "grid",
+        "--output",
+        color.to_str().unwrap(),
+        "--flow",
+        flow.to_str().unwrap(),
+        "--path",
+        "warp",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--flow needs --path vertex"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn bad_meshes_and_arguments_are_one_line_exit_2_with_no_output() {
+    let cam = fig2();
+    let out = tmp("never.png");
+    let cases = [
+        (
+            "nan.obj",
+            "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+            "vertex 1",
+        ),
+        ("empty.obj", "# no faces\n", "no triangles"),
+        (
+            "huge.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4000000000\n",
+            "huge.obj",
+        ),
+    ];
+    for (name, text, expect) in cases {
+        let p = tmp(name);
+        std::fs::write(&p, text).unwrap();
+        let o = vklens(&[
+            "render",
+            "--camera",
+            &cam,
+            "--scene",
+            p.to_str().unwrap(),
+            "--output",
+            out.to_str().unwrap(),
+        ]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{name}: {e}");
+        assert!(e.contains(expect) && e.contains(name), "{name}: {e}");
+        assert_eq!(e.trim().lines().count(), 1, "{name}: {e}");
+        assert!(!out.exists());
+    }
+    for (args, expect) in [
+        (vec!["--scene", "checkerboard:9"], "COLSxROWS"),
+        (vec!["--scene", "grid", "--pose", "1,2,3"], "six"),
+        (vec!["--scene", "grid", "--tessellate", "0"], "--tessellate"),
+        (vec!["--scene", "grid", "--depth", "d.png"], ".exr"),
+    ] {
+        let mut a = vec![
+            "render",
+            "--camera",
+            cam.as_str(),
+            "--output",
+            out.to_str().unwrap(),
+        ];
+        a.extend(args.iter().copied());
+        let o = vklens(&a);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(expect), "{args:?}: {}", stderr(&o));
+        assert!(!out.exists());
+    }
+}

@@ -419,7 +419,7 @@ impl<'a> SceneRenderer<'a> {
                     st.output.raw,
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     st.download.raw,
-                    &[color_copy(ow, oh)],
+                    &[st.output.whole_copy()],
                 );
                 memory_barrier(
                     gpu,
@@ -460,26 +460,6 @@ impl<'a> SceneRenderer<'a> {
         progress: &mut dyn FnMut(&str),
     ) -> Result<Rendered> {
         render_with(self, scene, request, progress)
-    }
-}
-
-fn color_copy(w: u32, h: u32) -> vk::BufferImageCopy {
-    vk::BufferImageCopy {
-        buffer_offset: 0,
-        buffer_row_length: 0,
-        buffer_image_height: 0,
-        image_subresource: vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        },
-        image_offset: vk::Offset3D::default(),
-        image_extent: vk::Extent3D {
-            width: w,
-            height: h,
-            depth: 1,
-        },
     }
 }
 

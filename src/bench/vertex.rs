@@ -133,6 +133,31 @@ fn time_render(ctx: &Context, d: &Drawn) -> Result<f64> {
     Ok(gpu.unwrap_or(wall))
 }
 
+/// GPU ms per frame of drawing `mesh` with `projection` (colour only).
+fn time_scene(
+    ctx: &Context,
+    camera: &OpenCvCamera,
+    projection: Projection,
+    scene: &Scene,
+    mesh: &Mesh,
+    pose: &Pose,
+) -> Result<f64> {
+    let drawn = prepare(
+        ctx,
+        camera,
+        projection,
+        scene,
+        mesh,
+        pose,
+        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+    )?;
+    time_render(ctx, &drawn)
+}
+
+const LENS: Projection = Projection::Lens {
+    delta: DEFAULT_DELTA,
+};
+
 /// Pinhole render of the overscanned frustum + compute warp, GPU-resident, per frame.
 fn time_pinhole_and_warp(
     ctx: &Context,
@@ -239,31 +264,15 @@ pub fn run(
             progress(&format!("paths: {w}×{h}, grid {n}×{n}"));
             let scene = builtin::grid(n);
             let pose = scene.default_pose(half_tangents(&camera));
-            let pinhole = prepare(
+            let pinhole_ms = time_scene(
                 ctx,
                 &camera,
                 Projection::Pinhole,
                 &scene,
                 &scene.mesh,
                 &pose,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             )?;
-            let pinhole_ms = time_render(ctx, &pinhole)?;
-            drop(pinhole);
-            let lens = Projection::Lens {
-                delta: DEFAULT_DELTA,
-            };
-            let vertex = prepare(
-                ctx,
-                &camera,
-                lens,
-                &scene,
-                &scene.mesh,
-                &pose,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            )?;
-            let vertex_ms = time_render(ctx, &vertex)?;
-            drop(vertex);
+            let vertex_ms = time_scene(ctx, &camera, LENS, &scene, &scene.mesh, &pose)?;
             let warp_ms =
                 time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Analytic)?;
             let map_ms = time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Map)?;
@@ -283,17 +292,14 @@ pub fn run(
     let camera = bench_camera(w, h);
     let scene = builtin::grid(8);
     let pose = scene.default_pose(half_tangents(&camera));
-    let pinhole = prepare(
+    let pinhole_ms = time_scene(
         ctx,
         &camera,
         Projection::Pinhole,
         &scene,
         &scene.mesh,
         &pose,
-        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
     )?;
-    let pinhole_ms = time_render(ctx, &pinhole)?;
-    drop(pinhole);
     for edge in EDGES {
         progress(&format!("tessellation: {w}×{h}, L = {edge:?}"));
         let mesh = match edge {
@@ -302,19 +308,7 @@ pub fn run(
             }
             None => scene.mesh.clone(),
         };
-        let lens = Projection::Lens {
-            delta: DEFAULT_DELTA,
-        };
-        let drawn = prepare(
-            ctx,
-            &camera,
-            lens,
-            &scene,
-            &mesh,
-            &pose,
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-        )?;
-        let ms = time_render(ctx, &drawn)?;
+        let ms = time_scene(ctx, &camera, LENS, &scene, &mesh, &pose)?;
         rows.push(json!({
             "bench": "vertex", "kind": "tessellation", "width": w, "height": h,
             "max_edge_px": edge, "triangles": mesh.triangle_count(),

@@ -4,7 +4,9 @@
 
 use ash::vk;
 
-use super::pipeline::{shader_module, specialization_data, DescriptorLayout};
+use super::pipeline::{
+    pipeline_layout, set_layout, shader_module, specialization_data, DescriptorLayout,
+};
 use super::{Gpu, GpuError, Result, SpecConstants};
 
 /// A one-subpass render pass: colour attachments by location (`None`: that location is
@@ -274,35 +276,8 @@ impl GraphicsPipeline {
             let module = shader_module(gpu, s.spirv)?;
             pipeline.modules.push(module);
         }
-        let layout_bindings: Vec<_> = desc
-            .bindings
-            .iter()
-            .enumerate()
-            .map(|(i, &ty)| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
-                    .descriptor_type(ty)
-                    .descriptor_count(1)
-                    .stage_flags(all_stages)
-            })
-            .collect();
-        pipeline.set_layout = unsafe {
-            device.create_descriptor_set_layout(
-                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
-                None,
-            )?
-        };
-        let set_layouts = [pipeline.set_layout];
-        let ranges = [vk::PushConstantRange {
-            stage_flags: all_stages,
-            offset: 0,
-            size: desc.push_size,
-        }];
-        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        if desc.push_size > 0 {
-            layout_info = layout_info.push_constant_ranges(&ranges);
-        }
-        pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None)? };
+        pipeline.set_layout = set_layout(gpu, desc.bindings, all_stages)?;
+        pipeline.layout = pipeline_layout(gpu, pipeline.set_layout, desc.push_size, all_stages)?;
 
         let spec_data: Vec<_> = desc
             .stages

@@ -78,34 +78,9 @@ impl ComputePipeline {
             constants,
             bindings: bindings.to_vec(),
         };
-        let layout_bindings: Vec<_> = bindings
-            .iter()
-            .enumerate()
-            .map(|(i, &ty)| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
-                    .descriptor_type(ty)
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            })
-            .collect();
-        pipeline.set_layout = unsafe {
-            device.create_descriptor_set_layout(
-                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
-                None,
-            )?
-        };
-        let ranges = [vk::PushConstantRange {
-            stage_flags: vk::ShaderStageFlags::COMPUTE,
-            offset: 0,
-            size: push_size,
-        }];
-        let set_layouts = [pipeline.set_layout];
-        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        if push_size > 0 {
-            layout_info = layout_info.push_constant_ranges(&ranges);
-        }
-        pipeline.layout = unsafe { device.create_pipeline_layout(&layout_info, None)? };
+        let stages = vk::ShaderStageFlags::COMPUTE;
+        pipeline.set_layout = set_layout(gpu, bindings, stages)?;
+        pipeline.layout = pipeline_layout(gpu, pipeline.set_layout, push_size, stages)?;
 
         let (map, data) = specialization_data(&pipeline.constants);
         let spec = vk::SpecializationInfo::default()
@@ -189,6 +164,51 @@ impl DescriptorLayout for ComputePipeline {
     fn binding_types(&self) -> &[vk::DescriptorType] {
         &self.bindings
     }
+}
+
+/// Set 0's layout: binding i has type `bindings[i]`, one descriptor, visible to `stages`.
+pub(crate) fn set_layout(
+    gpu: &Gpu,
+    bindings: &[vk::DescriptorType],
+    stages: vk::ShaderStageFlags,
+) -> Result<vk::DescriptorSetLayout> {
+    let layout_bindings: Vec<_> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, &ty)| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(ty)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    Ok(unsafe {
+        gpu.device().create_descriptor_set_layout(
+            &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
+            None,
+        )?
+    })
+}
+
+/// A pipeline layout of one set and `push_size` bytes of push constants (0: none) for `stages`.
+pub(crate) fn pipeline_layout(
+    gpu: &Gpu,
+    set_layout: vk::DescriptorSetLayout,
+    push_size: u32,
+    stages: vk::ShaderStageFlags,
+) -> Result<vk::PipelineLayout> {
+    let ranges = [vk::PushConstantRange {
+        stage_flags: stages,
+        offset: 0,
+        size: push_size,
+    }];
+    let set_layouts = [set_layout];
+    let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+    if push_size > 0 {
+        info = info.push_constant_ranges(&ranges);
+    }
+    Ok(unsafe { gpu.device().create_pipeline_layout(&info, None)? })
 }
 
 /// A shader module from SPIR-V bytes.

@@ -225,6 +225,27 @@ impl Image {
         }
     }
 
+    /// A buffer ↔ image copy of the whole image (tightly packed rows).
+    pub fn whole_copy(&self) -> vk::BufferImageCopy {
+        vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: Self::aspect_of(self.format),
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: vk::Extent3D {
+                width: self.extent.width,
+                height: self.extent.height,
+                depth: 1,
+            },
+        }
+    }
+
     /// The whole colour subresource.
     pub fn color_range() -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange {

@@ -218,7 +218,6 @@ impl Texture {
     /// # Safety
     /// `cmd` must be recording outside a render pass.
     pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
-        let e = self.image.extent;
         unsafe {
             image_barrier(
                 &self.gpu,
@@ -242,7 +241,7 @@ impl Texture {
                 self.staging.raw,
                 self.image.raw,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[copy_region(e, vk::ImageAspectFlags::COLOR)],
+                &[self.image.whole_copy()],
             );
             image_barrier(
                 &self.gpu,
@@ -308,26 +307,6 @@ impl MeshBuffers {
     /// `cmd` must be recording outside a render pass.
     pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
         unsafe { self.texture.record_upload(cmd) }
-    }
-}
-
-pub(crate) fn copy_region(e: vk::Extent2D, aspect: vk::ImageAspectFlags) -> vk::BufferImageCopy {
-    vk::BufferImageCopy {
-        buffer_offset: 0,
-        buffer_row_length: 0,
-        buffer_image_height: 0,
-        image_subresource: vk::ImageSubresourceLayers {
-            aspect_mask: aspect,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        },
-        image_offset: vk::Offset3D::default(),
-        image_extent: vk::Extent3D {
-            width: e.width,
-            height: e.height,
-            depth: 1,
-        },
     }
 }
 
@@ -720,7 +699,7 @@ impl GeometryTargets {
                     t.image.raw,
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     t.download.raw,
-                    &[copy_region(self.extent, vk::ImageAspectFlags::COLOR)],
+                    &[t.image.whole_copy()],
                 );
             }
             memory_barrier(

@@ -13,7 +13,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
-use super::geometry::{copy_region, Texture};
+use super::geometry::Texture;
 use crate::gpu::{
     memory_barrier, shaders, Buffer, Context, DescriptorPool, Framebuffer, Gpu, GpuError,
     GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
@@ -296,7 +296,7 @@ impl MeshWarpTarget {
                 self.image.raw,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 self.download.raw,
-                &[copy_region(self.image.extent, vk::ImageAspectFlags::COLOR)],
+                &[self.image.whole_copy()],
             );
             memory_barrier(
                 gpu,

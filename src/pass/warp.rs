@@ -599,26 +599,6 @@ impl WarpImages {
         })
     }
 
-    fn copy_region(w: u32, h: u32) -> [vk::BufferImageCopy; 1] {
-        [vk::BufferImageCopy {
-            buffer_offset: 0,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D {
-                width: w,
-                height: h,
-                depth: 1,
-            },
-        }]
-    }
-
     /// Records the upload of the source and the layout transitions the warp expects.
     ///
     /// # Safety
@@ -641,7 +621,6 @@ impl WarpImages {
             vk::PipelineStageFlags::COMPUTE_SHADER,
             vk::AccessFlags::SHADER_WRITE,
         );
-        let e = self.source.extent;
         unsafe {
             // Source: fill it by copy, then hand it to the shader for reading.
             image_barrier(
@@ -660,7 +639,7 @@ impl WarpImages {
                 self.upload.raw,
                 self.source.raw,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &Self::copy_region(e.width, e.height),
+                &[self.source.whole_copy()],
             );
             image_barrier(
                 &self.gpu,
@@ -701,7 +680,6 @@ impl WarpImages {
             vk::PipelineStageFlags::TRANSFER,
             vk::AccessFlags::TRANSFER_READ,
         );
-        let (w, h) = self.output_size;
         unsafe {
             for (img, buf) in [
                 (&self.output, &self.download),
@@ -724,7 +702,7 @@ impl WarpImages {
                     img.raw,
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     buf.raw,
-                    &Self::copy_region(w, h),
+                    &[img.whole_copy()],
                 );
             }
             // The host reads the buffers after the fence.
@@ -845,7 +823,7 @@ pub fn read_maps(
                     map.raw,
                     vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                     buf.raw,
-                    &WarpImages::copy_region(w, h),
+                    &[map.whole_copy()],
                 );
             }
             memory_barrier(

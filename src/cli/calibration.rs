@@ -14,6 +14,9 @@ use crate::scene::builtin::{self, parse_board_size, Board};
 use crate::scene::calibration::board_poses;
 
 #[derive(Args, Debug)]
+#[command(after_help = "Example (the seed's proof, for one camera and path):
+  vklens calibration-set --camera cam.yml --out set/ --path vertex
+  python3 tests/calibrate.py set/      # OpenCV calibrates; prints each parameter's error and σ")]
 pub struct CalibrationSetArgs {
     /// The lens to be recovered: an OpenCV/ROS/vklens camera file. Views have its size.
     #[arg(long, value_name = "CAM")]

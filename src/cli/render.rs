@@ -23,6 +23,10 @@ pub enum PathArg {
 }
 
 #[derive(Args, Debug)]
+#[command(after_help = "Examples:
+  vklens render --camera cam.yml --scene checkerboard:9x6 --output board.png --supersample 4 --jitter 4
+  vklens render --camera cam.yml --scene boxes --output c.png --ids ids.png --depth d.exr --flow f.exr --tessellate 8
+  vklens render --camera cam.yml --scene model.glb --output c.png --path warp --pose 0.1,0,0,0,0,3")]
 pub struct RenderArgs {
     /// The lens: an OpenCV/ROS/vklens camera file. The output has its width × height.
     #[arg(long, value_name = "CAM")]
@@ -68,7 +72,9 @@ pub struct RenderArgs {
     /// Render colour at S× per axis and box-filter down (anti-aliasing; 1 = off, max 8).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
     supersample: u32,
-    /// Warp path: source pixels per output pixel of the overscanned pinhole render.
+    /// Warp path: source pixels per output pixel of the overscanned pinhole render. Above 1
+    /// the bilinear warp minifies and aliases; for sharper output raise --supersample, which
+    /// supersamples the warp as well.
     #[arg(long, default_value_t = 1.0)]
     density: f64,
     /// Anti-aliasing: this many jittered passes averaged (sub-sample offsets), so edge

@@ -18,6 +18,7 @@ pub mod cli;
 pub mod gpu;
 pub mod imaging;
 pub mod io;
+pub mod lens;
 pub mod model;
 pub mod pass;
 pub mod render;

@@ -7,6 +7,7 @@
 mod bench;
 mod calibration;
 mod demo;
+mod lens;
 mod points;
 mod render;
 mod warp;
@@ -110,6 +111,9 @@ enum Command {
     /// OpenCV to calibrate from: DIR/view_NN.png and DIR/poses.json. tests/calibrate.py
     /// runs the calibration and reports how well the parameters come back.
     CalibrationSet(calibration::CalibrationSetArgs),
+    /// Real lens systems (seed 004): lens files of spherical surfaces and glasses.
+    #[command(subcommand)]
+    Lens(lens::LensCommand),
 }
 
 #[derive(Subcommand, Debug)]
@@ -236,5 +240,6 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Overscan(args) => warp::overscan_command(args),
         Command::Render(args) => render::run(args),
         Command::CalibrationSet(args) => calibration::run(args),
+        Command::Lens(command) => lens::run(command),
     }
 }

@@ -1,0 +1,87 @@
+//! Real lens systems (seed 004): the shipped prescriptions against their published first-order
+//! figures, and `vklens lens info`.
+
+use std::process::Command;
+
+use vklens::lens::{analyse, trace, Prescription, LAMBDA_D};
+
+fn shipped(name: &str) -> Prescription {
+    Prescription::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("lenses")
+            .join(name),
+    )
+    .unwrap()
+}
+
+#[test]
+fn double_gauss_matches_its_published_figures() {
+    // Smith, Modern Lens Design p. 312, scaled to 50 mm: f = 50 mm, f/2, 22° half field.
+    let p = shipped("dgauss.50mm.dat");
+    let par = analyse(&p, LAMBDA_D);
+    let efl = par.efl.unwrap();
+    assert!((efl - 50.0).abs() < 0.5, "EFL {efl}");
+    let n = par.f_number.unwrap();
+    assert!((n - 2.0).abs() < 0.06, "f/{n}");
+    assert!(
+        trace::chief_ray(&p, 22f64.to_radians(), LAMBDA_D).is_some(),
+        "22° field vignetted"
+    );
+    // First-order consistency: H' = F' − f, and the pupils are real images of the stop.
+    let rear_focus = par.rear_vertex_z + par.bfl.unwrap();
+    assert!((par.rear_principal_z.unwrap() - (rear_focus - efl)).abs() < 1e-9);
+    assert!(par.entrance_pupil_diameter > p.surfaces[p.stop_index()].aperture);
+}
+
+#[test]
+fn wide_angle_matches_its_published_figures() {
+    // Smith, Modern Lens Design p. 360 (Nakamura), scaled to 22 mm: 38° field.
+    let p = shipped("wide.22mm.dat");
+    let par = analyse(&p, LAMBDA_D);
+    let efl = par.efl.unwrap();
+    assert!((efl - 22.0).abs() < 0.22, "EFL {efl}");
+    assert!(
+        trace::chief_ray(&p, 19f64.to_radians(), LAMBDA_D).is_some(),
+        "19° half field vignetted"
+    );
+}
+
+#[test]
+fn lens_info_json_has_the_documented_keys_and_bad_files_name_the_line() {
+    let bin = env!("CARGO_BIN_EXE_vklens");
+    let lens = format!("{}/lenses/dgauss.50mm.dat", env!("CARGO_MANIFEST_DIR"));
+    let o = Command::new(bin)
+        .args(["lens", "info", "--lens", &lens, "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for key in [
+        "efl_mm",
+        "bfl_mm",
+        "f_number",
+        "exit_pupil_z_mm",
+        "exit_pupil_diameter_mm",
+    ] {
+        assert!(v[key].as_f64().is_some(), "{key} missing: {v}");
+    }
+    let curve = v["distortion"].as_array().unwrap();
+    assert!(curve.len() > 5);
+    // A double Gauss has mild barrel distortion at 20°: a few percent at most.
+    assert!(curve
+        .iter()
+        .all(|d| d["distortion_percent"].as_f64().unwrap().abs() < 5.0));
+
+    let bad = std::env::temp_dir().join(format!("vklens-bad-lens-{}.dat", std::process::id()));
+    std::fs::write(&bad, "# a lens\n50 5 1.5 20\n-50 x 1 20\n").unwrap();
+    let o = Command::new(bin)
+        .args(["lens", "info", "--lens", bad.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        e.contains(&format!("{}:3:", bad.display())) && e.contains("thickness"),
+        "{e}"
+    );
+}

@@ -85,3 +85,61 @@ fn lens_info_json_has_the_documented_keys_and_bad_files_name_the_line() {
         "{e}"
     );
 }
+
+#[test]
+fn the_fitted_opencv_camera_reproduces_the_traced_lens() {
+    // lens fit-opencv → a camera file every command accepts, whose forward model puts each
+    // chief ray where the exact trace does.
+    let out = std::env::temp_dir().join(format!("vklens-fit-{}.json", std::process::id()));
+    let lens = format!("{}/lenses/dgauss.50mm.dat", env!("CARGO_MANIFEST_DIR"));
+    let o = Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args([
+            "lens",
+            "fit-opencv",
+            "--lens",
+            &lens,
+            "--sensor",
+            "36x24",
+            "--pixels",
+            "1800x1200",
+        ])
+        .args(["--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let camera = vklens::io::load_camera(&out).unwrap();
+    let p = shipped("dgauss.50mm.dat");
+    let par = analyse(&p, LAMBDA_D);
+    let film = par.rear_vertex_z + par.bfl.unwrap();
+    let pitch = 36.0 / 1800.0;
+    for deg in [5.0f64, 10.0, 15.0, 20.0] {
+        let theta = deg.to_radians();
+        let exit =
+            trace::trace(&p, trace::chief_ray(&p, theta, LAMBDA_D).unwrap(), LAMBDA_D).unwrap();
+        let traced_px = trace::height_at(&exit, film).abs() / pitch;
+        let model = camera
+            .project(glam::DVec3::new(theta.tan(), 0.0, 1.0))
+            .unwrap();
+        let model_px = model.x - camera.intrinsics.cx;
+        assert!(
+            (model_px - traced_px).abs() < 0.01,
+            "{deg}°: model {model_px} px, trace {traced_px} px"
+        );
+    }
+    // Non-square pixels are refused with a clear line.
+    let o = Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args([
+            "lens",
+            "fit-opencv",
+            "--lens",
+            &lens,
+            "--sensor",
+            "36x24",
+            "--pixels",
+            "1800x1000",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("square"));
+}

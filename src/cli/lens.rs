@@ -6,13 +6,53 @@ use clap::{Args, Subcommand};
 use serde_json::json;
 
 use super::CliError;
-use crate::lens::{analyse, distortion_curve, Prescription, LAMBDA_D};
+use crate::lens::{analyse, distortion_curve, fit_opencv, Prescription, LAMBDA_D};
 
 #[derive(Subcommand, Debug)]
 pub enum LensCommand {
     /// First-order properties of a lens file (paraxial, d line) and its distortion curve
     /// (exact chief rays). Axial positions are mm from the front vertex, towards the image.
     Info(InfoArgs),
+    /// Fit the OpenCV standard model to the traced lens (focused at infinity, chief rays on
+    /// the paraxial focal plane) for a sensor and pixel count, and write a camera file every
+    /// other command accepts. The fit residual goes to stderr.
+    FitOpencv(FitArgs),
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Example:
+  vklens lens fit-opencv --lens lenses/dgauss.50mm.dat --sensor 36x24 --pixels 1800x1200 --out dgauss.json
+  vklens render --camera dgauss.json --scene boxes --output boxes.png")]
+pub struct FitArgs {
+    /// The lens file.
+    #[arg(long, value_name = "FILE")]
+    lens: PathBuf,
+    /// Sensor size in mm, WxH (e.g. 36x24).
+    #[arg(long, value_name = "WxH_mm", value_parser = parse_pair_f64)]
+    sensor: (f64, f64),
+    /// Image size in pixels, WxH (square pixels: the same pitch both ways).
+    #[arg(long, value_name = "WxH", value_parser = parse_pair_u32)]
+    pixels: (u32, u32),
+    /// Camera file to write (vklens JSON); stdout when absent.
+    #[arg(long, value_name = "CAM.json")]
+    out: Option<PathBuf>,
+}
+
+fn parse_pair<T: std::str::FromStr>(s: &str) -> Option<(T, T)> {
+    let (a, b) = s.split_once(['x', 'X'])?;
+    Some((a.trim().parse().ok()?, b.trim().parse().ok()?))
+}
+
+fn parse_pair_f64(s: &str) -> Result<(f64, f64), String> {
+    parse_pair::<f64>(s)
+        .filter(|(a, b)| a.is_finite() && b.is_finite() && *a > 0.0 && *b > 0.0)
+        .ok_or_else(|| format!("{s:?}: expected WxH in mm, e.g. 36x24"))
+}
+
+fn parse_pair_u32(s: &str) -> Result<(u32, u32), String> {
+    parse_pair::<u32>(s)
+        .filter(|(a, b)| (1..=65536).contains(a) && (1..=65536).contains(b))
+        .ok_or_else(|| format!("{s:?}: expected WxH in pixels, e.g. 1920x1280"))
 }
 
 #[derive(Args, Debug)]
@@ -36,6 +76,7 @@ pub struct InfoArgs {
 pub fn run(command: LensCommand) -> Result<(), CliError> {
     match command {
         LensCommand::Info(args) => info(args),
+        LensCommand::FitOpencv(args) => fit(args),
     }
 }
 
@@ -129,6 +170,40 @@ fn info(args: InfoArgs) -> Result<(), CliError> {
             "    (beyond {:.1}° the chief ray is vignetted)",
             curve.last().map(|d| d.field_deg).unwrap_or(0.0)
         );
+    }
+    Ok(())
+}
+
+fn fit(args: FitArgs) -> Result<(), CliError> {
+    let lens = Prescription::load(&args.lens).map_err(|e| CliError::input(e.to_string()))?;
+    let f = fit_opencv(&lens, args.sensor, args.pixels, LAMBDA_D)
+        .map_err(|e| CliError::input(format!("{}: {e}", args.lens.display())))?;
+    let camera = json!({
+        "width": f.width, "height": f.height,
+        "fx": f.fx, "fy": f.fy, "cx": f.cx, "cy": f.cy,
+        "dist_coeffs": f.dist_coeffs,
+        "fitted_to": {
+            "lens": lens.name,
+            "sensor_mm": [args.sensor.0, args.sensor.1],
+            "focus": "infinity",
+            "max_field_deg": f.max_field_deg,
+            "samples": f.samples,
+            "max_residual_px": f.max_residual_px,
+            "rms_residual_px": f.rms_residual_px,
+        },
+    });
+    eprintln!(
+        "{}: fx = fy = {:.3} px, k1 {:.5} k2 {:.5} k3 {:.5}; residual max {:.4} px, RMS {:.4} px over {} chief rays up to {:.1}°",
+        lens.name, f.fx, f.dist_coeffs[0], f.dist_coeffs[1], f.dist_coeffs[4],
+        f.max_residual_px, f.rms_residual_px, f.samples, f.max_field_deg
+    );
+    let text = format!("{camera:#}\n");
+    match &args.out {
+        Some(path) => crate::imaging::io::write_atomically(path, |tmp| {
+            std::fs::write(tmp, &text).map_err(|e| e.to_string())
+        })
+        .map_err(CliError::input)?,
+        None => print!("{text}"),
     }
     Ok(())
 }

@@ -3,13 +3,16 @@
 //!
 //! Built so far: the lens-file format ([`prescription`]), paraxial analysis ([`paraxial`]:
 //! focal lengths, principal planes, pupils, f-number, focusing), the exact tracer
-//! ([`trace`]) and the distortion curve from chief rays ([`distortion_curve`]). The
-//! image-based model (virtual centres of projection, quad-tree, GPU rendering) is next.
+//! ([`trace`]), the distortion curve from chief rays ([`distortion_curve`]) and the OpenCV
+//! model fitted to a traced lens ([`fit`]). The image-based model (virtual centres of
+//! projection, quad-tree, GPU rendering) is next.
 
+pub mod fit;
 pub mod paraxial;
 pub mod prescription;
 pub mod trace;
 
+pub use fit::{fit_opencv, OpenCvFit};
 pub use paraxial::{analyse, focus, Paraxial};
 pub use prescription::{Prescription, PrescriptionError, Surface, LAMBDA_D};
 

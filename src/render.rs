@@ -21,7 +21,7 @@ use ash::vk;
 use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{image_barrier, memory_barrier, Buffer, Context, GpuError, Image, Result};
+use crate::gpu::{image_barrier, record_download, Buffer, Context, GpuError, Image, Result};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::overscan::overscan;
@@ -414,22 +414,7 @@ impl<'a> SceneRenderer<'a> {
                     write,
                     read,
                 );
-                gpu.device().cmd_copy_image_to_buffer(
-                    cmd,
-                    st.output.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    st.download.raw,
-                    &[st.output.whole_copy()],
-                );
-                memory_barrier(
-                    gpu,
-                    cmd,
-                    (
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::AccessFlags::TRANSFER_WRITE,
-                    ),
-                    (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
-                );
+                record_download(gpu, cmd, &st.output, &st.download);
             }
             Ok(())
         })?;

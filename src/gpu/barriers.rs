@@ -81,3 +81,34 @@ pub unsafe fn image_barrier(
         )
     };
 }
+
+/// Copies `image` (in `TRANSFER_SRC_OPTIMAL`, its writes visible to transfers) whole into the
+/// host-visible `buffer`, and makes the copy visible to host reads after the fence.
+///
+/// # Safety
+/// As [`memory_barrier`]; `buffer` must hold the whole image, tightly packed.
+pub unsafe fn record_download(
+    gpu: &Gpu,
+    cmd: vk::CommandBuffer,
+    image: &super::Image,
+    buffer: &super::Buffer,
+) {
+    unsafe {
+        gpu.device().cmd_copy_image_to_buffer(
+            cmd,
+            image.raw,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            buffer.raw,
+            &[image.whole_copy()],
+        );
+        memory_barrier(
+            gpu,
+            cmd,
+            (
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+            (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
+        );
+    }
+}

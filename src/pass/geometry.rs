@@ -17,7 +17,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
 use crate::gpu::{
-    image_barrier, memory_barrier, shaders, Attribute, Buffer, Context, DescriptorPool,
+    image_barrier, record_download, shaders, Attribute, Buffer, Context, DescriptorPool,
     Framebuffer, Gpu, GpuError, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
     SpecConstants, Stage,
 };
@@ -691,26 +691,8 @@ impl GeometryTargets {
     /// # Safety
     /// `cmd` must be recording outside a render pass, after [`GeometryPass::record`].
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        let d = self.gpu.device();
-        unsafe {
-            for t in self.targets.iter().flatten() {
-                d.cmd_copy_image_to_buffer(
-                    cmd,
-                    t.image.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    t.download.raw,
-                    &[t.image.whole_copy()],
-                );
-            }
-            memory_barrier(
-                &self.gpu,
-                cmd,
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
-            );
+        for t in self.targets.iter().flatten() {
+            unsafe { record_download(&self.gpu, cmd, &t.image, &t.download) };
         }
     }
 

@@ -15,7 +15,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::geometry::Texture;
 use crate::gpu::{
-    memory_barrier, shaders, Buffer, Context, DescriptorPool, Framebuffer, Gpu, GpuError,
+    record_download, shaders, Buffer, Context, DescriptorPool, Framebuffer, Gpu, GpuError,
     GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 use crate::imaging::{Pixels, Raster};
@@ -290,24 +290,7 @@ impl MeshWarpTarget {
     /// # Safety
     /// `cmd` must be recording outside a render pass, after the warp.
     pub unsafe fn record_download(&self, gpu: &Gpu, cmd: vk::CommandBuffer) {
-        unsafe {
-            gpu.device().cmd_copy_image_to_buffer(
-                cmd,
-                self.image.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                self.download.raw,
-                &[self.image.whole_copy()],
-            );
-            memory_barrier(
-                gpu,
-                cmd,
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
-            );
-        }
+        unsafe { record_download(gpu, cmd, &self.image, &self.download) };
     }
 
     /// The output (after the submission completed).

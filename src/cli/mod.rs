@@ -74,6 +74,9 @@ Examples:
   vklens overscan --camera cam.yml > source.json
   vklens render --camera cam.yml --scene checkerboard:9x6 --output board.png --ids ids.png
   vklens render --camera cam.yml --scene boxes --output boxes.png --flow flow.exr --tessellate 8
+  vklens calibration-set --camera cam.yml --out set/ && python3 tests/calibrate.py set/
+  vklens lens info --lens lenses/dgauss.50mm.dat
+  vklens lens fit-opencv --lens lenses/dgauss.50mm.dat --sensor 36x24 --pixels 1800x1200 --out dgauss.json
   vklens bench inverse --json";
 
 #[derive(Parser, Debug)]

@@ -21,7 +21,9 @@ use ash::vk;
 use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{image_barrier, record_download, Buffer, Context, GpuError, Image, Result};
+use crate::gpu::{
+    image_barrier, record_compute_download, Buffer, Context, GpuError, Image, Result,
+};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::overscan::overscan;
@@ -213,14 +215,151 @@ pub fn downsample(image: &Raster, s: u32) -> Raster {
 }
 
 /// The warp path on the GPU in one submission: pinhole render (colour left in `GENERAL`) →
-/// compute warp reading it in place → readback. Nothing makes a round trip through the host.
-struct WarpStage {
-    pass: GeometryPass,
-    targets: GeometryTargets,
-    warp: WarpPass,
-    output: Image,
-    mask: Image,
+/// compute warp reading it in place → optional readback. Nothing makes a round trip through
+/// the host. `render` and `bench vertex` both drive it.
+pub struct WarpStage {
+    gpu: crate::gpu::Gpu,
+    pub pass: GeometryPass,
+    pub targets: GeometryTargets,
+    pub warp: WarpPass,
+    pub output: Image,
+    pub mask: Image,
     download: Buffer,
+    format: PixelFormat,
+}
+
+impl WarpStage {
+    /// A pinhole render with the `source` camera (colour in `format`, cleared to
+    /// `background`), warped by `geometry` into its output size.
+    pub fn new(
+        gpu: &crate::gpu::Gpu,
+        source: OpenCvCamera,
+        geometry: WarpGeometry,
+        coordinates: Coordinates,
+        format: ColorFormat,
+        background: [f32; 4],
+    ) -> Result<Self> {
+        let pixel_format = match format {
+            ColorFormat::Rgba8 => PixelFormat::Rgba8,
+            ColorFormat::Rgba32F => PixelFormat::Rgba32F,
+            ColorFormat::Rgba16F => {
+                return Err(invalid("the warp reads RGBA8 or RGBA32F sources"));
+            }
+        };
+        let mut desc = GeometryDesc::new(
+            source,
+            Projection::Pinhole,
+            Outputs::color_only(Some(format)),
+        );
+        desc.background = background;
+        desc.final_layout = vk::ImageLayout::GENERAL;
+        let pass = GeometryPass::new(gpu, desc)?;
+        let targets = GeometryTargets::new(gpu, &pass)?;
+        let (ow, oh) = geometry.output_size;
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        let output = Image::new_2d(gpu, "warp_path.output", pixel_format.vk(), ow, oh, usage)?;
+        let mask = Image::new_2d(gpu, "warp_path.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
+        let download = Buffer::new(
+            gpu,
+            "warp_path.download",
+            ow as u64 * oh as u64 * pixel_format.bytes() as u64,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let mut warp = WarpPass::new(
+            gpu,
+            WarpDesc {
+                geometry,
+                coordinates,
+                sampling: Sampling::Bilinear,
+                format: pixel_format,
+                fill: background,
+                write_mask: false,
+            },
+        )?;
+        let color = targets.color().ok_or_else(|| invalid("no colour target"))?;
+        warp.bind(color.view, output.view, mask.view);
+        Ok(WarpStage {
+            gpu: gpu.clone(),
+            pass,
+            targets,
+            warp,
+            output,
+            mask,
+            download,
+            format: pixel_format,
+        })
+    }
+
+    /// Records the one-off work: output and mask to `GENERAL`, the warp's map builds.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass; not while earlier work is pending.
+    pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
+        let none = (
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+            vk::AccessFlags::empty(),
+        );
+        let write = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_WRITE,
+        );
+        unsafe {
+            for img in [&self.output, &self.mask] {
+                image_barrier(
+                    &self.gpu,
+                    cmd,
+                    img.raw,
+                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                    none,
+                    write,
+                );
+            }
+            self.warp.record_prepare(cmd);
+        }
+    }
+
+    /// Records one frame: the pinhole render of `mesh` (bound with `pass.bind_mesh`), then
+    /// the warp. The render pass leaves the colour in `GENERAL`, its writes visible to compute.
+    ///
+    /// # Safety
+    /// After [`Self::record_prepare`]; `mesh` uploaded and alive until the work completes.
+    pub unsafe fn record(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+        unsafe {
+            self.pass.record(cmd, &self.targets, mesh);
+            self.warp.record(cmd);
+        }
+    }
+
+    /// Records the readback of the warped image (after [`Self::record`]).
+    ///
+    /// # Safety
+    /// As [`Self::record`].
+    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        unsafe { record_compute_download(&self.gpu, cmd, &self.output, &self.download) };
+    }
+
+    /// The warped image (after the submission completed).
+    pub fn read(&self) -> Result<Raster> {
+        let e = self.output.extent;
+        let n = e.width as usize * e.height as usize;
+        let (pixels, depth) = match self.format {
+            PixelFormat::Rgba8 => (
+                Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
+                Depth::U8,
+            ),
+            _ => (
+                Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
+                Depth::F32,
+            ),
+        };
+        Ok(Raster {
+            width: e.width,
+            height: e.height,
+            pixels,
+            depth,
+        })
+    }
 }
 
 /// Renders scenes through a headless context, keeping geometry passes (their compiled
@@ -241,12 +380,11 @@ impl<'a> SceneRenderer<'a> {
         }
     }
 
-    /// Draws `mesh` once with `desc`.
+    /// Draws `mesh` (from [`Self::upload`]) once with `desc`.
     pub fn draw(
         &mut self,
         desc: GeometryDesc,
-        mesh: &Mesh,
-        texture: Option<&Raster>,
+        mesh: &MeshBuffers,
         pose: &Pose,
         previous: &Pose,
     ) -> Result<Rendered> {
@@ -272,15 +410,14 @@ impl<'a> SceneRenderer<'a> {
                 self.passes.len() - 1
             }
         };
-        let buffers = MeshBuffers::new(gpu, mesh, texture)?;
         let (pass, targets) = &mut self.passes[index];
-        pass.bind_mesh(&buffers);
+        pass.bind_mesh(mesh);
         pass.set_frame(pose, previous)?;
         let (pass, targets) = (&*pass, &*targets);
         self.ctx.submit(|cmd| {
             unsafe {
-                buffers.record_upload(cmd);
-                pass.record(cmd, targets, &buffers);
+                mesh.record_upload(cmd);
+                pass.record(cmd, targets, mesh);
                 targets.record_download(cmd);
             }
             Ok(())
@@ -288,25 +425,23 @@ impl<'a> SceneRenderer<'a> {
         targets.read()
     }
 
-    /// The warp path's colour: `scene` rendered with the pinhole `source` camera, warped by
-    /// `geometry` (analytic, bilinear) — all on the GPU.
+    /// Uploads a mesh once for any number of draws (jittered passes share it).
+    pub fn upload(&self, mesh: &Mesh, texture: Option<&Raster>) -> Result<MeshBuffers> {
+        MeshBuffers::new(self.ctx.gpu(), mesh, texture)
+    }
+
+    /// The warp path's colour: `mesh` rendered with the pinhole `source` camera, warped by
+    /// `geometry` (analytic, bilinear) — all on the GPU. Stages are kept and retargeted.
+    #[allow(clippy::too_many_arguments)]
     pub fn draw_warped(
         &mut self,
-        scene: &Scene,
+        mesh: &MeshBuffers,
         pose: &Pose,
         source: OpenCvCamera,
         geometry: WarpGeometry,
         format: ColorFormat,
         background: [f32; 4],
     ) -> Result<Raster> {
-        let gpu = self.ctx.gpu();
-        let pixel_format = match format {
-            ColorFormat::Rgba8 => PixelFormat::Rgba8,
-            ColorFormat::Rgba32F => PixelFormat::Rgba32F,
-            ColorFormat::Rgba16F => {
-                return Err(invalid("the warp reads RGBA8 or RGBA32F sources"));
-            }
-        };
         let reusable = |st: &WarpStage| {
             let d = st.pass.desc();
             d.outputs.color == Some(format)
@@ -322,119 +457,32 @@ impl<'a> SceneRenderer<'a> {
                 i
             }
             None => {
-                let mut desc = GeometryDesc::new(
+                let stage = WarpStage::new(
+                    self.ctx.gpu(),
                     source,
-                    Projection::Pinhole,
-                    Outputs::color_only(Some(format)),
-                );
-                desc.background = background;
-                desc.final_layout = vk::ImageLayout::GENERAL;
-                let pass = GeometryPass::new(gpu, desc)?;
-                let targets = GeometryTargets::new(gpu, &pass)?;
-                let (ow, oh) = geometry.output_size;
-                let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-                let output =
-                    Image::new_2d(gpu, "warp_path.output", pixel_format.vk(), ow, oh, usage)?;
-                let mask =
-                    Image::new_2d(gpu, "warp_path.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
-                let download = Buffer::new(
-                    gpu,
-                    "warp_path.download",
-                    ow as u64 * oh as u64 * pixel_format.bytes() as u64,
-                    vk::BufferUsageFlags::TRANSFER_DST,
-                    MemoryLocation::GpuToCpu,
+                    geometry,
+                    Coordinates::Analytic,
+                    format,
+                    background,
                 )?;
-                let mut warp = WarpPass::new(
-                    gpu,
-                    WarpDesc {
-                        geometry,
-                        coordinates: Coordinates::Analytic,
-                        sampling: Sampling::Bilinear,
-                        format: pixel_format,
-                        fill: background,
-                        write_mask: false,
-                    },
-                )?;
-                let color = targets.color().ok_or_else(|| invalid("no colour target"))?;
-                warp.bind(color.view, output.view, mask.view);
-                self.warp_stages.push(WarpStage {
-                    pass,
-                    targets,
-                    warp,
-                    output,
-                    mask,
-                    download,
-                });
+                self.warp_stages.push(stage);
                 self.warp_stages.len() - 1
             }
         };
-        let buffers = MeshBuffers::new(gpu, &scene.mesh, scene.texture.as_ref())?;
         let st = &mut self.warp_stages[index];
-        st.pass.bind_mesh(&buffers);
+        st.pass.bind_mesh(mesh);
         st.pass.set_frame(pose, pose)?;
         let st = &*st;
-        let (ow, oh) = st.warp.desc().geometry.output_size;
         self.ctx.submit(|cmd| {
-            let none = (
-                vk::PipelineStageFlags::TOP_OF_PIPE,
-                vk::AccessFlags::empty(),
-            );
-            let write = (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_WRITE,
-            );
-            let read = (
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_READ,
-            );
             unsafe {
-                buffers.record_upload(cmd);
-                // The render pass leaves the colour in GENERAL, its writes visible to compute.
-                st.pass.record(cmd, &st.targets, &buffers);
-                for img in [&st.output, &st.mask] {
-                    image_barrier(
-                        gpu,
-                        cmd,
-                        img.raw,
-                        (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                        none,
-                        write,
-                    );
-                }
-                st.warp.record_prepare(cmd);
-                st.warp.record(cmd);
-                image_barrier(
-                    gpu,
-                    cmd,
-                    st.output.raw,
-                    (
-                        vk::ImageLayout::GENERAL,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    ),
-                    write,
-                    read,
-                );
-                record_download(gpu, cmd, &st.output, &st.download);
+                mesh.record_upload(cmd);
+                st.record_prepare(cmd);
+                st.record(cmd, mesh);
+                st.record_download(cmd);
             }
             Ok(())
         })?;
-        let n = ow as usize * oh as usize;
-        let (pixels, depth) = match pixel_format {
-            PixelFormat::Rgba8 => (
-                Pixels::Rgba8(st.download.read_pod::<[u8; 4]>(n)?),
-                Depth::U8,
-            ),
-            _ => (
-                Pixels::Rgba32F(st.download.read_pod::<[f32; 4]>(n)?),
-                Depth::F32,
-            ),
-        };
-        Ok(Raster {
-            width: ow,
-            height: oh,
-            pixels,
-            depth,
-        })
+        st.read()
     }
 
     /// Renders `scene` as `request` asks; `progress` hears each step.
@@ -482,19 +530,14 @@ fn render_with(
                 }
                 None => scene.mesh.clone(),
             };
+            let buffers = renderer.upload(&mesh, scene.texture.as_ref())?;
             let projection = Projection::Lens { delta };
             let o = request.outputs;
             let data = Outputs { color: None, ..o };
             let mut run = |camera: OpenCvCamera, outputs: Outputs| {
                 let mut desc = GeometryDesc::new(camera, projection, outputs);
                 desc.background = request.background;
-                renderer.draw(
-                    desc,
-                    &mesh,
-                    scene.texture.as_ref(),
-                    &request.pose,
-                    &request.previous_pose,
-                )
+                renderer.draw(desc, &buffers, &request.pose, &request.previous_pose)
             };
             if (s == 1 && request.jitter <= 1) || o.color.is_none() {
                 progress("rendering (vertex path)");
@@ -575,6 +618,7 @@ fn render_warp_path(
         )
         .map(|(r, _)| r)
     };
+    let buffers = renderer.upload(&scene.mesh, scene.texture.as_ref())?;
     let mut out = Rendered {
         width: cam.width,
         height: cam.height,
@@ -606,7 +650,14 @@ fn render_warp_path(
             let geometry = WarpGeometry::distort(big, method)
                 .with_ideal(k, (big_ov.width, big_ov.height))
                 .map_err(invalid)?;
-            renderer.draw_warped(scene, &request.pose, source, geometry, format, background)
+            renderer.draw_warped(
+                &buffers,
+                &request.pose,
+                source,
+                geometry,
+                format,
+                background,
+            )
         })?);
     }
     if o.ids || o.depth {
@@ -621,13 +672,7 @@ fn render_warp_path(
                 depth: o.depth,
             },
         );
-        let data = renderer.draw(
-            desc,
-            &scene.mesh,
-            scene.texture.as_ref(),
-            &request.pose,
-            &request.pose,
-        )?;
+        let data = renderer.draw(desc, &buffers, &request.pose, &request.pose)?;
         let raster = |pixels: Pixels| Raster {
             width: ov.width,
             height: ov.height,

@@ -333,7 +333,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         square: 0.04,
     };
     let scene = builtin::checkerboard(board, 4);
-    let pose = scene.default_pose([1.0, 1.0, 0.75, 0.75]);
+    let pose = scene.default_pose(&camera);
     let valid: std::collections::HashSet<u32> = scene
         .mesh
         .vertices

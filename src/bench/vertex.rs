@@ -19,7 +19,7 @@ use glam::DVec2;
 use serde_json::{json, Value};
 
 use super::warp::{bench_camera, test_source, time_batch};
-use crate::gpu::{image_barrier, Context, Image, Result};
+use crate::gpu::{Context, Result};
 use crate::imaging::cpu_warp::Sampling;
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
@@ -30,6 +30,7 @@ use crate::pass::geometry::{
 };
 use crate::pass::mesh_warp::{MeshWarpOutput, MeshWarpPass, MeshWarpTarget};
 use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
+use crate::render::WarpStage;
 use crate::scene::tessellate::tessellate;
 use crate::scene::{builtin, Mesh, Pose, Scene};
 
@@ -80,11 +81,6 @@ pub fn straight_line_error(camera: &OpenCvCamera, pose: &Pose, mesh: &Mesh) -> f
         }
     }
     worst
-}
-
-fn half_tangents(camera: &OpenCvCamera) -> [f64; 4] {
-    let f = crate::model::Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
-    [-f.left, f.right, -f.top, f.bottom]
 }
 
 /// GPU-resident render of `mesh`: the pass, its targets and buffers, uploaded.
@@ -158,7 +154,8 @@ const LENS: Projection = Projection::Lens {
     delta: DEFAULT_DELTA,
 };
 
-/// Pinhole render of the overscanned frustum + compute warp, GPU-resident, per frame.
+/// Pinhole render of the overscanned frustum + compute warp, GPU-resident, per frame (the
+/// warp path's [`WarpStage`]).
 fn time_pinhole_and_warp(
     ctx: &Context,
     camera: &OpenCvCamera,
@@ -166,88 +163,38 @@ fn time_pinhole_and_warp(
     pose: &Pose,
     coordinates: Coordinates,
 ) -> Result<f64> {
-    let gpu = ctx.gpu();
-    let ov = overscan(camera, 1.0).map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
+    let invalid = |e: String| crate::gpu::GpuError::Invalid(e);
+    let ov = overscan(camera, 1.0).map_err(|e| invalid(e.to_string()))?;
     let source = OpenCvCamera::new(
         ov.width,
         ov.height,
         ov.intrinsics,
         OpenCvDistortion::default(),
     )
-    .map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
-    let drawn = prepare(
-        ctx,
-        &source,
-        Projection::Pinhole,
-        scene,
-        &scene.mesh,
-        pose,
-        vk::ImageLayout::GENERAL,
-    )?;
+    .map_err(|e| invalid(e.to_string()))?;
     let geometry = WarpGeometry::distort(camera.clone(), InverseMethod::Newton)
         .with_ideal(ov.intrinsics, (ov.width, ov.height))
-        .map_err(|e| crate::gpu::GpuError::Invalid(e.to_string()))?;
-    let usage = vk::ImageUsageFlags::STORAGE;
-    let output = Image::new_2d(
+        .map_err(|e| invalid(e.to_string()))?;
+    let gpu = ctx.gpu();
+    let mut stage = WarpStage::new(
         gpu,
-        "bench.output",
-        vk::Format::R8G8B8A8_UNORM,
-        camera.width,
-        camera.height,
-        usage,
+        source,
+        geometry,
+        coordinates,
+        ColorFormat::Rgba8,
+        [0.0; 4],
     )?;
-    let mask = Image::new_2d(
-        gpu,
-        "bench.mask",
-        vk::Format::R8_UNORM,
-        camera.width,
-        camera.height,
-        usage,
-    )?;
-    let mut warp = WarpPass::new(
-        gpu,
-        WarpDesc {
-            geometry,
-            coordinates,
-            sampling: Sampling::Bilinear,
-            format: PixelFormat::Rgba8,
-            fill: [0.0; 4],
-            write_mask: false,
-        },
-    )?;
-    let color = drawn
-        .targets
-        .color()
-        .ok_or_else(|| crate::gpu::GpuError::Invalid("no colour".into()))?;
-    warp.bind(color.view, output.view, mask.view);
+    let mesh = MeshBuffers::new(gpu, &scene.mesh, scene.texture.as_ref())?;
+    stage.pass.bind_mesh(&mesh);
+    stage.pass.set_frame(pose, pose)?;
     ctx.submit(|cmd| {
-        let none = (
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::AccessFlags::empty(),
-        );
-        let write = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_WRITE,
-        );
         unsafe {
-            for img in [&output, &mask] {
-                image_barrier(
-                    gpu,
-                    cmd,
-                    img.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    none,
-                    write,
-                );
-            }
-            warp.record_prepare(cmd);
+            mesh.record_upload(cmd);
+            stage.record_prepare(cmd);
         }
         Ok(())
     })?;
-    let (wall, gpu_ms) = time_batch(ctx, &|cmd| unsafe {
-        drawn.pass.record(cmd, &drawn.targets, &drawn.buffers);
-        warp.record(cmd);
-    })?;
+    let (wall, gpu_ms) = time_batch(ctx, &|cmd| unsafe { stage.record(cmd, &mesh) })?;
     Ok(gpu_ms.unwrap_or(wall))
 }
 
@@ -263,7 +210,7 @@ pub fn run(
         for n in GRIDS {
             progress(&format!("paths: {w}×{h}, grid {n}×{n}"));
             let scene = builtin::grid(n);
-            let pose = scene.default_pose(half_tangents(&camera));
+            let pose = scene.default_pose(&camera);
             let pinhole_ms = time_scene(
                 ctx,
                 &camera,
@@ -291,7 +238,7 @@ pub fn run(
     let (w, h) = sizes[0];
     let camera = bench_camera(w, h);
     let scene = builtin::grid(8);
-    let pose = scene.default_pose(half_tangents(&camera));
+    let pose = scene.default_pose(&camera);
     let pinhole_ms = time_scene(
         ctx,
         &camera,

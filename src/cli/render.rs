@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
 use crate::imaging::{io as image_io, Depth, Pixels, Raster};
-use crate::model::{Frustum, InverseMethod, OpenCvCamera};
+use crate::model::InverseMethod;
 use crate::pass::geometry::{ColorFormat, Outputs, Rendered, DEFAULT_DELTA};
 use crate::render::{render_scene, RenderPath, RenderRequest};
 use crate::scene::{builtin, Pose, Scene};
@@ -103,12 +103,6 @@ fn parse_background(s: &str) -> Result<Background, String> {
     }
 }
 
-/// Frustum half-angle tangents (left, right, top, bottom) of a camera.
-pub(crate) fn half_tangents(camera: &OpenCvCamera) -> [f64; 4] {
-    let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
-    [-f.left, f.right, -f.top, f.bottom]
-}
-
 fn extension(path: &Path) -> Option<String> {
     path.extension()
         .and_then(|e| e.to_str())
@@ -187,7 +181,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     let scene = builtin::parse(&args.scene).map_err(|e| CliError::input(e.to_string()))?;
     let pose = match &args.pose {
         Some(p) => Pose::parse(p).map_err(CliError::input)?,
-        None => scene.default_pose(half_tangents(&camera)),
+        None => scene.default_pose(&camera),
     };
     let previous_pose = match &args.previous_pose {
         Some(p) => Pose::parse(p).map_err(CliError::input)?,

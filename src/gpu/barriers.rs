@@ -112,3 +112,36 @@ pub unsafe fn record_download(
         );
     }
 }
+
+/// [`record_download`] of an image a compute shader wrote in `GENERAL` layout: the transition
+/// to `TRANSFER_SRC_OPTIMAL` (making those writes visible to the copy) comes first.
+///
+/// # Safety
+/// As [`record_download`]; `image` must be in `GENERAL` layout.
+pub unsafe fn record_compute_download(
+    gpu: &Gpu,
+    cmd: vk::CommandBuffer,
+    image: &super::Image,
+    buffer: &super::Buffer,
+) {
+    unsafe {
+        image_barrier(
+            gpu,
+            cmd,
+            image.raw,
+            (
+                vk::ImageLayout::GENERAL,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            ),
+            (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_READ,
+            ),
+        );
+        record_download(gpu, cmd, image, buffer);
+    }
+}

@@ -22,7 +22,9 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::Allocator;
 
-pub use barriers::{host_read_barrier, image_barrier, memory_barrier, record_download};
+pub use barriers::{
+    host_read_barrier, image_barrier, memory_barrier, record_compute_download, record_download,
+};
 pub use context::{Context, ContextOptions};
 pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,

@@ -6,6 +6,7 @@
 //! [`WarpPass::record`] every frame. Images are the caller's: storage images in `GENERAL`
 //! layout, bound with [`WarpPass::bind`].
 
+use crate::gpu::record_compute_download;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -671,50 +672,9 @@ impl WarpImages {
     /// # Safety
     /// `cmd` must be recording outside a render pass, after the warp.
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        let d = self.gpu.device();
-        let shader_write = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_WRITE,
-        );
-        let transfer_read = (
-            vk::PipelineStageFlags::TRANSFER,
-            vk::AccessFlags::TRANSFER_READ,
-        );
         unsafe {
-            for (img, buf) in [
-                (&self.output, &self.download),
-                (&self.mask, &self.download_mask),
-            ] {
-                // The copy reads what the warp wrote.
-                image_barrier(
-                    &self.gpu,
-                    cmd,
-                    img.raw,
-                    (
-                        vk::ImageLayout::GENERAL,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    ),
-                    shader_write,
-                    transfer_read,
-                );
-                d.cmd_copy_image_to_buffer(
-                    cmd,
-                    img.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    buf.raw,
-                    &[img.whole_copy()],
-                );
-            }
-            // The host reads the buffers after the fence.
-            memory_barrier(
-                &self.gpu,
-                cmd,
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
-            );
+            record_compute_download(&self.gpu, cmd, &self.output, &self.download);
+            record_compute_download(&self.gpu, cmd, &self.mask, &self.download_mask);
         }
     }
 
@@ -799,42 +759,9 @@ pub fn read_maps(
         unsafe {
             pass.record_prepare(cmd);
             for (&c, buf) in channels.iter().zip(&buffers) {
-                let map = &pass.maps[c];
                 // The copy reads what the map build wrote.
-                image_barrier(
-                    gpu,
-                    cmd,
-                    map.raw,
-                    (
-                        vk::ImageLayout::GENERAL,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    ),
-                    (
-                        vk::PipelineStageFlags::COMPUTE_SHADER,
-                        vk::AccessFlags::SHADER_WRITE,
-                    ),
-                    (
-                        vk::PipelineStageFlags::TRANSFER,
-                        vk::AccessFlags::TRANSFER_READ,
-                    ),
-                );
-                gpu.device().cmd_copy_image_to_buffer(
-                    cmd,
-                    map.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    buf.raw,
-                    &[map.whole_copy()],
-                );
+                record_compute_download(gpu, cmd, &pass.maps[c], buf);
             }
-            memory_barrier(
-                gpu,
-                cmd,
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
-            );
         }
         Ok(())
     })?;

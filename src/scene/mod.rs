@@ -16,6 +16,7 @@ use glam::DVec3;
 pub use pose::Pose;
 
 use crate::imaging::Raster;
+use crate::model::{Frustum, OpenCvCamera};
 
 /// One vertex as the vertex shader reads it (`glsl/geometry.vert`, binding 0): 32 bytes.
 #[repr(C)]
@@ -183,8 +184,10 @@ pub struct Scene {
 
 impl Scene {
     /// A pose that shows the whole scene, centred, filling about 80 % of the smaller field of
-    /// view of a camera with these frustum half-angle tangents (left, right, top, bottom).
-    pub fn default_pose(&self, half_tangents: [f64; 4]) -> Pose {
+    /// view of `camera` (its Sec. 3.1 frustum).
+    pub fn default_pose(&self, camera: &OpenCvCamera) -> Pose {
+        let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
+        let half_tangents = [-f.left, f.right, -f.top, f.bottom];
         let (lo, hi) = self.mesh.bounds();
         let centre = 0.5 * (lo + hi);
         let forward = -self.view_from.normalize();

@@ -164,3 +164,92 @@ fn the_achromat_matches_its_published_figures_and_corrects_colour() {
         "F-C focal shift {shift} mm vs singlet {singlet_shift} mm"
     );
 }
+
+mod image_model {
+    use super::shipped;
+    use glam::{DVec2, DVec3};
+    use vklens::lens::image_model::{
+        fit_cop, least_squares_cop, max_angle_deg, ImageModel, ModelOptions, Optics, PlaneRay,
+    };
+    use vklens::lens::{Prescription, LAMBDA_D};
+
+    /// 36 × 24 mm film, 360 × 240 pixels, focused at 2 m.
+    fn optics(p: &Prescription) -> Optics {
+        let pitch: f64 = std::env::var("PITCH").ok().and_then(|v| v.parse().ok()).unwrap_or(0.1);
+        Optics::new(p, (360, 240), pitch, 2.0, None).unwrap()
+    }
+
+    /// The traced rays of a film grid through one lens sample, on the plane at the focus.
+    /// `cell` is the fraction of the film (from the top-left corner) the grid covers.
+    fn grid_rays(o: &Optics, sample: DVec3, n: u32, cell: f64) -> Vec<PlaneRay> {
+        let mut rays = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let px = DVec2::new(
+                    -0.5 + cell * o.film.width as f64 * i as f64 / n as f64,
+                    -0.5 + cell * o.film.height as f64 * j as f64 / n as f64,
+                );
+                if let Some(r) = o.trace_from_film(o.film.point(px), sample, LAMBDA_D) {
+                    let plane: f64 = std::env::var("PLANE").ok().and_then(|v| v.parse().ok()).unwrap_or(o.focus_m);
+                    let t = (plane - r.origin.z) / r.direction.z;
+                    rays.push(PlaneRay {
+                        p: r.origin + t * r.direction,
+                        d: r.direction,
+                    });
+                }
+            }
+        }
+        rays
+    }
+
+    #[test]
+    fn a_lens_that_is_a_pinhole_has_zero_angle_error() {
+        // A bare stop (0.01 mm) and a window of air: every ray from the film through the
+        // sample point goes on straight, so one centre of projection is exact.
+        let p = Prescription::parse("0 5 0 0.01\n0 40 1 30\n", "pinhole").unwrap();
+        let o = Optics::new(&p, (100, 100), 0.2, f64::INFINITY, None);
+        // Afocal (no glass): give it a film by hand through a focusing lens instead.
+        assert!(o.is_err(), "a pinhole has no focal length");
+        let p = Prescription::parse(
+            "0 5 0 0.01\n0 1 1 30\n0 40 1 30\n",
+            "pinhole",
+        )
+        .unwrap();
+        // Still afocal; the COP fit itself is what the test is about: trace through the
+        // bare stop with an explicit film.
+        let _ = p;
+        let pin = DVec3::new(0.0, 0.0, 0.0);
+        let rays: Vec<PlaneRay> = (0..121)
+            .map(|k| {
+                let film = DVec3::new((k % 11) as f64 - 5.0, (k / 11) as f64 - 5.0, 40.0);
+                let d = (pin - film).normalize();
+                let d = DVec3::new(d.x, -d.y, -d.z);
+                let t = 2.0 / d.z;
+                PlaneRay { p: t * d, d }
+            })
+            .collect();
+        let (e, angle) = fit_cop(&rays, DVec3::new(0.01, 0.02, 0.03));
+        assert!(e.length() < 1e-9 && angle < 1e-9, "{e} {angle}");
+    }
+
+    #[test]
+    fn newton_beats_the_least_squares_centre_on_the_doublet() {
+        let p = shipped(&std::env::var("LENS").unwrap_or("achromat.50mm.dat".into()));
+        let o = optics(&p);
+        let (samples, _) = o.lens_samples(10, LAMBDA_D).unwrap();
+        for cell in [1.0, 0.5, 0.25, 0.125, 0.0625] {
+        for s in samples.iter().take(4) {
+            let rays = grid_rays(&o, *s, 10, cell);
+            let ls = least_squares_cop(&rays).unwrap();
+            let ls_angle = max_angle_deg(&rays, ls);
+            let (e, newton) = fit_cop(&rays, ls);
+            println!("cell {cell} sample {s}: LS {ls_angle:.5}° {ls}, Newton {newton:.5}° {e}");
+        }
+        }
+        let m = ImageModel::build(&o, &ModelOptions::default()).unwrap();
+        println!("projections {} max {}", m.projection_count(), m.max_angle_deg());
+        let p = shipped("biconvex.50mm.dat");
+        let m = ImageModel::build(&optics(&p), &ModelOptions::default()).unwrap();
+        println!("singlet projections {} max {}", m.projection_count(), m.max_angle_deg());
+    }
+}

@@ -10,8 +10,9 @@ use super::pipeline::{
 use super::{Gpu, GpuError, Result, SpecConstants};
 
 /// A one-subpass render pass: colour attachments by location (`None`: that location is
-/// unused), an optional depth attachment. Every attachment is cleared on load and stored; the
-/// colour attachments end in `final_layout`, ready for what reads them next.
+/// unused), an optional depth attachment. Every attachment is cleared on load and stored
+/// ([`RenderPass::accumulating`]: kept), the colour attachments end in `final_layout`, ready
+/// for what reads them next.
 pub struct RenderPass {
     gpu: Gpu,
     pub raw: vk::RenderPass,
@@ -27,6 +28,34 @@ impl RenderPass {
         depth: Option<vk::Format>,
         final_layout: vk::ImageLayout,
     ) -> Result<Self> {
+        Self::build(gpu, colors, depth, final_layout, false)
+    }
+
+    /// One colour attachment whose contents are kept (load, not clear) and stay in
+    /// `COLOR_ATTACHMENT_OPTIMAL` before and after: for draws that add into an image over
+    /// many render passes (seed 004's accumulation buffer).
+    pub fn accumulating(gpu: &Gpu, format: vk::Format) -> Result<Self> {
+        Self::build(
+            gpu,
+            &[Some(format)],
+            None,
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            true,
+        )
+    }
+
+    fn build(
+        gpu: &Gpu,
+        colors: &[Option<vk::Format>],
+        depth: Option<vk::Format>,
+        final_layout: vk::ImageLayout,
+        keep: bool,
+    ) -> Result<Self> {
+        let (load_op, initial_layout) = if keep {
+            (vk::AttachmentLoadOp::LOAD, final_layout)
+        } else {
+            (vk::AttachmentLoadOp::CLEAR, vk::ImageLayout::UNDEFINED)
+        };
         let mut attachments = Vec::new();
         let mut refs = Vec::new();
         for format in colors {
@@ -40,11 +69,11 @@ impl RenderPass {
                         vk::AttachmentDescription::default()
                             .format(*f)
                             .samples(vk::SampleCountFlags::TYPE_1)
-                            .load_op(vk::AttachmentLoadOp::CLEAR)
+                            .load_op(load_op)
                             .store_op(vk::AttachmentStoreOp::STORE)
                             .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
                             .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-                            .initial_layout(vk::ImageLayout::UNDEFINED)
+                            .initial_layout(initial_layout)
                             .final_layout(final_layout),
                     );
                 }
@@ -93,8 +122,17 @@ impl RenderPass {
                     | vk::PipelineStageFlags::FRAGMENT_SHADER
                     | attachment_stages,
                 dst_stage_mask: attachment_stages,
-                src_access_mask: vk::AccessFlags::empty(),
-                dst_access_mask: attachment_writes,
+                // Kept contents: earlier draws' writes are visible to this pass's blending.
+                src_access_mask: if keep {
+                    attachment_writes
+                } else {
+                    vk::AccessFlags::empty()
+                },
+                dst_access_mask: if keep {
+                    attachment_writes | vk::AccessFlags::COLOR_ATTACHMENT_READ
+                } else {
+                    attachment_writes
+                },
                 dependency_flags: vk::DependencyFlags::empty(),
             },
             // What we rendered is visible to whatever reads it next (copy, compute, sampling).
@@ -220,6 +258,8 @@ pub struct GraphicsDesc<'a> {
     pub depth_test: bool,
     /// Bytes of push constants, visible to every stage (0: none).
     pub push_size: u32,
+    /// Add fragment outputs to the attachments (ONE + ONE) instead of replacing them.
+    pub additive: bool,
 }
 
 /// A graphics pipeline with its modules, set-0 layout and pipeline layout. Viewport and
@@ -353,7 +393,13 @@ impl GraphicsPipeline {
             .iter()
             .map(|_| {
                 vk::PipelineColorBlendAttachmentState::default()
-                    .blend_enable(false)
+                    .blend_enable(desc.additive)
+                    .src_color_blend_factor(vk::BlendFactor::ONE)
+                    .dst_color_blend_factor(vk::BlendFactor::ONE)
+                    .color_blend_op(vk::BlendOp::ADD)
+                    .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                    .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                    .alpha_blend_op(vk::BlendOp::ADD)
                     .color_write_mask(vk::ColorComponentFlags::RGBA)
             })
             .collect();

@@ -33,3 +33,7 @@ pub const GEOMETRY_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geome
 pub const MESH_WARP_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mesh_warp.vert.spv"));
 /// `glsl/mesh_warp.frag`: samples the source (or writes the interpolated coordinate).
 pub const MESH_WARP_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mesh_warp.frag.spv"));
+/// `glsl/film_morph.vert`: seed 004's morph of a cell's perspective image onto its film grid.
+pub const FILM_MORPH_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/film_morph.vert.spv"));
+/// `glsl/film_morph.frag`: the weighted, additive accumulation into the float film.
+pub const FILM_MORPH_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/film_morph.frag.spv"));

@@ -4,12 +4,15 @@
 //! Built so far: the lens-file format ([`prescription`]), paraxial analysis ([`paraxial`]:
 //! focal lengths, principal planes, pupils, f-number, focusing), the exact tracer
 //! ([`trace`]), the distortion curve from chief rays ([`distortion_curve`]) and the OpenCV
-//! model fitted to a traced lens ([`fit`]). The image-based model (virtual centres of
-//! projection, quad-tree, GPU rendering) is next.
+//! model fitted to a traced lens ([`fit`]), and seed 004's image-based model
+//! ([`image_model`]: virtual centres of projection, quad-tree, vignetting, radiometric
+//! weights) that the GPU renderer draws.
 
 pub mod fit;
+pub mod image_model;
 pub mod paraxial;
 pub mod prescription;
+pub mod reference;
 pub mod trace;
 
 pub use fit::{fit_opencv, OpenCvFit};

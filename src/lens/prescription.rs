@@ -197,6 +197,44 @@ impl Prescription {
         self.surfaces.iter().position(|s| s.stop).unwrap_or(0)
     }
 
+    /// The same lens seen from the image side: surfaces in reverse order, radii negated,
+    /// each medium moved to the other side of its surface. A ray traced through it from the
+    /// film, in the mirrored coordinate `z' = rear vertex z − z`, is the ray a film point
+    /// sends out through the lens (seed 004 Sec. 3.1 traces from the film this way).
+    pub fn reversed(&self) -> Prescription {
+        let n = self.surfaces.len();
+        let medium_before = |i: usize| -> (f64, Option<f64>) {
+            if i == 0 {
+                (1.0, None)
+            } else {
+                (self.surfaces[i - 1].ior, self.surfaces[i - 1].abbe)
+            }
+        };
+        let surfaces = (0..n)
+            .rev()
+            .map(|i| {
+                let s = &self.surfaces[i];
+                let (ior, abbe) = medium_before(i);
+                Surface {
+                    radius: -s.radius,
+                    thickness: if i == 0 {
+                        0.0
+                    } else {
+                        self.surfaces[i - 1].thickness
+                    },
+                    ior,
+                    aperture: s.aperture,
+                    abbe,
+                    stop: s.stop,
+                }
+            })
+            .collect();
+        Prescription {
+            name: format!("{} (reversed)", self.name),
+            surfaces,
+        }
+    }
+
     /// Axial position (mm) of each surface's vertex, the first at 0, increasing towards the
     /// image.
     pub fn vertex_positions(&self) -> Vec<f64> {

@@ -396,6 +396,7 @@ impl GeometryPass {
                 render_pass: &render_pass,
                 depth_test: true,
                 push_size: 0,
+                additive: false,
             },
         )?;
         let camera = Buffer::from_pod(

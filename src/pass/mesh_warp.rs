@@ -160,6 +160,7 @@ impl MeshWarpPass {
                 render_pass: &render_pass,
                 depth_test: false,
                 push_size: std::mem::size_of::<MeshWarpPush>() as u32,
+                additive: false,
             },
         )?;
         let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;

@@ -5,7 +5,9 @@
 pub mod camera_params;
 pub mod copy;
 pub mod geometry;
+pub mod film;
 pub mod grid_demo;
+pub mod lens_render;
 pub mod mesh_warp;
 pub mod points;
 pub mod warp;

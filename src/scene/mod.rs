@@ -7,6 +7,7 @@ pub mod builtin;
 pub mod calibration;
 pub mod load;
 pub mod pose;
+pub mod raycast;
 pub mod tessellate;
 
 use std::fmt;

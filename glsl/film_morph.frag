@@ -1,0 +1,19 @@
+#version 450
+// Adds one cell's weighted slice of the light field into the film (additive blending into a
+// float image: the accumulation buffer of seed 004 Sec. 3.5).
+
+layout(push_constant) uniform FilmPush {
+    vec4 film_size;
+    vec4 channel_mask;
+} push;
+
+layout(set = 0, binding = 0) uniform sampler2D cell_image;
+
+layout(location = 0) in vec2 v_uv;
+layout(location = 1) noperspective in float v_weight;
+
+layout(location = 0) out vec4 out_radiance;
+
+void main() {
+    out_radiance = texture(cell_image, v_uv) * (v_weight * push.channel_mask);
+}

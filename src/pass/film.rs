@@ -1,0 +1,297 @@
+//! Seed 004 Sec. 3.5's accumulation: each cell's perspective image, morphed onto its film
+//! grid and weighted by `W_i(x')` at the grid vertices, is added into a float film image
+//! (additive blending; the seed's accumulation buffer).
+//!
+//! Embedding: [`FilmPass::record_clear`], then any number of [`FilmPass::record_cell`]
+//! (each after the cell's image was rendered), then [`FilmTarget::record_download`] or the
+//! caller's own use of the image (left in `COLOR_ATTACHMENT_OPTIMAL`).
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use gpu_allocator::MemoryLocation;
+
+use crate::gpu::{
+    image_barrier, record_download, shaders, Buffer, DescriptorPool, Framebuffer, Gpu, GpuError,
+    GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
+};
+
+/// The film's format: float, so that many weighted slices add without clipping or banding.
+pub const FILM_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// One film-grid vertex: film position (pixels), where it samples the cell image (0..1),
+/// radiometric weight.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct FilmVertex {
+    pub film_px: [f32; 2],
+    pub cell_uv: [f32; 2],
+    pub weight: f32,
+    pub _pad: f32,
+}
+
+/// `FilmPush` of `glsl/film_morph.{vert,frag}`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct FilmPush {
+    /// Film width, height (pixels), unused, unused.
+    pub film_size: [f32; 4],
+    /// Channels a draw adds to (1 or 0 each; alpha collects the weights: vignetting).
+    pub channel_mask: [f32; 4],
+}
+
+/// The morph-and-accumulate pipeline; one descriptor set per cell image it reads.
+pub struct FilmPass {
+    gpu: Gpu,
+    pool: DescriptorPool,
+    pipeline: GraphicsPipeline,
+    pub render_pass: RenderPass,
+    sampler: Sampler,
+}
+
+impl FilmPass {
+    /// `images`: how many distinct cell images (descriptor sets) the caller will bind.
+    pub fn new(gpu: &Gpu, images: u32) -> Result<Self> {
+        let render_pass = RenderPass::accumulating(gpu, FILM_FORMAT)?;
+        let attributes = [
+            (0, vk::Format::R32G32_SFLOAT, 0),
+            (1, vk::Format::R32G32_SFLOAT, 8),
+            (2, vk::Format::R32_SFLOAT, 16),
+        ];
+        let pipeline = GraphicsPipeline::new(
+            gpu,
+            GraphicsDesc {
+                stages: vec![
+                    Stage {
+                        stage: vk::ShaderStageFlags::VERTEX,
+                        spirv: shaders::FILM_MORPH_VERT,
+                        constants: SpecConstants::new(),
+                    },
+                    Stage {
+                        stage: vk::ShaderStageFlags::FRAGMENT,
+                        spirv: shaders::FILM_MORPH_FRAG,
+                        constants: SpecConstants::new(),
+                    },
+                ],
+                bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],
+                vertex: Some((std::mem::size_of::<FilmVertex>() as u32, &attributes)),
+                render_pass: &render_pass,
+                depth_test: false,
+                push_size: std::mem::size_of::<FilmPush>() as u32,
+                additive: true,
+            },
+        )?;
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, images.max(1))?;
+        Ok(FilmPass {
+            gpu: gpu.clone(),
+            pool,
+            pipeline,
+            render_pass,
+            // Clamped: a grid vertex at a cell's edge must not wrap to the other side.
+            sampler: Sampler::new(
+                gpu,
+                vk::Filter::LINEAR,
+                vk::SamplerAddressMode::CLAMP_TO_EDGE,
+            )?,
+        })
+    }
+
+    /// A descriptor set that samples `view` (in `SHADER_READ_ONLY_OPTIMAL` when drawn).
+    pub fn bind_image(&self, view: vk::ImageView) -> Result<vk::DescriptorSet> {
+        let set = self.pool.allocate(&self.pipeline)?;
+        let info = [vk::DescriptorImageInfo {
+            sampler: self.sampler.raw,
+            image_view: view,
+            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(0)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&info);
+        unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
+        Ok(set)
+    }
+
+    pub fn pipeline(&self) -> &GraphicsPipeline {
+        &self.pipeline
+    }
+
+    /// Clears the film to zero and leaves it in `COLOR_ATTACHMENT_OPTIMAL` for the cells.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass; `target` must stay alive until the
+    /// work completes.
+    pub unsafe fn record_clear(&self, cmd: vk::CommandBuffer, target: &FilmTarget) {
+        let d = self.gpu.device();
+        unsafe {
+            image_barrier(
+                &self.gpu,
+                cmd,
+                target.image.raw,
+                (
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                ),
+                (
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::AccessFlags::empty(),
+                ),
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+            );
+            d.cmd_clear_color_image(
+                cmd,
+                target.image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &vk::ClearColorValue { float32: [0.0; 4] },
+                &[Image::color_range()],
+            );
+            image_barrier(
+                &self.gpu,
+                cmd,
+                target.image.raw,
+                (
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                ),
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+                (
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                    vk::AccessFlags::COLOR_ATTACHMENT_READ
+                        | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                ),
+            );
+        }
+    }
+
+    /// Adds one cell: `count` vertices (a triangle list) from `first` in `vertices`, sampling
+    /// the image of `set`, into the channels of `channel_mask`.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass, after [`Self::record_clear`] and after
+    /// the cell image was rendered (its writes visible to fragment shaders, in
+    /// `SHADER_READ_ONLY_OPTIMAL`); everything must stay alive until the work completes.
+    #[allow(clippy::too_many_arguments)]
+    pub unsafe fn record_cell(
+        &self,
+        cmd: vk::CommandBuffer,
+        target: &FilmTarget,
+        set: vk::DescriptorSet,
+        vertices: &Buffer,
+        first: u32,
+        count: u32,
+        channel_mask: [f32; 4],
+    ) {
+        let push = FilmPush {
+            film_size: [target.width as f32, target.height as f32, 0.0, 0.0],
+            channel_mask,
+        };
+        let d = self.gpu.device();
+        unsafe {
+            self.pipeline
+                .begin(cmd, &self.render_pass, &target.framebuffer, &[], set);
+            d.cmd_push_constants(
+                cmd,
+                self.pipeline.layout,
+                self.pipeline.push_stages,
+                0,
+                bytemuck::bytes_of(&push),
+            );
+            d.cmd_bind_vertex_buffers(cmd, 0, &[vertices.raw], &[0]);
+            d.cmd_draw(cmd, count, 1, first, 0);
+            d.cmd_end_render_pass(cmd);
+        }
+    }
+}
+
+/// The float film image and a host buffer to read it back.
+pub struct FilmTarget {
+    gpu: Gpu,
+    pub image: Image,
+    pub framebuffer: Framebuffer,
+    download: Buffer,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl FilmTarget {
+    pub fn new(gpu: &Gpu, pass: &FilmPass, width: u32, height: u32) -> Result<Self> {
+        if width == 0 || height == 0 || width.max(height) > gpu.max_image_side() {
+            return Err(GpuError::Invalid(format!(
+                "film {width}×{height}: each side must be 1..={}",
+                gpu.max_image_side()
+            )));
+        }
+        let image = Image::new_2d(
+            gpu,
+            "film",
+            FILM_FORMAT,
+            width,
+            height,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST,
+        )?;
+        let framebuffer = Framebuffer::new(
+            gpu,
+            &pass.render_pass,
+            &[image.view],
+            vk::Extent2D { width, height },
+        )?;
+        let download = Buffer::new(
+            gpu,
+            "film.download",
+            width as u64 * height as u64 * 16,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        Ok(FilmTarget {
+            gpu: gpu.clone(),
+            image,
+            framebuffer,
+            download,
+            width,
+            height,
+        })
+    }
+
+    /// Copies the film to its host buffer (it must be in `COLOR_ATTACHMENT_OPTIMAL`, as the
+    /// cells leave it); afterwards it is in `TRANSFER_SRC_OPTIMAL`.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass, after the cells.
+    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        unsafe {
+            image_barrier(
+                &self.gpu,
+                cmd,
+                self.image.raw,
+                (
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                ),
+                (
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+                ),
+                (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_READ,
+                ),
+            );
+            record_download(&self.gpu, cmd, &self.image, &self.download);
+        }
+    }
+
+    /// The film after the submission that downloaded it completed: RGBA, alpha = the
+    /// accumulated weight of what was drawn (relative illumination where the scene is opaque).
+    pub fn read(&self) -> Result<Vec<[f32; 4]>> {
+        self.download
+            .read_pod::<[f32; 4]>(self.width as usize * self.height as usize)
+    }
+}

@@ -1,0 +1,340 @@
+//! Seed 004 Sec. 3.5's rendering loop on the GPU: for every lens sample and every quad-tree
+//! cell of an [`ImageModel`], render the scene with that cell's perspective projection (a
+//! pinhole [`GeometryPass`] at the virtual centre of projection with the cell's frustum), then
+//! morph it onto the film grid with the radiometric weights and add it into the float film
+//! ([`FilmPass`]). Depth of field comes from the lens samples, vignetting from the shrunken
+//! grids and the weights, distortion and the other aberrations from the morph.
+//!
+//! With one model per colour channel (each traced at its own wavelength), each channel is
+//! accumulated from its own projections: lateral and longitudinal colour come out of the lens.
+//!
+//! Cost: one render pass and one morph per cell. Cells are submitted one at a time (each
+//! geometry pass holds one camera uniform); the frame time reported by [`LensRenderer`]
+//! includes those submissions.
+
+use std::time::Instant;
+
+use ash::vk;
+use glam::DVec2;
+
+use super::film::{FilmPass, FilmTarget, FilmVertex};
+use super::geometry::{ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers};
+use super::geometry::{Outputs, Projection};
+use crate::gpu::{Buffer, Context, GpuError, Result};
+use crate::lens::image_model::{Cell, ImageModel};
+use crate::model::{Intrinsics, OpenCvCamera, OpenCvDistortion};
+use crate::scene::Pose;
+
+/// What the renderer draws with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LensRenderOptions {
+    /// Cell render resolution relative to the film pixels the cell covers (before rounding up
+    /// to a power of two).
+    pub oversample: f64,
+    /// Near and far planes of the cell renders (metres from the COP).
+    pub near: f64,
+    pub far: f64,
+}
+
+impl Default for LensRenderOptions {
+    fn default() -> Self {
+        LensRenderOptions {
+            oversample: 1.0,
+            near: 0.01,
+            far: 1000.0,
+        }
+    }
+}
+
+/// One cell to draw: its projection and its triangles in the film vertex buffer.
+struct CellDraw {
+    camera: OpenCvCamera,
+    cop: glam::DVec3,
+    bucket: usize,
+    first: u32,
+    count: u32,
+    mask: [f32; 4],
+}
+
+/// A render size shared by cells: a geometry pass, its images and the film's view of them.
+struct Bucket {
+    size: (u32, u32),
+    pass: GeometryPass,
+    targets: GeometryTargets,
+    set: vk::DescriptorSet,
+}
+
+/// A rendered film.
+#[derive(Debug, Clone)]
+pub struct LensFrame {
+    pub width: u32,
+    pub height: u32,
+    /// RGB: irradiance relative to the on-axis irradiance of a white scene; alpha: the
+    /// accumulated weight (relative illumination where the scene is opaque).
+    pub pixels: Vec<[f32; 4]>,
+    /// Perspective projections drawn.
+    pub projections: usize,
+    /// Wall time of the frame (all submissions, without the readback), milliseconds.
+    pub frame_ms: f64,
+}
+
+/// The GPU side of the image-based model: built once per lens setting, draws any number of
+/// frames (poses) of one scene.
+pub struct LensRenderer<'a> {
+    ctx: &'a Context,
+    film: FilmPass,
+    target: FilmTarget,
+    buckets: Vec<Bucket>,
+    draws: Vec<CellDraw>,
+    vertices: Buffer,
+    options: LensRenderOptions,
+}
+
+/// Channel masks for one model (all channels) or three (R, G, B; alpha collected with G).
+pub const ALL_CHANNELS: [f32; 4] = [1.0, 1.0, 1.0, 1.0];
+pub const RGB_CHANNELS: [[f32; 4]; 3] = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 1.0],
+    [0.0, 0.0, 1.0, 0.0],
+];
+
+impl<'a> LensRenderer<'a> {
+    /// `models`: each with the channels it draws into (one model: [`ALL_CHANNELS`]; three
+    /// wavelengths: [`RGB_CHANNELS`]). All models must share one film.
+    pub fn new(
+        ctx: &'a Context,
+        models: &[(&ImageModel, [f32; 4])],
+        options: LensRenderOptions,
+    ) -> Result<Self> {
+        let gpu = ctx.gpu();
+        let Some(film) = models.first().map(|(m, _)| m.film) else {
+            return Err(GpuError::Invalid("no lens model to render".into()));
+        };
+        if models.iter().any(|(m, _)| m.film != film) {
+            return Err(GpuError::Invalid("the models have different films".into()));
+        }
+        if !(options.oversample.is_finite() && options.oversample > 0.0) {
+            return Err(GpuError::Invalid(format!(
+                "oversample {} must be positive",
+                options.oversample
+            )));
+        }
+        let max_side = gpu.max_image_side().min(4096);
+        let mut sizes: Vec<(u32, u32)> = Vec::new();
+        let mut vertices: Vec<FilmVertex> = Vec::new();
+        let mut draws = Vec::new();
+        for (model, mask) in models {
+            for cell in model.samples.iter().flat_map(|s| &s.cells) {
+                let size = render_size(cell, options.oversample, max_side);
+                let camera = cell_camera(cell, size)?;
+                let first = vertices.len() as u32;
+                push_triangles(cell, &camera, &mut vertices);
+                let count = vertices.len() as u32 - first;
+                if count == 0 {
+                    continue;
+                }
+                let bucket = match sizes.iter().position(|s| *s == size) {
+                    Some(i) => i,
+                    None => {
+                        sizes.push(size);
+                        sizes.len() - 1
+                    }
+                };
+                draws.push(CellDraw {
+                    camera,
+                    cop: cell.cop,
+                    bucket,
+                    first,
+                    count,
+                    mask: *mask,
+                });
+            }
+        }
+        if vertices.is_empty() {
+            return Err(GpuError::Invalid(
+                "the lens passes no light to the film (every ray is blocked)".into(),
+            ));
+        }
+        let film_pass = FilmPass::new(gpu, sizes.len() as u32)?;
+        let target = FilmTarget::new(gpu, &film_pass, film.width, film.height)?;
+        let mut buckets = Vec::with_capacity(sizes.len());
+        for size in sizes {
+            let camera = draws
+                .iter()
+                .find(|d| d.camera.width == size.0 && d.camera.height == size.1)
+                .map(|d| d.camera.clone())
+                .ok_or_else(|| GpuError::Invalid("bucket without a cell".into()))?;
+            let mut desc = GeometryDesc::new(
+                camera,
+                Projection::Pinhole,
+                Outputs::color_only(Some(ColorFormat::Rgba8)),
+            );
+            desc.near = options.near;
+            desc.far = options.far;
+            desc.final_layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+            let pass = GeometryPass::new(gpu, desc)?;
+            let targets = GeometryTargets::new(gpu, &pass)?;
+            let view = targets
+                .color()
+                .map(|i| i.view)
+                .ok_or_else(|| GpuError::Invalid("cell render without colour".into()))?;
+            let set = film_pass.bind_image(view)?;
+            buckets.push(Bucket {
+                size,
+                pass,
+                targets,
+                set,
+            });
+        }
+        let vertices = Buffer::from_pod(
+            gpu,
+            "film.vertices",
+            &vertices,
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+        )?;
+        Ok(LensRenderer {
+            ctx,
+            film: film_pass,
+            target,
+            buckets,
+            draws,
+            vertices,
+            options,
+        })
+    }
+
+    /// Perspective projections per frame.
+    pub fn projection_count(&self) -> usize {
+        self.draws.len()
+    }
+
+    /// Distinct cell render sizes (one geometry pipeline each).
+    pub fn render_sizes(&self) -> Vec<(u32, u32)> {
+        self.buckets.iter().map(|b| b.size).collect()
+    }
+
+    pub fn options(&self) -> &LensRenderOptions {
+        &self.options
+    }
+
+    /// Renders one frame of `mesh` (uploaded and its texture recorded, see
+    /// [`MeshBuffers::record_upload`]) seen from `pose` (world → camera frame, origin at the
+    /// lens's front vertex).
+    pub fn render(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<LensFrame> {
+        let start = Instant::now();
+        let (film, target) = (&self.film, &self.target);
+        self.ctx.submit(|cmd| {
+            unsafe { film.record_clear(cmd, target) };
+            Ok(())
+        })?;
+        for b in &mut self.buckets {
+            b.pass.bind_mesh(mesh);
+        }
+        for draw in &self.draws {
+            let bucket = &mut self.buckets[draw.bucket];
+            bucket.pass.set_camera(&draw.camera)?;
+            // The cell's camera sits at its COP, axes as the lens's camera frame.
+            let cell_pose = Pose {
+                rotation: pose.rotation,
+                translation: pose.translation - draw.cop,
+            };
+            bucket.pass.set_frame(&cell_pose, &cell_pose)?;
+            let bucket = &self.buckets[draw.bucket];
+            let vertices = &self.vertices;
+            self.ctx.submit(|cmd| {
+                unsafe {
+                    bucket.pass.record(cmd, &bucket.targets, mesh);
+                    film.record_cell(
+                        cmd,
+                        target,
+                        bucket.set,
+                        vertices,
+                        draw.first,
+                        draw.count,
+                        draw.mask,
+                    );
+                }
+                Ok(())
+            })?;
+        }
+        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.ctx.submit(|cmd| {
+            unsafe { target.record_download(cmd) };
+            Ok(())
+        })?;
+        Ok(LensFrame {
+            width: target.width,
+            height: target.height,
+            pixels: target.read()?,
+            projections: self.draws.len(),
+            frame_ms,
+        })
+    }
+}
+
+/// The render size of a cell: its film extent × `oversample`, a one-pixel margin, rounded
+/// up to a power of two so that cells share pipelines.
+fn render_size(cell: &Cell, oversample: f64, max_side: u32) -> (u32, u32) {
+    let (lo, hi) = cell.vertices.iter().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), v| (lo.min(v.film_px), hi.max(v.film_px)),
+    );
+    let side = |extent: f64| {
+        ((extent * oversample).ceil().max(1.0) as u32 + 2)
+            .next_power_of_two()
+            .clamp(16, max_side)
+    };
+    (side(hi.x - lo.x), side(hi.y - lo.y))
+}
+
+/// The pinhole camera of a cell: its projected bounds fill the render but for a one-pixel
+/// margin (OpenCV convention: `min` lands on u = 0.5, the edge between pixels 0 and 1).
+fn cell_camera(cell: &Cell, (w, h): (u32, u32)) -> Result<OpenCvCamera> {
+    let span = (cell.max - cell.min).max(DVec2::splat(1e-9));
+    let fx = (w as f64 - 2.0) / span.x;
+    let fy = (h as f64 - 2.0) / span.y;
+    OpenCvCamera::new(
+        w,
+        h,
+        Intrinsics {
+            fx,
+            fy,
+            cx: 0.5 - fx * cell.min.x,
+            cy: 0.5 - fy * cell.min.y,
+        },
+        OpenCvDistortion::default(),
+    )
+    .map_err(|e| GpuError::Invalid(format!("cell projection: {e}")))
+}
+
+/// Two triangles per grid quad whose four rays all pass the lens.
+fn push_triangles(cell: &Cell, camera: &OpenCvCamera, out: &mut Vec<FilmVertex>) {
+    let row = cell.n as usize + 1;
+    let i = &camera.intrinsics;
+    let vertex = |k: usize| -> Option<FilmVertex> {
+        let v = &cell.vertices[k];
+        let q = v.projected?;
+        let u = i.fx * q.x + i.cx;
+        let w = i.fy * q.y + i.cy;
+        Some(FilmVertex {
+            film_px: v.film_px.as_vec2().to_array(),
+            cell_uv: [
+                ((u + 0.5) / camera.width as f64) as f32,
+                ((w + 0.5) / camera.height as f64) as f32,
+            ],
+            weight: v.weight as f32,
+            _pad: 0.0,
+        })
+    };
+    for j in 0..cell.n as usize {
+        for a in 0..cell.n as usize {
+            let k = j * row + a;
+            let (Some(p00), Some(p10), Some(p01), Some(p11)) =
+                (vertex(k), vertex(k + 1), vertex(k + row), vertex(k + row + 1))
+            else {
+                continue;
+            };
+            out.extend_from_slice(&[p00, p10, p01, p10, p11, p01]);
+        }
+    }
+}

@@ -165,6 +165,19 @@ fn the_achromat_matches_its_published_figures_and_corrects_colour() {
     );
 }
 
+#[test]
+fn the_singlet_matches_its_published_figures_and_does_not_correct_colour() {
+    // Thorlabs LB1471: f = 50.0 mm ± 1 % (its catalogue tolerance) at 587.6 nm.
+    let p = shipped("biconvex.50mm.dat");
+    let efl = analyse(&p, LAMBDA_D).efl.unwrap();
+    assert!((efl - 50.0).abs() < 0.5, "EFL {efl}");
+    // Its focal length moves by about f / V_d between F and C (no correction at all).
+    use vklens::lens::prescription::{LAMBDA_C, LAMBDA_F};
+    let shift = analyse(&p, LAMBDA_C).efl.unwrap() - analyse(&p, LAMBDA_F).efl.unwrap();
+    let expected = efl / 64.17;
+    assert!((shift / expected - 1.0).abs() < 0.05, "{shift} vs {expected}");
+}
+
 mod image_model {
     use super::shipped;
     use glam::{DVec2, DVec3};
@@ -175,12 +188,11 @@ mod image_model {
 
     /// 36 × 24 mm film, 360 × 240 pixels, focused at 2 m.
     fn optics(p: &Prescription) -> Optics {
-        let pitch: f64 = std::env::var("PITCH").ok().and_then(|v| v.parse().ok()).unwrap_or(0.1);
-        Optics::new(p, (360, 240), pitch, 2.0, None).unwrap()
+        Optics::new(p, (360, 240), 0.1, 2.0, None).unwrap()
     }
 
-    /// The traced rays of a film grid through one lens sample, on the plane at the focus.
-    /// `cell` is the fraction of the film (from the top-left corner) the grid covers.
+    /// The traced rays of an `n × n` film grid through one lens sample, on the plane at the
+    /// focus; `cell` is the fraction of the film (from its top-left corner) the grid covers.
     fn grid_rays(o: &Optics, sample: DVec3, n: u32, cell: f64) -> Vec<PlaneRay> {
         let mut rays = Vec::new();
         for j in 0..=n {
@@ -190,8 +202,7 @@ mod image_model {
                     -0.5 + cell * o.film.height as f64 * j as f64 / n as f64,
                 );
                 if let Some(r) = o.trace_from_film(o.film.point(px), sample, LAMBDA_D) {
-                    let plane: f64 = std::env::var("PLANE").ok().and_then(|v| v.parse().ok()).unwrap_or(o.focus_m);
-                    let t = (plane - r.origin.z) / r.direction.z;
+                    let t = (o.focus_m - r.origin.z) / r.direction.z;
                     rays.push(PlaneRay {
                         p: r.origin + t * r.direction,
                         d: r.direction,
@@ -202,54 +213,112 @@ mod image_model {
         rays
     }
 
+    /// Σ (1 − c²): what the Newton fit minimizes (seed 004 Eq. 1).
+    fn sin2_sum(rays: &[PlaneRay], e: DVec3) -> f64 {
+        rays.iter()
+            .map(|r| {
+                let f = r.p - e;
+                1.0 - r.d.dot(f).powi(2) / f.length_squared()
+            })
+            .sum()
+    }
+
     #[test]
     fn a_lens_that_is_a_pinhole_has_zero_angle_error() {
-        // A bare stop (0.01 mm) and a window of air: every ray from the film through the
-        // sample point goes on straight, so one centre of projection is exact.
-        let p = Prescription::parse("0 5 0 0.01\n0 40 1 30\n", "pinhole").unwrap();
-        let o = Optics::new(&p, (100, 100), 0.2, f64::INFINITY, None);
-        // Afocal (no glass): give it a film by hand through a focusing lens instead.
-        assert!(o.is_err(), "a pinhole has no focal length");
-        let p = Prescription::parse(
-            "0 5 0 0.01\n0 1 1 30\n0 40 1 30\n",
-            "pinhole",
-        )
-        .unwrap();
-        // Still afocal; the COP fit itself is what the test is about: trace through the
-        // bare stop with an explicit film.
-        let _ = p;
-        let pin = DVec3::new(0.0, 0.0, 0.0);
+        // A bare 0.01 mm stop: every ray from the film through the sample point (the stop's
+        // centre) goes on straight, so one centre of projection is exact — and the Newton
+        // fit finds it from a guess 4 cm away.
+        let pin = DVec3::ZERO;
         let rays: Vec<PlaneRay> = (0..121)
             .map(|k| {
                 let film = DVec3::new((k % 11) as f64 - 5.0, (k / 11) as f64 - 5.0, 40.0);
                 let d = (pin - film).normalize();
                 let d = DVec3::new(d.x, -d.y, -d.z);
-                let t = 2.0 / d.z;
-                PlaneRay { p: t * d, d }
+                PlaneRay { p: 2.0 / d.z * d, d }
             })
             .collect();
         let (e, angle) = fit_cop(&rays, DVec3::new(0.01, 0.02, 0.03));
         assert!(e.length() < 1e-9 && angle < 1e-9, "{e} {angle}");
+        // The same through the tracer and the whole model: a window of air and a 0.05 mm
+        // stop as the rear surface, the film 40 mm behind it. Every lens sample lies in the
+        // stop, every cell is one exact projection from its sample point.
+        let p = Prescription::parse("0 1 1 20\n0 40 0 0.05\n", "pinhole").unwrap();
+        let film = vklens::lens::image_model::Film {
+            width: 120,
+            height: 80,
+            pitch_mm: 0.2,
+            z_mm: 41.0,
+        };
+        let o = Optics::with_film(&p, film, 2.0).unwrap();
+        let m = ImageModel::build(&o, &ModelOptions::default()).unwrap();
+        assert_eq!(m.projection_count(), 10, "no cell needs subdividing");
+        assert!(m.max_angle_deg() < 1e-7, "{}", m.max_angle_deg());
+        for s in &m.samples {
+            let cop = s.cells[0].cop;
+            let expected = vklens::lens::image_model::lens_to_camera(s.point);
+            assert!((cop - expected).length() < 1e-9, "{cop} vs {expected}");
+        }
     }
 
     #[test]
-    fn newton_beats_the_least_squares_centre_on_the_doublet() {
-        let p = shipped(&std::env::var("LENS").unwrap_or("achromat.50mm.dat".into()));
+    fn newton_reaches_the_optimum_of_the_angle_criterion_on_the_doublet() {
+        // Seed 004 Sec. 3.3 reports the angle COP "reduced the maximum angle by a factor of
+        // up to 10" over the least-squares-distance COP once cells are subdivided. On the
+        // shipped doublet (and on the other three lenses) that did not reproduce: the two
+        // centres' largest angles agree within 10 % at every cell size from the whole film
+        // down to 1/16 of it (measured 0.0020° vs 0.0021° whole-film, 0.00023° vs 0.00023°
+        // at 1/16). What holds everywhere: Newton reaches the optimum of Σ (1 − c²), which
+        // the LS centre does not.
+        let p = shipped("achromat.50mm.dat");
         let o = optics(&p);
         let (samples, _) = o.lens_samples(10, LAMBDA_D).unwrap();
-        for cell in [1.0, 0.5, 0.25, 0.125, 0.0625] {
-        for s in samples.iter().take(4) {
-            let rays = grid_rays(&o, *s, 10, cell);
-            let ls = least_squares_cop(&rays).unwrap();
-            let ls_angle = max_angle_deg(&rays, ls);
-            let (e, newton) = fit_cop(&rays, ls);
-            println!("cell {cell} sample {s}: LS {ls_angle:.5}° {ls}, Newton {newton:.5}° {e}");
+        for cell in [1.0, 0.25, 0.0625] {
+            for s in samples.iter().take(4) {
+                let rays = grid_rays(&o, *s, 10, cell);
+                let ls = least_squares_cop(&rays).unwrap();
+                let (e, newton_angle) = fit_cop(&rays, ls);
+                let ls_angle = max_angle_deg(&rays, ls);
+                assert!(sin2_sum(&rays, e) <= sin2_sum(&rays, ls) * (1.0 + 1e-9));
+                assert!(
+                    (newton_angle / ls_angle - 1.0).abs() < 0.1,
+                    "cell {cell}: Newton {newton_angle}° LS {ls_angle}°"
+                );
+                // From the seed's start (the lens centre) it lands on the same optimum.
+                let (from_centre, _) = fit_cop(&rays, DVec3::new(0.0, 0.0, -0.01));
+                assert!((from_centre - e).length() < 1e-6, "{from_centre} vs {e}");
+            }
         }
+    }
+
+    #[test]
+    fn the_quad_tree_refines_until_the_threshold_holds() {
+        let p = shipped("dgauss.50mm.dat");
+        let o = optics(&p);
+        let coarse = ImageModel::build(
+            &o,
+            &ModelOptions {
+                max_angle_deg: 0.5,
+                ..ModelOptions::default()
+            },
+        )
+        .unwrap();
+        let fine = ImageModel::build(
+            &o,
+            &ModelOptions {
+                max_angle_deg: 0.005,
+                ..ModelOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(coarse.projection_count(), 10, "one projection per sample");
+        assert!(fine.projection_count() > coarse.projection_count());
+        assert!(fine.max_angle_deg() <= 0.005, "{}", fine.max_angle_deg());
+        // Every cell's grid lies on the film and its weights are positive.
+        for cell in fine.samples.iter().flat_map(|s| &s.cells) {
+            for v in &cell.vertices {
+                assert!(v.film_px.x >= -0.5 - 1e-9 && v.film_px.x <= 359.5 + 1e-9);
+                assert!(v.weight > 0.0);
+            }
         }
-        let m = ImageModel::build(&o, &ModelOptions::default()).unwrap();
-        println!("projections {} max {}", m.projection_count(), m.max_angle_deg());
-        let p = shipped("biconvex.50mm.dat");
-        let m = ImageModel::build(&optics(&p), &ModelOptions::default()).unwrap();
-        println!("singlet projections {} max {}", m.projection_count(), m.max_angle_deg());
     }
 }

@@ -154,6 +154,28 @@ impl Optics {
         })
     }
 
+    /// A lens with the film placed by hand (no focusing, no f-stop change): `film.z_mm` is
+    /// where the film is, `focus_m` where the virtual image planes go. Any lens works here,
+    /// afocal ones and bare stops (a pinhole camera) included.
+    pub fn with_film(lens: &Prescription, film: Film, focus_m: f64) -> Result<Self, String> {
+        let rear_z = lens.vertex_positions()[lens.surfaces.len() - 1];
+        if !(film.pitch_mm > 0.0 && film.z_mm > rear_z && focus_m > 0.0) {
+            return Err(format!(
+                "film at z {} mm must lie behind the rear vertex ({rear_z} mm), with a \
+                 positive pitch and focus distance",
+                film.z_mm
+            ));
+        }
+        Ok(Optics {
+            reversed: lens.reversed(),
+            lens: lens.clone(),
+            rear_z,
+            film,
+            focus_m,
+            f_number: f64::NAN,
+        })
+    }
+
     /// The pinhole camera this lens approximates to first order: the film's pixels, focal
     /// length in pixels = the distance from the rear principal plane to the film (the
     /// magnification of the focused plane), principal point at the film centre. Used to
@@ -350,6 +372,43 @@ pub fn least_squares_cop(rays: &[PlaneRay]) -> Option<DVec3> {
         b += proj * r.p;
     }
     (m.determinant().abs() > 1e-300).then(|| m.inverse() * b)
+}
+
+/// Wavelengths (µm) of the red, green and blue channels when chromatic aberration is
+/// simulated: the C, e and F lines (the glass data's Cauchy law is fitted at C, d, F).
+pub const RGB_WAVELENGTHS: [f64; 3] = [0.656_27, 0.546_07, 0.486_13];
+
+/// Channel masks: one model for all channels, or one per channel (alpha, the accumulated
+/// weight, goes with green).
+pub const ALL_CHANNELS: [f32; 4] = [1.0, 1.0, 1.0, 1.0];
+pub const RGB_CHANNELS: [[f32; 4]; 3] = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 1.0],
+    [0.0, 0.0, 1.0, 0.0],
+];
+
+/// The models a frame needs: one at `options.lambda_um` for all channels, or — with
+/// `chromatic` — one per channel at [`RGB_WAVELENGTHS`], each with its channel mask (seed 004
+/// could not do this on its hardware; each channel gets its own projections).
+pub fn channel_models(
+    optics: &Optics,
+    options: &ModelOptions,
+    chromatic: bool,
+) -> Result<Vec<(ImageModel, [f32; 4])>, String> {
+    if !chromatic {
+        return Ok(vec![(ImageModel::build(optics, options)?, ALL_CHANNELS)]);
+    }
+    RGB_WAVELENGTHS
+        .iter()
+        .zip(RGB_CHANNELS)
+        .map(|(&lambda_um, mask)| {
+            let o = ModelOptions {
+                lambda_um,
+                ..*options
+            };
+            Ok((ImageModel::build(optics, &o)?, mask))
+        })
+        .collect()
 }
 
 /// Settings of the model.

@@ -90,20 +90,14 @@ pub struct LensRenderer<'a> {
     options: LensRenderOptions,
 }
 
-/// Channel masks for one model (all channels) or three (R, G, B; alpha collected with G).
-pub const ALL_CHANNELS: [f32; 4] = [1.0, 1.0, 1.0, 1.0];
-pub const RGB_CHANNELS: [[f32; 4]; 3] = [
-    [1.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 1.0],
-    [0.0, 0.0, 1.0, 0.0],
-];
+pub use crate::lens::image_model::{ALL_CHANNELS, RGB_CHANNELS};
 
 impl<'a> LensRenderer<'a> {
     /// `models`: each with the channels it draws into (one model: [`ALL_CHANNELS`]; three
     /// wavelengths: [`RGB_CHANNELS`]). All models must share one film.
     pub fn new(
         ctx: &'a Context,
-        models: &[(&ImageModel, [f32; 4])],
+        models: &[(ImageModel, [f32; 4])],
         options: LensRenderOptions,
     ) -> Result<Self> {
         let gpu = ctx.gpu();

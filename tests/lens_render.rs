@@ -243,3 +243,4 @@ fn chromatic_aberration_comes_out_of_the_glass() {
     );
     assert_no_validation_messages(&ctx);
 }
+

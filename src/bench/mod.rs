@@ -2,5 +2,6 @@
 //! approximation, reported as tables (and JSON lines), never asserted as wall-clock limits.
 
 pub mod inverse;
+pub mod lens;
 pub mod vertex;
 pub mod warp;

@@ -135,3 +135,50 @@ pub fn vertex(args: VertexArgs) -> Result<(), CliError> {
     }
     Ok(())
 }
+
+#[derive(Args, Debug)]
+pub struct LensArgs {
+    /// Film pixels per side (24 × 24 mm film; seed 004 timed 256 × 256).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
+    pixels: u32,
+    /// Folder with the lens files (default: ./lenses, else the source tree's).
+    #[arg(long, value_name = "DIR")]
+    lenses: Option<std::path::PathBuf>,
+    /// One JSON object per line instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn lens(args: LensArgs) -> Result<(), CliError> {
+    let dir = args.lenses.clone().unwrap_or_else(|| {
+        let here = std::path::PathBuf::from("lenses");
+        if here.is_dir() {
+            here
+        } else {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("lenses")
+        }
+    });
+    if !dir.is_dir() {
+        return Err(CliError::input(format!(
+            "--lenses {}: no such folder",
+            dir.display()
+        )));
+    }
+    let ctx = context()?;
+    eprintln!("device: {}", ctx.gpu().device_name());
+    let rows = crate::bench::lens::run(&ctx, &dir, args.pixels, &mut |s| super::progress_line(s))
+        .map_err(|e| match e {
+            crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+            other => CliError::from(other),
+        })?;
+    super::progress_done(&format!("measured {} rows", rows.len()));
+    finish(&ctx)?;
+    if args.json {
+        for r in &rows {
+            println!("{r}");
+        }
+    } else {
+        println!("{}", crate::bench::lens::table(&rows));
+    }
+    Ok(())
+}

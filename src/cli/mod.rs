@@ -167,6 +167,9 @@ enum BenchCommand {
     /// The geometry path (Alg. 1) beside a plain pinhole render and pinhole + compute warp on
     /// grids of growing size, what tessellation costs and leaves, and seed 002's mesh warp.
     Vertex(bench::VertexArgs),
+    /// Seed 004's image-based lens model: lens samples, angle threshold and film grid
+    /// against PSNR versus the CPU reference ray tracer, and the speed ratio between them.
+    Lens(bench::LensArgs),
 }
 
 /// Where the model runs.
@@ -236,6 +239,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Inverse(args)) => bench::inverse(args),
         Command::Bench(BenchCommand::Warp(args)) => bench::warp(args),
         Command::Bench(BenchCommand::Vertex(args)) => bench::vertex(args),
+        Command::Bench(BenchCommand::Lens(args)) => bench::lens(args),
         Command::Demo(args) => demo::run(args),
         Command::Distort(args) => warp::run(args, Direction::Distort, false),
         Command::Undistort(args) => warp::run(args, Direction::Undistort, false),

@@ -19,6 +19,36 @@ pub use fit::{fit_opencv, OpenCvFit};
 pub use paraxial::{analyse, focus, Paraxial};
 pub use prescription::{Prescription, PrescriptionError, Surface, LAMBDA_D};
 
+/// Frames `scene` for a render through `lens`: the pose (given, or the scene centred in the
+/// lens's first-order camera) and the optics focused at `focus_m` (given, or the distance of
+/// the scene's centre).
+pub fn frame_scene(
+    lens: &Prescription,
+    pixels: (u32, u32),
+    pitch_mm: f64,
+    f_number: Option<f64>,
+    focus_m: Option<f64>,
+    pose: Option<crate::scene::Pose>,
+    scene: &crate::scene::Scene,
+) -> Result<(image_model::Optics, crate::scene::Pose), String> {
+    let framing = image_model::Optics::new(lens, pixels, pitch_mm, f64::INFINITY, f_number)?;
+    let pose = match pose {
+        Some(p) => p,
+        None => scene.default_pose(&framing.equivalent_camera()?),
+    };
+    let focus = focus_m.unwrap_or_else(|| {
+        let (lo, hi) = scene.mesh.bounds();
+        let z = pose.apply(0.5 * (lo + hi)).z;
+        if z > 0.0 {
+            z
+        } else {
+            f64::INFINITY
+        }
+    });
+    let optics = image_model::Optics::new(lens, pixels, pitch_mm, focus, f_number)?;
+    Ok((optics, pose))
+}
+
 /// One point of a distortion curve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DistortionPoint {

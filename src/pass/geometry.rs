@@ -490,32 +490,133 @@ impl GeometryPass {
     /// Sets the pose to render from and the pose flow is measured from. Host write: call it
     /// while no recorded draw of this pass is executing.
     pub fn set_frame(&self, pose: &Pose, previous: &Pose) -> Result<()> {
-        let p = self.projection();
+        let frame = self.frame_data(&self.desc.camera, self.discard_bound, pose, previous);
+        self.frame.write(0, bytemuck::bytes_of(&frame))
+    }
+
+    fn frame_data(
+        &self,
+        c: &OpenCvCamera,
+        discard_bound: f64,
+        pose: &Pose,
+        previous: &Pose,
+    ) -> GeometryFrame {
+        let p = vulkan_projection(
+            &Frustum::from_intrinsics(&c.intrinsics, c.width, c.height),
+            self.desc.near,
+            self.desc.far,
+        );
         let m = |m: DMat4| m.as_mat4().to_cols_array_2d();
-        let c = &self.desc.camera;
-        let frame = GeometryFrame {
+        GeometryFrame {
             view_projection: m(p * pose.matrix()),
             previous_view_projection: m(p * previous.matrix()),
             view: m(pose.matrix()),
             viewport: [
                 c.width as f32,
                 c.height as f32,
-                self.discard_bound.min(f32::MAX as f64) as f32,
+                discard_bound.min(f32::MAX as f64) as f32,
                 0.0,
             ],
-        };
-        self.frame.write(0, bytemuck::bytes_of(&frame))
+        }
+    }
+
+    /// `count` extra camera-and-pose slots, so that many views (seed 004's cells, a batch of
+    /// poses) record into one command buffer: each slot has its own uniforms and descriptor
+    /// set, filled with [`Self::set_slot`] and drawn with [`Self::record_slot`].
+    pub fn slots(&self, count: u32) -> Result<GeometrySlots> {
+        let pool = DescriptorPool::for_pipeline(&self.gpu, &self.pipeline, count.max(1))?;
+        let mut slots = Vec::with_capacity(count as usize);
+        for _ in 0..count {
+            let camera = Buffer::from_pod(
+                &self.gpu,
+                "geometry.slot.camera",
+                &[CameraParams::from_camera(&self.desc.camera)],
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+            )?;
+            let frame = Buffer::from_pod(
+                &self.gpu,
+                "geometry.slot.frame",
+                &[GeometryFrame::zeroed()],
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+            )?;
+            let set = pool.allocate(&self.pipeline)?;
+            crate::gpu::write_buffer_descriptors(
+                &self.gpu,
+                set,
+                &[
+                    (0, vk::DescriptorType::UNIFORM_BUFFER, &camera),
+                    (1, vk::DescriptorType::UNIFORM_BUFFER, &frame),
+                ],
+            );
+            slots.push(Slot { camera, frame, set });
+        }
+        Ok(GeometrySlots { _pool: pool, slots })
+    }
+
+    /// Fills slot `i` with `camera` (same size and terms as the pass, see
+    /// [`Self::accepts_camera`]) seen from `pose`. Host write: no recorded draw of the slot
+    /// may be executing.
+    pub fn set_slot(
+        &self,
+        slots: &GeometrySlots,
+        i: usize,
+        camera: &OpenCvCamera,
+        pose: &Pose,
+        previous: &Pose,
+    ) -> Result<()> {
+        if !self.accepts_camera(camera) {
+            return Err(GpuError::Invalid(
+                "a slot needs the pass's image size and distortion terms".into(),
+            ));
+        }
+        let slot = slots
+            .slots
+            .get(i)
+            .ok_or_else(|| GpuError::Invalid(format!("no slot {i}")))?;
+        let bound = discard_bound(&self.desc.projection, camera)?;
+        slot.camera
+            .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))?;
+        let frame = self.frame_data(camera, bound, pose, previous);
+        slot.frame.write(0, bytemuck::bytes_of(&frame))
+    }
+
+    /// Points every slot at `mesh`'s texture.
+    pub fn bind_slots_mesh(&self, slots: &GeometrySlots, mesh: &MeshBuffers) {
+        for slot in &slots.slots {
+            self.write_texture(slot.set, mesh);
+        }
+    }
+
+    /// Records the render pass with slot `i`'s camera and pose (see [`Self::record`]).
+    ///
+    /// # Safety
+    /// As [`Self::record`]; the slot must be filled and its mesh texture bound.
+    pub unsafe fn record_slot(
+        &self,
+        cmd: vk::CommandBuffer,
+        targets: &GeometryTargets,
+        mesh: &MeshBuffers,
+        slots: &GeometrySlots,
+        i: usize,
+    ) {
+        if let Some(slot) = slots.slots.get(i) {
+            unsafe { self.record_with_set(cmd, targets, mesh, slot.set) }
+        }
     }
 
     /// Points the pass at `mesh`'s texture.
     pub fn bind_mesh(&mut self, mesh: &MeshBuffers) {
+        self.write_texture(self.set, mesh);
+    }
+
+    fn write_texture(&self, set: vk::DescriptorSet, mesh: &MeshBuffers) {
         let info = [vk::DescriptorImageInfo {
             sampler: self.sampler.raw,
             image_view: mesh.texture.image.view,
             image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
         }];
         let write = vk::WriteDescriptorSet::default()
-            .dst_set(self.set)
+            .dst_set(set)
             .dst_binding(2)
             .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
             .image_info(&info);
@@ -535,6 +636,16 @@ impl GeometryPass {
         cmd: vk::CommandBuffer,
         targets: &GeometryTargets,
         mesh: &MeshBuffers,
+    ) {
+        unsafe { self.record_with_set(cmd, targets, mesh, self.set) }
+    }
+
+    unsafe fn record_with_set(
+        &self,
+        cmd: vk::CommandBuffer,
+        targets: &GeometryTargets,
+        mesh: &MeshBuffers,
+        set: vk::DescriptorSet,
     ) {
         let bg = self.desc.background;
         let mut clears = Vec::new();
@@ -576,7 +687,7 @@ impl GeometryPass {
                 &self.render_pass,
                 &targets.framebuffer,
                 &clears,
-                self.set,
+                set,
             );
             d.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cmd, mesh.indices.raw, 0, vk::IndexType::UINT32);
@@ -584,6 +695,29 @@ impl GeometryPass {
             d.cmd_end_render_pass(cmd);
         }
     }
+}
+
+/// Extra camera-and-pose slots of a [`GeometryPass`] ([`GeometryPass::slots`]).
+pub struct GeometrySlots {
+    // Drop order: the sets' pool before nothing else; buffers are independent.
+    _pool: DescriptorPool,
+    slots: Vec<Slot>,
+}
+
+impl GeometrySlots {
+    pub fn len(&self) -> usize {
+        self.slots.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.slots.is_empty()
+    }
+}
+
+struct Slot {
+    camera: Buffer,
+    frame: Buffer,
+    set: vk::DescriptorSet,
 }
 
 /// One output image and the host buffer it is read back into.

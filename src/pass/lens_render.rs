@@ -8,9 +8,10 @@
 //! With one model per colour channel (each traced at its own wavelength), each channel is
 //! accumulated from its own projections: lateral and longitudinal colour come out of the lens.
 //!
-//! Cost: one render pass and one morph per cell. Cells are submitted one at a time (each
-//! geometry pass holds one camera uniform); the frame time reported by [`LensRenderer`]
-//! includes those submissions.
+//! Cost: one render pass and one morph per cell, all recorded into one command buffer (each
+//! cell has its own camera-and-pose slot of the geometry pass; cells of one render size share
+//! a pipeline and an image, in turn). [`LensRenderer::record`] records a frame into a
+//! command buffer the caller owns; [`LensRenderer::render`] is the headless caller.
 
 use std::time::Instant;
 
@@ -18,7 +19,9 @@ use ash::vk;
 use glam::DVec2;
 
 use super::film::{FilmPass, FilmTarget, FilmVertex};
-use super::geometry::{ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers};
+use super::geometry::{
+    ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers,
+};
 use super::geometry::{Outputs, Projection};
 use crate::gpu::{Buffer, Context, GpuError, Result};
 use crate::lens::image_model::{Cell, ImageModel};
@@ -51,6 +54,8 @@ struct CellDraw {
     camera: OpenCvCamera,
     cop: glam::DVec3,
     bucket: usize,
+    /// Its slot in the bucket's geometry pass.
+    slot: usize,
     first: u32,
     count: u32,
     mask: [f32; 4],
@@ -61,6 +66,7 @@ struct Bucket {
     size: (u32, u32),
     pass: GeometryPass,
     targets: GeometryTargets,
+    slots: GeometrySlots,
     set: vk::DescriptorSet,
 }
 
@@ -74,7 +80,8 @@ pub struct LensFrame {
     pub pixels: Vec<[f32; 4]>,
     /// Perspective projections drawn.
     pub projections: usize,
-    /// Wall time of the frame (all submissions, without the readback), milliseconds.
+    /// Wall time of the frame's submission (recorded in one command buffer, without the
+    /// readback), milliseconds.
     pub frame_ms: f64,
 }
 
@@ -134,10 +141,12 @@ impl<'a> LensRenderer<'a> {
                         sizes.len() - 1
                     }
                 };
+                let slot = draws.iter().filter(|d: &&CellDraw| d.bucket == bucket).count();
                 draws.push(CellDraw {
                     camera,
                     cop: cell.cop,
                     bucket,
+                    slot,
                     first,
                     count,
                     mask: *mask,
@@ -152,7 +161,7 @@ impl<'a> LensRenderer<'a> {
         let film_pass = FilmPass::new(gpu, sizes.len() as u32)?;
         let target = FilmTarget::new(gpu, &film_pass, film.width, film.height)?;
         let mut buckets = Vec::with_capacity(sizes.len());
-        for size in sizes {
+        for (index, size) in sizes.into_iter().enumerate() {
             let camera = draws
                 .iter()
                 .find(|d| d.camera.width == size.0 && d.camera.height == size.1)
@@ -173,10 +182,13 @@ impl<'a> LensRenderer<'a> {
                 .map(|i| i.view)
                 .ok_or_else(|| GpuError::Invalid("cell render without colour".into()))?;
             let set = film_pass.bind_image(view)?;
+            let count = draws.iter().filter(|d| d.bucket == index).count();
+            let slots = pass.slots(count as u32)?;
             buckets.push(Bucket {
                 size,
                 pass,
                 targets,
+                slots,
                 set,
             });
         }
@@ -211,47 +223,69 @@ impl<'a> LensRenderer<'a> {
         &self.options
     }
 
-    /// Renders one frame of `mesh` (uploaded and its texture recorded, see
-    /// [`MeshBuffers::record_upload`]) seen from `pose` (world → camera frame, origin at the
-    /// lens's front vertex).
-    pub fn render(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<LensFrame> {
-        let start = Instant::now();
-        let (film, target) = (&self.film, &self.target);
-        self.ctx.submit(|cmd| {
-            unsafe { film.record_clear(cmd, target) };
-            Ok(())
-        })?;
-        for b in &mut self.buckets {
-            b.pass.bind_mesh(mesh);
+    /// Prepares a frame of `mesh` seen from `pose` (world → camera frame, origin at the lens's
+    /// front vertex): writes every cell's camera and pose. Host writes: no recorded frame of
+    /// this renderer may be executing.
+    pub fn prepare(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<()> {
+        for b in &self.buckets {
+            b.pass.bind_slots_mesh(&b.slots, mesh);
         }
         for draw in &self.draws {
-            let bucket = &mut self.buckets[draw.bucket];
-            bucket.pass.set_camera(&draw.camera)?;
+            let b = &self.buckets[draw.bucket];
             // The cell's camera sits at its COP, axes as the lens's camera frame.
             let cell_pose = Pose {
                 rotation: pose.rotation,
                 translation: pose.translation - draw.cop,
             };
-            bucket.pass.set_frame(&cell_pose, &cell_pose)?;
-            let bucket = &self.buckets[draw.bucket];
-            let vertices = &self.vertices;
-            self.ctx.submit(|cmd| {
-                unsafe {
-                    bucket.pass.record(cmd, &bucket.targets, mesh);
-                    film.record_cell(
-                        cmd,
-                        target,
-                        bucket.set,
-                        vertices,
-                        draw.first,
-                        draw.count,
-                        draw.mask,
-                    );
-                }
-                Ok(())
-            })?;
+            b.pass
+                .set_slot(&b.slots, draw.slot, &draw.camera, &cell_pose, &cell_pose)?;
         }
+        Ok(())
+    }
+
+    /// Records a prepared frame: the film cleared, then every cell rendered and added. The
+    /// film is left in `COLOR_ATTACHMENT_OPTIMAL` ([`Self::film`]).
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass on a graphics queue of this renderer's
+    /// device, after [`Self::prepare`] with `mesh` (uploaded, its texture recorded); all must
+    /// stay alive until the work completes.
+    pub unsafe fn record(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+        unsafe {
+            self.film.record_clear(cmd, &self.target);
+            for draw in &self.draws {
+                let b = &self.buckets[draw.bucket];
+                b.pass.record_slot(cmd, &b.targets, mesh, &b.slots, draw.slot);
+                self.film.record_cell(
+                    cmd,
+                    &self.target,
+                    b.set,
+                    &self.vertices,
+                    draw.first,
+                    draw.count,
+                    draw.mask,
+                );
+            }
+        }
+    }
+
+    /// The film image the frame accumulates into.
+    pub fn film(&self) -> &FilmTarget {
+        &self.target
+    }
+
+    /// Renders and reads back one frame of `mesh` (uploaded, its texture recorded, see
+    /// [`MeshBuffers::record_upload`]) seen from `pose`.
+    pub fn render(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<LensFrame> {
+        self.prepare(mesh, pose)?;
+        let start = Instant::now();
+        let this = &*self;
+        self.ctx.submit(|cmd| {
+            unsafe { this.record(cmd, mesh) };
+            Ok(())
+        })?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        let target = &self.target;
         self.ctx.submit(|cmd| {
             unsafe { target.record_download(cmd) };
             Ok(())
@@ -267,7 +301,7 @@ impl<'a> LensRenderer<'a> {
 }
 
 /// The render size of a cell: its film extent × `oversample`, a one-pixel margin, rounded
-/// up to a power of two so that cells share pipelines.
+/// up to a multiple of 32 so that cells of about one size share a pipeline.
 fn render_size(cell: &Cell, oversample: f64, max_side: u32) -> (u32, u32) {
     let (lo, hi) = cell.vertices.iter().fold(
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
@@ -275,8 +309,8 @@ fn render_size(cell: &Cell, oversample: f64, max_side: u32) -> (u32, u32) {
     );
     let side = |extent: f64| {
         ((extent * oversample).ceil().max(1.0) as u32 + 2)
-            .next_power_of_two()
-            .clamp(16, max_side)
+            .next_multiple_of(32)
+            .clamp(32, max_side)
     };
     (side(hi.x - lo.x), side(hi.y - lo.y))
 }

@@ -101,6 +101,18 @@ fn mesh_warp_push_matches_the_glsl_block() {
 }
 
 #[test]
+fn film_push_matches_the_glsl_block() {
+    use vklens::pass::film::FilmPush;
+    let host = vec![
+        ("film_size", offset_of!(FilmPush, film_size)),
+        ("channel_mask", offset_of!(FilmPush, channel_mask)),
+    ];
+    check(shaders::FILM_MORPH_VERT, "FilmPush", host.clone());
+    check(shaders::FILM_MORPH_FRAG, "FilmPush", host);
+    assert_eq!(std::mem::size_of::<FilmPush>(), 32);
+}
+
+#[test]
 fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
     // Simulate only what is asked for: a k1 k2 camera rendering colour only builds a vertex
     // stage with the rational/prism/tilt groups off and a fragment stage that writes no ID,

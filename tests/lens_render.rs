@@ -45,12 +45,12 @@ fn image_based_render_matches_the_reference() {
         let options = ModelOptions::default();
         let model = ImageModel::build(&optics, &options).unwrap();
         let mut renderer = LensRenderer::new(
-            &ctx,
+            ctx.gpu(),
             &[(model.clone(), ALL_CHANNELS)],
             LensRenderOptions::default(),
         )
         .unwrap();
-        let frame = renderer.render(&mesh, &pose).unwrap();
+        let frame = renderer.render(&ctx, &mesh, &pose).unwrap();
         let reference = render_reference(
             &optics,
             &[Channel {
@@ -105,8 +105,12 @@ fn vignetting_falls_off_as_the_reference_does() {
     let optics = Optics::new(&p, (180, 120), 0.2, 5.0, None).unwrap();
     let options = ModelOptions::default();
     let model = ImageModel::build(&optics, &options).unwrap();
-    let mut renderer =
-        LensRenderer::new(&ctx, &[(model.clone(), ALL_CHANNELS)], LensRenderOptions::default()).unwrap();
+    let mut renderer = LensRenderer::new(
+        ctx.gpu(),
+        &[(model.clone(), ALL_CHANNELS)],
+        LensRenderOptions::default(),
+    )
+    .unwrap();
     let wall = white_wall(5.0);
     let mesh = MeshBuffers::new(ctx.gpu(), &wall, None).unwrap();
     ctx.submit(|cmd| {
@@ -114,7 +118,9 @@ fn vignetting_falls_off_as_the_reference_does() {
         Ok(())
     })
     .unwrap();
-    let frame = renderer.render(&mesh, &vklens::scene::Pose::IDENTITY).unwrap();
+    let frame = renderer
+        .render(&ctx, &mesh, &vklens::scene::Pose::IDENTITY)
+        .unwrap();
     let mut profile = Vec::new();
     for k in 0..=10 {
         let t = k as f64 / 10.0;
@@ -137,7 +143,10 @@ fn vignetting_falls_off_as_the_reference_does() {
     }
     // It falls off: the f/2 double Gauss at full aperture keeps 16 % in the corner of a
     // 36 × 24 mm film (cos⁴ alone would keep 72 %: the rest is the rims of the lenses).
-    assert!(profile.windows(2).all(|w| w[1] <= w[0] + 1e-9), "{profile:?}");
+    assert!(
+        profile.windows(2).all(|w| w[1] <= w[0] + 1e-9),
+        "{profile:?}"
+    );
     assert!(profile[10] < 0.3 && profile[0] > 0.99, "{profile:?}");
     assert_no_validation_messages(&ctx);
 }
@@ -176,8 +185,8 @@ fn moments(px: &[[f32; 4]], w: usize) -> [(f64, f64); 3] {
 #[test]
 fn chromatic_aberration_comes_out_of_the_glass() {
     use vklens::lens::image_model::channel_models;
-    use vklens::lens::reference::Channel;
     use vklens::lens::image_model::{RGB_CHANNELS, RGB_WAVELENGTHS};
+    use vklens::lens::reference::Channel;
     let ctx = validated_context();
     // On the axis, 2 m away, in focus (d line): what differs between channels is where each
     // wavelength focuses (longitudinal colour), seen as the spot's spread.
@@ -204,8 +213,11 @@ fn chromatic_aberration_comes_out_of_the_glass() {
             ..ModelOptions::default()
         };
         let models = channel_models(&optics, &options, true).unwrap();
-        let mut renderer = LensRenderer::new(&ctx, &models, LensRenderOptions::default()).unwrap();
-        let frame = renderer.render(&gpu_mesh, &vklens::scene::Pose::IDENTITY).unwrap();
+        let mut renderer =
+            LensRenderer::new(ctx.gpu(), &models, LensRenderOptions::default()).unwrap();
+        let frame = renderer
+            .render(&ctx, &gpu_mesh, &vklens::scene::Pose::IDENTITY)
+            .unwrap();
         let channels: Vec<Channel> = RGB_WAVELENGTHS
             .iter()
             .zip(RGB_CHANNELS)
@@ -223,7 +235,10 @@ fn chromatic_aberration_comes_out_of_the_glass() {
         let (gpu, reference) = (moments(&frame.pixels, 240), moments(&reference.pixels, 240));
         println!("{lens}: GPU {gpu:?}\n reference {reference:?}");
         for c in 0..3 {
-            assert!((gpu[c].0 - reference[c].0).abs() < 0.2, "{lens} channel {c}");
+            assert!(
+                (gpu[c].0 - reference[c].0).abs() < 0.2,
+                "{lens} channel {c}"
+            );
             assert!(
                 (gpu[c].1 / reference[c].1 - 1.0).abs() < 0.05,
                 "{lens} channel {c}: spread {} vs {}",
@@ -243,4 +258,3 @@ fn chromatic_aberration_comes_out_of_the_glass() {
     );
     assert_no_validation_messages(&ctx);
 }
-

@@ -175,7 +175,10 @@ fn the_singlet_matches_its_published_figures_and_does_not_correct_colour() {
     use vklens::lens::prescription::{LAMBDA_C, LAMBDA_F};
     let shift = analyse(&p, LAMBDA_C).efl.unwrap() - analyse(&p, LAMBDA_F).efl.unwrap();
     let expected = efl / 64.17;
-    assert!((shift / expected - 1.0).abs() < 0.05, "{shift} vs {expected}");
+    assert!(
+        (shift / expected - 1.0).abs() < 0.05,
+        "{shift} vs {expected}"
+    );
 }
 
 mod image_model {
@@ -234,7 +237,10 @@ mod image_model {
                 let film = DVec3::new((k % 11) as f64 - 5.0, (k / 11) as f64 - 5.0, 40.0);
                 let d = (pin - film).normalize();
                 let d = DVec3::new(d.x, -d.y, -d.z);
-                PlaneRay { p: 2.0 / d.z * d, d }
+                PlaneRay {
+                    p: 2.0 / d.z * d,
+                    d,
+                }
             })
             .collect();
         let (e, angle) = fit_cop(&rays, DVec3::new(0.01, 0.02, 0.03));
@@ -321,4 +327,72 @@ mod image_model {
             }
         }
     }
+}
+
+#[test]
+fn lens_render_cli_writes_the_film_and_refuses_bad_input() {
+    let bin = env!("CARGO_BIN_EXE_vklens");
+    let dir = std::env::temp_dir().join(format!("vklens-lens-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let lens = format!("{}/lenses/achromat.50mm.dat", env!("CARGO_MANIFEST_DIR"));
+    let out = dir.join("film.png");
+    let run = |extra: &[&str]| {
+        Command::new(bin)
+            .args(["lens", "render", "--lens", &lens, "--scene", "boxes"])
+            .args(["--pixels", "96x64", "--samples", "4"])
+            .args(extra)
+            .env("VKLENS_VALIDATION", "1")
+            .output()
+            .unwrap()
+    };
+    for reference in [false, true] {
+        let _ = std::fs::remove_file(&out);
+        let mut args = vec!["--output", out.to_str().unwrap()];
+        if reference {
+            args.push("--reference");
+        }
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let img = image::open(&out).unwrap().to_rgba8();
+        assert_eq!(img.dimensions(), (96, 64));
+        // Something of the scene reached the film (the boxes are lit, not all black).
+        assert!(
+            img.pixels().any(|p| p[1] > 100),
+            "reference {reference}: a black film"
+        );
+    }
+    // Bad input: one line naming the problem, exit 2, nothing written.
+    let _ = std::fs::remove_file(&out);
+    let bad_file = dir.join("bad.dat");
+    std::fs::write(&bad_file, "30 5 1.5 20\n-30 x 1 20\n").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["--fstop".into(), "1.2".into()], "faster than the lens"),
+        (vec!["--focus=-1".into()], "--focus"),
+        (vec!["--max-angle".into(), "0".into()], "--max-angle"),
+        (vec!["--sensor".into(), "36x36".into()], "non-square"),
+    ];
+    for (extra, expected) in cases {
+        let mut args: Vec<&str> = extra.iter().map(|s| s.as_str()).collect();
+        args.extend(["--output", out.to_str().unwrap()]);
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(err.contains(expected), "{extra:?}: {err}");
+        assert!(!out.exists());
+    }
+    let o = Command::new(bin)
+        .args([
+            "lens",
+            "render",
+            "--lens",
+            bad_file.to_str().unwrap(),
+            "--scene",
+            "boxes",
+        ])
+        .args(["--output", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("bad.dat:2"));
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -66,36 +66,31 @@ pub fn run(
             .map_err(invalid)?;
         // The references, one per sample count (shared by the rows that use it).
         let mut references: Vec<(u32, ReferenceFrame)> = Vec::new();
-        let mut reference = |samples: u32, progress: &mut dyn FnMut(&str)| -> Result<ReferenceFrame> {
-            if let Some((_, r)) = references.iter().find(|(s, _)| *s == samples) {
-                return Ok(r.clone());
-            }
-            progress(&format!("{name}: reference ray tracing, {samples} samples"));
-            let r = render_reference(
-                &optics,
-                &[Channel {
-                    lambda_um: LAMBDA_D,
-                    mask: ALL_CHANNELS,
-                }],
-                samples,
-                &scene,
-                &pose,
-                &|_| {},
-            )
-            .map_err(invalid)?;
-            references.push((samples, r.clone()));
-            Ok(r)
-        };
+        let mut reference =
+            |samples: u32, progress: &mut dyn FnMut(&str)| -> Result<ReferenceFrame> {
+                if let Some((_, r)) = references.iter().find(|(s, _)| *s == samples) {
+                    return Ok(r.clone());
+                }
+                progress(&format!("{name}: reference ray tracing, {samples} samples"));
+                let r = render_reference(
+                    &optics,
+                    &[Channel {
+                        lambda_um: LAMBDA_D,
+                        mask: ALL_CHANNELS,
+                    }],
+                    samples,
+                    &scene,
+                    &pose,
+                    &|_| {},
+                )
+                .map_err(invalid)?;
+                references.push((samples, r.clone()));
+                Ok(r)
+            };
         let mut configs: Vec<(&str, ModelOptions)> = Vec::new();
         let base = ModelOptions::default();
         for s in SAMPLES {
-            configs.push((
-                "samples",
-                ModelOptions {
-                    samples: s,
-                    ..base
-                },
-            ));
+            configs.push(("samples", ModelOptions { samples: s, ..base }));
         }
         for t in THRESHOLDS {
             configs.push((
@@ -119,14 +114,14 @@ pub fn run(
             let preprocess_ms = start.elapsed().as_secs_f64() * 1e3;
             let max_angle = model.max_angle_deg();
             let mut renderer = LensRenderer::new(
-                ctx,
+                ctx.gpu(),
                 &[(model, ALL_CHANNELS)],
                 LensRenderOptions::default(),
             )?;
             let mut times = Vec::new();
-            let mut frame = renderer.render(&mesh, &pose)?; // warm-up
+            let mut frame = renderer.render(ctx, &mesh, &pose)?; // warm-up
             for _ in 0..3 {
-                frame = renderer.render(&mesh, &pose)?;
+                frame = renderer.render(ctx, &mesh, &pose)?;
                 times.push(frame.frame_ms);
             }
             let gpu_ms = median(times);

@@ -168,9 +168,9 @@ pub fn lens(args: LensArgs) -> Result<(), CliError> {
     eprintln!("device: {}", ctx.gpu().device_name());
     let rows = crate::bench::lens::run(&ctx, &dir, args.pixels, &mut |s| super::progress_line(s))
         .map_err(|e| match e {
-            crate::gpu::GpuError::Invalid(m) => CliError::input(m),
-            other => CliError::from(other),
-        })?;
+        crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+        other => CliError::from(other),
+    })?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     finish(&ctx)?;
     if args.json {

@@ -355,14 +355,9 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
                 mask: crate::lens::image_model::ALL_CHANNELS,
             }]
         };
-        let frame = render_reference(
-            &optics,
-            &channels,
-            args.samples,
-            &scene,
-            &pose,
-            &|f| progress_line(&format!("reference ray tracing: {:3.0} %", 100.0 * f)),
-        )
+        let frame = render_reference(&optics, &channels, args.samples, &scene, &pose, &|f| {
+            progress_line(&format!("reference ray tracing: {:3.0} %", 100.0 * f))
+        })
         .map_err(lens_error)?;
         progress_done(&format!(
             "reference: {} rays through the lens in {:.2} s",
@@ -378,7 +373,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             other => CliError::from(other),
         };
         let mut renderer = crate::pass::lens_render::LensRenderer::new(
-            &ctx,
+            ctx.gpu(),
             &models,
             crate::pass::lens_render::LensRenderOptions::default(),
         )
@@ -392,17 +387,14 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             renderer.projection_count(),
             ctx.gpu().device_name()
         ));
-        let mesh = crate::pass::geometry::MeshBuffers::new(
-            ctx.gpu(),
-            &scene.mesh,
-            scene.texture.as_ref(),
-        )
-        .map_err(gpu_error)?;
+        let mesh =
+            crate::pass::geometry::MeshBuffers::new(ctx.gpu(), &scene.mesh, scene.texture.as_ref())
+                .map_err(gpu_error)?;
         ctx.submit(|cmd| {
             unsafe { mesh.record_upload(cmd) };
             Ok(())
         })?;
-        let frame = renderer.render(&mesh, &pose).map_err(gpu_error)?;
+        let frame = renderer.render(&ctx, &mesh, &pose).map_err(gpu_error)?;
         super::finish(&ctx)?;
         progress_done(&format!(
             "{} projections in {:.1} ms",

@@ -109,11 +109,7 @@ fn extension(path: &Path) -> Option<String> {
         .map(|e| e.to_ascii_lowercase())
 }
 
-pub(crate) fn check_output(
-    path: &Path,
-    what: &str,
-    allowed: &[&str],
-) -> Result<String, CliError> {
+pub(crate) fn check_output(path: &Path, what: &str, allowed: &[&str]) -> Result<String, CliError> {
     let ext = extension(path).unwrap_or_default();
     if !allowed.contains(&ext.as_str()) {
         return Err(CliError::input(format!(

@@ -24,9 +24,9 @@
 use glam::{DMat3, DVec2, DVec3};
 
 use super::paraxial::{analyse, focus};
-use crate::model::{Intrinsics, OpenCvCamera, OpenCvDistortion};
 use super::prescription::{Prescription, LAMBDA_D};
 use super::trace::{trace, Ray};
+use crate::model::{Intrinsics, OpenCvCamera, OpenCvDistortion};
 
 /// The film: its pixel grid and where it sits.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,7 +103,9 @@ impl Optics {
             return Err("the lens is afocal: it forms no image".into());
         };
         if efl <= 0.0 {
-            return Err(format!("the lens diverges (EFL {efl:.3} mm): no real image"));
+            return Err(format!(
+                "the lens diverges (EFL {efl:.3} mm): no real image"
+            ));
         }
         let mut lens = lens.clone();
         let f_number = match f_number {
@@ -190,7 +192,12 @@ impl Optics {
         OpenCvCamera::new(
             self.film.width,
             self.film.height,
-            Intrinsics { fx: f, fy: f, cx, cy },
+            Intrinsics {
+                fx: f,
+                fy: f,
+                cx,
+                cy,
+            },
             OpenCvDistortion::default(),
         )
         .map_err(|e| e.to_string())
@@ -700,7 +707,9 @@ impl CellBuilder<'_> {
             })
             .collect();
         let projected = vertices.iter().filter_map(|v| v.projected);
-        let min = projected.clone().fold(DVec2::splat(f64::INFINITY), DVec2::min);
+        let min = projected
+            .clone()
+            .fold(DVec2::splat(f64::INFINITY), DVec2::min);
         let max = projected.fold(DVec2::splat(f64::NEG_INFINITY), DVec2::max);
         if !(min.is_finite() && max.is_finite()) {
             return;
@@ -749,7 +758,11 @@ mod tests {
             let (sm, gm, _) = cos2_terms(&rays, e - de);
             assert!(((sp - sm) / (2.0 * eps) - g[axis]).abs() < 1e-6);
             let column = (gp - gm) / (2.0 * eps);
-            assert!((column - h.col(axis)).length() < 1e-5, "{column} {}", h.col(axis));
+            assert!(
+                (column - h.col(axis)).length() < 1e-5,
+                "{column} {}",
+                h.col(axis)
+            );
         }
     }
 

@@ -88,7 +88,8 @@ pub fn render_reference(
                                 for (k, p) in points.iter().enumerate() {
                                     traced += 1;
                                     let film_point = film.point(
-                                        DVec2::new(x as f64, y as f64) + pixel_offset(k, points.len()),
+                                        DVec2::new(x as f64, y as f64)
+                                            + pixel_offset(k, points.len()),
                                     );
                                     let Some(ray) =
                                         optics.trace_from_film(film_point, *p, channel.lambda_um)

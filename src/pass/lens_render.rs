@@ -23,7 +23,7 @@ use super::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers,
 };
 use super::geometry::{Outputs, Projection};
-use crate::gpu::{Buffer, Context, GpuError, Result};
+use crate::gpu::{Buffer, Context, Gpu, GpuError, Result};
 use crate::lens::image_model::{Cell, ImageModel};
 use crate::model::{Intrinsics, OpenCvCamera, OpenCvDistortion};
 use crate::scene::Pose;
@@ -85,10 +85,10 @@ pub struct LensFrame {
     pub frame_ms: f64,
 }
 
-/// The GPU side of the image-based model: built once per lens setting, draws any number of
-/// frames (poses) of one scene.
-pub struct LensRenderer<'a> {
-    ctx: &'a Context,
+/// The GPU side of the image-based model: built once per lens setting on any device (the
+/// caller's, through [`Gpu::from_caller`], or the headless [`Context`]'s), draws any number
+/// of frames (poses) of one scene.
+pub struct LensRenderer {
     film: FilmPass,
     target: FilmTarget,
     buckets: Vec<Bucket>,
@@ -99,15 +99,14 @@ pub struct LensRenderer<'a> {
 
 pub use crate::lens::image_model::{ALL_CHANNELS, RGB_CHANNELS};
 
-impl<'a> LensRenderer<'a> {
+impl LensRenderer {
     /// `models`: each with the channels it draws into (one model: [`ALL_CHANNELS`]; three
     /// wavelengths: [`RGB_CHANNELS`]). All models must share one film.
     pub fn new(
-        ctx: &'a Context,
+        gpu: &Gpu,
         models: &[(ImageModel, [f32; 4])],
         options: LensRenderOptions,
     ) -> Result<Self> {
-        let gpu = ctx.gpu();
         let Some(film) = models.first().map(|(m, _)| m.film) else {
             return Err(GpuError::Invalid("no lens model to render".into()));
         };
@@ -141,7 +140,10 @@ impl<'a> LensRenderer<'a> {
                         sizes.len() - 1
                     }
                 };
-                let slot = draws.iter().filter(|d: &&CellDraw| d.bucket == bucket).count();
+                let slot = draws
+                    .iter()
+                    .filter(|d: &&CellDraw| d.bucket == bucket)
+                    .count();
                 draws.push(CellDraw {
                     camera,
                     cop: cell.cop,
@@ -199,7 +201,6 @@ impl<'a> LensRenderer<'a> {
             vk::BufferUsageFlags::VERTEX_BUFFER,
         )?;
         Ok(LensRenderer {
-            ctx,
             film: film_pass,
             target,
             buckets,
@@ -255,7 +256,8 @@ impl<'a> LensRenderer<'a> {
             self.film.record_clear(cmd, &self.target);
             for draw in &self.draws {
                 let b = &self.buckets[draw.bucket];
-                b.pass.record_slot(cmd, &b.targets, mesh, &b.slots, draw.slot);
+                b.pass
+                    .record_slot(cmd, &b.targets, mesh, &b.slots, draw.slot);
                 self.film.record_cell(
                     cmd,
                     &self.target,
@@ -275,18 +277,18 @@ impl<'a> LensRenderer<'a> {
     }
 
     /// Renders and reads back one frame of `mesh` (uploaded, its texture recorded, see
-    /// [`MeshBuffers::record_upload`]) seen from `pose`.
-    pub fn render(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<LensFrame> {
+    /// [`MeshBuffers::record_upload`]) seen from `pose`, on the headless context.
+    pub fn render(&mut self, ctx: &Context, mesh: &MeshBuffers, pose: &Pose) -> Result<LensFrame> {
         self.prepare(mesh, pose)?;
         let start = Instant::now();
         let this = &*self;
-        self.ctx.submit(|cmd| {
+        ctx.submit(|cmd| {
             unsafe { this.record(cmd, mesh) };
             Ok(())
         })?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let target = &self.target;
-        self.ctx.submit(|cmd| {
+        ctx.submit(|cmd| {
             unsafe { target.record_download(cmd) };
             Ok(())
         })?;
@@ -357,9 +359,12 @@ fn push_triangles(cell: &Cell, camera: &OpenCvCamera, out: &mut Vec<FilmVertex>)
     for j in 0..cell.n as usize {
         for a in 0..cell.n as usize {
             let k = j * row + a;
-            let (Some(p00), Some(p10), Some(p01), Some(p11)) =
-                (vertex(k), vertex(k + 1), vertex(k + row), vertex(k + row + 1))
-            else {
+            let (Some(p00), Some(p10), Some(p01), Some(p11)) = (
+                vertex(k),
+                vertex(k + 1),
+                vertex(k + row),
+                vertex(k + row + 1),
+            ) else {
                 continue;
             };
             out.extend_from_slice(&[p00, p10, p01, p10, p11, p01]);

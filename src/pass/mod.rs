@@ -4,8 +4,8 @@
 
 pub mod camera_params;
 pub mod copy;
-pub mod geometry;
 pub mod film;
+pub mod geometry;
 pub mod grid_demo;
 pub mod lens_render;
 pub mod mesh_warp;

@@ -100,7 +100,13 @@ impl Bvh {
     }
 
     /// The nearest hit with `t` in `(t_min, t_max)` of the ray `origin + t·direction`.
-    pub fn intersect(&self, origin: DVec3, direction: DVec3, t_min: f64, t_max: f64) -> Option<Hit> {
+    pub fn intersect(
+        &self,
+        origin: DVec3,
+        direction: DVec3,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<Hit> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -183,11 +189,7 @@ pub fn shade(mesh: &Mesh, texture: Option<&Raster>, hit: &Hit) -> [f64; 4] {
     );
     let tex = texture.map(|t| sample_repeat(t, uv)).unwrap_or([1.0; 4]);
     std::array::from_fn(|c| {
-        let colour = mix(
-            v0.color[c] as f64,
-            v1.color[c] as f64,
-            v2.color[c] as f64,
-        ) / 255.0;
+        let colour = mix(v0.color[c] as f64, v1.color[c] as f64, v2.color[c] as f64) / 255.0;
         colour * tex[c]
     })
 }
@@ -208,7 +210,12 @@ fn sample_repeat(t: &Raster, uv: DVec2) -> [f64; 4] {
         }
     };
     let (i, j) = (x0 as i64, y0 as i64);
-    let (a, b, c, d) = (texel(i, j), texel(i + 1, j), texel(i, j + 1), texel(i + 1, j + 1));
+    let (a, b, c, d) = (
+        texel(i, j),
+        texel(i + 1, j),
+        texel(i, j + 1),
+        texel(i + 1, j + 1),
+    );
     std::array::from_fn(|k| {
         (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
     })

@@ -396,3 +396,23 @@ fn lens_render_cli_writes_the_film_and_refuses_bad_input() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("bad.dat:2"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn fitting_at_a_finite_focus_scales_the_focal_length_by_the_magnification() {
+    use vklens::lens::fit_opencv;
+    let p = shipped("dgauss.50mm.dat");
+    let par = analyse(&p, LAMBDA_D);
+    let at_infinity = fit_opencv(&p, (36.0, 24.0), (1800, 1200), f64::INFINITY, LAMBDA_D).unwrap();
+    let at_one_metre = fit_opencv(&p, (36.0, 24.0), (1800, 1200), 1.0, LAMBDA_D).unwrap();
+    // Paraxially the film moves from F' to s' = f s / (s − f) behind H' (s measured from H),
+    // and the image height of a point seen at tan θ from the entrance pupil, d away, is
+    // (s'/s) d tan θ: the focal length in pixels grows by (s'/f)(d/s).
+    let f = par.efl.unwrap();
+    let s = 1000.0 + par.front_principal_z.unwrap();
+    let d = 1000.0 + par.entrance_pupil_z;
+    let expected = s / (s - f) * d / s;
+    let ratio = at_one_metre.fx / at_infinity.fx;
+    assert!((ratio / expected - 1.0).abs() < 2e-3, "{ratio} vs {expected}");
+    assert!(at_one_metre.rms_residual_px < 0.01, "{}", at_one_metre.rms_residual_px);
+    assert!(fit_opencv(&p, (36.0, 24.0), (1800, 1200), 0.01, LAMBDA_D).is_err());
+}

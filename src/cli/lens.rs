@@ -103,6 +103,10 @@ pub struct FitArgs {
     /// Camera file to write (vklens JSON); stdout when absent.
     #[arg(long, value_name = "CAM.json")]
     out: Option<PathBuf>,
+    /// Focus distance in metres from the front vertex (default: infinity). The camera centre
+    /// of the fitted model is the entrance pupil.
+    #[arg(long, value_name = "M")]
+    focus: Option<f64>,
 }
 
 fn parse_pair<T: std::str::FromStr>(s: &str) -> Option<(T, T)> {
@@ -244,7 +248,13 @@ fn info(args: InfoArgs) -> Result<(), CliError> {
 
 fn fit(args: FitArgs) -> Result<(), CliError> {
     let lens = Prescription::load(&args.lens).map_err(|e| CliError::input(e.to_string()))?;
-    let f = fit_opencv(&lens, args.sensor, args.pixels, LAMBDA_D)
+    let focus = args.focus.unwrap_or(f64::INFINITY);
+    if !(focus > 0.0) {
+        return Err(CliError::input(format!(
+            "--focus {focus}: expected a distance in metres > 0"
+        )));
+    }
+    let f = fit_opencv(&lens, args.sensor, args.pixels, focus, LAMBDA_D)
         .map_err(|e| CliError::input(format!("{}: {e}", args.lens.display())))?;
     let camera = json!({
         "width": f.width, "height": f.height,
@@ -253,7 +263,8 @@ fn fit(args: FitArgs) -> Result<(), CliError> {
         "fitted_to": {
             "lens": lens.name,
             "sensor_mm": [args.sensor.0, args.sensor.1],
-            "focus": "infinity",
+            "focus_m": if focus.is_infinite() { json!("infinity") } else { json!(focus) },
+            "camera_centre": "entrance pupil",
             "max_field_deg": f.max_field_deg,
             "samples": f.samples,
             "max_residual_px": f.max_residual_px,

@@ -33,11 +33,18 @@ pub struct OpenCvFit {
 }
 
 /// Fits the model for a sensor of `sensor_mm` (width, height) with `pixels` (width, height),
-/// the film at the paraxial focus for infinity, at `lambda_um`.
+/// the film at the paraxial focus for an object `focus_m` metres in front of the front vertex
+/// (infinite: focused at infinity), at `lambda_um`.
+///
+/// The chief ray of field angle θ passes the centre of the stop, so in object space it comes
+/// from the centre of the entrance pupil: that is the camera centre, and OpenCV's normalized
+/// coordinate is tan θ whatever the focus. Focusing only moves the film, which scales and
+/// reshapes r(θ); the fit is the same linear problem.
 pub fn fit_opencv(
     p: &Prescription,
     sensor_mm: (f64, f64),
     pixels: (u32, u32),
+    focus_m: f64,
     lambda_um: f64,
 ) -> Result<OpenCvFit, String> {
     let pitch_x = sensor_mm.0 / pixels.0 as f64;
@@ -56,7 +63,19 @@ pub fn fit_opencv(
             "the lens diverges (EFL {efl:.3} mm): no real image to fit"
         ));
     }
-    let film_z = par.rear_vertex_z + bfl;
+    let image = if focus_m.is_infinite() {
+        Some(bfl)
+    } else if focus_m > 0.0 {
+        super::focus(p, focus_m * 1000.0, lambda_um)
+    } else {
+        None
+    };
+    let Some(image) = image.filter(|d| d.is_finite() && *d > 0.0) else {
+        return Err(format!(
+            "cannot focus at {focus_m} m: the image would not be behind the lens"
+        ));
+    };
+    let film_z = par.rear_vertex_z + image;
     let half_diagonal = 0.5 * (sensor_mm.0.hypot(sensor_mm.1));
     // Sample field angles until the image height passes the sensor corner (or rays stop).
     let mut samples = Vec::new();

@@ -15,5 +15,7 @@ layout(location = 1) noperspective in float v_weight;
 layout(location = 0) out vec4 out_radiance;
 
 void main() {
-    out_radiance = texture(cell_image, v_uv) * (v_weight * push.channel_mask);
+    // Alpha collects the weight alone, whatever the scene's coverage: the relative
+    // illumination of the film (its vignetting), which a plan without vignetting divides out.
+    out_radiance = vec4(texture(cell_image, v_uv).rgb, 1.0) * (v_weight * push.channel_mask);
 }

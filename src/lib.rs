@@ -7,6 +7,9 @@
 //! * [`gpu`] — Vulkan plumbing: a [`gpu::Gpu`] built from the caller's device, queue and
 //!   allocator, the headless [`gpu::Context`] that tests and the CLI use, owned resources.
 //! * [`pass`] — GPU passes that record into a command buffer the caller owns.
+//! * [`lens`] — real lens systems (seed 004): prescriptions, exact tracing, the image-based
+//!   model and its reference ray tracer. No Vulkan.
+//! * [`plan`] — scene files and the planner: the cheapest pipeline for what a scene asks.
 //! * [`bench`] — the accuracy-versus-time measurements behind `vklens bench`.
 
 // `!(x > 0.0)` is how this crate says "x is positive and not NaN": a NaN must fail every
@@ -21,5 +24,6 @@ pub mod io;
 pub mod lens;
 pub mod model;
 pub mod pass;
+pub mod plan;
 pub mod render;
 pub mod scene;

@@ -47,6 +47,9 @@ pub enum RenderPath {
     /// compute warp with `method`. Bilinear resampling blurs and shifts edges by up to a few
     /// hundredths of a source pixel; a denser source shrinks that in output pixels.
     Warp { method: InverseMethod, density: f64 },
+    /// No lens at all: the Sec. 3.1 pinhole projection of the camera's intrinsics (its
+    /// distortion is ignored), no geometry shader, no warp.
+    Pinhole,
 }
 
 /// What to render.
@@ -65,6 +68,8 @@ pub struct RenderRequest {
     /// Split mesh edges longer than this many pixels first (vertex path).
     pub tessellate: Option<f64>,
     pub background: [f32; 4],
+    /// Lateral chromatic aberration (warp path): per-channel radial scales R, G, B.
+    pub chromatic: Option<[f64; 3]>,
 }
 
 /// The camera rendering `camera`'s image at `s×` its resolution.
@@ -369,6 +374,18 @@ pub struct SceneRenderer<'a> {
     ctx: &'a Context,
     passes: Vec<(GeometryPass, GeometryTargets)>,
     warp_stages: Vec<WarpStage>,
+    /// Every pipeline recorded so far, in order, with the specialization constants it was
+    /// built with: what a plan can be checked against (not timings).
+    pub recorded: Vec<RecordedPipeline>,
+}
+
+/// One recorded use of a pipeline.
+#[derive(Debug, Clone)]
+pub struct RecordedPipeline {
+    /// "pinhole render", "Alg. 1 (vertex + discard)" or "warp".
+    pub kind: &'static str,
+    /// The constants of each stage.
+    pub constants: Vec<(vk::ShaderStageFlags, crate::gpu::SpecConstants)>,
 }
 
 impl<'a> SceneRenderer<'a> {
@@ -377,6 +394,7 @@ impl<'a> SceneRenderer<'a> {
             ctx,
             passes: Vec::new(),
             warp_stages: Vec::new(),
+            recorded: Vec::new(),
         }
     }
 
@@ -411,6 +429,10 @@ impl<'a> SceneRenderer<'a> {
             }
         };
         let (pass, targets) = &mut self.passes[index];
+        self.recorded.push(RecordedPipeline {
+            kind: geometry_kind(pass),
+            constants: pass.pipeline().constants.clone(),
+        });
         pass.bind_mesh(mesh);
         pass.set_frame(pose, previous)?;
         let (pass, targets) = (&*pass, &*targets);
@@ -470,6 +492,17 @@ impl<'a> SceneRenderer<'a> {
             }
         };
         let st = &mut self.warp_stages[index];
+        self.recorded.push(RecordedPipeline {
+            kind: geometry_kind(&st.pass),
+            constants: st.pass.pipeline().constants.clone(),
+        });
+        self.recorded.push(RecordedPipeline {
+            kind: "warp",
+            constants: vec![(
+                vk::ShaderStageFlags::COMPUTE,
+                st.warp.pipeline().constants.clone(),
+            )],
+        });
         st.pass.bind_mesh(mesh);
         st.pass.set_frame(pose, pose)?;
         let st = &*st;
@@ -500,6 +533,13 @@ fn invalid(e: impl ToString) -> GpuError {
     GpuError::Invalid(e.to_string())
 }
 
+fn geometry_kind(pass: &GeometryPass) -> &'static str {
+    match pass.desc().projection {
+        Projection::Lens { .. } => "Alg. 1 (vertex + discard)",
+        Projection::Pinhole => "pinhole render",
+    }
+}
+
 /// Renders `scene` as `request` asks (a one-off [`SceneRenderer`]); `progress` hears each
 /// step.
 pub fn render_scene(
@@ -519,7 +559,12 @@ fn render_with(
 ) -> Result<Rendered> {
     let s = request.supersample.clamp(1, 16);
     match request.path {
-        RenderPath::Vertex { delta } => {
+        RenderPath::Vertex { .. } | RenderPath::Pinhole => {
+            if request.chromatic.is_some() {
+                return Err(invalid(
+                    "chromatic aberration needs the warp path (one fused pass samples each channel through its own lens)",
+                ));
+            }
             let mesh = match request.tessellate {
                 Some(l) => {
                     progress(&format!("tessellating to {l} px edges"));
@@ -531,7 +576,10 @@ fn render_with(
                 None => scene.mesh.clone(),
             };
             let buffers = renderer.upload(&mesh, scene.texture.as_ref())?;
-            let projection = Projection::Lens { delta };
+            let projection = match request.path {
+                RenderPath::Vertex { delta } => Projection::Lens { delta },
+                _ => Projection::Pinhole,
+            };
             let o = request.outputs;
             let data = Outputs { color: None, ..o };
             let mut run = |camera: OpenCvCamera, outputs: Outputs| {
@@ -647,9 +695,12 @@ fn render_warp_path(
             let source =
                 OpenCvCamera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
                     .map_err(invalid)?;
-            let geometry = WarpGeometry::distort(big, method)
+            let mut geometry = WarpGeometry::distort(big, method)
                 .with_ideal(k, (big_ov.width, big_ov.height))
                 .map_err(invalid)?;
+            if let Some(scales) = request.chromatic {
+                geometry = geometry.with_chromatic(scales).map_err(invalid)?;
+            }
             renderer.draw_warped(
                 &buffers,
                 &request.pose,

@@ -215,6 +215,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             jitter: 4,
             tessellate: None,
             background: [0.0, 0.0, 0.0, 1.0],
+            chromatic: None,
         };
         let color = render_scene(&ctx, &scene, &request, &mut |_| {})
             .unwrap()
@@ -373,6 +374,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         jitter: 1,
         tessellate: None,
         background: [0.0; 4],
+        chromatic: None,
     };
     let warped = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     assert!(warped.ids.unwrap().iter().all(|i| valid.contains(i)));
@@ -441,6 +443,7 @@ fn vertex_and_warp_paths_agree_on_a_finely_tessellated_scene() {
         jitter: 1,
         tessellate: Some(2.0),
         background: [0.0; 4],
+        chromatic: None,
     };
     let vertex = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     request.path = RenderPath::Warp {

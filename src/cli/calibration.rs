@@ -104,6 +104,7 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
             jitter: args.jitter,
             tessellate: (args.path == PathArg::Vertex).then_some(args.tessellate),
             background: [0.5, 0.5, 0.5, 1.0],
+            chromatic: None,
         };
         let rendered = renderer.render(&scene, &request, &mut |_| {})?;
         let color = rendered

@@ -343,6 +343,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
         max_angle_deg: args.max_angle,
         max_depth: args.max_depth,
         lambda_um: LAMBDA_D,
+        vignetting: true,
     };
     progress_line(&format!(
         "{}: f/{:.2}, focus {:.3} m, film {}×{} at {:.3} mm from the rear vertex",

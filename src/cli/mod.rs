@@ -9,6 +9,7 @@ mod calibration;
 mod demo;
 mod lens;
 mod points;
+mod planned;
 mod render;
 mod warp;
 

@@ -29,15 +29,30 @@ pub enum PathArg {
   vklens render --camera cam.yml --scene model.glb --output c.png --path warp --pose 0.1,0,0,0,0,3")]
 pub struct RenderArgs {
     /// The lens: an OpenCV/ROS/vklens camera file. The output has its width × height.
+    /// (Not with a .toml scene: the scene file names its optics.)
     #[arg(long, value_name = "CAM")]
-    camera: PathBuf,
+    camera: Option<PathBuf>,
     /// checkerboard[:COLSxROWS[:SQUARE_M]] (OpenCV's board, inner corners, default 9x6 of
     /// 0.04 m), grid[:N] (N×N textured quads, default 16), boxes, or an .obj/.gltf/.glb file.
+    /// Or a scene file (.toml, see examples/scenes/): then the planner builds the cheapest
+    /// pipeline for the effects, outputs and accuracy it asks for, and --out names a folder.
     #[arg(long, value_name = "SCENE")]
     scene: String,
     /// Colour output: .png (8-bit RGBA) or .exr (16-bit float RGBA).
     #[arg(long, value_name = "OUT")]
-    output: PathBuf,
+    output: Option<PathBuf>,
+    /// Scene files: the folder for every output of every frame (created if missing):
+    /// color_NNNN.png|exr, ids_NNNN.png, flow_NNNN.exr, depth_NNNN.exr, and plan.json.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Scene files: print the plan — each pass, why it is there, its measured time on the
+    /// first frame — before rendering.
+    #[arg(long)]
+    explain: bool,
+    /// Scene files: render only frames A..B of the pose list (A included, B not; A..=B
+    /// includes B).
+    #[arg(long, value_name = "A..B")]
+    frames: Option<String>,
     /// Object IDs: .png (16-bit grey, 0 = background) or .exr (IDs as floats).
     #[arg(long, value_name = "IDS")]
     ids: Option<PathBuf>,
@@ -148,8 +163,27 @@ fn nudged(pose: &Pose, scene: &Scene) -> Pose {
 }
 
 pub fn run(args: RenderArgs) -> Result<(), CliError> {
-    let camera = load_camera(&args.camera)?;
-    let color_ext = check_output(&args.output, "colour", &["png", "exr"])?;
+    if args.scene.to_ascii_lowercase().ends_with(".toml") {
+        return super::planned::run(&args.scene, &args);
+    }
+    for (given, flag) in [
+        (args.out.is_some(), "--out"),
+        (args.explain, "--explain"),
+        (args.frames.is_some(), "--frames"),
+    ] {
+        if given {
+            return Err(CliError::input(format!(
+                "{flag} is for scene files (--scene S.toml); with --camera use --output"
+            )));
+        }
+    }
+    let (Some(camera_path), Some(output)) = (&args.camera, &args.output) else {
+        return Err(CliError::input(
+            "give --camera CAM and --output OUT (or --scene S.toml with --out DIR)",
+        ));
+    };
+    let camera = load_camera(camera_path)?;
+    let color_ext = check_output(output, "colour", &["png", "exr"])?;
     let ids_ext = match &args.ids {
         Some(p) => Some(check_output(p, "ID", &["png", "exr"])?),
         None => None,
@@ -213,6 +247,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         jitter: args.jitter,
         tessellate: args.tessellate,
         background: args.background.0,
+        chromatic: None,
     };
     let ctx = context()?;
     progress_line(&format!(
@@ -227,12 +262,61 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             other => CliError::from(other),
         })?;
     finish(&ctx)?;
-    write_outputs(&args, &rendered, ids_ext.as_deref())?;
-    progress_done(&format!("wrote {}", args.output.display()));
+    write_outputs(
+        &Targets {
+            color: Some(output),
+            ids: args.ids.as_deref(),
+            flow: args.flow.as_deref(),
+            depth: args.depth.as_deref(),
+        },
+        &rendered,
+        ids_ext.as_deref(),
+    )?;
+    progress_done(&format!("wrote {}", output.display()));
     Ok(())
 }
 
-fn write_outputs(args: &RenderArgs, r: &Rendered, ids_ext: Option<&str>) -> Result<(), CliError> {
+/// Where each output of a frame goes.
+pub(crate) struct Targets<'a> {
+    pub color: Option<&'a Path>,
+    pub ids: Option<&'a Path>,
+    pub flow: Option<&'a Path>,
+    pub depth: Option<&'a Path>,
+}
+
+impl RenderArgs {
+    pub(crate) fn conflicts_with_scene_file(&self) -> Option<&'static str> {
+        if self.camera.is_some() {
+            Some("--camera")
+        } else if self.output.is_some() {
+            Some("--output")
+        } else if self.ids.is_some() || self.flow.is_some() || self.depth.is_some() {
+            Some("--ids/--flow/--depth (the scene file's [outputs] asks for them)")
+        } else if self.pose.is_some() || self.previous_pose.is_some() {
+            Some("--pose (the scene file's [[poses]] gives them)")
+        } else {
+            None
+        }
+    }
+
+    pub(crate) fn out(&self) -> Option<&Path> {
+        self.out.as_deref()
+    }
+
+    pub(crate) fn explain(&self) -> bool {
+        self.explain
+    }
+
+    pub(crate) fn frames(&self) -> Option<&str> {
+        self.frames.as_deref()
+    }
+}
+
+pub(crate) fn write_outputs(
+    args: &Targets,
+    r: &Rendered,
+    ids_ext: Option<&str>,
+) -> Result<(), CliError> {
     let save =
         |raster: &Raster, path: &Path| image_io::save(raster, path).map_err(CliError::runtime);
     let float_image = |pixels: Vec<[f32; 4]>| Raster {
@@ -241,10 +325,10 @@ fn write_outputs(args: &RenderArgs, r: &Rendered, ids_ext: Option<&str>) -> Resu
         pixels: Pixels::Rgba32F(pixels),
         depth: Depth::F32,
     };
-    if let Some(c) = &r.color {
-        save(c, &args.output)?;
+    if let (Some(path), Some(c)) = (args.color, &r.color) {
+        save(c, path)?;
     }
-    if let (Some(path), Some(ids)) = (&args.ids, &r.ids) {
+    if let (Some(path), Some(ids)) = (args.ids, &r.ids) {
         if ids_ext == Some("png") {
             if let Some(&big) = ids.iter().find(|&&i| i > u16::MAX as u32) {
                 return Err(CliError::input(format!(
@@ -272,7 +356,7 @@ fn write_outputs(args: &RenderArgs, r: &Rendered, ids_ext: Option<&str>) -> Resu
             )?;
         }
     }
-    if let (Some(path), Some(flow)) = (&args.flow, &r.flow) {
+    if let (Some(path), Some(flow)) = (args.flow, &r.flow) {
         let pixels = flow
             .iter()
             .map(|f| {
@@ -282,7 +366,7 @@ fn write_outputs(args: &RenderArgs, r: &Rendered, ids_ext: Option<&str>) -> Resu
             .collect();
         save(&float_image(pixels), path)?;
     }
-    if let (Some(path), Some(depth)) = (&args.depth, &r.depth) {
+    if let (Some(path), Some(depth)) = (args.depth, &r.depth) {
         save(
             &float_image(depth.iter().map(|&z| [z, z, z, 1.0]).collect()),
             path,

@@ -431,6 +431,10 @@ pub struct ModelOptions {
     pub max_depth: u32,
     /// Wavelength (µm).
     pub lambda_um: f64,
+    /// Fit each sample's lit region (Sec. 3.4's border bisection). Without it the film grid
+    /// stays the whole film and quads with blocked rays are dropped: a plan that does not
+    /// want vignetting divides the accumulated weight out instead.
+    pub vignetting: bool,
 }
 
 impl Default for ModelOptions {
@@ -441,6 +445,7 @@ impl Default for ModelOptions {
             max_angle_deg: 0.05,
             max_depth: 4,
             lambda_um: LAMBDA_D,
+            vignetting: true,
         }
     }
 }
@@ -532,7 +537,7 @@ impl ImageModel {
         let plane_z = optics.focus_m.min(1.0e4);
         let mut samples = Vec::with_capacity(points.len());
         for point in points {
-            let border = Border::new(optics, point, lambda);
+            let border = Border::new(optics, point, lambda, options.vignetting);
             let mut builder = CellBuilder {
                 optics,
                 options,
@@ -577,7 +582,7 @@ struct Border {
 const SIDE: usize = 64;
 
 impl Border {
-    fn new(optics: &Optics, point: DVec3, lambda: f64) -> Self {
+    fn new(optics: &Optics, point: DVec3, lambda: f64, fit: bool) -> Self {
         let film = optics.film;
         let (w, h) = (film.width as f64, film.height as f64);
         let corner = |s: f64, t: f64| DVec2::new(-0.5 + s * w, -0.5 + t * h);
@@ -587,7 +592,7 @@ impl Border {
                 .trace_from_film(film.point(px), point, lambda)
                 .is_some()
         };
-        let centre_lit = lit(centre);
+        let centre_lit = fit && lit(centre);
         let pull_in = |px: DVec2| -> DVec2 {
             if lit(px) || !centre_lit {
                 return px;

@@ -1,0 +1,168 @@
+//! `vklens render --scene S.toml --out DIR [--explain] [--frames A..B]`: a scene file through
+//! the planner.
+
+use std::path::Path;
+
+use serde_json::json;
+
+use super::render::{write_outputs, RenderArgs, Targets};
+use super::{context, finish, progress_done, progress_line, CliError};
+use crate::plan::{execute, load_geometry, plan, Plan, Route, SceneFile};
+
+/// Parses `A..B` (B excluded) or `A..=B` against `count` poses.
+pub fn parse_frames(s: &str, count: usize) -> Result<std::ops::Range<usize>, String> {
+    let bad = || format!("--frames {s:?}: expected A..B or A..=B (frame numbers from 0)");
+    let (a, b, inclusive) = if let Some((a, b)) = s.split_once("..=") {
+        (a, b, true)
+    } else if let Some((a, b)) = s.split_once("..") {
+        (a, b, false)
+    } else {
+        return Err(bad());
+    };
+    let a: usize = if a.trim().is_empty() { 0 } else { a.trim().parse().map_err(|_| bad())? };
+    let b: usize = if b.trim().is_empty() {
+        count
+    } else {
+        b.trim().parse::<usize>().map_err(|_| bad())? + inclusive as usize
+    };
+    if a >= b || b > count {
+        return Err(format!(
+            "--frames {s:?}: the scene has {count} pose(s), frames 0..{count}"
+        ));
+    }
+    Ok(a..b)
+}
+
+/// The plan as text (what `--explain` prints).
+pub fn explain(p: &Plan, measured_ms: Option<f64>) -> String {
+    let mut out = format!(
+        "plan: {}\n",
+        match &p.route {
+            Route::Pinhole => "pinhole render".to_string(),
+            Route::Vertex { tessellate } => format!(
+                "vertex path (Alg. 1){}",
+                tessellate.map(|l| format!(", tessellated to {l} px")).unwrap_or_default()
+            ),
+            Route::Warp { method, chromatic } => format!(
+                "pinhole render + warp ({method}{})",
+                if chromatic.is_some() { ", chromatic" } else { "" }
+            ),
+            Route::WarpAndVertex { method, .. } => {
+                format!("warp ({method}, chromatic) for colour + vertex path for the data")
+            }
+            Route::LensModel { samples, .. } => {
+                format!("image-based lens model, {samples} lens sample(s)")
+            }
+        }
+    );
+    for (i, s) in p.steps.iter().enumerate() {
+        out.push_str(&format!("  {}. {}: {}\n", i + 1, s.pass, s.why));
+    }
+    out.push_str(&format!(
+        "  geometric error: {:.2e} px (budget {} px)\n",
+        p.expected_error_px, p.budget_px
+    ));
+    if p.estimated_ms.is_finite() {
+        out.push_str(&format!(
+            "  estimated {:.1} ms per frame (lavapipe tables)",
+            p.estimated_ms
+        ));
+        out.push_str(&match measured_ms {
+            Some(m) => format!("; measured {m:.1} ms on frame 1\n"),
+            None => "\n".into(),
+        });
+    } else if let Some(m) = measured_ms {
+        out.push_str(&format!("  measured {m:.1} ms on frame 1\n"));
+    }
+    out
+}
+
+fn plan_json(p: &Plan, frames: &[(usize, f64)]) -> serde_json::Value {
+    json!({
+        "route": format!("{:?}", p.route),
+        "steps": p.steps.iter().map(|s| json!({"pass": s.pass, "why": s.why})).collect::<Vec<_>>(),
+        "expected_error_px": p.expected_error_px,
+        "budget_px": p.budget_px,
+        "estimated_ms": if p.estimated_ms.is_finite() { json!(p.estimated_ms) } else { json!(null) },
+        "frames": frames.iter().map(|(i, ms)| json!({"frame": i, "ms": ms})).collect::<Vec<_>>(),
+    })
+}
+
+pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
+    if let Some(flag) = args.conflicts_with_scene_file() {
+        return Err(CliError::input(format!(
+            "{flag} does not go with a scene file: it names its optics, outputs and poses; write into --out DIR"
+        )));
+    }
+    let Some(out) = args.out() else {
+        return Err(CliError::input("a scene file renders into a folder: give --out DIR"));
+    };
+    let file = SceneFile::load(Path::new(scene_path)).map_err(|e| CliError::input(e.to_string()))?;
+    let scene = load_geometry(&file).map_err(CliError::input)?;
+    let plan = plan(&file, &scene).map_err(CliError::input)?;
+    let frames = match args.frames() {
+        Some(f) => parse_frames(f, plan.poses.len()).map_err(CliError::input)?,
+        None => 0..plan.poses.len(),
+    };
+    if !out.is_dir() {
+        std::fs::create_dir(out).map_err(|e| {
+            CliError::input(format!("--out {}: cannot create the folder: {e}", out.display()))
+        })?;
+    }
+    let ctx = context()?;
+    let o = plan.outputs;
+    let color_ext = if o.exr { "exr" } else { "png" };
+    let total = frames.len();
+    let done: std::cell::RefCell<Vec<(usize, f64)>> = Default::default();
+    let mut write = |f: crate::plan::Frame| -> Result<(), crate::gpu::GpuError> {
+        let name = |kind: &str, ext: &str| out.join(format!("{kind}_{:04}.{ext}", f.index));
+        let (c, i, fl, d) = (
+            name("color", color_ext),
+            name("ids", "png"),
+            name("flow", "exr"),
+            name("depth", "exr"),
+        );
+        write_outputs(
+            &Targets {
+                color: o.color.then_some(c.as_path()),
+                ids: o.ids.then_some(i.as_path()),
+                flow: o.flow.then_some(fl.as_path()),
+                depth: o.depth.then_some(d.as_path()),
+            },
+            &f.rendered,
+            Some("png"),
+        )
+        .map_err(|e| crate::gpu::GpuError::Invalid(e.message))?;
+        done.borrow_mut().push((f.index, f.ms));
+        progress_line(&format!(
+            "frame {}/{total} ({:.1} ms)",
+            done.borrow().len(),
+            f.ms
+        ));
+        Ok(())
+    };
+    let gpu_error = |e: crate::gpu::GpuError| match e {
+        crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+        other => CliError::from(other),
+    };
+    let first = frames.start..frames.start + 1;
+    execute(&ctx, &plan, &scene, first, &mut write).map_err(gpu_error)?;
+    if args.explain() {
+        let measured = done.borrow().first().map(|(_, ms)| *ms);
+        // On stdout, before the remaining frames are rendered.
+        print!("{}", explain(&plan, measured));
+    }
+    if frames.len() > 1 {
+        execute(&ctx, &plan, &scene, frames.start + 1..frames.end, &mut write)
+            .map_err(gpu_error)?;
+    }
+    finish(&ctx)?;
+    let done = done.into_inner();
+    let json = format!("{:#}\n", plan_json(&plan, &done));
+    crate::imaging::io::write_atomically(&out.join("plan.json"), |tmp| {
+        std::fs::write(tmp, &json).map_err(|e| e.to_string())
+    })
+    .map_err(CliError::runtime)?;
+    progress_done(&format!("{} frame(s) in {}", done.len(), out.display()));
+    Ok(())
+}

@@ -1,0 +1,654 @@
+//! The planner (issue 7): from a scene file — optics, the effects and outputs it wants and
+//! its accuracy budget — the cheapest pipeline that delivers exactly that, and why.
+//!
+//! - **Route.** A calibrated camera goes by a pinhole render (no distortion wanted), Alg. 1
+//!   (tessellated as far as the budget needs) or a pinhole render + warp (overscanned), by
+//!   estimated cost; object IDs and flow force Alg. 1 (seed 000 Table 1); chromatic aberration
+//!   needs the warp's fused per-channel pass, so colour then goes by the warp and the data by
+//!   Alg. 1. A lens prescription goes by seed 004's image-based model.
+//! - **Accuracy.** The inverse method is the cheapest whose error, *measured* on this camera
+//!   (the f64 model over a grid of the image), meets the budget; the tessellation is the
+//!   coarsest whose straight-line error, measured on this scene and pose, meets it; for a
+//!   lens, the quad-tree's angle threshold is the budget turned into degrees.
+//! - **Nothing unasked.** No warp for a pinhole; the single-fetch warp without chromatic
+//!   aberration; one lens sample without depth of field; no border fitting without
+//!   vignetting; every distortion term whose coefficient is zero compiled out
+//!   (specialization constants). [`execute`] returns what was recorded, so tests check the
+//!   plan against the pipelines, not against timings.
+//!
+//! Cost estimates come from this README's measured lavapipe tables (`bench vertex`,
+//! `bench inverse`); `--explain` prints the times measured on the frame itself.
+
+pub mod scene_file;
+
+use std::time::Instant;
+
+use glam::{DVec2, DVec3};
+
+use crate::gpu::{Context, GpuError};
+use crate::lens::image_model::{channel_models, ModelOptions};
+use crate::lens::{frame_scene, Prescription, LAMBDA_D};
+use crate::model::{InverseMethod, OpenCvCamera, OpenCvDistortion};
+use crate::pass::geometry::{ColorFormat, MeshBuffers, Outputs, Rendered};
+use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
+use crate::render::{RecordedPipeline, RenderPath, RenderRequest, SceneRenderer};
+use crate::scene::{builtin, Pose, Scene};
+pub use scene_file::{SceneFile, SceneFileError};
+
+/// How the frames are made.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Route {
+    /// No lens wanted: the camera's pinhole projection.
+    Pinhole,
+    /// Alg. 1 for every output, the mesh tessellated to `tessellate` px edges (`None`: as is).
+    Vertex { tessellate: Option<f64> },
+    /// Pinhole render of the overscanned frustum + compute warp (colour, depth).
+    Warp {
+        method: InverseMethod,
+        chromatic: Option<[f64; 3]>,
+    },
+    /// Colour by the warp (chromatic aberration), IDs / flow / depth by Alg. 1.
+    WarpAndVertex {
+        method: InverseMethod,
+        chromatic: Option<[f64; 3]>,
+        tessellate: Option<f64>,
+    },
+    /// Seed 004's image-based model through a lens prescription.
+    LensModel {
+        samples: u32,
+        chromatic: bool,
+        vignetting: bool,
+        max_angle_deg: f64,
+    },
+}
+
+/// A lens prescription set up for a plan: film and focus resolved once for every frame, and
+/// the image-based models built (one, or one per channel).
+#[derive(Debug, Clone)]
+pub struct LensSetting {
+    pub prescription: Prescription,
+    pub pitch_mm: f64,
+    pub pixels: (u32, u32),
+    pub focus_m: f64,
+    pub f_number: Option<f64>,
+    pub models: Vec<(crate::lens::image_model::ImageModel, [f32; 4])>,
+}
+
+/// One step of a plan, and why it is there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step {
+    pub pass: String,
+    pub why: String,
+}
+
+/// A plan: the route, its steps, the geometric error it is expected to hold.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    pub route: Route,
+    pub steps: Vec<Step>,
+    /// The camera of the fast paths (the file's, distortion removed if unwanted).
+    pub camera: Option<OpenCvCamera>,
+    /// For a lens: the prescription and its setting.
+    pub lens: Option<LensSetting>,
+    /// Largest geometric error the plan's approximations leave (output pixels), as measured
+    /// while planning.
+    pub expected_error_px: f64,
+    pub budget_px: f64,
+    pub poses: Vec<Pose>,
+    pub outputs: scene_file::OutputSpec,
+    pub background: [f32; 4],
+    /// Estimated frame time from the measured tables (ms, lavapipe), for comparison.
+    pub estimated_ms: f64,
+}
+
+fn invalid(e: impl ToString) -> GpuError {
+    GpuError::Invalid(e.to_string())
+}
+
+/// Inverse methods the planner chooses between, with a per-pixel GPU cost (ns, f32, lavapipe:
+/// the medians of `bench inverse` in the README: Heikkilä ~25, fixed-point ~22 + 1.5 N,
+/// Newton ~80).
+pub fn inverse_candidates() -> Vec<(InverseMethod, f64)> {
+    let mut v = vec![(InverseMethod::Heikkila, 25.0)];
+    for n in [1, 2, 3, 5, 10, 20, 50] {
+        v.push((InverseMethod::FixedPoint(n), 22.0 + 1.5 * n as f64));
+    }
+    v.push((InverseMethod::Newton, 80.0));
+    v
+}
+
+/// The largest error (pixels) of `method` on `camera`: every pixel of a 48 × 36 grid over
+/// the image inside the valid domain is undistorted by the method and projected back by the
+/// exact forward model. `None` where the method refuses a pixel Newton accepts.
+pub fn inverse_error_px(camera: &OpenCvCamera, method: InverseMethod) -> Option<f64> {
+    let k = &camera.intrinsics;
+    let mut worst = 0f64;
+    for j in 0..36 {
+        for i in 0..48 {
+            let p = DVec2::new(
+                (i as f64 + 0.5) / 48.0 * camera.width as f64 - 0.5,
+                (j as f64 + 0.5) / 36.0 * camera.height as f64 - 0.5,
+            );
+            let y = DVec2::new((p.x - k.cx) / k.fx, (p.y - k.cy) / k.fy);
+            if camera
+                .undistort_normalized(y, InverseMethod::Newton)
+                .is_none()
+            {
+                continue; // outside the valid domain: no method may answer
+            }
+            let x = camera.undistort_normalized(y, method)?;
+            let back = camera.project(DVec3::new(x.x, x.y, 1.0))?;
+            let e = (back - p).length();
+            if !e.is_finite() {
+                return None;
+            }
+            worst = worst.max(e);
+        }
+    }
+    Some(worst)
+}
+
+/// Estimated frame times (ms) on lavapipe from the README's `bench vertex` table at 800×600:
+/// a pinhole render costs ~12 ns per pixel + 0.23 µs per triangle, Alg. 1 ~0.6 µs per
+/// triangle (geometry shader), a warp the method's per-pixel cost over an overscan of ~1.3×.
+fn estimate_ms(pixels: f64, triangles: f64, route: &str, method_ns: f64) -> f64 {
+    match route {
+        "vertex" => 12e-6 * pixels + 0.6e-3 * triangles,
+        "warp" => 12e-6 * 1.3 * pixels + 0.23e-3 * triangles + method_ns * 1e-6 * pixels,
+        _ => 12e-6 * pixels + 0.23e-3 * triangles,
+    }
+}
+
+/// Loads the scene's geometry.
+pub fn load_geometry(file: &SceneFile) -> Result<Scene, String> {
+    builtin::parse(&file.geometry).map_err(|e| format!("{}: [geometry] scene: {e}", file.source.display()))
+}
+
+/// Plans `file` for `scene`.
+pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
+    let src = file.source.display().to_string();
+    let e = &file.effects;
+    let o = &file.outputs;
+    let mut steps = Vec::new();
+    let step = |pass: &str, why: String| Step {
+        pass: pass.to_string(),
+        why,
+    };
+    match &file.optics {
+        scene_file::OpticsSpec::Lens {
+            path,
+            focus_m,
+            f_number,
+            sensor_mm,
+            pixels,
+        } => {
+            for (asked, key) in [(o.ids, "ids"), (o.flow, "flow"), (o.depth, "depth")] {
+                if asked {
+                    return Err(format!(
+                        "{src}: [outputs] {key}: the image-based lens model blends many views, so it has no exact {key}; give a calibrated camera (optics.camera; `vklens lens fit-opencv` makes one from the lens) for {key}"
+                    ));
+                }
+            }
+            if !e.distortion {
+                return Err(format!(
+                    "{src}: [effects] distortion = false: a real lens always distorts; use a camera file with the distortion switched off for a pinhole"
+                ));
+            }
+            let lens = Prescription::load(path).map_err(|e| e.to_string())?;
+            if e.chromatic_aberration && lens.surfaces.iter().all(|s| s.abbe.is_none()) {
+                return Err(format!(
+                    "{src}: [effects] chromatic_aberration: {} has no Abbe numbers (5th column)",
+                    path.display()
+                ));
+            }
+            let pitch = sensor_mm.0 / pixels.0 as f64;
+            if ((sensor_mm.1 / pixels.1 as f64) / pitch - 1.0).abs() > 1e-3 {
+                return Err(format!("{src}: [optics] sensor_mm and pixels give non-square pixels"));
+            }
+            let first = file.poses.first().copied();
+            let (optics, _) =
+                frame_scene(&lens, *pixels, pitch, *f_number, *focus_m, first, scene)
+                    .map_err(|e| format!("{}: {e}", path.display()))?;
+            let efl = crate::lens::analyse(&lens, LAMBDA_D).efl.unwrap_or(1.0);
+            // The budget in degrees: one pixel subtends pitch / EFL radians.
+            let px_deg = (pitch / efl).atan().to_degrees();
+            let max_angle_deg = file.max_error_px * px_deg;
+            let samples = if e.depth_of_field { e.lens_samples } else { 1 };
+            steps.push(step(
+                "image-based lens model (seed 004)",
+                format!(
+                    "optics is a lens prescription; {} lens sample{} ({}), quad-tree until {:.2e}° = {} px",
+                    samples,
+                    if samples == 1 { "" } else { "s" },
+                    if e.depth_of_field { "depth of field asked for" } else { "no depth of field asked: the rear surface's centre only" },
+                    max_angle_deg,
+                    file.max_error_px
+                ),
+            ));
+            steps.push(step(
+                "film accumulation",
+                if e.chromatic_aberration {
+                    "chromatic aberration asked: R, G, B traced at the C, e and F lines, each channel its own projections".into()
+                } else {
+                    "one wavelength (d line) for all channels: no chromatic aberration asked".into()
+                },
+            ));
+            steps.push(step(
+                if e.vignetting { "vignetting kept" } else { "vignetting divided out" },
+                if e.vignetting {
+                    "vignetting asked: border bisection per sample, radiometric weights kept".into()
+                } else {
+                    "no vignetting asked: no border fitting; the accumulated weight is divided out".into()
+                },
+            ));
+            let options = ModelOptions {
+                samples,
+                max_angle_deg,
+                vignetting: e.vignetting,
+                ..ModelOptions::default()
+            };
+            let models = channel_models(&optics, &options, e.chromatic_aberration)
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            let model_angle = models
+                .iter()
+                .map(|(m, _)| m.max_angle_deg())
+                .fold(0.0, f64::max);
+            let projections: usize = models.iter().map(|(m, _)| m.projection_count()).sum();
+            steps.push(step(
+                "cell renders",
+                format!("{projections} perspective projections per frame, largest angle error {model_angle:.2e}°"),
+            ));
+            let frame_pose = first.map(Ok).unwrap_or_else(|| {
+                optics
+                    .equivalent_camera()
+                    .map(|c| scene.default_pose(&c))
+            })?;
+            let poses = if file.poses.is_empty() {
+                vec![frame_pose]
+            } else {
+                file.poses.clone()
+            };
+            Ok(Plan {
+                route: Route::LensModel {
+                    samples,
+                    chromatic: e.chromatic_aberration,
+                    vignetting: e.vignetting,
+                    max_angle_deg,
+                },
+                steps,
+                camera: None,
+                lens: Some(LensSetting {
+                    prescription: lens,
+                    pitch_mm: pitch,
+                    pixels: *pixels,
+                    focus_m: optics.focus_m,
+                    f_number: *f_number,
+                    models,
+                }),
+                expected_error_px: model_angle / px_deg,
+                budget_px: file.max_error_px,
+                poses,
+                outputs: *o,
+                background: file.background,
+                estimated_ms: f64::NAN,
+            })
+        }
+        scene_file::OpticsSpec::Camera(path) => {
+            let mut camera =
+                crate::io::load_camera(path).map_err(|e| e.to_string())?;
+            if e.vignetting || e.depth_of_field {
+                let key = if e.vignetting { "vignetting" } else { "depth_of_field" };
+                return Err(format!(
+                    "{src}: [effects] {key}: a calibrated camera (OpenCV model) has no {key}; give a lens prescription (optics.lens)"
+                ));
+            }
+            if !e.distortion {
+                camera = OpenCvCamera::new(
+                    camera.width,
+                    camera.height,
+                    camera.intrinsics,
+                    OpenCvDistortion::default(),
+                )
+                .map_err(|e| e.to_string())?;
+            }
+            let poses = if file.poses.is_empty() {
+                vec![scene.default_pose(&camera)]
+            } else {
+                file.poses.clone()
+            };
+            let budget = file.max_error_px;
+            let pixels = camera.width as f64 * camera.height as f64;
+            let terms = camera.distortion.terms();
+            let terms_note = format!(
+                "compiled in: {}",
+                [
+                    (terms.radial, "radial"),
+                    (terms.rational, "rational"),
+                    (terms.tangential, "tangential"),
+                    (terms.prism, "thin prism"),
+                    (terms.tilt, "tilt"),
+                ]
+                .iter()
+                .filter(|t| t.0)
+                .map(|t| t.1)
+                .collect::<Vec<_>>()
+                .join(", ")
+            );
+            let chromatic = e.chromatic_aberration.then_some(e.chromatic_scales);
+            let lensless = terms == Default::default();
+            if lensless && chromatic.is_none() {
+                steps.push(step(
+                    "pinhole render",
+                    if e.distortion {
+                        "the camera has no distortion: no lens work at all".into()
+                    } else {
+                        "no distortion asked: the pinhole projection, no warp, no geometry shader".into()
+                    },
+                ));
+                return Ok(Plan {
+                    route: Route::Pinhole,
+                    steps,
+                    estimated_ms: estimate_ms(pixels, scene.mesh.triangle_count() as f64, "pinhole", 0.0),
+                    camera: Some(camera),
+                    lens: None,
+                    expected_error_px: 0.0,
+                    budget_px: budget,
+                    poses,
+                    outputs: *o,
+                    background: file.background,
+                });
+            }
+            // The vertex path: the coarsest tessellation that meets the budget.
+            let pose = poses[0];
+            let mut vertex: Option<(Option<f64>, f64, usize)> = None;
+            for l in [None, Some(64.0), Some(32.0), Some(16.0), Some(8.0), Some(4.0), Some(2.0), Some(1.0)] {
+                let mesh = match l {
+                    None => scene.mesh.clone(),
+                    Some(l) => crate::scene::tessellate::tessellate(&scene.mesh, &pose, &camera, l)?,
+                };
+                if mesh.triangle_count() > 4_000_000 {
+                    break;
+                }
+                let err = crate::bench::vertex::straight_line_error(&camera, &pose, &mesh);
+                if err <= budget {
+                    vertex = Some((l, err, mesh.triangle_count()));
+                    break;
+                }
+            }
+            // The warp: the cheapest inverse meeting the budget, measured on this camera.
+            let mut warp: Option<(InverseMethod, f64, f64)> = None;
+            for (m, ns) in inverse_candidates() {
+                if let Some(err) = inverse_error_px(&camera, m) {
+                    if err <= budget {
+                        warp = Some((m, err, ns));
+                        break;
+                    }
+                }
+            }
+            let triangles = scene.mesh.triangle_count() as f64;
+            let data_needs_vertex = o.ids || o.flow;
+            let vertex_ms = vertex.map(|(_, _, t)| estimate_ms(pixels, t as f64, "vertex", 0.0));
+            let warp_ms = warp.map(|(_, _, ns)| estimate_ms(pixels, triangles, "warp", ns));
+            let describe_tess = |l: Option<f64>, err: f64, tris: usize| match l {
+                None => format!("the mesh as it is: its straight edges stay within {err:.1e} px of the true curves ({tris} triangles)"),
+                Some(l) => format!("edges split to {l} px: straight-line error {err:.1e} px ≤ budget ({tris} triangles)"),
+            };
+            let describe_warp = |m: InverseMethod, err: f64| {
+                format!("inverse {m}: the cheapest method whose error on this camera, {err:.1e} px, meets the budget; overscanned source so every valid pixel has one")
+            };
+            let (route, expected, estimated) = if chromatic.is_some() || (!data_needs_vertex && warp.is_some() && (vertex.is_none() || warp_ms < vertex_ms)) {
+                let Some((m, werr, _)) = warp else {
+                    return Err(format!("{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera"));
+                };
+                steps.push(step("pinhole render (overscanned)", "the warp's source, covering every valid output pixel (seed 000 Sec. 3.3)".into()));
+                steps.push(step(
+                    if chromatic.is_some() { "warp, 3 fetches (chromatic)" } else { "warp, single fetch" },
+                    format!(
+                        "{}; {}; {}",
+                        describe_warp(m, werr),
+                        if chromatic.is_some() { "chromatic aberration asked: each channel through its own radial scale" } else { "no chromatic aberration: the single-fetch variant" },
+                        terms_note
+                    ),
+                ));
+                if data_needs_vertex {
+                    let Some((l, verr, tris)) = vertex else {
+                        return Err(format!("{src}: [accuracy] max_error_px = {budget}: tessellation cannot meet it for the ID/flow outputs"));
+                    };
+                    steps.push(step(
+                        "Alg. 1 (vertex + discard) for IDs/flow/depth",
+                        format!("IDs and flow cannot be warped (seed 000 Table 1); {}; {terms_note}", describe_tess(l, verr, tris)),
+                    ));
+                    (
+                        Route::WarpAndVertex { method: m, chromatic, tessellate: l },
+                        werr.max(verr),
+                        warp_ms.unwrap_or(0.0) + vertex_ms.unwrap_or(0.0),
+                    )
+                } else {
+                    (Route::Warp { method: m, chromatic }, werr, warp_ms.unwrap_or(f64::NAN))
+                }
+            } else {
+                let Some((l, verr, tris)) = vertex else {
+                    return Err(format!("{src}: [accuracy] max_error_px = {budget}: even 1 px edges do not meet it, and the outputs (IDs/flow) need the vertex path"));
+                };
+                let why = if data_needs_vertex {
+                    "IDs and flow need the geometry path (seed 000 Table 1)".to_string()
+                } else {
+                    format!(
+                        "estimated {:.1} ms against {} for pinhole + warp",
+                        vertex_ms.unwrap_or(f64::NAN),
+                        warp_ms.map(|w| format!("{w:.1} ms")).unwrap_or_else(|| "no warp meeting the budget".into())
+                    )
+                };
+                if l.is_some() {
+                    steps.push(step("tessellation", describe_tess(l, verr, tris)));
+                }
+                steps.push(step("Alg. 1 (vertex + discard)", format!("{why}; {}; {terms_note}", if l.is_none() { describe_tess(l, verr, tris) } else { "discard δ = 0.1 + D".into() })));
+                (Route::Vertex { tessellate: l }, verr, vertex_ms.unwrap_or(f64::NAN))
+            };
+            Ok(Plan {
+                route,
+                steps,
+                camera: Some(camera),
+                lens: None,
+                expected_error_px: expected,
+                budget_px: budget,
+                poses,
+                outputs: *o,
+                background: file.background,
+                estimated_ms: estimated,
+            })
+        }
+    }
+}
+
+/// One rendered frame.
+#[derive(Debug, Clone, Default)]
+pub struct Frame {
+    pub index: usize,
+    pub rendered: Rendered,
+    /// Wall time of the frame's GPU work (ms).
+    pub ms: f64,
+}
+
+/// What executing a plan recorded: the pipelines (with their specialization constants) and,
+/// for the lens model, its projection count.
+#[derive(Debug, Clone, Default)]
+pub struct Recorded {
+    pub pipelines: Vec<RecordedPipeline>,
+    pub lens_projections: usize,
+}
+
+impl Recorded {
+    pub fn has(&self, kind: &str) -> bool {
+        self.pipelines.iter().any(|p| p.kind == kind)
+    }
+}
+
+/// Renders the frames `frames` (indices into the plan's poses) of `scene` as `plan` says;
+/// `each` receives every frame as it is done.
+pub fn execute(
+    ctx: &Context,
+    plan: &Plan,
+    scene: &Scene,
+    frames: std::ops::Range<usize>,
+    each: &mut dyn FnMut(Frame) -> Result<(), GpuError>,
+) -> Result<Recorded, GpuError> {
+    let o = &plan.outputs;
+    let color_format = if o.exr { ColorFormat::Rgba16F } else { ColorFormat::Rgba8 };
+    let mut recorded = Recorded::default();
+    if let Route::LensModel {
+        vignetting, ..
+    } = plan.route
+    {
+        let setting = plan.lens.as_ref().ok_or_else(|| invalid("lens plan without a lens"))?;
+        let mut renderer =
+            LensRenderer::new(ctx.gpu(), &setting.models, LensRenderOptions::default())?;
+        let mesh = MeshBuffers::new(ctx.gpu(), &scene.mesh, scene.texture.as_ref())?;
+        ctx.submit(|cmd| {
+            unsafe { mesh.record_upload(cmd) };
+            Ok(())
+        })?;
+        if let Some(first) = frames.clone().next() {
+            renderer.render(ctx, &mesh, &plan.poses[first])?; // warm-up: pipelines, caches
+        }
+        for index in frames {
+            let pose = plan.poses[index];
+            let frame = renderer.render(ctx, &mesh, &pose)?;
+            recorded.lens_projections = frame.projections;
+            let pixels = frame
+                .pixels
+                .iter()
+                .map(|p| {
+                    let a = p[3];
+                    if vignetting || a <= 1e-6 {
+                        [p[0], p[1], p[2], 1.0]
+                    } else {
+                        [p[0] / a, p[1] / a, p[2] / a, 1.0]
+                    }
+                })
+                .collect::<Vec<_>>();
+            let raster = crate::imaging::Raster {
+                width: frame.width,
+                height: frame.height,
+                pixels: if o.exr {
+                    crate::imaging::Pixels::Rgba32F(pixels)
+                } else {
+                    crate::imaging::Pixels::Rgba8(
+                        pixels
+                            .iter()
+                            .map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+                            .collect(),
+                    )
+                },
+                depth: if o.exr { crate::imaging::Depth::F32 } else { crate::imaging::Depth::U8 },
+            };
+            each(Frame {
+                index,
+                rendered: Rendered {
+                    width: frame.width,
+                    height: frame.height,
+                    color: Some(raster),
+                    ..Default::default()
+                },
+                ms: frame.frame_ms,
+            })?;
+        }
+        recorded.pipelines.push(RecordedPipeline {
+            kind: "image-based lens model",
+            constants: Vec::new(),
+        });
+        return Ok(recorded);
+    }
+    let camera = plan.camera.clone().ok_or_else(|| invalid("plan without a camera"))?;
+    let mut renderer = SceneRenderer::new(ctx);
+    // The first frame once more before timing: pipelines are compiled on first use.
+    let warm_up = frames.clone().next();
+    for (index, timed) in warm_up.map(|i| (i, false)).into_iter().chain(frames.map(|i| (i, true))) {
+        let pose = plan.poses[index];
+        let previous = if index > 0 { plan.poses[index - 1] } else { pose };
+        let base = RenderRequest {
+            camera: camera.clone(),
+            pose,
+            previous_pose: previous,
+            path: RenderPath::Pinhole,
+            outputs: Outputs {
+                color: o.color.then_some(color_format),
+                ids: o.ids,
+                flow: o.flow,
+                depth: o.depth,
+            },
+            supersample: 1,
+            jitter: 1,
+            tessellate: None,
+            background: plan.background,
+            chromatic: None,
+        };
+        let start = Instant::now();
+        let mut quiet = |_: &str| {};
+        let rendered = match &plan.route {
+            Route::Pinhole => renderer.render(scene, &base, &mut quiet)?,
+            Route::Vertex { tessellate } => renderer.render(
+                scene,
+                &RenderRequest {
+                    path: RenderPath::Vertex { delta: crate::pass::geometry::DEFAULT_DELTA },
+                    tessellate: *tessellate,
+                    ..base
+                },
+                &mut quiet,
+            )?,
+            Route::Warp { method, chromatic } => renderer.render(
+                scene,
+                &RenderRequest {
+                    path: RenderPath::Warp { method: *method, density: 1.0 },
+                    chromatic: *chromatic,
+                    ..base
+                },
+                &mut quiet,
+            )?,
+            Route::WarpAndVertex {
+                method,
+                chromatic,
+                tessellate,
+            } => {
+                let mut colour = if o.color {
+                    renderer.render(
+                        scene,
+                        &RenderRequest {
+                            path: RenderPath::Warp { method: *method, density: 1.0 },
+                            chromatic: *chromatic,
+                            outputs: Outputs::color_only(Some(color_format)),
+                            ..base.clone()
+                        },
+                        &mut quiet,
+                    )?
+                } else {
+                    Rendered::default()
+                };
+                let data = renderer.render(
+                    scene,
+                    &RenderRequest {
+                        path: RenderPath::Vertex { delta: crate::pass::geometry::DEFAULT_DELTA },
+                        tessellate: *tessellate,
+                        outputs: Outputs { color: None, ..base.outputs },
+                        ..base
+                    },
+                    &mut quiet,
+                )?;
+                colour.width = data.width;
+                colour.height = data.height;
+                colour.ids = data.ids;
+                colour.flow = data.flow;
+                colour.depth = data.depth;
+                colour
+            }
+            Route::LensModel { .. } => unreachable!("handled above"),
+        };
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        if timed {
+            each(Frame { index, rendered, ms })?;
+        }
+    }
+    recorded.pipelines = renderer.recorded.clone();
+    Ok(recorded)
+}
+

@@ -1,0 +1,468 @@
+//! The scene file (TOML): what to render, through which optics, which effects and outputs
+//! are wanted, and how accurate the geometry must be. Every key is documented in
+//! `examples/scenes/README.md`; errors name the file, the key and what was expected. Unknown
+//! keys are errors too (a typo must not silently switch an effect off).
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use toml::{Table, Value};
+
+use crate::scene::Pose;
+
+/// What is wrong with a scene file: one line, `file: [table] key: problem`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneFileError {
+    pub file: String,
+    pub key: String,
+    pub problem: String,
+}
+
+impl std::fmt::Display for SceneFileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}: {}", self.file, self.problem)
+        } else {
+            write!(f, "{}: {}: {}", self.file, self.key, self.problem)
+        }
+    }
+}
+
+impl std::error::Error for SceneFileError {}
+
+/// The optics: a calibrated camera, or a lens prescription.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OpticsSpec {
+    /// An OpenCV / ROS / vklens camera file.
+    Camera(PathBuf),
+    /// A lens file with its setting and film.
+    Lens {
+        path: PathBuf,
+        /// Metres from the front vertex; `None`: the scene's centre.
+        focus_m: Option<f64>,
+        f_number: Option<f64>,
+        sensor_mm: (f64, f64),
+        pixels: (u32, u32),
+    },
+}
+
+/// The effects the scene asks for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Effects {
+    pub distortion: bool,
+    pub chromatic_aberration: bool,
+    /// Camera files: the per-channel radial scales (R, G, B) of the lateral colour.
+    pub chromatic_scales: [f64; 3],
+    pub vignetting: bool,
+    pub depth_of_field: bool,
+    /// Lens samples for depth of field.
+    pub lens_samples: u32,
+}
+
+/// The outputs the scene asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OutputSpec {
+    pub color: bool,
+    pub ids: bool,
+    pub flow: bool,
+    pub depth: bool,
+    /// Colour as float EXR instead of 8-bit PNG.
+    pub exr: bool,
+}
+
+/// A parsed scene file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneFile {
+    /// The file it came from (errors and relative paths).
+    pub source: PathBuf,
+    /// A built-in scene spec or a mesh path (resolved against the file's folder).
+    pub geometry: String,
+    pub optics: OpticsSpec,
+    pub effects: Effects,
+    pub outputs: OutputSpec,
+    /// The accuracy budget: largest geometric error in output pixels.
+    pub max_error_px: f64,
+    /// The poses to render; empty: the scene centred in the view.
+    pub poses: Vec<Pose>,
+    pub background: [f32; 4],
+}
+
+struct Reader<'a> {
+    file: &'a str,
+}
+
+impl Reader<'_> {
+    fn err(&self, key: &str, problem: impl Into<String>) -> SceneFileError {
+        SceneFileError {
+            file: self.file.to_string(),
+            key: key.to_string(),
+            problem: problem.into(),
+        }
+    }
+
+    fn table<'t>(&self, root: &'t Table, name: &str, keys: &[&str]) -> Result<Option<&'t Table>, SceneFileError> {
+        match root.get(name) {
+            None => Ok(None),
+            Some(Value::Table(t)) => {
+                for k in t.keys() {
+                    if !keys.contains(&k.as_str()) {
+                        return Err(self.err(
+                            &format!("[{name}] {k}"),
+                            format!("unknown key; expected one of {}", keys.join(", ")),
+                        ));
+                    }
+                }
+                Ok(Some(t))
+            }
+            Some(other) => Err(self.err(
+                &format!("[{name}]"),
+                format!("expected a table, found {}", other.type_str()),
+            )),
+        }
+    }
+
+    fn bool(&self, t: Option<&Table>, table: &str, key: &str, default: bool) -> Result<bool, SceneFileError> {
+        match t.and_then(|t| t.get(key)) {
+            None => Ok(default),
+            Some(Value::Boolean(b)) => Ok(*b),
+            Some(v) => Err(self.err(
+                &format!("[{table}] {key}"),
+                format!("expected true or false, found {v}"),
+            )),
+        }
+    }
+
+    fn number(&self, v: &Value, key: &str) -> Result<f64, SceneFileError> {
+        let x = match v {
+            Value::Float(f) => *f,
+            Value::Integer(i) => *i as f64,
+            other => {
+                return Err(self.err(key, format!("expected a number, found {other}")));
+            }
+        };
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("expected a finite number, found {x}")))
+        }
+    }
+
+    fn opt_number(&self, t: Option<&Table>, table: &str, key: &str) -> Result<Option<f64>, SceneFileError> {
+        t.and_then(|t| t.get(key))
+            .map(|v| self.number(v, &format!("[{table}] {key}")))
+            .transpose()
+    }
+
+    fn numbers<const N: usize>(&self, v: &Value, key: &str) -> Result<[f64; N], SceneFileError> {
+        let Value::Array(a) = v else {
+            return Err(self.err(key, format!("expected an array of {N} numbers, found {v}")));
+        };
+        if a.len() != N {
+            return Err(self.err(
+                key,
+                format!("expected {N} numbers, found {}", a.len()),
+            ));
+        }
+        let mut out = [0.0; N];
+        for (i, x) in a.iter().enumerate() {
+            out[i] = self.number(x, key)?;
+        }
+        Ok(out)
+    }
+
+    fn string<'t>(&self, t: Option<&'t Table>, table: &str, key: &str) -> Result<Option<&'t str>, SceneFileError> {
+        match t.and_then(|t| t.get(key)) {
+            None => Ok(None),
+            Some(Value::String(s)) => Ok(Some(s.as_str())),
+            Some(v) => Err(self.err(
+                &format!("[{table}] {key}"),
+                format!("expected a string, found {v}"),
+            )),
+        }
+    }
+
+    fn pose(&self, v: &Value, key: &str) -> Result<Pose, SceneFileError> {
+        let Value::Table(t) = v else {
+            return Err(self.err(key, "expected a table with rvec and tvec"));
+        };
+        for k in t.keys() {
+            if k != "rvec" && k != "tvec" {
+                return Err(self.err(&format!("{key}.{k}"), "unknown key; expected rvec, tvec"));
+            }
+        }
+        let get = |k: &str| {
+            t.get(k)
+                .ok_or_else(|| self.err(&format!("{key}.{k}"), "missing (3 numbers)"))
+        };
+        let r = self.numbers::<3>(get("rvec")?, &format!("{key}.rvec"))?;
+        let tv = self.numbers::<3>(get("tvec")?, &format!("{key}.tvec"))?;
+        Ok(Pose::from_rvec_tvec(DVec3::from(r), DVec3::from(tv)))
+    }
+}
+
+impl SceneFile {
+    /// Reads and checks a scene file.
+    pub fn load(path: &Path) -> Result<Self, SceneFileError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneFileError {
+            file: file.clone(),
+            key: String::new(),
+            problem: format!("cannot read: {e}"),
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses the text of a scene file that lives at `path`.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, SceneFileError> {
+        let file = path.display().to_string();
+        let r = Reader { file: &file };
+        let root: Table = text.parse().map_err(|e: toml::de::Error| {
+            r.err("", format!("not valid TOML: {}", e.message()))
+        })?;
+        const TABLES: [&str; 8] = [
+            "geometry",
+            "optics",
+            "effects",
+            "outputs",
+            "accuracy",
+            "poses",
+            "pose_sequence",
+            "render",
+        ];
+        for k in root.keys() {
+            if !TABLES.contains(&k.as_str()) {
+                return Err(r.err(k, format!("unknown key; expected one of {}", TABLES.join(", "))));
+            }
+        }
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let resolve = |p: &str| -> PathBuf {
+            let p = Path::new(p);
+            if p.is_absolute() {
+                p.to_path_buf()
+            } else {
+                dir.join(p)
+            }
+        };
+
+        let geometry = r.table(&root, "geometry", &["scene"])?;
+        let scene = r
+            .string(geometry, "geometry", "scene")?
+            .ok_or_else(|| r.err("[geometry] scene", "missing: a built-in scene (checkerboard, grid, boxes) or a mesh file"))?;
+        let builtin = ["checkerboard", "grid", "boxes"]
+            .iter()
+            .any(|b| scene == *b || scene.starts_with(&format!("{b}:")));
+        let geometry = if builtin {
+            scene.to_string()
+        } else {
+            resolve(scene).display().to_string()
+        };
+
+        let optics_t = r.table(
+            &root,
+            "optics",
+            &["camera", "lens", "focus_m", "fstop", "sensor_mm", "pixels"],
+        )?;
+        let camera = r.string(optics_t, "optics", "camera")?;
+        let lens = r.string(optics_t, "optics", "lens")?;
+        let optics = match (camera, lens) {
+            (Some(_), Some(_)) => {
+                return Err(r.err("[optics]", "give camera or lens, not both"));
+            }
+            (None, None) => {
+                return Err(r.err(
+                    "[optics]",
+                    "missing: camera = \"CAM.yml\" (a calibrated camera) or lens = \"LENS.dat\" (a prescription)",
+                ));
+            }
+            (Some(c), None) => {
+                for k in ["focus_m", "fstop", "sensor_mm", "pixels"] {
+                    if optics_t.is_some_and(|t| t.contains_key(k)) {
+                        return Err(r.err(
+                            &format!("[optics] {k}"),
+                            "only for a lens prescription (the camera file fixes its own)",
+                        ));
+                    }
+                }
+                OpticsSpec::Camera(resolve(c))
+            }
+            (None, Some(l)) => {
+                let focus_m = r.opt_number(optics_t, "optics", "focus_m")?;
+                if let Some(f) = focus_m {
+                    if !(f > 0.0) {
+                        return Err(r.err("[optics] focus_m", format!("expected metres > 0, found {f}")));
+                    }
+                }
+                let f_number = r.opt_number(optics_t, "optics", "fstop")?;
+                let sensor = match optics_t.and_then(|t| t.get("sensor_mm")) {
+                    Some(v) => r.numbers::<2>(v, "[optics] sensor_mm")?,
+                    None => [36.0, 24.0],
+                };
+                if !(sensor[0] > 0.0 && sensor[1] > 0.0) {
+                    return Err(r.err("[optics] sensor_mm", "expected two positive sizes in mm"));
+                }
+                let pixels = match optics_t.and_then(|t| t.get("pixels")) {
+                    Some(v) => r.numbers::<2>(v, "[optics] pixels")?,
+                    None => [480.0, 320.0],
+                };
+                if !pixels.iter().all(|p| p.fract() == 0.0 && (1.0..=16384.0).contains(p)) {
+                    return Err(r.err("[optics] pixels", "expected two whole numbers in 1..=16384"));
+                }
+                OpticsSpec::Lens {
+                    path: resolve(l),
+                    focus_m,
+                    f_number,
+                    sensor_mm: (sensor[0], sensor[1]),
+                    pixels: (pixels[0] as u32, pixels[1] as u32),
+                }
+            }
+        };
+
+        let e = r.table(
+            &root,
+            "effects",
+            &[
+                "distortion",
+                "chromatic_aberration",
+                "chromatic_scales",
+                "vignetting",
+                "depth_of_field",
+                "lens_samples",
+            ],
+        )?;
+        let chromatic_scales = match e.and_then(|t| t.get("chromatic_scales")) {
+            Some(v) => {
+                let s = r.numbers::<3>(v, "[effects] chromatic_scales")?;
+                if !s.iter().all(|x| (0.5..=2.0).contains(x)) {
+                    return Err(r.err(
+                        "[effects] chromatic_scales",
+                        "expected three radial scales R, G, B near 1 (0.5..2)",
+                    ));
+                }
+                s
+            }
+            None => [1.0; 3],
+        };
+        let lens_samples = match r.opt_number(e, "effects", "lens_samples")? {
+            None => 10,
+            Some(n) if n.fract() == 0.0 && (1.0..=1024.0).contains(&n) => n as u32,
+            Some(n) => {
+                return Err(r.err("[effects] lens_samples", format!("expected a whole number 1..=1024, found {n}")));
+            }
+        };
+        let effects = Effects {
+            distortion: r.bool(e, "effects", "distortion", true)?,
+            chromatic_aberration: r.bool(e, "effects", "chromatic_aberration", false)?,
+            chromatic_scales,
+            vignetting: r.bool(e, "effects", "vignetting", false)?,
+            depth_of_field: r.bool(e, "effects", "depth_of_field", false)?,
+            lens_samples,
+        };
+        if effects.chromatic_aberration
+            && matches!(optics, OpticsSpec::Camera(_))
+            && e.is_none_or(|t| !t.contains_key("chromatic_scales"))
+        {
+            return Err(r.err(
+                "[effects] chromatic_scales",
+                "missing: a camera file has no glass data, so chromatic_aberration needs the per-channel radial scales, e.g. [1.002, 1.0, 0.998]",
+            ));
+        }
+
+        let o = r.table(&root, "outputs", &["color", "ids", "flow", "depth", "format"])?;
+        let exr = match r.string(o, "outputs", "format")? {
+            None | Some("png") => false,
+            Some("exr") => true,
+            Some(other) => {
+                return Err(r.err("[outputs] format", format!("expected \"png\" or \"exr\", found {other:?}")));
+            }
+        };
+        let outputs = OutputSpec {
+            color: r.bool(o, "outputs", "color", true)?,
+            ids: r.bool(o, "outputs", "ids", false)?,
+            flow: r.bool(o, "outputs", "flow", false)?,
+            depth: r.bool(o, "outputs", "depth", false)?,
+            exr,
+        };
+        if !(outputs.color || outputs.ids || outputs.flow || outputs.depth) {
+            return Err(r.err("[outputs]", "every output is off: ask for color, ids, flow or depth"));
+        }
+
+        let a = r.table(&root, "accuracy", &["max_error_px"])?;
+        let max_error_px = r.opt_number(a, "accuracy", "max_error_px")?.unwrap_or(0.01);
+        if !(max_error_px > 0.0) {
+            return Err(r.err("[accuracy] max_error_px", format!("expected pixels > 0, found {max_error_px}")));
+        }
+
+        let render = r.table(&root, "render", &["background"])?;
+        let background = match render.and_then(|t| t.get("background")) {
+            Some(v) => r.numbers::<4>(v, "[render] background")?.map(|c| c as f32),
+            None => [0.0, 0.0, 0.0, 1.0],
+        };
+
+        let mut poses = Vec::new();
+        match root.get("poses") {
+            None => {}
+            Some(Value::Array(a)) => {
+                for (i, v) in a.iter().enumerate() {
+                    poses.push(r.pose(v, &format!("[[poses]] #{}", i + 1))?);
+                }
+            }
+            Some(v) => {
+                return Err(r.err("poses", format!("expected [[poses]] tables, found {}", v.type_str())));
+            }
+        }
+        if let Some(seq) = r.table(&root, "pose_sequence", &["from", "to", "frames"])? {
+            if !poses.is_empty() {
+                return Err(r.err("[pose_sequence]", "give [[poses]] or [pose_sequence], not both"));
+            }
+            let from = r.pose(
+                seq.get("from").ok_or_else(|| r.err("[pose_sequence] from", "missing"))?,
+                "[pose_sequence] from",
+            )?;
+            let to = r.pose(
+                seq.get("to").ok_or_else(|| r.err("[pose_sequence] to", "missing"))?,
+                "[pose_sequence] to",
+            )?;
+            let frames = match seq.get("frames") {
+                Some(Value::Integer(n)) if (1..=100_000).contains(n) => *n as usize,
+                Some(v) => {
+                    return Err(r.err("[pose_sequence] frames", format!("expected a whole number 1..=100000, found {v}")));
+                }
+                None => return Err(r.err("[pose_sequence] frames", "missing")),
+            };
+            poses = interpolate(&from, &to, frames);
+        }
+
+        Ok(SceneFile {
+            source: path.to_path_buf(),
+            geometry,
+            optics,
+            effects,
+            outputs,
+            max_error_px,
+            poses,
+            background,
+        })
+    }
+}
+
+/// `frames` poses from `from` to `to`: rotation by quaternion slerp, camera centre linear.
+pub fn interpolate(from: &Pose, to: &Pose, frames: usize) -> Vec<Pose> {
+    let qa = glam::DQuat::from_mat3(&from.rotation);
+    let qb = glam::DQuat::from_mat3(&to.rotation);
+    let (ca, cb) = (from.centre(), to.centre());
+    (0..frames)
+        .map(|k| {
+            let t = if frames == 1 {
+                0.0
+            } else {
+                k as f64 / (frames - 1) as f64
+            };
+            let rotation = glam::DMat3::from_quat(qa.slerp(qb, t));
+            let centre = ca.lerp(cb, t);
+            Pose {
+                rotation,
+                translation: -(rotation * centre),
+            }
+        })
+        .collect()
+}

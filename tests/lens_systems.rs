@@ -412,7 +412,14 @@ fn fitting_at_a_finite_focus_scales_the_focal_length_by_the_magnification() {
     let d = 1000.0 + par.entrance_pupil_z;
     let expected = s / (s - f) * d / s;
     let ratio = at_one_metre.fx / at_infinity.fx;
-    assert!((ratio / expected - 1.0).abs() < 2e-3, "{ratio} vs {expected}");
-    assert!(at_one_metre.rms_residual_px < 0.01, "{}", at_one_metre.rms_residual_px);
+    assert!(
+        (ratio / expected - 1.0).abs() < 2e-3,
+        "{ratio} vs {expected}"
+    );
+    assert!(
+        at_one_metre.rms_residual_px < 0.01,
+        "{}",
+        at_one_metre.rms_residual_px
+    );
     assert!(fit_opencv(&p, (36.0, 24.0), (1800, 1200), 0.01, LAMBDA_D).is_err());
 }

@@ -3,5 +3,6 @@
 
 pub mod inverse;
 pub mod lens;
+pub mod plan;
 pub mod vertex;
 pub mod warp;

@@ -182,3 +182,48 @@ pub fn lens(args: LensArgs) -> Result<(), CliError> {
     }
     Ok(())
 }
+
+#[derive(Args, Debug)]
+pub struct PlanArgs {
+    /// Folder of scene files (default: ./examples/scenes, else the source tree's).
+    #[arg(long, value_name = "DIR")]
+    scenes: Option<std::path::PathBuf>,
+    /// One JSON object per line instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn plan(args: PlanArgs) -> Result<(), CliError> {
+    let dir = args.scenes.clone().unwrap_or_else(|| {
+        let here = std::path::PathBuf::from("examples/scenes");
+        if here.is_dir() {
+            here
+        } else {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes")
+        }
+    });
+    if !dir.is_dir() {
+        return Err(CliError::input(format!(
+            "--scenes {}: no such folder",
+            dir.display()
+        )));
+    }
+    let ctx = context()?;
+    eprintln!("device: {}", ctx.gpu().device_name());
+    let rows = crate::bench::plan::run(&ctx, &dir, &mut |s| super::progress_line(s)).map_err(
+        |e| match e {
+            crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+            other => CliError::from(other),
+        },
+    )?;
+    super::progress_done(&format!("measured {} rows", rows.len()));
+    finish(&ctx)?;
+    if args.json {
+        for r in &rows {
+            println!("{r}");
+        }
+    } else {
+        println!("{}", crate::bench::plan::table(&rows));
+    }
+    Ok(())
+}

@@ -8,8 +8,8 @@ mod bench;
 mod calibration;
 mod demo;
 mod lens;
-mod points;
 mod planned;
+mod points;
 mod render;
 mod warp;
 
@@ -171,6 +171,9 @@ enum BenchCommand {
     /// Seed 004's image-based lens model: lens samples, angle threshold and film grid
     /// against PSNR versus the CPU reference ray tracer, and the speed ratio between them.
     Lens(bench::LensArgs),
+    /// The planner's choices for the example scenes beside the everything-on pipeline, and
+    /// the error-versus-time trade-off it picks from (inverse methods, tessellations).
+    Plan(bench::PlanArgs),
 }
 
 /// Where the model runs.
@@ -241,6 +244,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Warp(args)) => bench::warp(args),
         Command::Bench(BenchCommand::Vertex(args)) => bench::vertex(args),
         Command::Bench(BenchCommand::Lens(args)) => bench::lens(args),
+        Command::Bench(BenchCommand::Plan(args)) => bench::plan(args),
         Command::Demo(args) => demo::run(args),
         Command::Distort(args) => warp::run(args, Direction::Distort, false),
         Command::Undistort(args) => warp::run(args, Direction::Undistort, false),

@@ -19,7 +19,11 @@ pub fn parse_frames(s: &str, count: usize) -> Result<std::ops::Range<usize>, Str
     } else {
         return Err(bad());
     };
-    let a: usize = if a.trim().is_empty() { 0 } else { a.trim().parse().map_err(|_| bad())? };
+    let a: usize = if a.trim().is_empty() {
+        0
+    } else {
+        a.trim().parse().map_err(|_| bad())?
+    };
     let b: usize = if b.trim().is_empty() {
         count
     } else {
@@ -41,11 +45,17 @@ pub fn explain(p: &Plan, measured_ms: Option<f64>) -> String {
             Route::Pinhole => "pinhole render".to_string(),
             Route::Vertex { tessellate } => format!(
                 "vertex path (Alg. 1){}",
-                tessellate.map(|l| format!(", tessellated to {l} px")).unwrap_or_default()
+                tessellate
+                    .map(|l| format!(", tessellated to {l} px"))
+                    .unwrap_or_default()
             ),
             Route::Warp { method, chromatic } => format!(
                 "pinhole render + warp ({method}{})",
-                if chromatic.is_some() { ", chromatic" } else { "" }
+                if chromatic.is_some() {
+                    ", chromatic"
+                } else {
+                    ""
+                }
             ),
             Route::WarpAndVertex { method, .. } => {
                 format!("warp ({method}, chromatic) for colour + vertex path for the data")
@@ -95,9 +105,12 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
         )));
     }
     let Some(out) = args.out() else {
-        return Err(CliError::input("a scene file renders into a folder: give --out DIR"));
+        return Err(CliError::input(
+            "a scene file renders into a folder: give --out DIR",
+        ));
     };
-    let file = SceneFile::load(Path::new(scene_path)).map_err(|e| CliError::input(e.to_string()))?;
+    let file =
+        SceneFile::load(Path::new(scene_path)).map_err(|e| CliError::input(e.to_string()))?;
     let scene = load_geometry(&file).map_err(CliError::input)?;
     let plan = plan(&file, &scene).map_err(CliError::input)?;
     let frames = match args.frames() {
@@ -106,7 +119,10 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
     };
     if !out.is_dir() {
         std::fs::create_dir(out).map_err(|e| {
-            CliError::input(format!("--out {}: cannot create the folder: {e}", out.display()))
+            CliError::input(format!(
+                "--out {}: cannot create the folder: {e}",
+                out.display()
+            ))
         })?;
     }
     let ctx = context()?;
@@ -153,8 +169,14 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
         print!("{}", explain(&plan, measured));
     }
     if frames.len() > 1 {
-        execute(&ctx, &plan, &scene, frames.start + 1..frames.end, &mut write)
-            .map_err(gpu_error)?;
+        execute(
+            &ctx,
+            &plan,
+            &scene,
+            frames.start + 1..frames.end,
+            &mut write,
+        )
+        .map_err(gpu_error)?;
     }
     finish(&ctx)?;
     let done = done.into_inner();

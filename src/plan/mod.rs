@@ -105,16 +105,34 @@ fn invalid(e: impl ToString) -> GpuError {
     GpuError::Invalid(e.to_string())
 }
 
-/// Inverse methods the planner chooses between, with a per-pixel GPU cost (ns, f32, lavapipe:
-/// the medians of `bench inverse` in the README: Heikkilä ~25, fixed-point ~22 + 1.5 N,
-/// Newton ~80).
-pub fn inverse_candidates() -> Vec<(InverseMethod, f64)> {
+/// Inverse methods the planner chooses between, cheapest first for `terms`, with a per-pixel
+/// GPU cost (ns, f32, lavapipe), read off the README's `bench inverse` table: Heikkilä ~25;
+/// fixed-point ~22 + N × (1.2 for radial lenses, 6 with rational, prism or tilt terms, e.g.
+/// 36 → 129 ns from 5 to 20 iterations on `prism_tilt`); Newton ~70 (radial) to ~100.
+pub fn inverse_candidates_for(terms: crate::model::Terms) -> Vec<(InverseMethod, f64)> {
+    let complex = terms.rational || terms.prism || terms.tilt;
+    let per_iteration = if complex { 6.0 } else { 1.2 };
     let mut v = vec![(InverseMethod::Heikkila, 25.0)];
     for n in [1, 2, 3, 5, 10, 20, 50] {
-        v.push((InverseMethod::FixedPoint(n), 22.0 + 1.5 * n as f64));
+        v.push((
+            InverseMethod::FixedPoint(n),
+            22.0 + per_iteration * n as f64,
+        ));
     }
-    v.push((InverseMethod::Newton, 80.0));
+    v.push((InverseMethod::Newton, if complex { 100.0 } else { 70.0 }));
+    v.sort_by(|a, b| a.1.total_cmp(&b.1));
     v
+}
+
+/// [`inverse_candidates_for`] a lens with every term.
+pub fn inverse_candidates() -> Vec<(InverseMethod, f64)> {
+    inverse_candidates_for(crate::model::Terms {
+        radial: true,
+        rational: true,
+        tangential: true,
+        prism: true,
+        tilt: true,
+    })
 }
 
 /// The largest error (pixels) of `method` on `camera`: every pixel of a 48 × 36 grid over
@@ -161,7 +179,8 @@ fn estimate_ms(pixels: f64, triangles: f64, route: &str, method_ns: f64) -> f64 
 
 /// Loads the scene's geometry.
 pub fn load_geometry(file: &SceneFile) -> Result<Scene, String> {
-    builtin::parse(&file.geometry).map_err(|e| format!("{}: [geometry] scene: {e}", file.source.display()))
+    builtin::parse(&file.geometry)
+        .map_err(|e| format!("{}: [geometry] scene: {e}", file.source.display()))
 }
 
 /// Plans `file` for `scene`.
@@ -203,12 +222,13 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             }
             let pitch = sensor_mm.0 / pixels.0 as f64;
             if ((sensor_mm.1 / pixels.1 as f64) / pitch - 1.0).abs() > 1e-3 {
-                return Err(format!("{src}: [optics] sensor_mm and pixels give non-square pixels"));
+                return Err(format!(
+                    "{src}: [optics] sensor_mm and pixels give non-square pixels"
+                ));
             }
             let first = file.poses.first().copied();
-            let (optics, _) =
-                frame_scene(&lens, *pixels, pitch, *f_number, *focus_m, first, scene)
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
+            let (optics, _) = frame_scene(&lens, *pixels, pitch, *f_number, *focus_m, first, scene)
+                .map_err(|e| format!("{}: {e}", path.display()))?;
             let efl = crate::lens::analyse(&lens, LAMBDA_D).efl.unwrap_or(1.0);
             // The budget in degrees: one pixel subtends pitch / EFL radians.
             let px_deg = (pitch / efl).atan().to_degrees();
@@ -234,11 +254,16 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 },
             ));
             steps.push(step(
-                if e.vignetting { "vignetting kept" } else { "vignetting divided out" },
+                if e.vignetting {
+                    "vignetting kept"
+                } else {
+                    "vignetting divided out"
+                },
                 if e.vignetting {
                     "vignetting asked: border bisection per sample, radiometric weights kept".into()
                 } else {
-                    "no vignetting asked: no border fitting; the accumulated weight is divided out".into()
+                    "no vignetting asked: no border fitting; the accumulated weight is divided out"
+                        .into()
                 },
             ));
             let options = ModelOptions {
@@ -258,11 +283,9 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 "cell renders",
                 format!("{projections} perspective projections per frame, largest angle error {model_angle:.2e}°"),
             ));
-            let frame_pose = first.map(Ok).unwrap_or_else(|| {
-                optics
-                    .equivalent_camera()
-                    .map(|c| scene.default_pose(&c))
-            })?;
+            let frame_pose = first
+                .map(Ok)
+                .unwrap_or_else(|| optics.equivalent_camera().map(|c| scene.default_pose(&c)))?;
             let poses = if file.poses.is_empty() {
                 vec![frame_pose]
             } else {
@@ -294,10 +317,13 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             })
         }
         scene_file::OpticsSpec::Camera(path) => {
-            let mut camera =
-                crate::io::load_camera(path).map_err(|e| e.to_string())?;
+            let mut camera = crate::io::load_camera(path).map_err(|e| e.to_string())?;
             if e.vignetting || e.depth_of_field {
-                let key = if e.vignetting { "vignetting" } else { "depth_of_field" };
+                let key = if e.vignetting {
+                    "vignetting"
+                } else {
+                    "depth_of_field"
+                };
                 return Err(format!(
                     "{src}: [effects] {key}: a calibrated camera (OpenCV model) has no {key}; give a lens prescription (optics.lens)"
                 ));
@@ -342,13 +368,19 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     if e.distortion {
                         "the camera has no distortion: no lens work at all".into()
                     } else {
-                        "no distortion asked: the pinhole projection, no warp, no geometry shader".into()
+                        "no distortion asked: the pinhole projection, no warp, no geometry shader"
+                            .into()
                     },
                 ));
                 return Ok(Plan {
                     route: Route::Pinhole,
                     steps,
-                    estimated_ms: estimate_ms(pixels, scene.mesh.triangle_count() as f64, "pinhole", 0.0),
+                    estimated_ms: estimate_ms(
+                        pixels,
+                        scene.mesh.triangle_count() as f64,
+                        "pinhole",
+                        0.0,
+                    ),
                     camera: Some(camera),
                     lens: None,
                     expected_error_px: 0.0,
@@ -361,10 +393,21 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             // The vertex path: the coarsest tessellation that meets the budget.
             let pose = poses[0];
             let mut vertex: Option<(Option<f64>, f64, usize)> = None;
-            for l in [None, Some(64.0), Some(32.0), Some(16.0), Some(8.0), Some(4.0), Some(2.0), Some(1.0)] {
+            for l in [
+                None,
+                Some(64.0),
+                Some(32.0),
+                Some(16.0),
+                Some(8.0),
+                Some(4.0),
+                Some(2.0),
+                Some(1.0),
+            ] {
                 let mesh = match l {
                     None => scene.mesh.clone(),
-                    Some(l) => crate::scene::tessellate::tessellate(&scene.mesh, &pose, &camera, l)?,
+                    Some(l) => {
+                        crate::scene::tessellate::tessellate(&scene.mesh, &pose, &camera, l)?
+                    }
                 };
                 if mesh.triangle_count() > 4_000_000 {
                     break;
@@ -377,7 +420,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             }
             // The warp: the cheapest inverse meeting the budget, measured on this camera.
             let mut warp: Option<(InverseMethod, f64, f64)> = None;
-            for (m, ns) in inverse_candidates() {
+            for (m, ns) in inverse_candidates_for(terms) {
                 if let Some(err) = inverse_error_px(&camera, m) {
                     if err <= budget {
                         warp = Some((m, err, ns));
@@ -388,25 +431,46 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             let triangles = scene.mesh.triangle_count() as f64;
             let data_needs_vertex = o.ids || o.flow;
             let vertex_ms = vertex.map(|(_, _, t)| estimate_ms(pixels, t as f64, "vertex", 0.0));
-            let warp_ms = warp.map(|(_, _, ns)| estimate_ms(pixels, triangles, "warp", ns));
-            let describe_tess = |l: Option<f64>, err: f64, tris: usize| match l {
+            // Three fetches (and inverses) per pixel with chromatic aberration.
+            let fetches = if chromatic.is_some() { 3.0 } else { 1.0 };
+            let warp_ms =
+                warp.map(|(_, _, ns)| estimate_ms(pixels, triangles, "warp", ns * fetches));
+            let describe_tess = |l: Option<f64>, err: f64, tris: usize| {
+                match l {
                 None => format!("the mesh as it is: its straight edges stay within {err:.1e} px of the true curves ({tris} triangles)"),
                 Some(l) => format!("edges split to {l} px: straight-line error {err:.1e} px ≤ budget ({tris} triangles)"),
+            }
             };
             let describe_warp = |m: InverseMethod, err: f64| {
                 format!("inverse {m}: the cheapest method whose error on this camera, {err:.1e} px, meets the budget; overscanned source so every valid pixel has one")
             };
-            let (route, expected, estimated) = if chromatic.is_some() || (!data_needs_vertex && warp.is_some() && (vertex.is_none() || warp_ms < vertex_ms)) {
+            let (route, expected, estimated) = if chromatic.is_some()
+                || (!data_needs_vertex
+                    && warp.is_some()
+                    && (vertex.is_none() || warp_ms < vertex_ms))
+            {
                 let Some((m, werr, _)) = warp else {
                     return Err(format!("{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera"));
                 };
-                steps.push(step("pinhole render (overscanned)", "the warp's source, covering every valid output pixel (seed 000 Sec. 3.3)".into()));
                 steps.push(step(
-                    if chromatic.is_some() { "warp, 3 fetches (chromatic)" } else { "warp, single fetch" },
+                    "pinhole render (overscanned)",
+                    "the warp's source, covering every valid output pixel (seed 000 Sec. 3.3)"
+                        .into(),
+                ));
+                steps.push(step(
+                    if chromatic.is_some() {
+                        "warp, 3 fetches (chromatic)"
+                    } else {
+                        "warp, single fetch"
+                    },
                     format!(
                         "{}; {}; {}",
                         describe_warp(m, werr),
-                        if chromatic.is_some() { "chromatic aberration asked: each channel through its own radial scale" } else { "no chromatic aberration: the single-fetch variant" },
+                        if chromatic.is_some() {
+                            "chromatic aberration asked: each channel through its own radial scale"
+                        } else {
+                            "no chromatic aberration: the single-fetch variant"
+                        },
                         terms_note
                     ),
                 ));
@@ -416,15 +480,29 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     };
                     steps.push(step(
                         "Alg. 1 (vertex + discard) for IDs/flow/depth",
-                        format!("IDs and flow cannot be warped (seed 000 Table 1); {}; {terms_note}", describe_tess(l, verr, tris)),
+                        format!(
+                            "IDs and flow cannot be warped (seed 000 Table 1); {}; {terms_note}",
+                            describe_tess(l, verr, tris)
+                        ),
                     ));
                     (
-                        Route::WarpAndVertex { method: m, chromatic, tessellate: l },
+                        Route::WarpAndVertex {
+                            method: m,
+                            chromatic,
+                            tessellate: l,
+                        },
                         werr.max(verr),
                         warp_ms.unwrap_or(0.0) + vertex_ms.unwrap_or(0.0),
                     )
                 } else {
-                    (Route::Warp { method: m, chromatic }, werr, warp_ms.unwrap_or(f64::NAN))
+                    (
+                        Route::Warp {
+                            method: m,
+                            chromatic,
+                        },
+                        werr,
+                        warp_ms.unwrap_or(f64::NAN),
+                    )
                 }
             } else {
                 let Some((l, verr, tris)) = vertex else {
@@ -436,14 +514,30 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     format!(
                         "estimated {:.1} ms against {} for pinhole + warp",
                         vertex_ms.unwrap_or(f64::NAN),
-                        warp_ms.map(|w| format!("{w:.1} ms")).unwrap_or_else(|| "no warp meeting the budget".into())
+                        warp_ms
+                            .map(|w| format!("{w:.1} ms"))
+                            .unwrap_or_else(|| "no warp meeting the budget".into())
                     )
                 };
                 if l.is_some() {
                     steps.push(step("tessellation", describe_tess(l, verr, tris)));
                 }
-                steps.push(step("Alg. 1 (vertex + discard)", format!("{why}; {}; {terms_note}", if l.is_none() { describe_tess(l, verr, tris) } else { "discard δ = 0.1 + D".into() })));
-                (Route::Vertex { tessellate: l }, verr, vertex_ms.unwrap_or(f64::NAN))
+                steps.push(step(
+                    "Alg. 1 (vertex + discard)",
+                    format!(
+                        "{why}; {}; {terms_note}",
+                        if l.is_none() {
+                            describe_tess(l, verr, tris)
+                        } else {
+                            "discard δ = 0.1 + D".into()
+                        }
+                    ),
+                ));
+                (
+                    Route::Vertex { tessellate: l },
+                    verr,
+                    vertex_ms.unwrap_or(f64::NAN),
+                )
             };
             Ok(Plan {
                 route,
@@ -494,13 +588,17 @@ pub fn execute(
     each: &mut dyn FnMut(Frame) -> Result<(), GpuError>,
 ) -> Result<Recorded, GpuError> {
     let o = &plan.outputs;
-    let color_format = if o.exr { ColorFormat::Rgba16F } else { ColorFormat::Rgba8 };
+    let color_format = if o.exr {
+        ColorFormat::Rgba16F
+    } else {
+        ColorFormat::Rgba8
+    };
     let mut recorded = Recorded::default();
-    if let Route::LensModel {
-        vignetting, ..
-    } = plan.route
-    {
-        let setting = plan.lens.as_ref().ok_or_else(|| invalid("lens plan without a lens"))?;
+    if let Route::LensModel { vignetting, .. } = plan.route {
+        let setting = plan
+            .lens
+            .as_ref()
+            .ok_or_else(|| invalid("lens plan without a lens"))?;
         let mut renderer =
             LensRenderer::new(ctx.gpu(), &setting.models, LensRenderOptions::default())?;
         let mesh = MeshBuffers::new(ctx.gpu(), &scene.mesh, scene.texture.as_ref())?;
@@ -540,7 +638,11 @@ pub fn execute(
                             .collect(),
                     )
                 },
-                depth: if o.exr { crate::imaging::Depth::F32 } else { crate::imaging::Depth::U8 },
+                depth: if o.exr {
+                    crate::imaging::Depth::F32
+                } else {
+                    crate::imaging::Depth::U8
+                },
             };
             each(Frame {
                 index,
@@ -559,13 +661,24 @@ pub fn execute(
         });
         return Ok(recorded);
     }
-    let camera = plan.camera.clone().ok_or_else(|| invalid("plan without a camera"))?;
+    let camera = plan
+        .camera
+        .clone()
+        .ok_or_else(|| invalid("plan without a camera"))?;
     let mut renderer = SceneRenderer::new(ctx);
     // The first frame once more before timing: pipelines are compiled on first use.
     let warm_up = frames.clone().next();
-    for (index, timed) in warm_up.map(|i| (i, false)).into_iter().chain(frames.map(|i| (i, true))) {
+    for (index, timed) in warm_up
+        .map(|i| (i, false))
+        .into_iter()
+        .chain(frames.map(|i| (i, true)))
+    {
         let pose = plan.poses[index];
-        let previous = if index > 0 { plan.poses[index - 1] } else { pose };
+        let previous = if index > 0 {
+            plan.poses[index - 1]
+        } else {
+            pose
+        };
         let base = RenderRequest {
             camera: camera.clone(),
             pose,
@@ -590,7 +703,9 @@ pub fn execute(
             Route::Vertex { tessellate } => renderer.render(
                 scene,
                 &RenderRequest {
-                    path: RenderPath::Vertex { delta: crate::pass::geometry::DEFAULT_DELTA },
+                    path: RenderPath::Vertex {
+                        delta: crate::pass::geometry::DEFAULT_DELTA,
+                    },
                     tessellate: *tessellate,
                     ..base
                 },
@@ -599,7 +714,10 @@ pub fn execute(
             Route::Warp { method, chromatic } => renderer.render(
                 scene,
                 &RenderRequest {
-                    path: RenderPath::Warp { method: *method, density: 1.0 },
+                    path: RenderPath::Warp {
+                        method: *method,
+                        density: 1.0,
+                    },
                     chromatic: *chromatic,
                     ..base
                 },
@@ -614,7 +732,10 @@ pub fn execute(
                     renderer.render(
                         scene,
                         &RenderRequest {
-                            path: RenderPath::Warp { method: *method, density: 1.0 },
+                            path: RenderPath::Warp {
+                                method: *method,
+                                density: 1.0,
+                            },
                             chromatic: *chromatic,
                             outputs: Outputs::color_only(Some(color_format)),
                             ..base.clone()
@@ -627,9 +748,14 @@ pub fn execute(
                 let data = renderer.render(
                     scene,
                     &RenderRequest {
-                        path: RenderPath::Vertex { delta: crate::pass::geometry::DEFAULT_DELTA },
+                        path: RenderPath::Vertex {
+                            delta: crate::pass::geometry::DEFAULT_DELTA,
+                        },
                         tessellate: *tessellate,
-                        outputs: Outputs { color: None, ..base.outputs },
+                        outputs: Outputs {
+                            color: None,
+                            ..base.outputs
+                        },
                         ..base
                     },
                     &mut quiet,
@@ -645,10 +771,13 @@ pub fn execute(
         };
         let ms = start.elapsed().as_secs_f64() * 1e3;
         if timed {
-            each(Frame { index, rendered, ms })?;
+            each(Frame {
+                index,
+                rendered,
+                ms,
+            })?;
         }
     }
     recorded.pipelines = renderer.recorded.clone();
     Ok(recorded)
 }
-

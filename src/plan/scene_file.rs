@@ -100,7 +100,12 @@ impl Reader<'_> {
         }
     }
 
-    fn table<'t>(&self, root: &'t Table, name: &str, keys: &[&str]) -> Result<Option<&'t Table>, SceneFileError> {
+    fn table<'t>(
+        &self,
+        root: &'t Table,
+        name: &str,
+        keys: &[&str],
+    ) -> Result<Option<&'t Table>, SceneFileError> {
         match root.get(name) {
             None => Ok(None),
             Some(Value::Table(t)) => {
@@ -121,7 +126,13 @@ impl Reader<'_> {
         }
     }
 
-    fn bool(&self, t: Option<&Table>, table: &str, key: &str, default: bool) -> Result<bool, SceneFileError> {
+    fn bool(
+        &self,
+        t: Option<&Table>,
+        table: &str,
+        key: &str,
+        default: bool,
+    ) -> Result<bool, SceneFileError> {
         match t.and_then(|t| t.get(key)) {
             None => Ok(default),
             Some(Value::Boolean(b)) => Ok(*b),
@@ -147,7 +158,12 @@ impl Reader<'_> {
         }
     }
 
-    fn opt_number(&self, t: Option<&Table>, table: &str, key: &str) -> Result<Option<f64>, SceneFileError> {
+    fn opt_number(
+        &self,
+        t: Option<&Table>,
+        table: &str,
+        key: &str,
+    ) -> Result<Option<f64>, SceneFileError> {
         t.and_then(|t| t.get(key))
             .map(|v| self.number(v, &format!("[{table}] {key}")))
             .transpose()
@@ -158,10 +174,7 @@ impl Reader<'_> {
             return Err(self.err(key, format!("expected an array of {N} numbers, found {v}")));
         };
         if a.len() != N {
-            return Err(self.err(
-                key,
-                format!("expected {N} numbers, found {}", a.len()),
-            ));
+            return Err(self.err(key, format!("expected {N} numbers, found {}", a.len())));
         }
         let mut out = [0.0; N];
         for (i, x) in a.iter().enumerate() {
@@ -170,7 +183,12 @@ impl Reader<'_> {
         Ok(out)
     }
 
-    fn string<'t>(&self, t: Option<&'t Table>, table: &str, key: &str) -> Result<Option<&'t str>, SceneFileError> {
+    fn string<'t>(
+        &self,
+        t: Option<&'t Table>,
+        table: &str,
+        key: &str,
+    ) -> Result<Option<&'t str>, SceneFileError> {
         match t.and_then(|t| t.get(key)) {
             None => Ok(None),
             Some(Value::String(s)) => Ok(Some(s.as_str())),
@@ -216,9 +234,9 @@ impl SceneFile {
     pub fn parse(text: &str, path: &Path) -> Result<Self, SceneFileError> {
         let file = path.display().to_string();
         let r = Reader { file: &file };
-        let root: Table = text.parse().map_err(|e: toml::de::Error| {
-            r.err("", format!("not valid TOML: {}", e.message()))
-        })?;
+        let root: Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| r.err("", format!("not valid TOML: {}", e.message())))?;
         const TABLES: [&str; 8] = [
             "geometry",
             "optics",
@@ -231,7 +249,10 @@ impl SceneFile {
         ];
         for k in root.keys() {
             if !TABLES.contains(&k.as_str()) {
-                return Err(r.err(k, format!("unknown key; expected one of {}", TABLES.join(", "))));
+                return Err(r.err(
+                    k,
+                    format!("unknown key; expected one of {}", TABLES.join(", ")),
+                ));
             }
         }
         let dir = path.parent().unwrap_or(Path::new("."));
@@ -245,9 +266,12 @@ impl SceneFile {
         };
 
         let geometry = r.table(&root, "geometry", &["scene"])?;
-        let scene = r
-            .string(geometry, "geometry", "scene")?
-            .ok_or_else(|| r.err("[geometry] scene", "missing: a built-in scene (checkerboard, grid, boxes) or a mesh file"))?;
+        let scene = r.string(geometry, "geometry", "scene")?.ok_or_else(|| {
+            r.err(
+                "[geometry] scene",
+                "missing: a built-in scene (checkerboard, grid, boxes) or a mesh file",
+            )
+        })?;
         let builtin = ["checkerboard", "grid", "boxes"]
             .iter()
             .any(|b| scene == *b || scene.starts_with(&format!("{b}:")));
@@ -289,7 +313,10 @@ impl SceneFile {
                 let focus_m = r.opt_number(optics_t, "optics", "focus_m")?;
                 if let Some(f) = focus_m {
                     if !(f > 0.0) {
-                        return Err(r.err("[optics] focus_m", format!("expected metres > 0, found {f}")));
+                        return Err(r.err(
+                            "[optics] focus_m",
+                            format!("expected metres > 0, found {f}"),
+                        ));
                     }
                 }
                 let f_number = r.opt_number(optics_t, "optics", "fstop")?;
@@ -304,7 +331,10 @@ impl SceneFile {
                     Some(v) => r.numbers::<2>(v, "[optics] pixels")?,
                     None => [480.0, 320.0],
                 };
-                if !pixels.iter().all(|p| p.fract() == 0.0 && (1.0..=16384.0).contains(p)) {
+                if !pixels
+                    .iter()
+                    .all(|p| p.fract() == 0.0 && (1.0..=16384.0).contains(p))
+                {
                     return Err(r.err("[optics] pixels", "expected two whole numbers in 1..=16384"));
                 }
                 OpticsSpec::Lens {
@@ -346,7 +376,10 @@ impl SceneFile {
             None => 10,
             Some(n) if n.fract() == 0.0 && (1.0..=1024.0).contains(&n) => n as u32,
             Some(n) => {
-                return Err(r.err("[effects] lens_samples", format!("expected a whole number 1..=1024, found {n}")));
+                return Err(r.err(
+                    "[effects] lens_samples",
+                    format!("expected a whole number 1..=1024, found {n}"),
+                ));
             }
         };
         let effects = Effects {
@@ -367,12 +400,19 @@ impl SceneFile {
             ));
         }
 
-        let o = r.table(&root, "outputs", &["color", "ids", "flow", "depth", "format"])?;
+        let o = r.table(
+            &root,
+            "outputs",
+            &["color", "ids", "flow", "depth", "format"],
+        )?;
         let exr = match r.string(o, "outputs", "format")? {
             None | Some("png") => false,
             Some("exr") => true,
             Some(other) => {
-                return Err(r.err("[outputs] format", format!("expected \"png\" or \"exr\", found {other:?}")));
+                return Err(r.err(
+                    "[outputs] format",
+                    format!("expected \"png\" or \"exr\", found {other:?}"),
+                ));
             }
         };
         let outputs = OutputSpec {
@@ -383,13 +423,19 @@ impl SceneFile {
             exr,
         };
         if !(outputs.color || outputs.ids || outputs.flow || outputs.depth) {
-            return Err(r.err("[outputs]", "every output is off: ask for color, ids, flow or depth"));
+            return Err(r.err(
+                "[outputs]",
+                "every output is off: ask for color, ids, flow or depth",
+            ));
         }
 
         let a = r.table(&root, "accuracy", &["max_error_px"])?;
         let max_error_px = r.opt_number(a, "accuracy", "max_error_px")?.unwrap_or(0.01);
         if !(max_error_px > 0.0) {
-            return Err(r.err("[accuracy] max_error_px", format!("expected pixels > 0, found {max_error_px}")));
+            return Err(r.err(
+                "[accuracy] max_error_px",
+                format!("expected pixels > 0, found {max_error_px}"),
+            ));
         }
 
         let render = r.table(&root, "render", &["background"])?;
@@ -407,25 +453,36 @@ impl SceneFile {
                 }
             }
             Some(v) => {
-                return Err(r.err("poses", format!("expected [[poses]] tables, found {}", v.type_str())));
+                return Err(r.err(
+                    "poses",
+                    format!("expected [[poses]] tables, found {}", v.type_str()),
+                ));
             }
         }
         if let Some(seq) = r.table(&root, "pose_sequence", &["from", "to", "frames"])? {
             if !poses.is_empty() {
-                return Err(r.err("[pose_sequence]", "give [[poses]] or [pose_sequence], not both"));
+                return Err(r.err(
+                    "[pose_sequence]",
+                    "give [[poses]] or [pose_sequence], not both",
+                ));
             }
             let from = r.pose(
-                seq.get("from").ok_or_else(|| r.err("[pose_sequence] from", "missing"))?,
+                seq.get("from")
+                    .ok_or_else(|| r.err("[pose_sequence] from", "missing"))?,
                 "[pose_sequence] from",
             )?;
             let to = r.pose(
-                seq.get("to").ok_or_else(|| r.err("[pose_sequence] to", "missing"))?,
+                seq.get("to")
+                    .ok_or_else(|| r.err("[pose_sequence] to", "missing"))?,
                 "[pose_sequence] to",
             )?;
             let frames = match seq.get("frames") {
                 Some(Value::Integer(n)) if (1..=100_000).contains(n) => *n as usize,
                 Some(v) => {
-                    return Err(r.err("[pose_sequence] frames", format!("expected a whole number 1..=100000, found {v}")));
+                    return Err(r.err(
+                        "[pose_sequence] frames",
+                        format!("expected a whole number 1..=100000, found {v}"),
+                    ));
                 }
                 None => return Err(r.err("[pose_sequence] frames", "missing")),
             };

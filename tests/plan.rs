@@ -1,0 +1,295 @@
+//! The planner (issue 7): what it chooses, and proof on what is *recorded* (pipelines and
+//! their specialization constants), not on timings, that unasked effects cost nothing.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use ash::vk;
+use common::{assert_no_validation_messages, validated_context};
+use vklens::plan::{execute, load_geometry, plan, Route, SceneFile};
+
+fn examples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes")
+}
+
+fn scene_file(text: &str) -> SceneFile {
+    SceneFile::parse(text, &examples().join("test.toml")).unwrap()
+}
+
+fn error(text: &str) -> String {
+    SceneFile::parse(text, Path::new("/x/bad.toml"))
+        .unwrap_err()
+        .to_string()
+}
+
+/// The recorded constants of a pipeline kind's stage.
+fn constant(
+    recorded: &vklens::plan::Recorded,
+    kind: &str,
+    stage: vk::ShaderStageFlags,
+    id: u32,
+) -> Option<u32> {
+    recorded
+        .pipelines
+        .iter()
+        .filter(|p| p.kind == kind)
+        .flat_map(|p| p.constants.iter())
+        .find(|(s, _)| *s == stage)
+        .and_then(|(_, c)| c.get(id))
+}
+
+fn run(file: &SceneFile) -> (vklens::plan::Plan, vklens::plan::Recorded) {
+    let ctx = validated_context();
+    let scene = load_geometry(file).unwrap();
+    let p = plan(file, &scene).unwrap();
+    let mut frames = 0;
+    let recorded = execute(&ctx, &p, &scene, 0..1, &mut |f| {
+        assert!(f.rendered.color.is_some() || f.rendered.ids.is_some());
+        frames += 1;
+        Ok(())
+    })
+    .unwrap();
+    assert_eq!(frames, 1);
+    assert_no_validation_messages(&ctx);
+    (p, recorded)
+}
+
+#[test]
+fn a_pinhole_scene_records_no_warp_and_no_lens_work() {
+    let file = SceneFile::load(&examples().join("pinhole.toml")).unwrap();
+    let (p, recorded) = run(&file);
+    assert_eq!(p.route, Route::Pinhole);
+    assert!(recorded.has("pinhole render"));
+    assert!(!recorded.has("warp"), "{:?}", recorded.pipelines);
+    assert!(!recorded.has("Alg. 1 (vertex + discard)"));
+}
+
+#[test]
+fn k1_k2_runs_shaders_with_the_other_terms_compiled_out() {
+    // Alg. 1 (fine enough mesh is cheap here) — its vertex stage has only the radial group.
+    let file = SceneFile::load(&examples().join("distortion.toml")).unwrap();
+    let (p, recorded) = run(&file);
+    assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
+    let v = vk::ShaderStageFlags::VERTEX;
+    let kind = "Alg. 1 (vertex + discard)";
+    assert_eq!(constant(&recorded, kind, v, 0), Some(1), "radial on");
+    for (id, group) in [
+        (1, "rational"),
+        (2, "tangential"),
+        (3, "prism"),
+        (4, "tilt"),
+    ] {
+        assert_eq!(
+            constant(&recorded, kind, v, id),
+            Some(0),
+            "{group} compiled out"
+        );
+    }
+    assert!(!recorded.has("warp"));
+    assert!(p.expected_error_px <= p.budget_px);
+}
+
+#[test]
+fn without_chromatic_aberration_the_warp_is_the_single_fetch_variant() {
+    // A fine mesh makes the warp cheaper than Alg. 1 by the planner's tables.
+    let text = |chromatic: bool| {
+        format!(
+            "[geometry]\nscene = \"grid:256\"\n[optics]\ncamera = \"../cameras/barrel_k1k2.json\"\n\
+             [effects]\nchromatic_aberration = {chromatic}\nchromatic_scales = [1.003, 1.0, 0.997]\n"
+        )
+    };
+    let c = vk::ShaderStageFlags::COMPUTE;
+    let (p, recorded) = run(&scene_file(&text(false)));
+    assert!(
+        matches!(
+            p.route,
+            Route::Warp {
+                chromatic: None,
+                ..
+            }
+        ),
+        "{:?}",
+        p.route
+    );
+    assert_eq!(constant(&recorded, "warp", c, 11), Some(0), "single fetch");
+    assert_eq!(
+        constant(&recorded, "warp", c, 1),
+        Some(0),
+        "rational compiled out"
+    );
+    let (p, recorded) = run(&scene_file(&text(true)));
+    assert!(
+        matches!(
+            p.route,
+            Route::Warp {
+                chromatic: Some(_),
+                ..
+            }
+        ),
+        "{:?}",
+        p.route
+    );
+    assert_eq!(constant(&recorded, "warp", c, 11), Some(1), "three fetches");
+}
+
+#[test]
+fn ids_and_flow_force_the_geometry_path_and_the_budget_sets_the_tessellation() {
+    let file = SceneFile::load(&examples().join("ids_and_flow.toml")).unwrap();
+    let scene = load_geometry(&file).unwrap();
+    let p = plan(&file, &scene).unwrap();
+    assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
+    assert_eq!(p.poses.len(), 3);
+    // A tighter budget splits edges further.
+    let tight = SceneFile {
+        max_error_px: 0.002,
+        ..file.clone()
+    };
+    let q = plan(&tight, &scene).unwrap();
+    let edge = |r: &Route| match r {
+        Route::Vertex { tessellate } => tessellate.unwrap_or(f64::INFINITY),
+        other => panic!("{other:?}"),
+    };
+    assert!(
+        edge(&q.route) < edge(&p.route),
+        "{:?} vs {:?}",
+        q.route,
+        p.route
+    );
+    assert!(q.expected_error_px <= 0.002);
+}
+
+#[test]
+fn a_lens_without_depth_of_field_or_vignetting_does_none_of_that_work() {
+    let file = SceneFile::load(&examples().join("lens_chromatic.toml")).unwrap();
+    let scene = load_geometry(&file).unwrap();
+    let p = plan(&file, &scene).unwrap();
+    match p.route {
+        Route::LensModel {
+            samples,
+            chromatic,
+            vignetting,
+            ..
+        } => assert_eq!((samples, chromatic, vignetting), (1, true, false)),
+        other => panic!("{other:?}"),
+    }
+    let models = &p.lens.as_ref().unwrap().models;
+    assert_eq!(models.len(), 3, "one model per channel");
+    assert!(models.iter().all(|(m, _)| m.samples.len() == 1));
+    let file = SceneFile::load(&examples().join("lens_depth_of_field.toml")).unwrap();
+    let p = plan(&file, &scene).unwrap();
+    let models = &p.lens.as_ref().unwrap().models;
+    assert_eq!(
+        models.len(),
+        1,
+        "one wavelength without chromatic aberration"
+    );
+    assert_eq!(models[0].0.samples.len(), 10);
+}
+
+#[test]
+fn scene_file_errors_name_the_file_the_key_and_what_was_expected() {
+    let base = "[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"c.json\"\n";
+    let cases = [
+        (
+            format!("{base}[effects]\nvignette = true\n"),
+            "[effects] vignette: unknown key",
+        ),
+        (
+            format!("{base}[effects]\ndistortion = \"yes\"\n"),
+            "[effects] distortion: expected true or false",
+        ),
+        (
+            format!("{base}[accuracy]\nmax_error_px = -1\n"),
+            "[accuracy] max_error_px: expected pixels > 0",
+        ),
+        (format!("{base}[optics]\n"), "not valid TOML"),
+        (
+            "[geometry]\nscene = \"boxes\"\n".to_string(),
+            "[optics]: missing",
+        ),
+        (
+            format!("{base}[outputs]\ncolor = false\n"),
+            "every output is off",
+        ),
+        (
+            format!("{base}[effects]\nchromatic_aberration = true\n"),
+            "[effects] chromatic_scales: missing",
+        ),
+        (
+            format!("{base}[[poses]]\nrvec = [0, 0]\ntvec = [0, 0, 1]\n"),
+            "[[poses]] #1.rvec: expected 3 numbers",
+        ),
+    ];
+    for (text, expected) in cases {
+        let e = error(&text);
+        assert!(e.starts_with("/x/bad.toml: "), "{e}");
+        assert!(e.contains(expected), "{e}\n  expected {expected:?}");
+    }
+    // Planning errors name the key too: vignetting needs a lens.
+    let file = scene_file(
+        "[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"../cameras/barrel_k1k2.json\"\n[effects]\nvignetting = true\n",
+    );
+    let scene = load_geometry(&file).unwrap();
+    let e = plan(&file, &scene).unwrap_err();
+    assert!(e.contains("[effects] vignetting"), "{e}");
+}
+
+#[test]
+fn render_scene_cli_writes_every_output_of_every_frame() {
+    let bin = env!("CARGO_BIN_EXE_vklens");
+    let dir = std::env::temp_dir().join(format!("vklens-plan-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let scene = examples().join("ids_and_flow.toml");
+    let o = std::process::Command::new(bin)
+        .args([
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .args(["--explain", "--frames", "1..=2"])
+        .env("VKLENS_VALIDATION", "1")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("plan: vertex path") && stdout.contains("measured"),
+        "{stdout}"
+    );
+    for f in 1..=2 {
+        for name in [
+            "color_{f:04}.png",
+            "ids_{f:04}.png",
+            "flow_{f:04}.exr",
+            "depth_{f:04}.exr",
+        ] {
+            let name = name.replace("{f:04}", &format!("{f:04}"));
+            assert!(dir.join(&name).exists(), "{name}");
+        }
+    }
+    assert!(
+        !dir.join("color_0000.png").exists(),
+        "frame 0 was not asked for"
+    );
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("plan.json")).unwrap()).unwrap();
+    assert_eq!(plan["frames"].as_array().unwrap().len(), 2);
+    // Out of range frames: one line, exit 2.
+    let o = std::process::Command::new(bin)
+        .args([
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .args(["--frames", "2..9"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("3 pose(s)"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

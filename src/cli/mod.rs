@@ -109,7 +109,8 @@ enum Command {
     /// Print the pinhole source camera (JSON) that covers every valid distorted pixel.
     Overscan(warp::OverscanArgs),
     /// Render a scene through the lens (seed 000): per vertex with Alg. 1 (colour, IDs, flow,
-    /// depth, all exact) or as a pinhole render plus the compute warp.
+    /// depth, all exact) or as a pinhole render plus the compute warp. With a scene file
+    /// (--scene S.toml --out DIR) the planner picks the cheapest pipeline for what it asks.
     Render(render::RenderArgs),
     /// Render checkerboard views through the lens in varied poses (seed 000 Sec. 4), for
     /// OpenCV to calibrate from: DIR/view_NN.png and DIR/poses.json. tests/calibrate.py

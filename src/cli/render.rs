@@ -26,7 +26,11 @@ pub enum PathArg {
 #[command(after_help = "Examples:
   vklens render --camera cam.yml --scene checkerboard:9x6 --output board.png --supersample 4 --jitter 4
   vklens render --camera cam.yml --scene boxes --output c.png --ids ids.png --depth d.exr --flow f.exr --tessellate 8
-  vklens render --camera cam.yml --scene model.glb --output c.png --path warp --pose 0.1,0,0,0,0,3")]
+  vklens render --camera cam.yml --scene model.glb --output c.png --path warp --pose 0.1,0,0,0,0,3
+  vklens render --scene examples/scenes/ids_and_flow.toml --out frames/ --explain --frames 0..2
+
+Scene files (TOML) name the geometry, the optics (camera file or lens prescription), the
+effects and outputs wanted and the accuracy budget; examples/scenes/README.md has the schema.")]
 pub struct RenderArgs {
     /// The lens: an OpenCV/ROS/vklens camera file. The output has its width × height.
     /// (Not with a .toml scene: the scene file names its optics.)

@@ -509,7 +509,14 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     return Err(format!("{src}: [accuracy] max_error_px = {budget}: even 1 px edges do not meet it, and the outputs (IDs/flow) need the vertex path"));
                 };
                 let why = if data_needs_vertex {
-                    "IDs and flow need the geometry path (seed 000 Table 1)".to_string()
+                    format!(
+                        "{} need the geometry path: a warp cannot carry them (seed 000 Table 1)",
+                        match (o.ids, o.flow) {
+                            (true, true) => "IDs and flow",
+                            (true, false) => "object IDs",
+                            _ => "flow vectors",
+                        }
+                    )
                 } else {
                     format!(
                         "estimated {:.1} ms against {} for pinhole + warp",

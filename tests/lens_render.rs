@@ -3,22 +3,14 @@
 
 mod common;
 
-use common::{assert_no_validation_messages, validated_context};
+use common::{
+    assert_no_validation_messages, shipped_lens as shipped, upload_mesh, validated_context,
+};
 use vklens::lens::image_model::{ImageModel, ModelOptions, Optics};
 use vklens::lens::reference::{psnr, render_reference, Channel};
-use vklens::lens::{Prescription, LAMBDA_D};
-use vklens::pass::geometry::MeshBuffers;
+use vklens::lens::LAMBDA_D;
 use vklens::pass::lens_render::{LensRenderOptions, LensRenderer, ALL_CHANNELS};
 use vklens::scene::builtin;
-
-fn shipped(name: &str) -> Prescription {
-    Prescription::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("lenses")
-            .join(name),
-    )
-    .unwrap()
-}
 
 #[test]
 fn image_based_render_matches_the_reference() {
@@ -29,12 +21,7 @@ fn image_based_render_matches_the_reference() {
     // resamples it bilinearly).
     let ctx = validated_context();
     let scene = builtin::boxes();
-    let mesh = MeshBuffers::new(ctx.gpu(), &scene.mesh, scene.texture.as_ref()).unwrap();
-    ctx.submit(|cmd| {
-        unsafe { mesh.record_upload(cmd) };
-        Ok(())
-    })
-    .unwrap();
+    let mesh = upload_mesh(&ctx, &scene.mesh, scene.texture.as_ref());
     for lens in ["achromat.50mm.dat", "biconvex.50mm.dat"] {
         let p = shipped(lens);
         let framing = Optics::new(&p, (240, 160), 0.15, 1.0, None).unwrap();
@@ -112,12 +99,7 @@ fn vignetting_falls_off_as_the_reference_does() {
     )
     .unwrap();
     let wall = white_wall(5.0);
-    let mesh = MeshBuffers::new(ctx.gpu(), &wall, None).unwrap();
-    ctx.submit(|cmd| {
-        unsafe { mesh.record_upload(cmd) };
-        Ok(())
-    })
-    .unwrap();
+    let mesh = upload_mesh(&ctx, &wall, None);
     let frame = renderer
         .render(&ctx, &mesh, &vklens::scene::Pose::IDENTITY)
         .unwrap();
@@ -191,12 +173,7 @@ fn chromatic_aberration_comes_out_of_the_glass() {
     // On the axis, 2 m away, in focus (d line): what differs between channels is where each
     // wavelength focuses (longitudinal colour), seen as the spot's spread.
     let mesh = square(0.0, 2.0, 0.05);
-    let gpu_mesh = MeshBuffers::new(ctx.gpu(), &mesh, None).unwrap();
-    ctx.submit(|cmd| {
-        unsafe { gpu_mesh.record_upload(cmd) };
-        Ok(())
-    })
-    .unwrap();
+    let gpu_mesh = upload_mesh(&ctx, &mesh, None);
     let scene = vklens::scene::Scene {
         name: "square".into(),
         mesh: mesh.clone(),

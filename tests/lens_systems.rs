@@ -3,16 +3,11 @@
 
 use std::process::Command;
 
-use vklens::lens::{analyse, trace, Prescription, LAMBDA_D};
+use vklens::lens::{analyse, trace, LAMBDA_D};
 
-fn shipped(name: &str) -> Prescription {
-    Prescription::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("lenses")
-            .join(name),
-    )
-    .unwrap()
-}
+mod common;
+
+use common::shipped_lens as shipped;
 
 #[test]
 fn double_gauss_matches_its_published_figures() {

@@ -17,6 +17,7 @@
 
 use std::time::Instant;
 
+use super::fixed as f;
 use serde_json::{json, Value};
 
 use crate::gpu::{Context, GpuError, Result};
@@ -147,13 +148,6 @@ pub fn run(
         }
     }
     Ok(rows)
-}
-
-fn f(r: &Value, key: &str, digits: usize) -> String {
-    r[key]
-        .as_f64()
-        .map(|v| format!("{v:.digits$}"))
-        .unwrap_or_else(|| "—".into())
 }
 
 /// Markdown tables, one per sweep.

@@ -6,3 +6,19 @@ pub mod lens;
 pub mod plan;
 pub mod vertex;
 pub mod warp;
+
+/// A JSON row's number `key` with `digits` decimals, "—" when absent (table cells).
+pub(crate) fn fixed(row: &serde_json::Value, key: &str, digits: usize) -> String {
+    row[key]
+        .as_f64()
+        .map(|x| format!("{x:.digits$}"))
+        .unwrap_or_else(|| "—".into())
+}
+
+/// A JSON row's number `key` in scientific notation, "—" when absent.
+pub(crate) fn sci(row: &serde_json::Value, key: &str) -> String {
+    row[key]
+        .as_f64()
+        .map(|x| format!("{x:.1e}"))
+        .unwrap_or_else(|| "—".into())
+}

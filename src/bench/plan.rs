@@ -13,6 +13,7 @@
 
 use std::path::Path;
 
+use super::{fixed as f, sci as e};
 use serde_json::{json, Value};
 
 use crate::gpu::{Context, GpuError, Result};
@@ -193,20 +194,6 @@ pub fn run(ctx: &Context, examples: &Path, progress: &mut dyn FnMut(&str)) -> Re
         }));
     }
     Ok(rows)
-}
-
-fn f(r: &Value, key: &str, digits: usize) -> String {
-    r[key]
-        .as_f64()
-        .map(|v| format!("{v:.digits$}"))
-        .unwrap_or_else(|| "—".into())
-}
-
-fn e(r: &Value, key: &str) -> String {
-    r[key]
-        .as_f64()
-        .map(|v| format!("{v:.1e}"))
-        .unwrap_or_else(|| "—".into())
 }
 
 /// Markdown tables.

@@ -14,6 +14,7 @@
 //! Times are GPU work per frame recorded back to back (median of batches, see
 //! [`super::warp`]); errors are in output pixels.
 
+use super::{fixed as f, sci as e};
 use ash::vk;
 use glam::DVec2;
 use serde_json::{json, Value};
@@ -359,18 +360,6 @@ pub fn run(
         }
     }
     Ok(rows)
-}
-
-fn f(v: &Value, k: &str, digits: usize) -> String {
-    v[k].as_f64()
-        .map(|x| format!("{x:.digits$}"))
-        .unwrap_or_else(|| "—".into())
-}
-
-fn e(v: &Value, k: &str) -> String {
-    v[k].as_f64()
-        .map(|x| format!("{x:.1e}"))
-        .unwrap_or_else(|| "—".into())
 }
 
 /// The rows as Markdown tables.

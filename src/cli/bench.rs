@@ -96,13 +96,7 @@ pub fn warp(args: WarpArgs) -> Result<(), CliError> {
     let rows = crate::bench::warp::run(&ctx, &sizes, super::progress_line)?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     finish(&ctx)?;
-    if args.json {
-        for r in &rows {
-            println!("{r}");
-        }
-    } else {
-        println!("{}", crate::bench::warp::table(&rows));
-    }
+    print_rows(&rows, args.json, crate::bench::warp::table);
     Ok(())
 }
 
@@ -126,13 +120,7 @@ pub fn vertex(args: VertexArgs) -> Result<(), CliError> {
     let rows = crate::bench::vertex::run(&ctx, &sizes, &mut |s| super::progress_line(s))?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     finish(&ctx)?;
-    if args.json {
-        for r in &rows {
-            println!("{r}");
-        }
-    } else {
-        println!("{}", crate::bench::vertex::table(&rows));
-    }
+    print_rows(&rows, args.json, crate::bench::vertex::table);
     Ok(())
 }
 
@@ -149,21 +137,51 @@ pub struct LensArgs {
     json: bool,
 }
 
-pub fn lens(args: LensArgs) -> Result<(), CliError> {
-    let dir = args.lenses.clone().unwrap_or_else(|| {
-        let here = std::path::PathBuf::from("lenses");
+/// `given`, else `relative` below the working directory, else below the source tree; it
+/// must exist.
+fn data_folder(
+    given: Option<std::path::PathBuf>,
+    relative: &str,
+    flag: &str,
+) -> Result<std::path::PathBuf, CliError> {
+    let dir = given.unwrap_or_else(|| {
+        let here = std::path::PathBuf::from(relative);
         if here.is_dir() {
             here
         } else {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("lenses")
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
         }
     });
-    if !dir.is_dir() {
-        return Err(CliError::input(format!(
-            "--lenses {}: no such folder",
+    if dir.is_dir() {
+        Ok(dir)
+    } else {
+        Err(CliError::input(format!(
+            "{flag} {}: no such folder",
             dir.display()
-        )));
+        )))
     }
+}
+
+/// Prints rows as JSON lines or as the bench's tables.
+fn print_rows(rows: &[serde_json::Value], json: bool, table: fn(&[serde_json::Value]) -> String) {
+    if json {
+        for r in rows {
+            println!("{r}");
+        }
+    } else {
+        println!("{}", table(rows));
+    }
+}
+
+fn bench_error(e: crate::gpu::GpuError) -> CliError {
+    match e {
+        crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+        other => CliError::from(other),
+    }
+}
+
+pub fn lens(args: LensArgs) -> Result<(), CliError> {
+    let dir = data_folder(args.lenses.clone(), "lenses", "--lenses")?;
     let ctx = context()?;
     eprintln!("device: {}", ctx.gpu().device_name());
     let rows = crate::bench::lens::run(&ctx, &dir, args.pixels, &mut |s| super::progress_line(s))
@@ -194,36 +212,13 @@ pub struct PlanArgs {
 }
 
 pub fn plan(args: PlanArgs) -> Result<(), CliError> {
-    let dir = args.scenes.clone().unwrap_or_else(|| {
-        let here = std::path::PathBuf::from("examples/scenes");
-        if here.is_dir() {
-            here
-        } else {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes")
-        }
-    });
-    if !dir.is_dir() {
-        return Err(CliError::input(format!(
-            "--scenes {}: no such folder",
-            dir.display()
-        )));
-    }
+    let dir = data_folder(args.scenes.clone(), "examples/scenes", "--scenes")?;
     let ctx = context()?;
     eprintln!("device: {}", ctx.gpu().device_name());
-    let rows = crate::bench::plan::run(&ctx, &dir, &mut |s| super::progress_line(s)).map_err(
-        |e| match e {
-            crate::gpu::GpuError::Invalid(m) => CliError::input(m),
-            other => CliError::from(other),
-        },
-    )?;
+    let rows = crate::bench::plan::run(&ctx, &dir, &mut |s| super::progress_line(s))
+        .map_err(bench_error)?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     finish(&ctx)?;
-    if args.json {
-        for r in &rows {
-            println!("{r}");
-        }
-    } else {
-        println!("{}", crate::bench::plan::table(&rows));
-    }
+    print_rows(&rows, args.json, crate::bench::plan::table);
     Ok(())
 }

@@ -285,6 +285,36 @@ impl Optics {
     }
 }
 
+/// Lens samples with the factor that turns their Eq. 3 weights into relative irradiance:
+/// `A/n / E_axis`, where `E_axis = (A/n) Σ_i W_i(film centre)`, so that a white scene gives 1
+/// at the film centre (every sample passes there by construction).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WeightedSamples {
+    pub points: Vec<DVec3>,
+    /// Multiply `radiometric_weight` by this.
+    pub scale: f64,
+    /// `E_axis` (mm⁻² · mm²).
+    pub axial_irradiance: f64,
+}
+
+impl Optics {
+    /// [`Self::lens_samples`] with their normalization (see [`WeightedSamples`]).
+    pub fn weighted_samples(&self, n: u32, lambda_um: f64) -> Result<WeightedSamples, String> {
+        let (points, area) = self.lens_samples(n, lambda_um)?;
+        let per_sample = area / points.len() as f64;
+        let centre = self.film.point(DVec2::from(self.film.centre_px()));
+        let axial_irradiance: f64 = points
+            .iter()
+            .map(|p| per_sample * radiometric_weight(centre, *p))
+            .sum();
+        Ok(WeightedSamples {
+            points,
+            scale: per_sample / axial_irradiance,
+            axial_irradiance,
+        })
+    }
+}
+
 /// Seed 004 Eq. 3's weight `W_i(x') = cos θ' cos θ'' / ‖x'' − x'‖²` (mm⁻²) for the film point
 /// `film` and the lens sample `lens_point`, both normals along the axis (the samples stand
 /// for equal areas of the disc normal to the axis).
@@ -525,13 +555,11 @@ impl ImageModel {
         }
         let film = optics.film;
         let lambda = options.lambda_um;
-        let (points, area) = optics.lens_samples(options.samples, lambda)?;
-        let per_sample = area / points.len() as f64;
-        let centre = film.point(DVec2::from(film.centre_px()));
-        let axial_irradiance: f64 = points
-            .iter()
-            .map(|p| per_sample * radiometric_weight(centre, *p))
-            .sum();
+        let WeightedSamples {
+            points,
+            scale,
+            axial_irradiance,
+        } = optics.weighted_samples(options.samples, lambda)?;
         // The virtual image plane: at the focus distance (objects there land exactly where
         // their traced rays say), capped for infinity focus.
         let plane_z = optics.focus_m.min(1.0e4);
@@ -545,7 +573,7 @@ impl ImageModel {
                 lambda,
                 plane_z,
                 border: &border,
-                weight_scale: per_sample / axial_irradiance,
+                weight_scale: scale,
                 cells: Vec::new(),
             };
             // Seed: the first guess is the centre of the lens; the entrance pupil's centre

@@ -51,14 +51,8 @@ pub fn render_reference(
     // Per channel: the sample points and their normalized weights' scale.
     let mut lens = Vec::new();
     for c in channels {
-        let (points, area) = optics.lens_samples(samples, c.lambda_um)?;
-        let per_sample = area / points.len() as f64;
-        let centre = film.point(DVec2::from(film.centre_px()));
-        let axial: f64 = points
-            .iter()
-            .map(|p| per_sample * radiometric_weight(centre, *p))
-            .sum();
-        lens.push((c, points, per_sample / axial));
+        let s = optics.weighted_samples(samples, c.lambda_um)?;
+        lens.push((c, s.points, s.scale));
     }
     let bvh = Bvh::new(&scene.mesh);
     let inverse = pose.rotation.transpose();
@@ -163,21 +157,14 @@ pub fn pixel_offset(k: usize, n: usize) -> DVec2 {
 /// Relative illumination at a film pixel: Σ over samples whose ray passes of the normalized
 /// weight (1 on the axis) — the vignetting a white, all-covering scene would show.
 pub fn relative_illumination(optics: &Optics, samples: u32, lambda_um: f64, px: DVec2) -> f64 {
-    let Ok((points, area)) = optics.lens_samples(samples, lambda_um) else {
+    let Ok(s) = optics.weighted_samples(samples, lambda_um) else {
         return 0.0;
     };
-    let per_sample = area / points.len() as f64;
-    let film = optics.film;
-    let centre = film.point(DVec2::from(film.centre_px()));
-    let axial: f64 = points
-        .iter()
-        .map(|p| per_sample * radiometric_weight(centre, *p))
-        .sum();
-    let x = film.point(px);
-    points
+    let x = optics.film.point(px);
+    s.points
         .iter()
         .filter(|p| optics.trace_from_film(x, **p, lambda_um).is_some())
-        .map(|p| per_sample * radiometric_weight(x, *p) / axial)
+        .map(|p| radiometric_weight(x, *p) * s.scale)
         .sum()
 }
 

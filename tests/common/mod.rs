@@ -32,3 +32,28 @@ pub fn reference_camera(name: &str) -> vklens::model::OpenCvCamera {
         .camera()
         .expect("reference cases are valid cameras")
 }
+
+/// A lens file shipped in `lenses/`.
+pub fn shipped_lens(name: &str) -> vklens::lens::Prescription {
+    vklens::lens::Prescription::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("lenses")
+            .join(name),
+    )
+    .expect("shipped lens files parse")
+}
+
+/// Uploads a mesh (and its texture) for drawing.
+pub fn upload_mesh(
+    ctx: &Context,
+    mesh: &vklens::scene::Mesh,
+    texture: Option<&vklens::imaging::Raster>,
+) -> vklens::pass::geometry::MeshBuffers {
+    let buffers = vklens::pass::geometry::MeshBuffers::new(ctx.gpu(), mesh, texture).unwrap();
+    ctx.submit(|cmd| {
+        unsafe { buffers.record_upload(cmd) };
+        Ok(())
+    })
+    .unwrap();
+    buffers
+}

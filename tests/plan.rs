@@ -293,3 +293,45 @@ fn render_scene_cli_writes_every_output_of_every_frame() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("3 pose(s)"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
+    use vklens::gpu::QueryPool;
+    use vklens::plan::record::{pass_times, PlanRecorder};
+    let ctx = validated_context();
+    let file = SceneFile::load(&examples().join("ids_and_flow.toml")).unwrap();
+    let scene = load_geometry(&file).unwrap();
+    let p = plan(&file, &scene).unwrap();
+    // The headless execution of frame 1 …
+    let mut expected = None;
+    execute(&ctx, &p, &scene, 1..2, &mut |f| {
+        expected = Some(f.rendered);
+        Ok(())
+    })
+    .unwrap();
+    let expected = expected.unwrap();
+    // … equals the same frame recorded by the caller (here the context's command buffer
+    // stands for an engine's), IDs exactly.
+    let mut recorder = PlanRecorder::new(ctx.gpu(), &p, &scene).unwrap();
+    recorder.prepare(1).unwrap();
+    let queries = QueryPool::timestamps(ctx.gpu(), recorder.timestamp_count()).unwrap();
+    let (_, targets) = recorder.images();
+    let targets = targets.unwrap();
+    ctx.submit(|cmd| {
+        unsafe {
+            recorder.record_setup(cmd);
+            recorder.record(cmd, Some(&queries));
+            targets.record_download(cmd);
+        }
+        Ok(())
+    })
+    .unwrap();
+    let got = targets.read().unwrap();
+    assert_eq!(got.ids, expected.ids, "IDs differ");
+    assert_eq!(got.width, expected.width);
+    let times = pass_times(&ctx, &p, &scene, 0).unwrap().unwrap();
+    assert_eq!(times.len(), 1);
+    assert_eq!(times[0].0, "Alg. 1 (vertex + discard)");
+    assert!(times[0].1 > 0.0);
+    assert_no_validation_messages(&ctx);
+}

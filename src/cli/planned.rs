@@ -37,8 +37,9 @@ pub fn parse_frames(s: &str, count: usize) -> Result<std::ops::Range<usize>, Str
     Ok(a..b)
 }
 
-/// The plan as text (what `--explain` prints).
-pub fn explain(p: &Plan, measured_ms: Option<f64>) -> String {
+/// The plan as text (what `--explain` prints), with the frame's wall time and each pass's
+/// GPU time (timestamps) where measured.
+pub fn explain(p: &Plan, measured_ms: Option<f64>, passes: &[(&str, f64)]) -> String {
     let mut out = format!(
         "plan: {}\n",
         match &p.route {
@@ -83,6 +84,12 @@ pub fn explain(p: &Plan, measured_ms: Option<f64>) -> String {
         });
     } else if let Some(m) = measured_ms {
         out.push_str(&format!("  measured {m:.1} ms on frame 1\n"));
+    }
+    if !passes.is_empty() {
+        out.push_str("  GPU time per pass (timestamps, frame 1):\n");
+        for (name, ms) in passes {
+            out.push_str(&format!("    {name}: {ms:.2} ms\n"));
+        }
     }
     out
 }
@@ -165,8 +172,13 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
     execute(&ctx, &plan, &scene, first, &mut write).map_err(gpu_error)?;
     if args.explain() {
         let measured = done.borrow().first().map(|(_, ms)| *ms);
+        // Per-pass GPU times where the plan's passes can be recorded and timed as a whole.
+        let passes = crate::plan::record::pass_times(&ctx, &plan, &scene, frames.start)
+            .ok()
+            .flatten()
+            .unwrap_or_default();
         // On stdout, before the remaining frames are rendered.
-        print!("{}", explain(&plan, measured));
+        print!("{}", explain(&plan, measured, &passes));
     }
     if frames.len() > 1 {
         execute(

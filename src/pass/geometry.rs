@@ -694,7 +694,7 @@ impl GeometryPass {
 
 /// Extra camera-and-pose slots of a [`GeometryPass`] ([`GeometryPass::slots`]).
 pub struct GeometrySlots {
-    // Drop order: the sets' pool before nothing else; buffers are independent.
+    // The sets live in the pool; the uniform buffers they point at live in the slots.
     _pool: DescriptorPool,
     slots: Vec<Slot>,
 }

@@ -19,6 +19,7 @@
 //! Cost estimates come from this README's measured lavapipe tables (`bench vertex`,
 //! `bench inverse`); `--explain` prints the times measured on the frame itself.
 
+pub mod record;
 pub mod scene_file;
 
 use std::time::Instant;

@@ -14,7 +14,7 @@ pub enum LensCommand {
     /// First-order properties of a lens file (paraxial, d line) and its distortion curve
     /// (exact chief rays). Axial positions are mm from the front vertex, towards the image.
     Info(InfoArgs),
-    /// Fit the OpenCV standard model to the traced lens (focused at infinity, chief rays on
+    /// Fit the OpenCV standard model to the traced lens (focused at infinity or --focus M, chief rays on
     /// the paraxial focal plane) for a sensor and pixel count, and write a camera file every
     /// other command accepts. The fit residual goes to stderr.
     FitOpencv(FitArgs),

@@ -293,8 +293,6 @@ pub struct WeightedSamples {
     pub points: Vec<DVec3>,
     /// Multiply `radiometric_weight` by this.
     pub scale: f64,
-    /// `E_axis` (mm⁻² · mm²).
-    pub axial_irradiance: f64,
 }
 
 impl Optics {
@@ -310,7 +308,6 @@ impl Optics {
         Ok(WeightedSamples {
             points,
             scale: per_sample / axial_irradiance,
-            axial_irradiance,
         })
     }
 }
@@ -522,8 +519,6 @@ pub struct ImageModel {
     pub film: Film,
     pub options: ModelOptions,
     pub samples: Vec<SampleModel>,
-    /// The normalization of the weights: (A/n) Σ_i W_i at the film centre (mm⁻²·mm²).
-    pub axial_irradiance: f64,
     /// Virtual image plane depth (camera frame, m).
     pub plane_z: f64,
 }
@@ -555,11 +550,7 @@ impl ImageModel {
         }
         let film = optics.film;
         let lambda = options.lambda_um;
-        let WeightedSamples {
-            points,
-            scale,
-            axial_irradiance,
-        } = optics.weighted_samples(options.samples, lambda)?;
+        let WeightedSamples { points, scale } = optics.weighted_samples(options.samples, lambda)?;
         // The virtual image plane: at the focus distance (objects there land exactly where
         // their traced rays say), capped for infinity focus.
         let plane_z = optics.focus_m.min(1.0e4);
@@ -593,7 +584,6 @@ impl ImageModel {
             film,
             options: *options,
             samples,
-            axial_irradiance,
             plane_z,
         })
     }

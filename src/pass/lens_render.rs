@@ -63,7 +63,6 @@ struct CellDraw {
 
 /// A render size shared by cells: a geometry pass, its images and the film's view of them.
 struct Bucket {
-    size: (u32, u32),
     pass: GeometryPass,
     targets: GeometryTargets,
     slots: GeometrySlots,
@@ -94,7 +93,6 @@ pub struct LensRenderer {
     buckets: Vec<Bucket>,
     draws: Vec<CellDraw>,
     vertices: Buffer,
-    options: LensRenderOptions,
 }
 
 pub use crate::lens::image_model::{ALL_CHANNELS, RGB_CHANNELS};
@@ -187,7 +185,6 @@ impl LensRenderer {
             let count = draws.iter().filter(|d| d.bucket == index).count();
             let slots = pass.slots(count as u32)?;
             buckets.push(Bucket {
-                size,
                 pass,
                 targets,
                 slots,
@@ -206,22 +203,12 @@ impl LensRenderer {
             buckets,
             draws,
             vertices,
-            options,
         })
     }
 
     /// Perspective projections per frame.
     pub fn projection_count(&self) -> usize {
         self.draws.len()
-    }
-
-    /// Distinct cell render sizes (one geometry pipeline each).
-    pub fn render_sizes(&self) -> Vec<(u32, u32)> {
-        self.buckets.iter().map(|b| b.size).collect()
-    }
-
-    pub fn options(&self) -> &LensRenderOptions {
-        &self.options
     }
 
     /// Prepares a frame of `mesh` seen from `pose` (world → camera frame, origin at the lens's

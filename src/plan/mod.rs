@@ -391,19 +391,26 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     background: file.background,
                 });
             }
-            // The vertex path: the coarsest tessellation that meets the budget.
+            // The vertex path: the coarsest tessellation that meets the budget (not searched
+            // when nothing can go that way: chromatic colour without IDs or flow).
+            let data_needs_vertex = o.ids || o.flow;
             let pose = poses[0];
             let mut vertex: Option<(Option<f64>, f64, usize)> = None;
-            for l in [
-                None,
-                Some(64.0),
-                Some(32.0),
-                Some(16.0),
-                Some(8.0),
-                Some(4.0),
-                Some(2.0),
-                Some(1.0),
-            ] {
+            let candidates = if chromatic.is_none() || data_needs_vertex {
+                &[
+                    None,
+                    Some(64.0),
+                    Some(32.0),
+                    Some(16.0),
+                    Some(8.0),
+                    Some(4.0),
+                    Some(2.0),
+                    Some(1.0),
+                ][..]
+            } else {
+                &[][..]
+            };
+            for &l in candidates {
                 let mesh = match l {
                     None => scene.mesh.clone(),
                     Some(l) => {
@@ -430,7 +437,6 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 }
             }
             let triangles = scene.mesh.triangle_count() as f64;
-            let data_needs_vertex = o.ids || o.flow;
             let vertex_ms = vertex.map(|(_, _, t)| estimate_ms(pixels, t as f64, "vertex", 0.0));
             // Three fetches (and inverses) per pixel with chromatic aberration.
             let fetches = if chromatic.is_some() { 3.0 } else { 1.0 };
@@ -572,12 +578,10 @@ pub struct Frame {
     pub ms: f64,
 }
 
-/// What executing a plan recorded: the pipelines (with their specialization constants) and,
-/// for the lens model, its projection count.
+/// What executing a plan recorded: the pipelines, with their specialization constants.
 #[derive(Debug, Clone, Default)]
 pub struct Recorded {
     pub pipelines: Vec<RecordedPipeline>,
-    pub lens_projections: usize,
 }
 
 impl Recorded {
@@ -620,7 +624,6 @@ pub fn execute(
         for index in frames {
             let pose = plan.poses[index];
             let frame = renderer.render(ctx, &mesh, &pose)?;
-            recorded.lens_projections = frame.projections;
             let pixels = frame
                 .pixels
                 .iter()

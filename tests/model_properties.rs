@@ -155,6 +155,91 @@ fn projection_lands_on_opencv_pinhole_pixels() {
     assert!((corner.x / corner.w + 1.0).abs() < 1e-12 && (corner.y / corner.w + 1.0).abs() < 1e-12);
 }
 
+/// Two cameras the property test above once failed on (CI, then a 30 000-case run): a strong
+/// barrel lens with p2 and s4, whose fold is inside the image, and a wide rational lens with
+/// prism terms. Both exposed a domain table that disagreed with itself next to the fold:
+/// a distorted table read off chords (in-domain points refused before the inverse ran), and an
+/// ideal table whose interpolation between rays reached past the fold (Newton started where
+/// the Jacobian determinant is already negative).
+fn cameras_with_a_fold_in_view() -> [OpenCvCamera; 2] {
+    let barrel = OpenCvCamera::from_coeffs(
+        1280,
+        800,
+        Intrinsics {
+            fx: 479.871,
+            fy: 481.047,
+            cx: 642.889,
+            cy: 395.577,
+        },
+        &[
+            -0.31816, -0.075277, 0.0, -0.0031920, -0.0033314, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+            0.0029677,
+        ],
+    );
+    let wide = OpenCvCamera::from_coeffs(
+        1280,
+        800,
+        Intrinsics {
+            fx: 300.0,
+            fy: 285.0,
+            cx: 639.5,
+            cy: 399.5,
+        },
+        &[
+            0.0, 0.056964, 0.0, 0.0, 0.0, 0.0, 0.047253, 0.0075791, 0.0, 0.0022273, 0.0, 0.0022413,
+        ],
+    );
+    [barrel.expect("valid camera"), wide.expect("valid camera")]
+}
+
+#[test]
+fn the_band_next_to_the_fold_round_trips() {
+    // Every ideal point just inside the boundary, all the way round and at depths from 1 % of
+    // the radius down to 1e-7, must come back from its distorted image: that band is where
+    // every ideal point maps next to the boundary, so any slack in the tables shows there.
+    for (which, cam) in cameras_with_a_fold_in_view().iter().enumerate() {
+        assert!(cam.domain().folds(), "camera {which} should fold");
+        let mut checked = 0;
+        for k in 0..4096 {
+            let angle = std::f64::consts::TAU * (k as f64 + 0.37) / 4096.0;
+            let dir = DVec2::new(angle.cos(), angle.sin());
+            for depth in [1e-2, 1e-3, 1e-4, 1e-5, 1e-7] {
+                let x = dir * cam.domain().ideal_radius(angle) * (1.0 - depth);
+                assert!(
+                    cam.domain().contains_ideal(x),
+                    "camera {which}: {x} not inside"
+                );
+                let y = cam
+                    .distort_normalized(x)
+                    .expect("forward defined in the domain");
+                let back = cam
+                    .undistort_normalized(y, InverseMethod::Newton)
+                    .unwrap_or_else(|| {
+                        panic!("camera {which}: Newton refused {x} (depth {depth})")
+                    });
+                // Near the fold the inverse is ill-conditioned (det J → 0): the residual is what
+                // Newton controls, and the ideal error follows from it through J.
+                let residual = (cam.distort_normalized(back).unwrap() - y).length();
+                assert!(
+                    residual <= 1e-12 * (1.0 + y.length()),
+                    "camera {which}: residual {residual}"
+                );
+                // The ideal error is the residual over the smallest singular value of J, which
+                // is at least det(J)/|J|_F: that vanishes at the fold, so the bound grows there.
+                let jac = cam.jacobian_normalized(x).expect("defined in the domain");
+                let frobenius = (jac.x_axis.length_squared() + jac.y_axis.length_squared()).sqrt();
+                let bound = 2e-12 * (1.0 + y.length()) * frobenius / jac.determinant();
+                assert!(
+                    (back - x).length() <= bound.max(1e-12),
+                    "camera {which}: {back} vs {x}, beyond {bound}"
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 4096 * 5);
+    }
+}
+
 #[test]
 fn fold_over_is_reported_not_guessed() {
     // r_d = r (1 − 0.5 r²) peaks at r = √(2/3): beyond, two ideal radii share a distorted one.
@@ -213,12 +298,12 @@ fn a_rational_pole_ends_the_domain() {
     );
     // Just inside the pole the map still grows monotonically (to +∞): the point is valid and
     // recovered exactly.
-    let near_pole = cam.distort_normalized(DVec2::new(0.999_999, 0.0)).unwrap();
-    assert!(near_pole.x > 1e5);
+    let near_pole = cam.distort_normalized(DVec2::new(0.999_99, 0.0)).unwrap();
+    assert!(near_pole.x > 1e4);
     let back = cam
         .undistort_normalized(near_pole, InverseMethod::Newton)
         .expect("valid");
-    assert!((back.x - 0.999_999).abs() < 1e-12, "{back}");
+    assert!((back.x - 0.999_99).abs() < 1e-12, "{back}");
     // Beyond the pole the model flips sign: r = 1.1 lands at x ≈ −5.24, on top of the genuine
     // preimage r ≈ −0.909. The domain excludes r = 1.1 and the inverse returns the genuine one.
     let beyond = DVec2::new(1.1, 0.0);

@@ -54,6 +54,8 @@
 #endif
 // model::opencv::NEWTON_MAX_HALVINGS: near a fold the first steps overshoot the domain.
 #define VKL_NEWTON_MAX_HALVINGS 40
+// model::opencv::CONTINUATION_STEPS: Newton's fallback from the principal point.
+#define VKL_CONTINUATION_STEPS 8
 
 layout(constant_id = 0) const bool VKL_RADIAL = true;      // k1 k2 k3
 layout(constant_id = 1) const bool VKL_RATIONAL = true;    // k4 k5 k6
@@ -231,16 +233,10 @@ VKL_VEC2 vkl_radial_start(VKL_VEC2 t) {
     return dir * r;
 }
 
-// Newton's method with the analytic Jacobian, damped to stay in the valid domain.
-// Distorted normalized -> ideal normalized; false outside the valid domain.
-bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
-    x = VKL_VEC2(0.0);
-    VKL_VEC2 t;
-    if (!vkl_remove_tilt(d, t)) return false;
-    if (!vkl_contains_distorted(t)) return false;
+// The damped Newton iteration from x (model::opencv::OpenCvCamera::newton_from): true when it
+// ends in the domain with a vanishing residual and a positive Jacobian determinant.
+bool vkl_newton_from(VKL_VEC2 t, inout VKL_VEC2 x) {
     VKL_FLOAT rho = length(t);
-    if (rho == 0.0) return true;
-    x = vkl_radial_start(t);
     VKL_VEC2 f;
     VKL_MAT2 J;
     if (!vkl_distort_pre_tilt(x, f, J)) return false;
@@ -271,6 +267,28 @@ bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
     }
     return length(f - t) <= VKL_NEWTON_ACCEPT * (1.0 + rho) && determinant(J) > 0.0
         && vkl_contains_ideal(x);
+}
+
+// Newton's method with the analytic Jacobian, damped to stay in the valid domain.
+// Distorted normalized -> ideal normalized; false outside the valid domain. Started from the
+// radial inverse; where that start lies in another basin (tangential or prism terms next to a
+// fold at a wide angle), continuation from the principal point along the segment to t
+// (model::opencv::CONTINUATION_STEPS steps). Only such pixels ever run the second loop.
+bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
+    x = VKL_VEC2(0.0);
+    VKL_VEC2 t;
+    if (!vkl_remove_tilt(d, t)) return false;
+    if (!vkl_contains_distorted(t)) return false;
+    if (length(t) == 0.0) return true;
+    x = vkl_radial_start(t);
+    if (vkl_newton_from(t, x)) return true;
+    x = VKL_VEC2(0.0);
+    for (int k = 1; k <= VKL_CONTINUATION_STEPS; ++k) {
+        if (!vkl_newton_from(t * (VKL_FLOAT(k) / VKL_FLOAT(VKL_CONTINUATION_STEPS)), x)) {
+            return false;
+        }
+    }
+    return true;
 }
 
 // Seed 000 Eq. 2 (Heikkilä): closed-form approximate inverse, k1 k2 p1 p2 only.

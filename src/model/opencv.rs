@@ -36,6 +36,9 @@ pub const NEWTON_MAX_ITERATIONS: usize = 50;
 pub const NEWTON_ACCEPT_RESIDUAL: f64 = 1e-12;
 /// Newton: most step halvings per iteration (damping near the domain boundary).
 pub const NEWTON_MAX_HALVINGS: usize = 40;
+/// Steps of the continuation Newton falls back to when its radial start fails (see
+/// `OpenCvCamera::newton`). Only points next to a fold at wide angles ever need it.
+pub const CONTINUATION_STEPS: usize = 8;
 
 /// Pinhole intrinsics in pixels (no skew).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -400,15 +403,38 @@ impl OpenCvCamera {
 
     /// Newton's method with the analytic Jacobian on the pre-tilt distortion, started from the
     /// exact inverse of the radial part and damped so that it never leaves the valid domain.
+    ///
+    /// Where tangential or prism terms turn the image far from the radial direction (next to a
+    /// fold at a wide field angle), the radial start can lie in another basin, and the damped
+    /// iteration stalls on the domain's edge. Then it falls back to continuation: the target is
+    /// approached from the principal point in `CONTINUATION_STEPS` steps along the segment,
+    /// each solved from the last answer. The preimage of that segment is a continuous path
+    /// inside the domain whenever the segment is inside the domain's image, which the distorted
+    /// table (star-shaped by construction) has already checked.
     fn newton(&self, target: DVec2) -> Option<DVec2> {
-        let d = &self.distortion;
         let rho = target.length();
         if rho == 0.0 {
             // Every term (radial, tangential, prism) vanishes at the principal point, and the
             // Jacobian there is the identity: the answer is exactly the principal point.
             return Some(DVec2::ZERO);
         }
-        let mut x = self.radial_start(target);
+        if let Some(x) = self.newton_from(self.radial_start(target), target) {
+            return Some(x);
+        }
+        let mut x = DVec2::ZERO;
+        for step in 1..=CONTINUATION_STEPS {
+            let along = target * (step as f64 / CONTINUATION_STEPS as f64);
+            x = self.newton_from(x, along)?;
+        }
+        Some(x)
+    }
+
+    /// The damped Newton iteration from `start`; `None` unless it ends in the domain with a
+    /// vanishing residual and a positive Jacobian determinant.
+    fn newton_from(&self, start: DVec2, target: DVec2) -> Option<DVec2> {
+        let d = &self.distortion;
+        let rho = target.length();
+        let mut x = start;
         let (mut f, mut jac) = d.distort_pre_tilt(x)?;
         for _ in 0..NEWTON_MAX_ITERATIONS {
             let residual = (f - target).length();

@@ -281,12 +281,14 @@ bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
     if (!vkl_contains_distorted(t)) return false;
     if (length(t) == 0.0) return true;
     x = vkl_radial_start(t);
-    if (vkl_newton_from(t, x)) return true;
-    x = VKL_VEC2(0.0);
-    for (int k = 1; k <= VKL_CONTINUATION_STEPS; ++k) {
-        if (!vkl_newton_from(t * (VKL_FLOAT(k) / VKL_FLOAT(VKL_CONTINUATION_STEPS)), x)) {
-            return false;
-        }
+    // One call site, so the iteration is compiled once: round 0 is the radial start; rounds
+    // 1..N, reached only if it fails, walk the target out from the principal point.
+    for (int k = 0; k <= VKL_CONTINUATION_STEPS; ++k) {
+        if (k == 1) x = VKL_VEC2(0.0);
+        VKL_FLOAT along = k == 0 ? 1.0 : VKL_FLOAT(k) / VKL_FLOAT(VKL_CONTINUATION_STEPS);
+        bool ok = vkl_newton_from(t * along, x);
+        if (k == 0 && ok) return true;
+        if (k > 0 && !ok) return false;
     }
     return true;
 }

@@ -37,3 +37,12 @@ pub const MESH_WARP_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mesh
 pub const FILM_MORPH_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/film_morph.vert.spv"));
 /// `glsl/film_morph.frag`: the weighted, additive accumulation into the float film.
 pub const FILM_MORPH_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/film_morph.frag.spv"));
+/// `glsl/warp_raster.vert`: one triangle over the whole framebuffer.
+pub const WARP_RASTER_VERT: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/warp_raster.vert.spv"));
+/// `glsl/warp_raster.frag`: the map warp per fragment, rgba32f source.
+pub const WARP_RASTER_FRAG: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/warp_raster.frag.spv"));
+/// `glsl/warp_raster.frag`, rgba8 source.
+pub const WARP_RASTER_FRAG_RGBA8: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/warp_raster.frag.rgba8.spv"));

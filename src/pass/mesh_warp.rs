@@ -253,11 +253,21 @@ pub struct MeshWarpTarget {
 
 impl MeshWarpTarget {
     pub fn new(gpu: &Gpu, pass: &MeshWarpPass) -> Result<Self> {
-        let (w, h) = pass.output_size;
+        Self::for_render_pass(gpu, &pass.render_pass, pass.output_size, pass.format)
+    }
+
+    /// A target for any single-colour-attachment render pass whose output is RGBA8 or RGBA32F
+    /// (the fragment-shader warp uses it too).
+    pub fn for_render_pass(
+        gpu: &Gpu,
+        render_pass: &RenderPass,
+        (w, h): (u32, u32),
+        format: vk::Format,
+    ) -> Result<Self> {
         let image = Image::new_2d(
             gpu,
             "mesh_warp.output",
-            pass.format,
+            format,
             w,
             h,
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
@@ -266,8 +276,8 @@ impl MeshWarpTarget {
             width: w,
             height: h,
         };
-        let framebuffer = Framebuffer::new(gpu, &pass.render_pass, &[image.view], extent)?;
-        let bpp = if pass.format == vk::Format::R8G8B8A8_UNORM {
+        let framebuffer = Framebuffer::new(gpu, render_pass, &[image.view], extent)?;
+        let bpp = if format == vk::Format::R8G8B8A8_UNORM {
             4
         } else {
             16
@@ -282,7 +292,7 @@ impl MeshWarpTarget {
             )?,
             image,
             framebuffer,
-            format: pass.format,
+            format,
         })
     }
 

@@ -11,6 +11,7 @@ pub mod lens_render;
 pub mod mesh_warp;
 pub mod points;
 pub mod warp;
+pub mod warp_raster;
 
 pub use camera_params::{CameraParams, CameraParams64, CAMERA_SPEC_IDS};
 pub use points::{PointsMode, PointsPass, Precision};

@@ -427,6 +427,18 @@ impl WarpPass {
             .map(|v| v != 0)
     }
 
+    /// The map images' views as [G, R, B] (R and B are 1×1 placeholders without chromatic
+    /// aberration; all are placeholders in analytic mode). They are in `GENERAL` layout after
+    /// [`WarpPass::record_prepare`].
+    pub fn map_views(&self) -> [vk::ImageView; 3] {
+        [self.maps[1].view, self.maps[0].view, self.maps[2].view]
+    }
+
+    /// The push constants the warp runs with.
+    pub fn push(&self) -> WarpPush {
+        self.push
+    }
+
     /// The warp pipeline (its specialization constants show what was compiled in).
     pub fn pipeline(&self) -> &ComputePipeline {
         &self.pipeline

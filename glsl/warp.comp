@@ -8,10 +8,12 @@
 // fill value and mask 0; they are never smeared edge pixels.
 //
 // Variants: default rgba32f images; VKL_RGBA8 rgba8 (8-bit data); VKL_R32UI r32ui (object IDs,
-// nearest sampling only: IDs are never blended).
+// nearest sampling only: IDs are never blended); VKL_R32F r32f (depth, nearest only: the host
+// refuses bilinear, which would blend +inf background into a surface's edge).
 #extension GL_GOOGLE_include_directive : require
 // vklens:variant rgba8 VKL_RGBA8
 // vklens:variant r32ui VKL_R32UI
+// vklens:variant r32f VKL_R32F
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -28,6 +30,8 @@ layout(constant_id = 14) const bool WRITE_MASK = true;
 
 #if defined(VKL_R32UI)
 layout(set = 0, binding = 2, r32ui) uniform writeonly uimage2D target;
+#elif defined(VKL_R32F)
+layout(set = 0, binding = 2, r32f) uniform writeonly image2D target;
 #elif defined(VKL_RGBA8)
 layout(set = 0, binding = 2, rgba8) uniform writeonly image2D target;
 #else

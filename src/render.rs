@@ -231,6 +231,16 @@ pub struct WarpStage {
     pub mask: Image,
     download: Buffer,
     format: PixelFormat,
+    /// The depth through the same warp (nearest, +inf fill), when asked for.
+    pub depth: Option<DepthWarp>,
+}
+
+/// The second, nearest warp of a [`WarpStage`] that carries the pinhole render's depth.
+pub struct DepthWarp {
+    pub warp: WarpPass,
+    /// R32F, the warp's output size, `GENERAL` after the warp.
+    pub output: Image,
+    _mask: Image,
 }
 
 impl WarpStage {
@@ -244,6 +254,28 @@ impl WarpStage {
         format: ColorFormat,
         background: [f32; 4],
     ) -> Result<Self> {
+        Self::with_depth(
+            gpu,
+            source,
+            geometry,
+            coordinates,
+            format,
+            background,
+            false,
+        )
+    }
+
+    /// As [`Self::new`]; with `depth`, the pinhole render also writes camera depth and a
+    /// second warp (nearest, +inf where there is no source) carries it to the output.
+    pub fn with_depth(
+        gpu: &crate::gpu::Gpu,
+        source: OpenCvCamera,
+        geometry: WarpGeometry,
+        coordinates: Coordinates,
+        format: ColorFormat,
+        background: [f32; 4],
+        depth: bool,
+    ) -> Result<Self> {
         let pixel_format = match format {
             ColorFormat::Rgba8 => PixelFormat::Rgba8,
             ColorFormat::Rgba32F => PixelFormat::Rgba32F,
@@ -254,7 +286,10 @@ impl WarpStage {
         let mut desc = GeometryDesc::new(
             source,
             Projection::Pinhole,
-            Outputs::color_only(Some(format)),
+            Outputs {
+                depth,
+                ..Outputs::color_only(Some(format))
+            },
         );
         desc.background = background;
         desc.final_layout = vk::ImageLayout::GENERAL;
@@ -284,6 +319,45 @@ impl WarpStage {
         )?;
         let color = targets.color().ok_or_else(|| invalid("no colour target"))?;
         warp.bind(color.view, output.view, mask.view);
+        let depth = match targets.depth() {
+            Some(source) => {
+                // Depth follows the lens itself (the green channel's reference geometry,
+                // unit scale), as the headless warp path does: one coordinate, nearest.
+                let mut plain = warp.desc().geometry.clone();
+                plain.chromatic = None;
+                if let Some(cams) = plain.channel_cameras.take() {
+                    let [_, green, _] = *cams;
+                    plain.camera = green;
+                }
+                let mut depth_warp = WarpPass::new(
+                    gpu,
+                    WarpDesc {
+                        geometry: plain,
+                        sampling: Sampling::Nearest,
+                        format: PixelFormat::R32Float,
+                        fill: [f32::INFINITY; 4],
+                        ..warp.desc().clone()
+                    },
+                )?;
+                let r32f = PixelFormat::R32Float.vk();
+                let output = Image::new_2d(gpu, "warp_path.depth", r32f, ow, oh, usage)?;
+                let mask = Image::new_2d(
+                    gpu,
+                    "warp_path.depth_mask",
+                    vk::Format::R8_UNORM,
+                    ow,
+                    oh,
+                    usage,
+                )?;
+                depth_warp.bind(source.view, output.view, mask.view);
+                Some(DepthWarp {
+                    warp: depth_warp,
+                    output,
+                    _mask: mask,
+                })
+            }
+            None => None,
+        };
         Ok(WarpStage {
             gpu: gpu.clone(),
             pass,
@@ -293,6 +367,7 @@ impl WarpStage {
             mask,
             download,
             format: pixel_format,
+            depth,
         })
     }
 
@@ -310,7 +385,8 @@ impl WarpStage {
             vk::AccessFlags::SHADER_WRITE,
         );
         unsafe {
-            for img in [&self.output, &self.mask] {
+            let depth = self.depth.iter().flat_map(|d| [&d.output, &d._mask]);
+            for img in [&self.output, &self.mask].into_iter().chain(depth) {
                 image_barrier(
                     &self.gpu,
                     cmd,
@@ -321,18 +397,35 @@ impl WarpStage {
                 );
             }
             self.warp.record_prepare(cmd);
+            if let Some(d) = &self.depth {
+                d.warp.record_prepare(cmd);
+            }
         }
     }
 
     /// Records one frame: the pinhole render of `mesh` (bound with `pass.bind_mesh`), then
-    /// the warp. The render pass leaves the colour in `GENERAL`, its writes visible to compute.
+    /// the warp (and the depth warp). The render pass leaves the colour in `GENERAL`, its writes visible to compute.
     ///
     /// # Safety
     /// After [`Self::record_prepare`]; `mesh` uploaded and alive until the work completes.
     pub unsafe fn record(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
         unsafe {
             self.pass.record(cmd, &self.targets, mesh);
+            self.record_warps(cmd);
+        }
+    }
+
+    /// Records the warps alone (colour, then depth when asked for), after the caller recorded
+    /// the pinhole render.
+    ///
+    /// # Safety
+    /// As [`Self::record`], with `self.pass` recorded first.
+    pub unsafe fn record_warps(&self, cmd: vk::CommandBuffer) {
+        unsafe {
             self.warp.record(cmd);
+            if let Some(d) = &self.depth {
+                d.warp.record(cmd);
+            }
         }
     }
 
@@ -750,7 +843,7 @@ fn render_warp_path(
                 &raster(Pixels::Rgba32F(
                     depth.iter().map(|&z| [z, z, z, 1.0]).collect(),
                 )),
-                PixelFormat::Rgba32F,
+                PixelFormat::R32Float,
                 Sampling::Nearest,
                 [f32::INFINITY; 4],
             )?;

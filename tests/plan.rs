@@ -335,3 +335,63 @@ fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
     assert!(times[0].1 > 0.0);
     assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
+    // Chromatic colour takes the warp; depth asked beside it goes through the same warp as a
+    // second, nearest one (+inf where there is no source). An engine recording the plan gets
+    // the very depth the headless execution writes.
+    use vklens::gpu::{record_compute_download, Buffer};
+    let ctx = validated_context();
+    let gpu = ctx.gpu();
+    let text = std::fs::read_to_string(examples().join("chromatic.toml")).unwrap()
+        + "\n[outputs]\ncolor = true\ndepth = true\n";
+    let file = scene_file(&text);
+    let scene = load_geometry(&file).unwrap();
+    let p = plan(&file, &scene).unwrap();
+    assert!(matches!(p.route, Route::Warp { .. }), "{:?}", p.route);
+    let mut expected = None;
+    execute(&ctx, &p, &scene, 0..1, &mut |f| {
+        expected = Some(f.rendered);
+        Ok(())
+    })
+    .unwrap();
+    let expected = expected.unwrap().depth.expect("execute() writes depth");
+    let mut recorder = vklens::plan::record::PlanRecorder::new(gpu, &p, &scene).unwrap();
+    recorder.prepare(0).unwrap();
+    let image = recorder
+        .warped_depth()
+        .expect("the warp route records depth");
+    let n = (image.extent.width * image.extent.height) as usize;
+    assert_eq!(n, expected.len());
+    let download = Buffer::new(
+        gpu,
+        "test.depth",
+        4 * n as u64,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuToCpu,
+    )
+    .unwrap();
+    ctx.submit(|cmd| {
+        unsafe {
+            recorder.record_setup(cmd);
+            recorder.record(cmd, None);
+            record_compute_download(gpu, cmd, image, &download);
+        }
+        Ok(())
+    })
+    .unwrap();
+    let got = download.read_pod::<f32>(n).unwrap();
+    let bits = |v: &[f32]| v.iter().map(|z| z.to_bits()).collect::<Vec<_>>();
+    assert!(
+        bits(&got) == bits(&expected),
+        "depth differs from execute()'s"
+    );
+    let surface = got.iter().filter(|z| z.is_finite()).count();
+    assert!(
+        surface > n / 2,
+        "the grid should fill most of the frame ({surface} of {n})"
+    );
+    assert!(got.iter().all(|&z| z.is_infinite() || z > 0.0));
+    assert_no_validation_messages(&ctx);
+}

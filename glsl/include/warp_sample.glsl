@@ -1,5 +1,6 @@
 // The warp's source side, shared by glsl/warp.comp and glsl/warp_raster.frag: the push
-// constants, the source image (format by variant: rgba32f by default, VKL_RGBA8, VKL_R32UI)
+// constants, the source image (format by variant: rgba32f by default, VKL_RGBA8, VKL_R32UI,
+// VKL_R32F)
 // and one sample of it at an OpenCV source position.
 #ifndef VKL_WARP_SAMPLE_GLSL
 #define VKL_WARP_SAMPLE_GLSL
@@ -10,6 +11,8 @@
 
 #if defined(VKL_R32UI)
 layout(set = 0, binding = VKL_WARP_SOURCE_BINDING, r32ui) uniform readonly uimage2D source;
+#elif defined(VKL_R32F)
+layout(set = 0, binding = VKL_WARP_SOURCE_BINDING, r32f) uniform readonly image2D source;
 #elif defined(VKL_RGBA8)
 layout(set = 0, binding = VKL_WARP_SOURCE_BINDING, rgba8) uniform readonly image2D source;
 #else

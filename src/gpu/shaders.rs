@@ -12,6 +12,8 @@ pub const WARP_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp
 pub const WARP_COMP_RGBA8: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.rgba8.spv"));
 /// `glsl/warp.comp`, r32ui images (object IDs, nearest only).
 pub const WARP_COMP_R32UI: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.r32ui.spv"));
+/// `glsl/warp.comp`, r32f images (depth, nearest only).
+pub const WARP_COMP_R32F: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.r32f.spv"));
 /// `glsl/inverse_map.comp`: a coordinate map per camera and channel.
 pub const INVERSE_MAP_COMP: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/inverse_map.comp.spv"));

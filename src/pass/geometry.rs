@@ -815,6 +815,11 @@ impl GeometryTargets {
         self.targets[1].as_ref().map(|t| &t.image)
     }
 
+    /// The camera-depth image (when rendered; R32F metres, +inf where nothing was drawn).
+    pub fn depth(&self) -> Option<&Image> {
+        self.targets[3].as_ref().map(|t| &t.image)
+    }
+
     /// Records the copies of every output into its host buffer. The outputs must be in
     /// `TRANSFER_SRC_OPTIMAL` (the default final layout).
     ///

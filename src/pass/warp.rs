@@ -51,6 +51,9 @@ pub enum PixelFormat {
     Rgba32F,
     /// `R32_UINT` (object IDs; nearest only, never blended).
     R32Uint,
+    /// `R32_SFLOAT` (depth; nearest only: +inf where nothing was drawn must not be blended).
+    /// Headless rasters carry it as RGBA32F, channel 0.
+    R32Float,
 }
 
 impl PixelFormat {
@@ -60,12 +63,13 @@ impl PixelFormat {
             PixelFormat::Rgba8 => vk::Format::R8G8B8A8_UNORM,
             PixelFormat::Rgba32F => vk::Format::R32G32B32A32_SFLOAT,
             PixelFormat::R32Uint => vk::Format::R32_UINT,
+            PixelFormat::R32Float => vk::Format::R32_SFLOAT,
         }
     }
     /// Bytes per pixel.
     pub fn bytes(self) -> usize {
         match self {
-            PixelFormat::Rgba8 | PixelFormat::R32Uint => 4,
+            PixelFormat::Rgba8 | PixelFormat::R32Uint | PixelFormat::R32Float => 4,
             PixelFormat::Rgba32F => 16,
         }
     }
@@ -158,11 +162,11 @@ impl WarpPass {
     /// variant when there is no chromatic aberration) and, in map mode, the map images.
     pub fn new(gpu: &Gpu, desc: WarpDesc) -> Result<Self> {
         let g = &desc.geometry;
-        if desc.format == PixelFormat::R32Uint
+        if matches!(desc.format, PixelFormat::R32Uint | PixelFormat::R32Float)
             && (desc.sampling != Sampling::Nearest || g.is_chromatic())
         {
             return Err(GpuError::Invalid(
-                "object IDs (R32_UINT) are sampled nearest and without chromatic aberration".into(),
+                "object IDs (R32_UINT) and depth (R32_SFLOAT) are sampled nearest and without chromatic aberration".into(),
             ));
         }
         if let Coordinates::CoarseMap { stride, refine } = desc.coordinates {
@@ -199,6 +203,7 @@ impl WarpPass {
             PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,
             PixelFormat::Rgba32F => shaders::WARP_COMP,
             PixelFormat::R32Uint => shaders::WARP_COMP_R32UI,
+            PixelFormat::R32Float => shaders::WARP_COMP_R32F,
         };
         let storage = vk::DescriptorType::STORAGE_IMAGE;
         let pipeline = ComputePipeline::new(
@@ -566,6 +571,10 @@ impl WarpImages {
         let bytes: Vec<u8> = match (&source.pixels, desc.format) {
             (Pixels::Rgba8(p), PixelFormat::Rgba8) => p.iter().flatten().copied().collect(),
             (Pixels::R32Uint(p), PixelFormat::R32Uint) => bytemuck::cast_slice(p).to_vec(),
+            (Pixels::Rgba32F(p), PixelFormat::R32Float) => {
+                let v: Vec<f32> = p.iter().map(|q| q[0]).collect();
+                bytemuck::cast_slice(&v).to_vec()
+            }
             (_, PixelFormat::Rgba32F) => {
                 let v: Vec<[f32; 4]> = (0..source.len()).map(|i| source.rgba_f32(i)).collect();
                 bytemuck::cast_slice(&v).to_vec()
@@ -698,6 +707,13 @@ impl WarpImages {
             PixelFormat::Rgba8 => Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
             PixelFormat::Rgba32F => Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
             PixelFormat::R32Uint => Pixels::R32Uint(self.download.read_pod::<u32>(n)?),
+            PixelFormat::R32Float => Pixels::Rgba32F(
+                self.download
+                    .read_pod::<f32>(n)?
+                    .into_iter()
+                    .map(|z| [z, z, z, 1.0])
+                    .collect(),
+            ),
         };
         let mask = self.download_mask.read_pod::<u8>(n)?;
         Ok((

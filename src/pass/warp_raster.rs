@@ -45,9 +45,9 @@ impl RasterWarpPass {
         let (format, spirv) = match desc.format {
             PixelFormat::Rgba8 => (vk::Format::R8G8B8A8_UNORM, shaders::WARP_RASTER_FRAG_RGBA8),
             PixelFormat::Rgba32F => (vk::Format::R32G32B32A32_SFLOAT, shaders::WARP_RASTER_FRAG),
-            PixelFormat::R32Uint => {
+            PixelFormat::R32Uint | PixelFormat::R32Float => {
                 return Err(GpuError::Invalid(
-                    "the fragment-shader warp is for colour: object IDs take the compute warp"
+                    "the fragment-shader warp is for colour: IDs and depth take the compute warp"
                         .into(),
                 ))
             }

@@ -3,8 +3,8 @@
 //! [`PlanRecorder::record`] can write a timestamp after every pass.
 //!
 //! What it records per route: a pinhole render or Alg. 1 (every output), the warp path's
-//! pinhole render + warp (colour), both for warp + Alg. 1, or the lens model's frame. Depth
-//! through the warp path (a second, nearest warp) is left to [`super::execute`].
+//! pinhole render + warp (colour, and depth by a second, nearest warp), both for warp + Alg. 1,
+//! or the lens model's frame.
 
 use ash::vk;
 
@@ -71,30 +71,41 @@ impl PlanRecorder {
             let targets = GeometryTargets::new(gpu, &pass)?;
             Ok((pass, targets))
         };
-        let warp_stage =
-            |camera: &OpenCvCamera, method, chromatic: Option<[f64; 3]>| -> Result<WarpStage> {
-                let ov = overscan(camera, 1.0).map_err(invalid)?;
-                let source = OpenCvCamera::new(
-                    ov.width,
-                    ov.height,
-                    ov.intrinsics,
-                    OpenCvDistortion::default(),
-                )
+        let warp_stage = |camera: &OpenCvCamera,
+                          method,
+                          chromatic: Option<[f64; 3]>,
+                          depth: bool|
+         -> Result<WarpStage> {
+            let ov = overscan(camera, 1.0).map_err(invalid)?;
+            let source = OpenCvCamera::new(
+                ov.width,
+                ov.height,
+                ov.intrinsics,
+                OpenCvDistortion::default(),
+            )
+            .map_err(invalid)?;
+            let mut g = WarpGeometry::distort(camera.clone(), method)
+                .with_ideal(ov.intrinsics, (ov.width, ov.height))
                 .map_err(invalid)?;
-                let mut g = WarpGeometry::distort(camera.clone(), method)
-                    .with_ideal(ov.intrinsics, (ov.width, ov.height))
-                    .map_err(invalid)?;
-                if let Some(s) = chromatic {
-                    g = g.with_chromatic(s).map_err(invalid)?;
-                }
-                // The warp reads RGBA8 or RGBA32F sources.
-                let f = if format == ColorFormat::Rgba8 {
-                    ColorFormat::Rgba8
-                } else {
-                    ColorFormat::Rgba32F
-                };
-                WarpStage::new(gpu, source, g, Coordinates::Analytic, f, plan.background)
+            if let Some(s) = chromatic {
+                g = g.with_chromatic(s).map_err(invalid)?;
+            }
+            // The warp reads RGBA8 or RGBA32F sources.
+            let f = if format == ColorFormat::Rgba8 {
+                ColorFormat::Rgba8
+            } else {
+                ColorFormat::Rgba32F
             };
+            WarpStage::with_depth(
+                gpu,
+                source,
+                g,
+                Coordinates::Analytic,
+                f,
+                plan.background,
+                depth,
+            )
+        };
         // One mesh for every pass: tessellated where Alg. 1 needs it (the warp's pinhole
         // render of warp + Alg. 1 does not mind the finer mesh).
         let mesh = match (&plan.route, plan.camera.as_ref()) {
@@ -137,19 +148,19 @@ impl PlanRecorder {
                         r.names.push("Alg. 1 (vertex + discard)");
                     }
                     Route::Warp { method, chromatic } => {
-                        if o.ids || o.flow || o.depth {
+                        if o.ids || o.flow {
                             return Err(invalid(
-                                "the recorder gives the warp route's colour; its depth is a second warp that execute() runs",
+                                "IDs and flow take Alg. 1 (seed 000 Table 1): the planner never routes them through the warp",
                             ));
                         }
-                        r.warp = Some(warp_stage(camera, *method, *chromatic)?);
+                        r.warp = Some(warp_stage(camera, *method, *chromatic, o.depth)?);
                         r.names.extend(["pinhole render (overscanned)", "warp"]);
                     }
                     Route::WarpAndVertex {
                         method, chromatic, ..
                     } => {
                         if o.color {
-                            r.warp = Some(warp_stage(camera, *method, *chromatic)?);
+                            r.warp = Some(warp_stage(camera, *method, *chromatic, false)?);
                             r.names.extend(["pinhole render (overscanned)", "warp"]);
                         }
                         r.geometry = Some(geometry(
@@ -247,7 +258,7 @@ impl PlanRecorder {
             if let Some(st) = &self.warp {
                 st.pass.record(cmd, &st.targets, &self.mesh);
                 stamp();
-                st.warp.record(cmd);
+                st.record_warps(cmd);
                 stamp();
             }
             if let Some((pass, targets)) = &self.geometry {
@@ -257,9 +268,15 @@ impl PlanRecorder {
         }
     }
 
+    /// The warp route's depth (R32F metres, +inf where nothing was drawn or there is no
+    /// source; `GENERAL` after a frame), when the plan asks for depth through the warp.
+    pub fn warped_depth(&self) -> Option<&crate::gpu::Image> {
+        self.warp.as_ref()?.depth.as_ref().map(|d| &d.output)
+    }
+
     /// The images a recorded frame leaves: colour (warp output, lens film or geometry
     /// colour) and the geometry pass's targets (IDs, flow, depth) for the caller to read or
-    /// sample.
+    /// sample. The warp route's depth is [`Self::warped_depth`].
     pub fn images(&self) -> (Option<&crate::gpu::Image>, Option<&GeometryTargets>) {
         let colour = if let Some(st) = &self.warp {
             Some(&st.output)

@@ -431,8 +431,9 @@ impl GraphicsPipeline {
     }
 
     /// Begins `render_pass` on `framebuffer` with `clears` (one per attachment, in attachment
-    /// order), binds this pipeline and `set`, and sets viewport and scissor to the whole
-    /// framebuffer. The caller draws, then ends the render pass.
+    /// order), binds this pipeline and `set`, sets viewport and scissor to the whole
+    /// framebuffer and pushes `push` (every push-constant stage; empty: none). The caller
+    /// draws, then ends the render pass.
     ///
     /// # Safety
     /// `cmd` must be recording outside a render pass; `framebuffer` must belong to
@@ -444,6 +445,7 @@ impl GraphicsPipeline {
         framebuffer: &Framebuffer,
         clears: &[vk::ClearValue],
         set: vk::DescriptorSet,
+        push: &[u8],
     ) {
         let d = self.gpu.device();
         let extent = framebuffer.extent;
@@ -480,6 +482,9 @@ impl GraphicsPipeline {
                 }],
             );
             d.cmd_set_scissor(cmd, 0, &[area]);
+            if !push.is_empty() {
+                d.cmd_push_constants(cmd, self.layout, self.push_stages, 0, push);
+            }
         }
     }
 }

@@ -193,13 +193,12 @@ impl FilmPass {
         };
         let d = self.gpu.device();
         unsafe {
-            self.pipeline
-                .begin(cmd, &self.render_pass, &target.framebuffer, &[], set);
-            d.cmd_push_constants(
+            self.pipeline.begin(
                 cmd,
-                self.pipeline.layout,
-                self.pipeline.push_stages,
-                0,
+                &self.render_pass,
+                &target.framebuffer,
+                &[],
+                set,
                 bytemuck::bytes_of(&push),
             );
             d.cmd_bind_vertex_buffers(cmd, 0, &[vertices.raw], &[0]);

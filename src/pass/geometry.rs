@@ -682,8 +682,14 @@ impl GeometryPass {
         });
         let d = self.gpu.device();
         unsafe {
-            self.pipeline
-                .begin(cmd, &self.render_pass, &targets.framebuffer, &clears, set);
+            self.pipeline.begin(
+                cmd,
+                &self.render_pass,
+                &targets.framebuffer,
+                &clears,
+                set,
+                &[],
+            );
             d.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cmd, mesh.indices.raw, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);

@@ -226,13 +226,12 @@ impl MeshWarpPass {
             color: vk::ClearColorValue { float32: [0.0; 4] },
         }];
         unsafe {
-            self.pipeline
-                .begin(cmd, &self.render_pass, framebuffer, &clears, self.set);
-            d.cmd_push_constants(
+            self.pipeline.begin(
                 cmd,
-                self.pipeline.layout,
-                self.pipeline.push_stages,
-                0,
+                &self.render_pass,
+                framebuffer,
+                &clears,
+                self.set,
                 bytemuck::bytes_of(&self.push),
             );
             d.cmd_bind_vertex_buffers(cmd, 0, &[self.vertices.raw], &[0]);

@@ -80,7 +80,7 @@ impl RasterWarpPass {
         )?;
         let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
         let set = pool.allocate(&pipeline)?;
-        let mut pass = RasterWarpPass {
+        let pass = RasterWarpPass {
             gpu: gpu.clone(),
             pipeline,
             render_pass,
@@ -92,7 +92,6 @@ impl RasterWarpPass {
         };
         let [g, r, b] = warp.map_views();
         write_storage_image_descriptors(&pass.gpu, pass.set, &[(0, g), (1, r), (2, b)]);
-        pass.push = warp.push();
         Ok(pass)
     }
 
@@ -103,8 +102,8 @@ impl RasterWarpPass {
     }
 
     /// Records the warp into `framebuffer` (one colour attachment of `output_size` and this
-    /// pass's format, made with `self.render_pass`); every pixel is written, so nothing is
-    /// cleared first.
+    /// pass's format, made with `self.render_pass`). The render pass clears it first (its load
+    /// op), then every pixel is written.
     ///
     /// # Safety
     /// `cmd` must be recording outside a render pass, after the [`WarpPass`]'s
@@ -117,13 +116,12 @@ impl RasterWarpPass {
             color: vk::ClearColorValue { float32: [0.0; 4] },
         }];
         unsafe {
-            self.pipeline
-                .begin(cmd, &self.render_pass, framebuffer, &clears, self.set);
-            d.cmd_push_constants(
+            self.pipeline.begin(
                 cmd,
-                self.pipeline.layout,
-                self.pipeline.push_stages,
-                0,
+                &self.render_pass,
+                framebuffer,
+                &clears,
+                self.set,
                 bytemuck::bytes_of(&self.push),
             );
             d.cmd_draw(cmd, 3, 1, 0, 0);

@@ -240,7 +240,6 @@ pub struct DepthWarp {
     pub warp: WarpPass,
     /// R32F, the warp's output size, `GENERAL` after the warp.
     pub output: Image,
-    _mask: Image,
 }
 
 impl WarpStage {
@@ -341,19 +340,11 @@ impl WarpStage {
                 )?;
                 let r32f = PixelFormat::R32Float.vk();
                 let output = Image::new_2d(gpu, "warp_path.depth", r32f, ow, oh, usage)?;
-                let mask = Image::new_2d(
-                    gpu,
-                    "warp_path.depth_mask",
-                    vk::Format::R8_UNORM,
-                    ow,
-                    oh,
-                    usage,
-                )?;
+                // Neither warp writes its mask (write_mask is off): they can share one.
                 depth_warp.bind(source.view, output.view, mask.view);
                 Some(DepthWarp {
                     warp: depth_warp,
                     output,
-                    _mask: mask,
                 })
             }
             None => None,
@@ -385,7 +376,7 @@ impl WarpStage {
             vk::AccessFlags::SHADER_WRITE,
         );
         unsafe {
-            let depth = self.depth.iter().flat_map(|d| [&d.output, &d._mask]);
+            let depth = self.depth.iter().map(|d| &d.output);
             for img in [&self.output, &self.mask].into_iter().chain(depth) {
                 image_barrier(
                     &self.gpu,

@@ -220,6 +220,18 @@ fn scene_file_errors_name_the_file_the_key_and_what_was_expected() {
             format!("{base}[[poses]]\nrvec = [0, 0]\ntvec = [0, 0, 1]\n"),
             "[[poses]] #1.rvec: expected 3 numbers",
         ),
+        (
+            format!("{base}[render]\nsupersample = 0\n"),
+            "[render] supersample: expected a whole number 1..=16, found 0",
+        ),
+        (
+            format!("{base}[render]\njitter = 2.5\n"),
+            "[render] jitter: expected a whole number 1..=64, found 2.5",
+        ),
+        (
+            format!("{base}[render]\nantialias = 4\n"),
+            "[render] antialias: unknown key; expected one of background, supersample, jitter",
+        ),
     ];
     for (text, expected) in cases {
         let e = error(&text);
@@ -393,5 +405,88 @@ fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
         "the grid should fill most of the frame ({surface} of {n})"
     );
     assert!(got.iter().all(|&z| z.is_infinite() || z > 0.0));
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
+    // [render] supersample and jitter: the plan says so, execute() averages the colour, and
+    // IDs, flow and depth are the very same single-sample images as without them.
+    let ctx = validated_context();
+    let base = std::fs::read_to_string(examples().join("ids_and_flow.toml")).unwrap();
+    let plain = scene_file(&base);
+    let smooth = scene_file(&format!("{base}\n[render]\nsupersample = 2\njitter = 2\n"));
+    assert_eq!(smooth.antialias.supersample, 2);
+    let scene = load_geometry(&plain).unwrap();
+    let frame = |file: &SceneFile| {
+        let p = plan(file, &scene).unwrap();
+        let mut out = None;
+        execute(&ctx, &p, &scene, 0..1, &mut |f| {
+            out = Some(f.rendered);
+            Ok(())
+        })
+        .unwrap();
+        (p, out.unwrap())
+    };
+    let (p1, one) = frame(&plain);
+    let (p4, four) = frame(&smooth);
+    assert!(!p1.steps.iter().any(|s| s.pass == "anti-aliasing"));
+    let step = p4
+        .steps
+        .iter()
+        .find(|s| s.pass == "anti-aliasing")
+        .expect("an AA step");
+    assert!(
+        step.why.contains("2× supersampling and 2 jittered"),
+        "{}",
+        step.why
+    );
+    assert_eq!(
+        p1.route, p4.route,
+        "anti-aliasing does not change the route"
+    );
+    // Bit for bit (flow and depth hold NaN and +inf where nothing was drawn).
+    let bits = |v: Option<Vec<f32>>| v.map(|v| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+    let flow_bits =
+        |v: &Option<Vec<[f32; 2]>>| bits(v.as_ref().map(|v| v.iter().flatten().copied().collect()));
+    assert!(
+        one.ids == four.ids,
+        "IDs are one sample per pixel either way"
+    );
+    assert!(
+        bits(one.depth.clone()) == bits(four.depth.clone()),
+        "depth differs"
+    );
+    assert!(
+        flow_bits(&one.flow) == flow_bits(&four.flow),
+        "flow differs"
+    );
+    let (a, b) = (one.color.unwrap(), four.color.unwrap());
+    let diffs: Vec<f32> = (0..a.len())
+        .map(|i| {
+            let (p, q) = (a.rgba_f32(i), b.rgba_f32(i));
+            (0..3).map(|c| (p[c] - q[c]).abs()).fold(0.0, f32::max)
+        })
+        .collect();
+    let changed = diffs.iter().filter(|&&d| d > 2.0 / 255.0).count();
+    let mean = diffs.iter().sum::<f32>() / diffs.len() as f32;
+    // Edges and fine texture change, the picture does not: many pixels move a little.
+    eprintln!(
+        "anti-aliasing: {changed} of {} pixels changed, mean {mean}",
+        diffs.len()
+    );
+    assert!(changed > 0, "anti-aliasing changed no pixel");
+    assert!(mean < 0.05, "mean change {mean}");
+    // The engine recorder draws one sample per pixel and says so rather than ignore the keys.
+    let e = match vklens::plan::record::PlanRecorder::new(ctx.gpu(), &p4, &scene) {
+        Ok(_) => panic!("the recorder accepted an anti-aliased plan"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("one sample per pixel"), "{e}");
+    // A lens scene cannot take the keys.
+    let lens = std::fs::read_to_string(examples().join("lens_chromatic.toml")).unwrap();
+    let lens = scene_file(&format!("{lens}\n[render]\nsupersample = 2\n"));
+    let e = plan(&lens, &load_geometry(&lens).unwrap()).unwrap_err();
+    assert!(e.contains("[render] supersample"), "{e}");
     assert_no_validation_messages(&ctx);
 }

@@ -98,6 +98,8 @@ pub struct Plan {
     pub poses: Vec<Pose>,
     pub outputs: scene_file::OutputSpec,
     pub background: [f32; 4],
+    /// Colour anti-aliasing (`[render] supersample`, `jitter`); camera files only.
+    pub antialias: scene_file::Antialias,
     /// Estimated frame time from the measured tables (ms, lavapipe), for comparison.
     pub estimated_ms: f64,
 }
@@ -184,6 +186,19 @@ pub fn load_geometry(file: &SceneFile) -> Result<Scene, String> {
         .map_err(|e| format!("{}: [geometry] scene: {e}", file.source.display()))
 }
 
+/// The step that says colour is anti-aliased, when `[render]` asks for it.
+fn push_antialias_step(steps: &mut Vec<Step>, aa: scene_file::Antialias, color: bool) {
+    if aa.is_on() && color {
+        steps.push(Step {
+            pass: "anti-aliasing".into(),
+            why: format!(
+                "[render] asks for {}× supersampling and {} jittered pass(es) of the colour, averaged; IDs, flow and depth stay one sample per pixel",
+                aa.supersample, aa.jitter
+            ),
+        });
+    }
+}
+
 /// Plans `file` for `scene`.
 pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
     let src = file.source.display().to_string();
@@ -202,6 +217,11 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             sensor_mm,
             pixels,
         } => {
+            if file.antialias.is_on() {
+                return Err(format!(
+                    "{src}: [render] supersample / jitter: the image-based lens model renders one sample per pixel per lens sample; anti-aliasing is for camera-file scenes"
+                ));
+            }
             for (asked, key) in [(o.ids, "ids"), (o.flow, "flow"), (o.depth, "depth")] {
                 if asked {
                     return Err(format!(
@@ -314,6 +334,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 poses,
                 outputs: *o,
                 background: file.background,
+                antialias: file.antialias,
                 estimated_ms: f64::NAN,
             })
         }
@@ -373,6 +394,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                             .into()
                     },
                 ));
+                push_antialias_step(&mut steps, file.antialias, o.color);
                 return Ok(Plan {
                     route: Route::Pinhole,
                     steps,
@@ -389,6 +411,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     poses,
                     outputs: *o,
                     background: file.background,
+                    antialias: file.antialias,
                 });
             }
             // The vertex path: the coarsest tessellation that meets the budget (not searched
@@ -553,6 +576,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     vertex_ms.unwrap_or(f64::NAN),
                 )
             };
+            push_antialias_step(&mut steps, file.antialias, o.color);
             Ok(Plan {
                 route,
                 steps,
@@ -563,6 +587,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 poses,
                 outputs: *o,
                 background: file.background,
+                antialias: file.antialias,
                 estimated_ms: estimated,
             })
         }
@@ -701,8 +726,8 @@ pub fn execute(
                 flow: o.flow,
                 depth: o.depth,
             },
-            supersample: 1,
-            jitter: 1,
+            supersample: plan.antialias.supersample,
+            jitter: plan.antialias.jitter,
             tessellate: None,
             background: plan.background,
             chromatic: None,

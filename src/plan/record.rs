@@ -43,6 +43,11 @@ impl PlanRecorder {
     /// Builds the plan's passes on `gpu` for `scene` (its mesh tessellated, where the plan
     /// says so, at the first pose).
     pub fn new(gpu: &Gpu, plan: &Plan, scene: &Scene) -> Result<Self> {
+        if plan.antialias.is_on() {
+            return Err(invalid(
+                "the recorder draws one sample per pixel: the scene's [render] supersample / jitter are averaged on the host by execute(); an engine anti-aliases its own way (MSAA, TAA)",
+            ));
+        }
         let o = plan.outputs;
         let format = if o.exr {
             ColorFormat::Rgba16F

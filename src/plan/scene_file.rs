@@ -85,6 +85,32 @@ pub struct SceneFile {
     /// The poses to render; empty: the scene centred in the view.
     pub poses: Vec<Pose>,
     pub background: [f32; 4],
+    /// Anti-aliasing of colour (`[render]`): the same meaning as `vklens render`'s flags.
+    pub antialias: Antialias,
+}
+
+/// Colour anti-aliasing: `supersample`× the resolution box-filtered down, `jitter` sub-sample
+/// passes averaged. IDs, flow and depth are always one sample per pixel (never blended).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Antialias {
+    pub supersample: u32,
+    pub jitter: u32,
+}
+
+impl Default for Antialias {
+    fn default() -> Self {
+        Antialias {
+            supersample: 1,
+            jitter: 1,
+        }
+    }
+}
+
+impl Antialias {
+    /// Whether more than one sample per pixel is asked for.
+    pub fn is_on(&self) -> bool {
+        *self != Antialias::default()
+    }
 }
 
 struct Reader<'a> {
@@ -167,6 +193,33 @@ impl Reader<'_> {
         t.and_then(|t| t.get(key))
             .map(|v| self.number(v, &format!("[{table}] {key}")))
             .transpose()
+    }
+
+    /// An optional whole number in `range` (`[table] key` in errors).
+    fn opt_whole(
+        &self,
+        t: Option<&Table>,
+        table: &str,
+        key: &str,
+        range: std::ops::RangeInclusive<u32>,
+    ) -> Result<Option<u32>, SceneFileError> {
+        match self.opt_number(t, table, key)? {
+            None => Ok(None),
+            Some(n)
+                if n.fract() == 0.0
+                    && (*range.start() as f64..=*range.end() as f64).contains(&n) =>
+            {
+                Ok(Some(n as u32))
+            }
+            Some(n) => Err(self.err(
+                &format!("[{table}] {key}"),
+                format!(
+                    "expected a whole number {}..={}, found {n}",
+                    range.start(),
+                    range.end()
+                ),
+            )),
+        }
     }
 
     fn numbers<const N: usize>(&self, v: &Value, key: &str) -> Result<[f64; N], SceneFileError> {
@@ -372,16 +425,9 @@ impl SceneFile {
             }
             None => [1.0; 3],
         };
-        let lens_samples = match r.opt_number(e, "effects", "lens_samples")? {
-            None => 10,
-            Some(n) if n.fract() == 0.0 && (1.0..=1024.0).contains(&n) => n as u32,
-            Some(n) => {
-                return Err(r.err(
-                    "[effects] lens_samples",
-                    format!("expected a whole number 1..=1024, found {n}"),
-                ));
-            }
-        };
+        let lens_samples = r
+            .opt_whole(e, "effects", "lens_samples", 1..=1024)?
+            .unwrap_or(10);
         let effects = Effects {
             distortion: r.bool(e, "effects", "distortion", true)?,
             chromatic_aberration: r.bool(e, "effects", "chromatic_aberration", false)?,
@@ -438,10 +484,18 @@ impl SceneFile {
             ));
         }
 
-        let render = r.table(&root, "render", &["background"])?;
+        let render = r.table(&root, "render", &["background", "supersample", "jitter"])?;
         let background = match render.and_then(|t| t.get("background")) {
             Some(v) => r.numbers::<4>(v, "[render] background")?.map(|c| c as f32),
             None => [0.0, 0.0, 0.0, 1.0],
+        };
+        let antialias = Antialias {
+            supersample: r
+                .opt_whole(render, "render", "supersample", 1..=16)?
+                .unwrap_or(1),
+            jitter: r
+                .opt_whole(render, "render", "jitter", 1..=64)?
+                .unwrap_or(1),
         };
 
         let mut poses = Vec::new();
@@ -498,6 +552,7 @@ impl SceneFile {
             max_error_px,
             poses,
             background,
+            antialias,
         })
     }
 }

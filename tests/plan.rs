@@ -222,7 +222,7 @@ fn scene_file_errors_name_the_file_the_key_and_what_was_expected() {
         ),
         (
             format!("{base}[render]\nsupersample = 0\n"),
-            "[render] supersample: expected a whole number 1..=16, found 0",
+            "[render] supersample: expected a whole number 1..=8, found 0",
         ),
         (
             format!("{base}[render]\njitter = 2.5\n"),
@@ -303,6 +303,20 @@ fn render_scene_cli_writes_every_output_of_every_frame() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("3 pose(s)"));
+    // Anti-aliasing flags beside a scene file would be ignored: refused, pointing at the keys.
+    let o = std::process::Command::new(bin)
+        .args([
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .args(["--supersample", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("[render] supersample"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -298,6 +298,8 @@ impl RenderArgs {
             Some("--ids/--flow/--depth (the scene file's [outputs] asks for them)")
         } else if self.pose.is_some() || self.previous_pose.is_some() {
             Some("--pose (the scene file's [[poses]] gives them)")
+        } else if self.supersample != 1 || self.jitter != 1 {
+            Some("--supersample/--jitter (the scene file's [render] supersample and jitter)")
         } else {
             None
         }

@@ -491,7 +491,7 @@ impl SceneFile {
         };
         let antialias = Antialias {
             supersample: r
-                .opt_whole(render, "render", "supersample", 1..=16)?
+                .opt_whole(render, "render", "supersample", 1..=8)?
                 .unwrap_or(1),
             jitter: r
                 .opt_whole(render, "render", "jitter", 1..=64)?

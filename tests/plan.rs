@@ -253,18 +253,22 @@ fn render_scene_cli_writes_every_output_of_every_frame() {
     let dir = std::env::temp_dir().join(format!("vklens-plan-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let scene = examples().join("ids_and_flow.toml");
-    let o = std::process::Command::new(bin)
-        .args([
-            "render",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-        ])
-        .args(["--explain", "--frames", "1..=2"])
-        .env("VKLENS_VALIDATION", "1")
-        .output()
-        .unwrap();
+    // `vklens render --scene S --out DIR` plus `extra`.
+    let render = |extra: &[&str]| {
+        std::process::Command::new(bin)
+            .args([
+                "render",
+                "--scene",
+                scene.to_str().unwrap(),
+                "--out",
+                dir.to_str().unwrap(),
+            ])
+            .args(extra)
+            .env("VKLENS_VALIDATION", "1")
+            .output()
+            .unwrap()
+    };
+    let o = render(&["--explain", "--frames", "1..=2"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -290,31 +294,11 @@ fn render_scene_cli_writes_every_output_of_every_frame() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("plan.json")).unwrap()).unwrap();
     assert_eq!(plan["frames"].as_array().unwrap().len(), 2);
     // Out of range frames: one line, exit 2.
-    let o = std::process::Command::new(bin)
-        .args([
-            "render",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-        ])
-        .args(["--frames", "2..9"])
-        .output()
-        .unwrap();
+    let o = render(&["--frames", "2..9"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("3 pose(s)"));
     // Anti-aliasing flags beside a scene file would be ignored: refused, pointing at the keys.
-    let o = std::process::Command::new(bin)
-        .args([
-            "render",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-        ])
-        .args(["--supersample", "2"])
-        .output()
-        .unwrap();
+    let o = render(&["--supersample", "2"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("[render] supersample"));
     let _ = std::fs::remove_dir_all(&dir);

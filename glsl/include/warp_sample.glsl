@@ -1,7 +1,6 @@
 // The warp's source side, shared by glsl/warp.comp and glsl/warp_raster.frag: the push
 // constants, the source image (format by variant: rgba32f by default, VKL_RGBA8, VKL_R32UI,
-// VKL_R32F)
-// and one sample of it at an OpenCV source position.
+// VKL_R32F) and one sample of it at an OpenCV source position.
 #ifndef VKL_WARP_SAMPLE_GLSL
 #define VKL_WARP_SAMPLE_GLSL
 

@@ -13,12 +13,13 @@ use ash::vk;
 use glam::DVec2;
 use serde_json::{json, Value};
 
-use crate::gpu::{memory_barrier, Context, Framebuffer, Image, QueryPool, Result};
+use crate::gpu::{memory_barrier, Context, QueryPool, Result};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 use crate::model::{Intrinsics, InverseMethod, OpenCvCamera};
 use crate::pass::copy::CopyPass;
+use crate::pass::mesh_warp::MeshWarpTarget;
 use crate::pass::warp::{read_maps, Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
 use crate::pass::warp_raster::RasterWarpPass;
 
@@ -282,25 +283,15 @@ pub fn run(
                     let mut raster =
                         RasterWarpPass::new(gpu, &pass, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)?;
                     raster.bind(images.source.view);
-                    let target = Image::new_2d(
-                        gpu,
-                        "bench.raster_output",
-                        raster.format,
-                        w,
-                        h,
-                        vk::ImageUsageFlags::COLOR_ATTACHMENT,
-                    )?;
-                    let framebuffer = Framebuffer::new(
+                    let target = MeshWarpTarget::for_render_pass(
                         gpu,
                         &raster.render_pass,
-                        &[target.view],
-                        vk::Extent2D {
-                            width: w,
-                            height: h,
-                        },
+                        (w, h),
+                        raster.format,
                     )?;
-                    let (frame_ms, gpu_ms) =
-                        time_batch(ctx, &|cmd| unsafe { raster.record(cmd, &framebuffer) })?;
+                    let (frame_ms, gpu_ms) = time_batch(ctx, &|cmd| unsafe {
+                        raster.record(cmd, &target.framebuffer)
+                    })?;
                     rows.push(json!({
                         "bench": "warp", "width": w, "height": h, "method": "map_raster", "chromatic": chromatic,
                         "frame_ms": frame_ms, "gpu_ms": gpu_ms, "max_err_px": err,

@@ -312,19 +312,11 @@ fn clip_to_the_image(
         if inside(dir * r) {
             continue;
         }
-        let (mut lo, mut hi) = (0.0, r);
-        while hi - lo > 1e-13 * hi {
-            let mid = 0.5 * (lo + hi);
-            if inside(dir * mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
+        let last = last_true(0.0, r, |radius| inside(dir * radius));
         lower_to(
             ideal,
             k as f64 / refine as f64,
-            lo * (1.0 - BOUNDARY_MARGIN),
+            last * (1.0 - BOUNDARY_MARGIN),
         );
         lowered = true;
     }
@@ -346,14 +338,13 @@ fn cover_boundary(table: &mut [f64], boundary: &[DVec2]) {
         if !rho.is_finite() || rho == 0.0 {
             continue;
         }
-        let t = (p.y.atan2(p.x) / TAU).rem_euclid(1.0) * n as f64;
-        let i = (t.floor() as usize).min(n - 1);
-        let reach = lookup(table, p.y.atan2(p.x));
+        let (i, j, f) = interval(n, position(n, p.y.atan2(p.x)));
+        let reach = table[i] * (1.0 - f) + table[j] * f;
         if rho > reach && rho <= reach * (1.0 + COVER_MAX_SHORTFALL) {
             // Scaling both ends of the interval by one factor scales the interpolation by it.
             let scale = rho / reach;
             table[i] *= scale;
-            table[(i + 1) % n] *= scale;
+            table[j] *= scale;
         }
     }
     for r in table.iter_mut() {
@@ -363,11 +354,13 @@ fn cover_boundary(table: &mut [f64], boundary: &[DVec2]) {
 
 /// Linear interpolation in a table of radii at uniform angles `TAU * i / len`.
 fn lookup(table: &[f64], angle: f64) -> f64 {
-    let n = table.len();
-    let t = (angle / TAU).rem_euclid(1.0) * n as f64;
-    let i = (t.floor() as usize).min(n - 1);
-    let f = t - i as f64;
-    table[i] * (1.0 - f) + table[(i + 1) % n] * f
+    let (i, j, f) = interval(table.len(), position(table.len(), angle));
+    table[i] * (1.0 - f) + table[j] * f
+}
+
+/// The fractional table position of `angle` (radians) in a table of `n` uniform angles.
+fn position(n: usize, angle: f64) -> f64 {
+    (angle / TAU).rem_euclid(1.0) * n as f64
 }
 
 /// The first failure of `valid_at` on the ray `dir` below `outside` (where it fails), found by
@@ -381,16 +374,21 @@ fn fold_between(
     if !(inside < outside) || !valid_at(dir * inside, dir) {
         return march(valid_at, dir).0;
     }
-    let (mut inside, mut outside) = (inside, outside);
+    last_true(inside, outside, |r| valid_at(dir * r, dir)) * (1.0 - BOUNDARY_MARGIN)
+}
+
+/// Bisection between `inside` (where `holds`) and `outside` (where it does not) to a relative
+/// 1e-13: the last radius where it holds, assuming one change in between.
+fn last_true(mut inside: f64, mut outside: f64, holds: impl Fn(f64) -> bool) -> f64 {
     while outside - inside > 1e-13 * outside {
         let mid = 0.5 * (inside + outside);
-        if valid_at(dir * mid, dir) {
+        if holds(mid) {
             inside = mid;
         } else {
             outside = mid;
         }
     }
-    inside * (1.0 - BOUNDARY_MARGIN)
+    inside
 }
 
 /// Walks outward along `dir` until `valid_at` fails; returns the last valid radius (refined by

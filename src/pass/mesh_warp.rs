@@ -256,7 +256,7 @@ impl MeshWarpTarget {
     }
 
     /// A target for any single-colour-attachment render pass whose output is RGBA8 or RGBA32F
-    /// (the fragment-shader warp uses it too).
+    /// (the fragment-shader warp and its bench use it too).
     pub fn for_render_pass(
         gpu: &Gpu,
         render_pass: &RenderPass,

@@ -10,7 +10,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "warp_coords.glsl"
 
 // Solve every STRIDE-th pixel only (a coarse map for upsample_map.comp); 1: every pixel.
+// A coarse map has one ring of samples beyond its cells (cubic stencils): sample k sits at
+// pixel (k - 1) * STRIDE (model::warp::coarse_size).
 layout(constant_id = 11) const uint STRIDE = 1;
+const int RING = STRIDE > 1 ? 1 : 0;
 
 layout(set = 0, binding = 1, rg32f) uniform writeonly image2D map;
 
@@ -25,7 +28,7 @@ void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
     if (id.x >= int(pc.sizes.z) || id.y >= int(pc.sizes.w)) return;
     vec2 s;
-    bool ok = vkl_warp_source(vec2(id * int(STRIDE)), pc.ideal, pc.chromatic.x, s);
+    bool ok = vkl_warp_source(vec2((id - RING) * int(STRIDE)), pc.ideal, pc.chromatic.x, s);
     float nan = uintBitsToFloat(0x7fc00000u);
     imageStore(map, id, ok ? vec4(s, 0.0, 0.0) : vec4(nan, nan, 0.0, 0.0));
 }

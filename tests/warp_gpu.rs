@@ -8,7 +8,7 @@ use vklens::imaging::{Depth, Pixels, Raster};
 use vklens::io::reference::load_reference;
 use vklens::model::warp::WarpGeometry;
 use vklens::model::InverseMethod;
-use vklens::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
+use vklens::pass::warp::{run_warp, Coordinates, MapInterpolation, PixelFormat, WarpDesc};
 use vklens::pass::warp_raster::run_raster_warp;
 
 /// A test image with edges and smooth gradients in every channel.
@@ -208,13 +208,23 @@ fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
                 Coordinates::CoarseMap {
                     stride: 4,
                     refine: 0,
+                    interpolation: MapInterpolation::Bilinear,
                 },
                 3e-3,
             ),
             (
                 Coordinates::CoarseMap {
+                    stride: 8,
+                    refine: 0,
+                    interpolation: MapInterpolation::Cubic,
+                },
+                1e-3,
+            ),
+            (
+                Coordinates::CoarseMap {
                     stride: 16,
                     refine: 1,
+                    interpolation: MapInterpolation::Bilinear,
                 },
                 2e-3,
             ),
@@ -311,19 +321,29 @@ fn a_full_camera_per_channel_matches_the_reference() {
 fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
     use vklens::pass::warp::WarpPass;
     let ctx = common::validated_context();
-    for (name, expect_check) in [
+    let interpolations = [MapInterpolation::Bilinear, MapInterpolation::Cubic];
+    for ((name, expect_check), interpolation) in [
         ("prism_tilt", false),
         ("seed_fig2", false),
         ("rational_wide", true),
-    ] {
+    ]
+    .into_iter()
+    .flat_map(|case| interpolations.map(|i| (case, i)))
+    {
         let cam = common::reference_camera(name);
         let g = WarpGeometry::distort(cam, InverseMethod::Newton);
-        let estimate = g.coarse_interpolation_error(8);
+        let estimate = g.coarse_interpolation_error(8, interpolation);
+        if interpolation == MapInterpolation::Cubic && !expect_check {
+            // The cubic stencil's error is O(h⁴): far under the bilinear one at stride 8.
+            let bilinear = g.coarse_interpolation_error(8, MapInterpolation::Bilinear);
+            assert!(estimate.unwrap() < 0.1 * bilinear.unwrap(), "{name}");
+        }
         let desc = WarpDesc {
             geometry: g,
             coordinates: Coordinates::CoarseMap {
                 stride: 8,
                 refine: 0,
+                interpolation,
             },
             sampling: Sampling::Bilinear,
             format: PixelFormat::Rgba8,
@@ -332,10 +352,14 @@ fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
         };
         let pass = WarpPass::new(ctx.gpu(), desc).unwrap();
         println!(
-            "{name}: f64 interpolation estimate {estimate:?} px; per-pixel check {:?}",
+            "{name} {interpolation:?}: f64 interpolation estimate {estimate:?} px; per-pixel check {:?}",
             pass.coarse_map_checked()
         );
-        assert_eq!(pass.coarse_map_checked(), Some(expect_check), "{name}");
+        assert_eq!(
+            pass.coarse_map_checked(),
+            Some(expect_check),
+            "{name} {interpolation:?}"
+        );
     }
     common::assert_no_validation_messages(&ctx);
 }

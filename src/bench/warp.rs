@@ -20,7 +20,9 @@ use crate::model::warp::WarpGeometry;
 use crate::model::{Intrinsics, InverseMethod, OpenCvCamera};
 use crate::pass::copy::CopyPass;
 use crate::pass::mesh_warp::MeshWarpTarget;
-use crate::pass::warp::{read_maps, Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
+use crate::pass::warp::{
+    read_maps, Coordinates, MapInterpolation, PixelFormat, WarpDesc, WarpImages, WarpPass,
+};
 use crate::pass::warp_raster::RasterWarpPass;
 
 /// The sizes measured by default.
@@ -51,30 +53,25 @@ pub const BATCH: u32 = 20;
 /// Batches per measurement (the median is reported; the machine is noisy).
 pub const REPEATS: usize = 5;
 /// How full-frame inverse maps are built, measured for time and error.
-pub const MAP_BUILDS: [(&str, Coordinates); 4] = [
+pub const MAP_BUILDS: [(&str, Coordinates); 6] = [
     ("newton", Coordinates::Map),
-    (
-        "coarse8+bilinear",
-        Coordinates::CoarseMap {
-            stride: 8,
-            refine: 0,
-        },
-    ),
-    (
-        "coarse4+bilinear",
-        Coordinates::CoarseMap {
-            stride: 4,
-            refine: 0,
-        },
-    ),
+    ("coarse8+bilinear", coarse(8, 0, MapInterpolation::Bilinear)),
+    ("coarse4+bilinear", coarse(4, 0, MapInterpolation::Bilinear)),
+    ("coarse8+cubic", coarse(8, 0, MapInterpolation::Cubic)),
+    ("coarse16+cubic", coarse(16, 0, MapInterpolation::Cubic)),
     (
         "coarse16+bilinear+newton1",
-        Coordinates::CoarseMap {
-            stride: 16,
-            refine: 1,
-        },
+        coarse(16, 1, MapInterpolation::Bilinear),
     ),
 ];
+
+const fn coarse(stride: u32, refine: u32, interpolation: MapInterpolation) -> Coordinates {
+    Coordinates::CoarseMap {
+        stride,
+        refine,
+        interpolation,
+    }
+}
 
 /// Lateral colour used for the chromatic rows.
 pub const CHROMATIC: [f64; 3] = [1.003, 1.0, 0.997];

@@ -19,7 +19,8 @@ use crate::gpu::{
 };
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
-use crate::model::warp::{Direction, WarpGeometry};
+pub use crate::model::warp::MapInterpolation;
+use crate::model::warp::{coarse_cells, coarse_size, Direction, WarpGeometry};
 use crate::model::{InverseMethod, OpenCvCamera, Terms};
 
 /// How output pixels get their source coordinates.
@@ -30,9 +31,13 @@ pub enum Coordinates {
     /// Sample a map built once per camera (RG32F per channel) with the same code.
     Map,
     /// Sample a map built from a coarse one: every `stride`-th pixel solved exactly, the rest
-    /// interpolated bilinearly, then `refine` Newton steps (distort only). Next to a fold,
-    /// validity is conservative by up to one coarse cell (`Map` is exact there).
-    CoarseMap { stride: u32, refine: u32 },
+    /// interpolated (`interpolation`), then `refine` Newton steps (distort only). Next to a
+    /// fold, validity is conservative by up to one coarse cell (`Map` is exact there).
+    CoarseMap {
+        stride: u32,
+        refine: u32,
+        interpolation: MapInterpolation,
+    },
 }
 
 impl Coordinates {
@@ -169,7 +174,7 @@ impl WarpPass {
                 "object IDs (R32_UINT) and depth (R32_SFLOAT) are sampled nearest and without chromatic aberration".into(),
             ));
         }
-        if let Coordinates::CoarseMap { stride, refine } = desc.coordinates {
+        if let Coordinates::CoarseMap { stride, refine, .. } = desc.coordinates {
             if !(2..=64).contains(&stride) || refine > 8 || g.direction != Direction::Distort {
                 return Err(GpuError::Invalid(
                     "a coarse map needs the distort direction, a stride in 2..=64 and at most 8 refinement steps".into(),
@@ -283,9 +288,13 @@ impl WarpPass {
                 .u32(8, mode)
                 .u32(9, method)
                 .u32(10, iterations);
-            let (stride, refine) = match desc.coordinates {
-                Coordinates::CoarseMap { stride, refine } => (stride, refine),
-                _ => (1, 0),
+            let (stride, refine, interpolation) = match desc.coordinates {
+                Coordinates::CoarseMap {
+                    stride,
+                    refine,
+                    interpolation,
+                } => (stride, refine, interpolation),
+                _ => (1, 0, MapInterpolation::Bilinear),
             };
             let uniform = vk::DescriptorType::UNIFORM_BUFFER;
             map_pipelines.push(ComputePipeline::new(
@@ -299,7 +308,7 @@ impl WarpPass {
                 // The per-pixel forward check is compiled out when the host's f64 estimate says
                 // interpolation cannot reach the tolerance (and no fold is in view).
                 let check = g
-                    .coarse_interpolation_error(stride)
+                    .coarse_interpolation_error(stride, interpolation)
                     .is_none_or(|e| e > 0.5 * COARSE_MAX_RESIDUAL_PX as f64);
                 map_pipelines.push(ComputePipeline::new(
                     gpu,
@@ -309,7 +318,8 @@ impl WarpPass {
                     base.u32(11, stride)
                         .u32(12, refine)
                         .f32(13, COARSE_MAX_RESIDUAL_PX)
-                        .bool(14, check),
+                        .bool(14, check)
+                        .bool(15, interpolation == MapInterpolation::Cubic),
                 )?);
             }
             let steps_per_channel = if stride > 1 { 2 } else { 1 };
@@ -319,7 +329,8 @@ impl WarpPass {
                 (channels.len() * steps_per_channel) as u32,
             )?;
             let (ow, oh) = g.output_size;
-            let (cw, ch) = ((ow - 1) / stride + 2, (oh - 1) / stride + 2);
+            let (cw, ch) = coarse_size((ow, oh), stride);
+            let (cells_x, cells_y) = coarse_cells((ow, oh), stride);
             for &c in &channels {
                 let cam = Buffer::from_pod(
                     gpu,
@@ -365,7 +376,8 @@ impl WarpPass {
                         pipeline: 1,
                         set: up,
                         push: p,
-                        groups: (ow.div_ceil(8), oh.div_ceil(8)),
+                        // One invocation per coarse cell (glsl/upsample_map.comp).
+                        groups: (cells_x.div_ceil(8), cells_y.div_ceil(8)),
                         barrier_after: false,
                     });
                     coarse_maps.push(coarse);

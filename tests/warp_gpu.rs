@@ -318,6 +318,63 @@ fn a_full_camera_per_channel_matches_the_reference() {
 }
 
 #[test]
+fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
+    // One invocation per coarse cell writes its pixels: the cells cut by the right and bottom
+    // edges, the cells past a multiple of the workgroup size, and images smaller than one cell
+    // must all get every pixel, within the accuracy of the interpolation of the f64 model.
+    // Each map is of another camera (principal point moved by a third of a pixel), so that a
+    // pixel left unwritten cannot pass on what an earlier map left in reused memory.
+    use glam::DVec2;
+    use vklens::model::{Intrinsics, OpenCvCamera};
+    use vklens::pass::warp::read_maps;
+    let ctx = common::validated_context();
+    let mut variant = 0.0;
+    for (w, h) in [(1, 1), (17, 9), (33, 20), (70, 9)] {
+        for (stride, interpolation) in [
+            (4, MapInterpolation::Bilinear),
+            (8, MapInterpolation::Cubic),
+            (16, MapInterpolation::Cubic),
+        ] {
+            variant += 1.0;
+            // A mild lens, so that interpolation is accurate even across a whole tiny image.
+            let f = 2.0 * w.max(h) as f64 + 2.0;
+            let cam = OpenCvCamera::from_coeffs(
+                w,
+                h,
+                Intrinsics {
+                    fx: f,
+                    fy: f,
+                    cx: (w as f64 - 1.0) / 2.0 + variant / 3.0,
+                    cy: (h as f64 - 1.0) / 2.0,
+                },
+                &[-0.05, 0.01, 0.001, -0.001, 0.002],
+            )
+            .unwrap();
+            let g = WarpGeometry::distort(cam, InverseMethod::Newton);
+            let coords = Coordinates::CoarseMap {
+                stride,
+                refine: 0,
+                interpolation,
+            };
+            // The host's f64 estimate of this interpolation (at cell centres, where it peaks).
+            let estimate = g.coarse_interpolation_error(stride, interpolation).unwrap();
+            let coarse = &read_maps(&ctx, &g, coords).unwrap()[0];
+            assert_eq!(coarse.len(), (w * h) as usize);
+            for (i, c) in coarse.iter().enumerate() {
+                let p = DVec2::new((i as u32 % w) as f64, (i as u32 / w) as f64);
+                let exact = g.model_coordinate(p, 1).unwrap();
+                let d = (DVec2::new(c[0] as f64, c[1] as f64) - exact).length();
+                assert!(
+                    d <= 1.5 * estimate + 1e-3,
+                    "{w}×{h} {coords:?} pixel {p}: {d} px, estimate {estimate} px"
+                );
+            }
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
 fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
     use vklens::pass::warp::WarpPass;
     let ctx = common::validated_context();

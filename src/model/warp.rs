@@ -152,7 +152,6 @@ impl WarpGeometry {
         stride: u32,
         interpolation: MapInterpolation,
     ) -> Option<f64> {
-        let (w, h) = self.output_size;
         let channels: &[usize] = if self.is_chromatic() {
             &[0, 1, 2]
         } else {
@@ -175,25 +174,24 @@ impl WarpGeometry {
             let at = |i: u32, j: u32| grid[(j * cw + i) as usize];
             for j in 0..cells_y {
                 for i in 0..cells_x {
-                    // Cells cut by the image's right or bottom edge still cover pixels.
-                    debug_assert!(i * stride < w && j * stride < h);
                     let (a, b) = (at(i + 1, j + 1)?, at(i + 2, j + 1)?);
                     let (d, e) = (at(i + 1, j + 2)?, at(i + 2, j + 2)?);
-                    let stencil: Option<Vec<DVec2>> = match interpolation {
-                        MapInterpolation::Bilinear => None,
-                        MapInterpolation::Cubic => (0..4)
-                            .flat_map(|r| (0..4).map(move |q| (q, r)))
-                            .map(|(q, r)| at(i + q, j + r))
-                            .collect(),
+                    // The cubic stencil, row by row, weighted at the centre; None where its
+                    // ring has no source (the GPU falls back to bilinear there too).
+                    let cubic = || -> Option<DVec2> {
+                        let mut sum = DVec2::ZERO;
+                        for r in 0..4 {
+                            for q in 0..4 {
+                                sum +=
+                                    at(i + q, j + r)? * (centre[q as usize] * centre[r as usize]);
+                            }
+                        }
+                        Some(sum)
                     };
-                    let value = match stencil {
-                        Some(v) => (0..4)
-                            .map(|r| {
-                                let row: DVec2 = (0..4).map(|q| v[r * 4 + q] * centre[q]).sum();
-                                row * centre[r]
-                            })
-                            .sum(),
-                        None => (a + b + d + e) * 0.25,
+                    let bilinear = (a + b + d + e) * 0.25;
+                    let value = match interpolation {
+                        MapInterpolation::Bilinear => bilinear,
+                        MapInterpolation::Cubic => cubic().unwrap_or(bilinear),
                     };
                     let p = DVec2::new((i as f64 + 0.5) * s, (j as f64 + 0.5) * s);
                     let exact = self.model_coordinate(p, c)?;

@@ -3,7 +3,7 @@
 //! buffer and submission. It records three passes into one command buffer:
 //!
 //!   1. its own "render": a clear of the pinhole image to a colour, plus a brighter block;
-//!   2. vklens's warp: the pinhole image through the seed's Fig. 2 lens;
+//!   2. vklens's warp: the pinhole image through Lambers et al.'s Fig. 2 lens;
 //!   3. its own "present": a copy of the lens image to a host buffer;
 //!
 //! then writes `embed.png`. vklens creates no instance, device or queue and submits nothing.
@@ -251,7 +251,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .ok_or("size")?
                 .save("embed.png")?;
             println!(
-                "wrote embed.png: the engine's image through the seed's Fig. 2 lens ({})",
+                "wrote embed.png: the engine's image through Lambers et al.'s Fig. 2 lens ({})",
                 gpu.device_name()
             );
         }

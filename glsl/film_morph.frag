@@ -1,6 +1,6 @@
 #version 450
 // Adds one cell's weighted slice of the light field into the film (additive blending into a
-// float image: the accumulation buffer of seed 004 Sec. 3.5).
+// float image: the accumulation buffer of Heidrich et al. Sec. 3.5).
 
 layout(push_constant) uniform FilmPush {
     vec4 film_size;

@@ -7,7 +7,7 @@
 layout(push_constant) uniform FilmPush {
     // Film width, height (pixels), unused, unused.
     vec4 film_size;
-    // Which channels this draw adds to: seed 004 traced one wavelength for all three;
+    // Which channels this draw adds to: Heidrich et al. traced one wavelength for all three;
     // with chromatic aberration each channel has its own projections.
     vec4 channel_mask;
 } push;

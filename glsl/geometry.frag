@@ -1,5 +1,5 @@
 #version 450
-// The geometry path's outputs (seed 000 Table 1): colour, object ID (exact: flat, never
+// The geometry path's outputs (Lambers et al. Table 1): colour, object ID (exact: flat, never
 // blended), 2D flow and camera depth. Each is written only when its attachment exists
 // (specialization constants), so an unasked output costs nothing.
 //

@@ -1,5 +1,5 @@
 #version 450
-// The geometry path's vertex shader: seed 000 Alg. 1 in Vulkan's conventions.
+// The geometry path's vertex shader: Lambers et al. Alg. 1 in Vulkan's conventions.
 //
 // The Sec. 3.1 projection gives clip coordinates; NDC -> window coordinates (Vulkan's NDC y
 // already points down, like OpenCV's v) -> OpenCV pixel (window − 0.5: OpenCV puts pixel

@@ -1,5 +1,5 @@
 #version 450
-// The post-processing warp (seed 000 Sec. 3.3): every output pixel finds its source position —
+// The post-processing warp (Lambers et al. Sec. 3.3): every output pixel finds its source position —
 // analytically with the inverse (or forward) model, or from a precomputed map — and samples
 // the source image once per channel. With chromatic aberration on, R, G and B each have their
 // own coordinate; each channel is still interpolated exactly once.

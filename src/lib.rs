@@ -7,7 +7,7 @@
 //! * [`gpu`] — Vulkan plumbing: a [`gpu::Gpu`] built from the caller's device, queue and
 //!   allocator, the headless [`gpu::Context`] that tests and the CLI use, owned resources.
 //! * [`pass`] — GPU passes that record into a command buffer the caller owns.
-//! * [`lens`] — real lens systems (seed 004): prescriptions, exact tracing, the image-based
+//! * [`lens`] — real lens systems (Heidrich et al.): prescriptions, exact tracing, the image-based
 //!   model and its reference ray tracer. No Vulkan.
 //! * [`plan`] — scene files and the planner: the cheapest pipeline for what a scene asks.
 //! * [`bench`] — the accuracy-versus-time measurements behind `vklens bench`.

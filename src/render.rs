@@ -1,4 +1,4 @@
-//! A scene through a calibrated lens, by either of seed 000's two paths:
+//! A scene through a calibrated lens, by either of Lambers et al.'s two paths:
 //!
 //! * **vertex** (Sec. 3.2): Alg. 1 per vertex, triangle discard, optional tessellation; every
 //!   output exact for its data type (colour, IDs, flow, depth);
@@ -43,7 +43,7 @@ pub enum RenderPath {
     /// Alg. 1 with discard tolerance δ.
     Vertex { delta: f64 },
     /// Pinhole render of the overscanned frustum with `density` source pixels per output
-    /// pixel (seed 000 Sec. 3.3: "an enlarged frustum and increased resolution"), then the
+    /// pixel (Lambers et al. Sec. 3.3: "an enlarged frustum and increased resolution"), then the
     /// compute warp with `method`. Bilinear resampling blurs and shifts edges by up to a few
     /// hundredths of a source pixel; a denser source shrinks that in output pixels.
     Warp { method: InverseMethod, density: f64 },
@@ -715,7 +715,7 @@ fn render_warp_path(
     let o = request.outputs;
     if o.flow {
         return Err(invalid(
-            "flow needs the vertex path: its vectors live in the pinhole image and a warp cannot carry them (seed 000 Table 1); use --path vertex",
+            "flow needs the vertex path: its vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1); use --path vertex",
         ));
     }
     let cam = &request.camera;

@@ -6,13 +6,13 @@ well the lens comes back.
 
 Reads DIR/poses.json (board size, the true camera) and DIR/view_NN.png; runs
 cv2.findChessboardCorners, cv2.cornerSubPix and cv2.calibrateCamera estimating fx fy cx cy
-k1 k2 p1 p2 (and k3 when the true camera has one; otherwise CALIB_FIX_K3 — the seed's
+k1 k2 p1 p2 (and k3 when the true camera has one; otherwise CALIB_FIX_K3 — Lambers et al.'s
 four-coefficient model). Reports, for fx fy cx cy k1 k2 p1 p2, the error in percent:
 
   * fx fy cx cy: relative to the true value;
   * distortion coefficients: relative to max(|true|, FLOOR) — for a coefficient that is zero
     (or smaller than FLOOR) a relative error means nothing, so the error is absolute, in units
-    of FLOOR (default 0.01, the size of the seed's smallest non-zero coefficient, p2 = -0.01).
+    of FLOOR (default 0.01, the size of Lambers et al.'s smallest non-zero coefficient, p2 = -0.01).
 
 Exit 0 when every error is below --limit percent (default 0.5), 1 otherwise, 2 on bad input.
 """

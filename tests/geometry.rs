@@ -1,4 +1,4 @@
-//! The geometry path (seed 000 Sec. 3.2) on lavapipe, validated, against exact oracles:
+//! The geometry path (Lambers et al. Sec. 3.2) on lavapipe, validated, against exact oracles:
 //! OpenCV's projectPoints (the shared reference) and a CPU ray cast through the f64 model.
 
 mod common;

@@ -1,4 +1,4 @@
-//! Real lens systems (seed 004): the shipped prescriptions against their published first-order
+//! Real lens systems (Heidrich et al.): the shipped prescriptions against their published first-order
 //! figures, and `vklens lens info`.
 
 use std::process::Command;
@@ -212,7 +212,7 @@ mod image_model {
         rays
     }
 
-    /// Σ (1 − c²): what the Newton fit minimizes (seed 004 Eq. 1).
+    /// Σ (1 − c²): what the Newton fit minimizes (Heidrich et al. Eq. 1).
     /// (From |d × f|², not as 1 − c², which has no digits left at a 1/64 cell's angles.)
     fn sin2_sum(rays: &[PlaneRay], e: DVec3) -> f64 {
         rays.iter()
@@ -286,7 +286,7 @@ mod image_model {
                     (newton_angle / ls_angle - 1.0).abs() < 0.1,
                     "cell {cell}: Newton {newton_angle}° LS {ls_angle}°"
                 );
-                // From the seed's start (the lens centre) the iteration alone lands on the
+                // From Heidrich et al.'s start (the lens centre) the iteration alone lands on the
                 // same optimum. For 1/64 of the film the plain Newton step from there is
                 // useless (the Hessian is indefinite so far from a tight bundle's centre) and
                 // the damped step has to carry it.

@@ -5,7 +5,7 @@
     interpolation rounding: OpenCV quantizes map coordinates to 1/32 px (INTER_BITS = 5) and
     weights to 15 bits, so on a smooth image the two agree to a grey level (bound: mean 0.05,
     max 1 level; measured: max 1 level on every camera).
-(b) `vklens distort` followed by OpenCV's undistortion returns the pinhole image (the seed's
+(b) `vklens distort` followed by OpenCV's undistortion returns the pinhole image (Lambers et al.'s
     Fig. 2 round trip), with a stated PSNR inside the valid region (bound 40 dB; measured
     42.8-43.9 dB: two bilinear resamplings of an 8-bit image).
 
@@ -74,7 +74,7 @@ for name in ["seed_fig2", "seed_fig1_barrel", "webcam_plumb_bob", "prism_tilt", 
     if mean > 0.05 or worst > 1:
         failures.append(f"(a) {name}: mean {mean:.5f} / max {worst} levels exceed 0.05 / 1")
 
-print("(b) vklens distort, then OpenCV undistortion: the seed's Fig. 2 round trip")
+print("(b) vklens distort, then OpenCV undistortion: Lambers et al.'s Fig. 2 round trip")
 for name, bound in [("seed_fig2", 40.0), ("seed_fig1_barrel", 40.0), ("webcam_plumb_bob", 40.0)]:
     w, h, K, D, cam = camera(name)
     pinhole = smooth_image(w, h)

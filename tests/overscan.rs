@@ -1,5 +1,5 @@
 //! Overscan: the computed source covers every valid distorted pixel — for barrel, pincushion,
-//! mustache and folding lenses — where the seed's four-corner rule does not.
+//! mustache and folding lenses — where Lambers et al.'s four-corner rule does not.
 
 use glam::DVec2;
 use vklens::io::reference::load_reference;

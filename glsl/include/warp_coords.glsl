@@ -6,7 +6,7 @@
 // MODE 1 (undistort / precorrect): the output is a pinhole image with intrinsics `ideal`; the
 //   source is the lens image of `vkl_cam`. Forward model per pixel (initUndistortRectifyMap).
 //
-// Lateral chromatic aberration (seed 002 Sec. III; Lensfun's linear TCA): channel c's image is
+// Lateral chromatic aberration (the Durham radial-correction paper Sec. III; Lensfun's linear TCA): channel c's image is
 // magnified by `scale` about the principal point, in distorted normalized coordinates.
 
 #ifndef VKL_WARP_COORDS_GLSL

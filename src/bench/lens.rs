@@ -1,9 +1,9 @@
-//! `vklens bench lens`: what the image-based lens model's accuracy costs in time (seed 004
-//! Sec. 4's comparison, made systematic). For seed 004's pair of lenses (the achromatic
+//! `vklens bench lens`: what the image-based lens model's accuracy costs in time (Heidrich et al.
+//! Sec. 4's comparison, made systematic). For Heidrich et al.'s pair of lenses (the achromatic
 //! doublet and the bi-convex singlet) and the wide-angle lens, on the boxes scene focused on
 //! its centre:
 //!
-//! * **samples** — lens samples 1, 4, 10, 32 at the seed's 0.05° threshold;
+//! * **samples** — lens samples 1, 4, 10, 32 at Heidrich et al.'s 0.05° threshold;
 //! * **threshold** — largest angle error 0.5°, 0.05°, 0.01°, 0.001° and 0.0002° (one
 //!   projection per sample already holds the shipped lenses to about 0.001° — 1 % of a
 //!   pixel — so only the last two split cells);
@@ -37,7 +37,7 @@ pub const GRIDS: [u32; 3] = [5, 10, 20];
 /// Lens samples of the converged reference (the error of few samples, not of the model).
 pub const CONVERGED_SAMPLES: u32 = 128;
 
-/// Film: 24 × 24 mm at `pixels` × `pixels` (seed 004 timed 256 × 256).
+/// Film: 24 × 24 mm at `pixels` × `pixels` (Heidrich et al. timed 256 × 256).
 pub const FILM_MM: f64 = 24.0;
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -1,4 +1,4 @@
-//! `vklens bench vertex`: the geometry path's cost and error (seed 000 Sec. 3.4's
+//! `vklens bench vertex`: the geometry path's cost and error (Lambers et al. Sec. 3.4's
 //! "computational complexity" and first limitation; a seed-002 Table I analogue):
 //!
 //! * **paths** — textured grids of 8², 128² and 512² quads at 800×600 and 1920×1080: Alg. 1
@@ -8,7 +8,7 @@
 //! * **tessellation** — what splitting edges to L px costs in triangles and time, and the
 //!   straight-line error it leaves (the largest distance between a rendered edge, straight
 //!   between its moved vertices, and the true curved image of that edge);
-//! * **mesh_warp** — seed 002's n×n grid warp (n = 8 … 512): its coordinate error against
+//! * **mesh_warp** — the Durham radial-correction paper's n×n grid warp (n = 8 … 512): its coordinate error against
 //!   the f64 model and its time, beside the compute warp on the same image.
 //!
 //! Times are GPU work per frame recorded back to back (median of batches, see
@@ -407,7 +407,7 @@ pub fn table(rows: &[Value]) -> String {
         ));
     }
     out.push_str(
-        "\nMesh warp (seed 002 Sec. II-B) beside the compute warp\n\n\
+        "\nMesh warp (the Durham radial-correction paper Sec. II-B) beside the compute warp\n\n\
          | size | warp | ms | max coord err px | mean coord err px |\n|---|---|---:|---:|---:|\n",
     );
     for r in rows {

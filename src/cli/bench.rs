@@ -126,7 +126,7 @@ pub fn vertex(args: VertexArgs) -> Result<(), CliError> {
 
 #[derive(Args, Debug)]
 pub struct LensArgs {
-    /// Film pixels per side (24 × 24 mm film; seed 004 timed 256 × 256).
+    /// Film pixels per side (24 × 24 mm film; Heidrich et al. timed 256 × 256).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
     pixels: u32,
     /// Folder with the lens files (default: ./lenses, else the source tree's).

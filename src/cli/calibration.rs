@@ -1,4 +1,4 @@
-//! `vklens calibration-set`: seed 000 Sec. 4's proof set — checkerboard views through the
+//! `vklens calibration-set`: Lambers et al. Sec. 4's proof set — checkerboard views through the
 //! lens, by either path, for OpenCV to calibrate from (`tests/calibrate.py`).
 
 use std::path::PathBuf;
@@ -14,7 +14,7 @@ use crate::scene::builtin::{self, parse_board_size, Board};
 use crate::scene::calibration::board_poses;
 
 #[derive(Args, Debug)]
-#[command(after_help = "Example (the seed's proof, for one camera and path):
+#[command(after_help = "Example (Lambers et al.'s proof, for one camera and path):
   vklens calibration-set --camera cam.yml --out set/ --path vertex
   python3 tests/calibrate.py set/      # OpenCV calibrates; prints each parameter's error and σ")]
 pub struct CalibrationSetArgs {
@@ -24,7 +24,7 @@ pub struct CalibrationSetArgs {
     /// Folder for view_NN.png and poses.json (created if missing).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Number of views (the seed used 17).
+    /// Number of views (Lambers et al. used 17).
     #[arg(long, default_value_t = 17, value_parser = clap::value_parser!(u32).range(3..=100))]
     count: u32,
     #[arg(long, value_enum, default_value_t = PathArg::Vertex)]

@@ -9,7 +9,7 @@ use crate::model::{Intrinsics, OpenCvCamera};
 
 #[derive(Args, Debug)]
 pub struct DemoArgs {
-    /// Camera file; default: the seed paper's Fig. 2 camera (800×600, fx = fy = 400,
+    /// Camera file; default: Lambers et al.'s Fig. 2 camera (800×600, fx = fy = 400,
     /// cx = 399.5, cy = 299.5, k1 = -0.05, k2 = 0.01, p1 = 0.03, p2 = -0.01).
     #[arg(long, value_name = "CAM")]
     camera: Option<PathBuf>,
@@ -34,7 +34,7 @@ pub fn seed_fig2() -> OpenCvCamera {
         },
         &[-0.05, 0.01, 0.03, -0.01],
     )
-    .expect("the seed's camera is valid")
+    .expect("Lambers et al.'s camera is valid")
 }
 
 pub fn run(args: DemoArgs) -> Result<(), CliError> {

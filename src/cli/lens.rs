@@ -1,4 +1,4 @@
-//! `vklens lens ...`: real lens systems (seed 004).
+//! `vklens lens ...`: real lens systems (Heidrich et al.).
 
 use std::path::PathBuf;
 
@@ -18,7 +18,7 @@ pub enum LensCommand {
     /// the paraxial focal plane) for a sensor and pixel count, and write a camera file every
     /// other command accepts. The fit residual goes to stderr.
     FitOpencv(FitArgs),
-    /// Render a scene through the lens with seed 004's image-based model on the GPU (or,
+    /// Render a scene through the lens with Heidrich et al.'s image-based model on the GPU (or,
     /// with --reference, with the CPU distribution ray tracer it approximates): depth of
     /// field from lens samples, vignetting, distortion and the other aberrations of the real
     /// glass, chromatic aberration per channel with --chromatic.
@@ -56,7 +56,7 @@ pub struct RenderArgs {
           value_parser = clap::value_parser!(u32).range(1..=1024))]
     samples: u32,
     /// Subdivide a film cell until its projection's largest angle error is below this
-    /// (degrees; seed 004: 0.05).
+    /// (degrees; Heidrich et al.: 0.05).
     #[arg(long, value_name = "DEG", default_value_t = 0.05)]
     max_angle: f64,
     /// Render with the CPU distribution ray tracer (same lens samples) instead of the GPU.
@@ -68,7 +68,7 @@ pub struct RenderArgs {
     /// Film size in pixels, WxH (square pixels).
     #[arg(long, value_name = "WxH", default_value = "480x320", value_parser = parse_pair_u32)]
     pixels: (u32, u32),
-    /// Film grid per cell, N×N quads (seed 004: 10).
+    /// Film grid per cell, N×N quads (Heidrich et al.: 10).
     #[arg(long, value_name = "N", default_value_t = 10,
           value_parser = clap::value_parser!(u32).range(1..=256))]
     grid: u32,

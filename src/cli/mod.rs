@@ -61,7 +61,7 @@ in f32 or f64, and says explicitly where a lens folds over and no inverse can be
 Camera files (CAM): vklens JSON {\"width\", \"height\", \"fx\", \"fy\", \"cx\", \"cy\", \"dist_coeffs\": [...]},
 OpenCV FileStorage YAML/XML/JSON as calibrateCamera writes it (camera_matrix,
 distortion_coefficients, image_width, image_height; %YAML:1.0 headers welcome), ROS camera_info,
-or a Brown headset lens {\"model\": \"brown\", \"width\", \"height\", \"c1\", \"c2\"} (seed 002).
+or a Brown headset lens {\"model\": \"brown\", \"width\", \"height\", \"c1\", \"c2\"} (the Durham radial-correction paper).
 
 Environment: VKLENS_DEVICE picks the Vulkan device (cpu, gpu, an index, or part of its name);
 VKLENS_VALIDATION=1 turns the Khronos validation layer on (any message fails the command).
@@ -98,25 +98,25 @@ enum Command {
     /// Render a procedural grid through a lens to a PNG (no input image needed).
     Demo(demo::DemoArgs),
     /// Simulate the lens on a pinhole image: every output pixel samples the input where the
-    /// inverse model says its light came from (seed 000 Sec. 3.3).
+    /// inverse model says its light came from (Lambers et al. Sec. 3.3).
     Distort(warp::WarpArgs),
     /// Rectify an image taken through the lens into a pinhole image (forward model per pixel,
     /// as OpenCV's initUndistortRectifyMap + remap).
     Undistort(warp::WarpArgs),
-    /// Pre-distort an image for a headset lens (seed 002): the screen shows what the lens will
+    /// Pre-distort an image for a headset lens (the Durham radial-correction paper): the screen shows what the lens will
     /// undo; with --chromatic, lateral colour is pre-corrected per channel.
     Precorrect(warp::WarpArgs),
     /// Print the pinhole source camera (JSON) that covers every valid distorted pixel.
     Overscan(warp::OverscanArgs),
-    /// Render a scene through the lens (seed 000): per vertex with Alg. 1 (colour, IDs, flow,
+    /// Render a scene through the lens (Lambers et al.): per vertex with Alg. 1 (colour, IDs, flow,
     /// depth, all exact) or as a pinhole render plus the compute warp. With a scene file
     /// (--scene S.toml --out DIR) the planner picks the cheapest pipeline for what it asks.
     Render(render::RenderArgs),
-    /// Render checkerboard views through the lens in varied poses (seed 000 Sec. 4), for
+    /// Render checkerboard views through the lens in varied poses (Lambers et al. Sec. 4), for
     /// OpenCV to calibrate from: DIR/view_NN.png and DIR/poses.json. tests/calibrate.py
     /// runs the calibration and reports how well the parameters come back.
     CalibrationSet(calibration::CalibrationSetArgs),
-    /// Real lens systems (seed 004): lens files of spherical surfaces and glasses.
+    /// Real lens systems (Heidrich et al.): lens files of spherical surfaces and glasses.
     #[command(subcommand)]
     Lens(lens::LensCommand),
 }
@@ -143,7 +143,7 @@ enum PointsCommand {
         /// Camera file (JSON, OpenCV FileStorage YAML/XML/JSON, or ROS camera_info YAML).
         #[arg(long, value_name = "CAM")]
         camera: PathBuf,
-        /// newton: exact (Newton, analytic Jacobian, all 14 coefficients). heikkila: seed 000
+        /// newton: exact (Newton, analytic Jacobian, all 14 coefficients). heikkila: Lambers et al.
         /// Eq. 2 (k1 k2 p1 p2 only, approximate). fixed-point:N: OpenCV's undistortPoints
         /// iteration with N iterations (OpenCV's default is 5).
         #[arg(long, default_value = "newton", value_parser = parse_method)]
@@ -167,7 +167,7 @@ enum BenchCommand {
     /// copy pass on the same driver, and the cost of building a full-frame inverse map.
     Warp(bench::WarpArgs),
     /// The geometry path (Alg. 1) beside a plain pinhole render and pinhole + compute warp on
-    /// grids of growing size, what tessellation costs and leaves, and seed 002's mesh warp.
+    /// grids of growing size, what tessellation costs and leaves, and the Durham radial-correction paper's mesh warp.
     Vertex(bench::VertexArgs),
     /// Seed 004's image-based lens model: lens samples, angle threshold and film grid
     /// against PSNR versus the CPU reference ray tracer, and the speed ratio between them.

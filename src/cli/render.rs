@@ -11,7 +11,7 @@ use crate::pass::geometry::{ColorFormat, Outputs, Rendered, DEFAULT_DELTA};
 use crate::render::{render_scene, RenderPath, RenderRequest};
 use crate::scene::{builtin, Pose, Scene};
 
-/// Which of seed 000's two paths renders the lens.
+/// Which of Lambers et al.'s two paths renders the lens.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum PathArg {
     /// Alg. 1 per vertex, triangles outside the frustum ± (δ + D) dropped: exact colour, IDs,
@@ -70,7 +70,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = PathArg::Vertex)]
     path: PathArg,
     /// Split mesh edges longer than L pixels (pinhole image) before the vertex path: Alg. 1
-    /// moves vertices only, so straight edges between them stay straight (seed 000's first
+    /// moves vertices only, so straight edges between them stay straight (Lambers et al.'s first
     /// limitation). `vklens bench vertex` shows what L costs in error and time.
     #[arg(long, value_name = "L")]
     tessellate: Option<f64>,
@@ -200,7 +200,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     }
     if args.flow.is_some() && args.path == PathArg::Warp {
         return Err(CliError::input(
-            "--flow needs --path vertex: flow vectors live in the pinhole image and a warp cannot carry them (seed 000 Table 1)",
+            "--flow needs --path vertex: flow vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1)",
         ));
     }
     if let Some(l) = args.tessellate {

@@ -33,7 +33,7 @@ impl RenderPass {
 
     /// One colour attachment whose contents are kept (load, not clear) and stay in
     /// `COLOR_ATTACHMENT_OPTIMAL` before and after: for draws that add into an image over
-    /// many render passes (seed 004's accumulation buffer).
+    /// many render passes (Heidrich et al.'s accumulation buffer).
     pub fn accumulating(gpu: &Gpu, format: vk::Format) -> Result<Self> {
         Self::build(
             gpu,

@@ -22,20 +22,20 @@ pub const COPY_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/copy.comp
 /// `glsl/upsample_map.comp`: a full-resolution map from a coarse one (+ Newton refinement).
 pub const UPSAMPLE_MAP_COMP: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/upsample_map.comp.spv"));
-/// `glsl/geometry.vert`: seed 000 Alg. 1 (or a pinhole projection) per vertex.
+/// `glsl/geometry.vert`: Lambers et al. Alg. 1 (or a pinhole projection) per vertex.
 pub const GEOMETRY_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.spv"));
 /// `glsl/geometry.vert` without the discard data: the pinhole render (no geometry shader).
 pub const GEOMETRY_VERT_PINHOLE: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pinhole.spv"));
-/// `glsl/geometry.geom`: seed 000 Sec. 3.2's triangle discard.
+/// `glsl/geometry.geom`: Lambers et al. Sec. 3.2's triangle discard.
 pub const GEOMETRY_GEOM: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.geom.spv"));
 /// `glsl/geometry.frag`: colour, object ID, flow and depth outputs.
 pub const GEOMETRY_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.frag.spv"));
-/// `glsl/mesh_warp.vert`: seed 002's mesh-based warp (grid vertices with source coordinates).
+/// `glsl/mesh_warp.vert`: the Durham radial-correction paper's mesh-based warp (grid vertices with source coordinates).
 pub const MESH_WARP_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mesh_warp.vert.spv"));
 /// `glsl/mesh_warp.frag`: samples the source (or writes the interpolated coordinate).
 pub const MESH_WARP_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/mesh_warp.frag.spv"));
-/// `glsl/film_morph.vert`: seed 004's morph of a cell's perspective image onto its film grid.
+/// `glsl/film_morph.vert`: Heidrich et al.'s morph of a cell's perspective image onto its film grid.
 pub const FILM_MORPH_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/film_morph.vert.spv"));
 /// `glsl/film_morph.frag`: the weighted, additive accumulation into the float film.
 pub const FILM_MORPH_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/film_morph.frag.spv"));

@@ -8,7 +8,7 @@
 //!   `image_height`.
 //! * ROS `camera_info` YAML (`plumb_bob`, `rational_polynomial`).
 //!
-//! * A Brown radial lens (seed 002): `{"model": "brown", "width", "height", "c1", "c2"}`.
+//! * A Brown radial lens (the Durham radial-correction paper): `{"model": "brown", "width", "height", "c1", "c2"}`.
 //!
 //! Every format is first turned into a JSON tree, then read by one function, so every format
 //! gets the same checks and the same error messages (file, field, value).

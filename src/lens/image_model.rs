@@ -1,4 +1,4 @@
-//! The image-based lens model of seed 004 Sec. 3 (Heidrich et al.), pure f64 CPU work done
+//! The image-based lens model of Heidrich et al. Sec. 3, pure f64 CPU work done
 //! once per lens setting (focus, f-stop, wavelength):
 //!
 //! - sample points `p_i` on the image-side (rear) lens surface, over the part of it the axial
@@ -7,7 +7,7 @@
 //!   (Sec. 3.1);
 //! - the virtual centre of projection that minimizes the *angle* between traced and
 //!   projected rays, by Newton iteration on Σ c² (Sec. 3.3, Eq. 1), and the least-squares
-//!   *distance* COP the seed rejects, kept for comparison;
+//!   *distance* COP Heidrich et al. reject, kept for comparison;
 //! - quad-tree refinement of the film grid until the largest angle error is under a threshold
 //!   (Sec. 3.2);
 //! - vignetting: border grid points whose rays are blocked move towards the film centre by
@@ -339,7 +339,7 @@ pub fn max_angle_deg(rays: &[PlaneRay], cop: DVec3) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Σ sin²θ = Σ (1 − c²) — seed 004 Eq. 1 turned into a minimization — with its gradient and
+/// Σ sin²θ = Σ (1 − c²) — Heidrich et al. Eq. 1 turned into a minimization — with its gradient and
 /// Hessian in `e`. The sum is taken from |d × f|² rather than as 1 − c², which keeps its
 /// digits when the angles are tiny: at 1e-5° a ray's 1 − c² is 3e-14, below what a sum of
 /// c² ≈ 121 resolves, and a step could no longer be told better or worse.
@@ -366,7 +366,7 @@ fn sin2_terms(rays: &[PlaneRay], e: DVec3) -> (f64, DVec3, DMat3) {
 }
 
 /// Seed 004 Sec. 3.3: the COP that maximizes Σ c² — the cosine of the angle between each
-/// traced ray and the projected one. Newton iteration as the seed's, from `e0` or from the
+/// traced ray and the projected one. Newton iteration as Heidrich et al.'s, from `e0` or from the
 /// least-squares-distance COP, whichever is better (for a bundle of nearly parallel rays, a
 /// start far away can sit where the objective is not concave at all). Returns the COP and its
 /// largest angle error (°).
@@ -418,7 +418,7 @@ pub fn fit_cop_from(rays: &[PlaneRay], e0: DVec3) -> (DVec3, f64) {
     (e, max_angle_deg(rays, e))
 }
 
-/// The COP the seed rejects (its ref. [7]): the point nearest to all rays in the
+/// The COP Heidrich et al. reject (its ref. [7]): the point nearest to all rays in the
 /// least-squares sense, Σ (I − d dᵀ)(e − o) = 0, with `o` the rays' plane points.
 pub fn least_squares_cop(rays: &[PlaneRay]) -> Option<DVec3> {
     let mut m = DMat3::ZERO;
@@ -445,7 +445,7 @@ pub const RGB_CHANNELS: [[f32; 4]; 3] = [
 ];
 
 /// The models a frame needs: one at `options.lambda_um` for all channels, or — with
-/// `chromatic` — one per channel at [`RGB_WAVELENGTHS`], each with its channel mask (seed 004
+/// `chromatic` — one per channel at [`RGB_WAVELENGTHS`], each with its channel mask (Heidrich et al.
 /// could not do this on its hardware; each channel gets its own projections).
 pub fn channel_models(
     optics: &Optics,
@@ -560,7 +560,7 @@ impl ImageModel {
             .fold(0.0, f64::max)
     }
 
-    /// Builds the model (the preprocessing of seed 004 Sec. 3.5).
+    /// Builds the model (the preprocessing of Heidrich et al. Sec. 3.5).
     pub fn build(optics: &Optics, options: &ModelOptions) -> Result<Self, String> {
         if options.grid == 0 || options.grid > 256 {
             return Err(format!("grid {} must be 1..256", options.grid));

@@ -1,10 +1,10 @@
-//! Real lens systems (seed 004, Heidrich et al.): prescriptions of spherical surfaces and
+//! Real lens systems (Heidrich et al.): prescriptions of spherical surfaces and
 //! glasses, an exact sequential ray tracer, and first-order analysis — pure f64, no Vulkan.
 //!
 //! Built so far: the lens-file format ([`prescription`]), paraxial analysis ([`paraxial`]:
 //! focal lengths, principal planes, pupils, f-number, focusing), the exact tracer
 //! ([`trace`]), the distortion curve from chief rays ([`distortion_curve`]) and the OpenCV
-//! model fitted to a traced lens ([`fit`]), and seed 004's image-based model
+//! model fitted to a traced lens ([`fit`]), and Heidrich et al.'s image-based model
 //! ([`image_model`]: virtual centres of projection, quad-tree, vignetting, radiometric
 //! weights) that the GPU renderer draws.
 

@@ -200,7 +200,7 @@ impl Prescription {
     /// The same lens seen from the image side: surfaces in reverse order, radii negated,
     /// each medium moved to the other side of its surface. A ray traced through it from the
     /// film, in the mirrored coordinate `z' = rear vertex z − z`, is the ray a film point
-    /// sends out through the lens (seed 004 Sec. 3.1 traces from the film this way).
+    /// sends out through the lens (Heidrich et al. Sec. 3.1 traces from the film this way).
     pub fn reversed(&self) -> Prescription {
         let n = self.surfaces.len();
         let medium_before = |i: usize| -> (f64, Option<f64>) {

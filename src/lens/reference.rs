@@ -1,5 +1,5 @@
 //! The ground truth for the image-based model: distribution ray tracing through the same
-//! prescription and the same scene (seed 004 Sec. 4 compares against exactly this). Every film
+//! prescription and the same scene (Heidrich et al. Sec. 4 compares against exactly this). Every film
 //! pixel centre sends one ray through each lens sample point; each ray is traced exactly
 //! through the lens, cast into the scene, shaded as the rasterizer shades, and weighted with
 //! the same radiometric term `W_i(x')` (Eq. 3). Each sample's ray starts at its own place in

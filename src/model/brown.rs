@@ -1,6 +1,6 @@
 //! Seed 002's Brown radial model for headset lenses.
 //!
-//! Coordinates are normalized per axis to [-1, 1] over the image (seed 002 Sec. II-A:
+//! Coordinates are normalized per axis to [-1, 1] over the image (the Durham radial-correction paper Sec. II-A:
 //! `p_norm = 2 p_uv − 1`), with OpenCV's pixel-centre convention: pixel centre `u` has
 //! `uv = (u + 0.5) / w`. Forward (Eq. 1) scales a point radially:
 //! `r_d = r_u + c1 r_u³ + c2 r_u⁵`, i.e. `p_d = p_u (1 + c1 r_u² + c2 r_u⁴)`.
@@ -52,7 +52,7 @@ impl BrownRadial {
 
     /// The same lens as an OpenCV camera: per-axis [-1, 1] normalisation is OpenCV's with
     /// `fx = w/2, fy = h/2, cx = (w-1)/2, cy = (h-1)/2`, and Eq. 1 is `k1 = c1, k2 = c2`.
-    /// This is how the GPU warp runs the Brown model (seed 002 pre-correction).
+    /// This is how the GPU warp runs the Brown model (the Durham radial-correction paper pre-correction).
     pub fn to_opencv(&self) -> Result<super::OpenCvCamera, ModelError> {
         let (w, h) = (self.width as f64, self.height as f64);
         super::OpenCvCamera::from_coeffs(
@@ -106,7 +106,7 @@ impl BrownRadial {
         )
     }
 
-    /// Eq. 2 + Eq. 3: the seed's closed-form approximate inverse.
+    /// Eq. 2 + Eq. 3: the Durham paper's closed-form approximate inverse.
     pub fn approx_inverse_normalized(&self, d: DVec2) -> Option<DVec2> {
         let (c1, c2) = (self.c1, self.c2);
         let s = d.length_squared();

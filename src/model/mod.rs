@@ -9,9 +9,9 @@
 //!
 //! # Layout (after COLMAP's `sensor/models.h`)
 //!
-//! * [`opencv`] — the OpenCV "standard" model with all 14 coefficients (seed 000, Eq. 1, and
+//! * [`opencv`] — the OpenCV "standard" model with all 14 coefficients (Lambers et al., Eq. 1, and
 //!   OpenCV's own `projectPoints`), its analytic Jacobian and three inverse methods.
-//! * [`brown`] — seed 002's Brown radial model for headset lenses (Eq. 1, Eq. 2).
+//! * [`brown`] — the Durham radial-correction paper's Brown radial model for headset lenses (Eq. 1, Eq. 2).
 //! * [`domain`] — the valid (invertible) domain of a distortion, computed once per camera.
 //! * [`projection`] — the Sec. 3.1 frustum as a Vulkan projection matrix.
 //! * [`solve`] — the safeguarded 1D Newton both models' inverses start from.
@@ -71,8 +71,8 @@ pub enum InverseMethod {
     /// Newton's method with the analytic Jacobian on every coefficient; converges to the
     /// machine precision of f64 inside the valid domain.
     Newton,
-    /// The closed-form Taylor approximation of seed 000 Eq. 2 (Heikkilä), k1 k2 p1 p2 only;
-    /// for the Brown model, seed 002 Eq. 2 (Mallon & Whelan).
+    /// The closed-form Taylor approximation of Lambers et al. Eq. 2 (Heikkilä), k1 k2 p1 p2 only;
+    /// for the Brown model, the Durham radial-correction paper Eq. 2 (Mallon & Whelan).
     Heikkila,
     /// OpenCV's `undistortPoints` fixed-point iteration with this many iterations
     /// (OpenCV's default criteria are 5).

@@ -1,6 +1,6 @@
 //! The OpenCV "standard" camera model with all 14 distortion coefficients.
 //!
-//! Forward model, exactly as `cv2.projectPoints` computes it (seed 000 Eq. 1 extended to
+//! Forward model, exactly as `cv2.projectPoints` computes it (Lambers et al. Eq. 1 extended to
 //! OpenCV's full model). For an ideal normalized point x = (x, y) = (X/Z, Y/Z), s = r² = x² + y²:
 //!
 //! ```text

@@ -1,4 +1,4 @@
-//! Overscan (seed 000 Sec. 3.3's unfilled areas): the pinhole camera a post-processing warp
+//! Overscan (Lambers et al. Sec. 3.3's unfilled areas): the pinhole camera a post-processing warp
 //! needs as its source so that *every* valid distorted pixel has something to sample.
 //!
 //! The seed suggests undistorting the four image corners. That is not enough: for barrel,

@@ -3,7 +3,7 @@
 //! With OpenCV's pixel-centre convention the image spans `u ∈ [-0.5, w − 0.5]`, so at unit
 //! depth the frustum's side planes are
 //! `left = −(cx + 0.5)/fx`, `right = w/fx + left`, `top = −(cy + 0.5)/fy`, `bottom = h/fy + top`
-//! — exactly the seed's l, r, b, t (the seed's y axis points up, ours, like OpenCV's and
+//! — exactly Lambers et al.'s l, r, b, t (their y axis points up, ours, like OpenCV's and
 //! Vulkan's, points down, so its "b" is our "top").
 //!
 //! The matrix takes points in the OpenCV camera frame (x right, y down, z forward) to Vulkan

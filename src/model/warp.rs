@@ -11,7 +11,7 @@ use super::{Intrinsics, InverseMethod, ModelError, OpenCvCamera};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Direction {
     /// Simulate the lens: the source is a pinhole image, the output the lens image
-    /// (inverse model per output pixel; seed 000 Sec. 3.3).
+    /// (inverse model per output pixel; Lambers et al. Sec. 3.3).
     Distort,
     /// Rectify a lens image: the source is the lens image, the output a pinhole image (forward
     /// model per output pixel, like OpenCV's initUndistortRectifyMap + remap). Seed 002's
@@ -33,7 +33,7 @@ pub struct WarpGeometry {
     /// Inverse method (distort only).
     pub method: InverseMethod,
     /// Lateral chromatic aberration: magnification of the R, G, B images about the principal
-    /// point (seed 002 Sec. III, Lensfun's linear TCA), `None` for none.
+    /// point (the Durham radial-correction paper Sec. III, Lensfun's linear TCA), `None` for none.
     pub chromatic: Option<[f64; 3]>,
     /// A full camera per channel (R, G, B), overriding `camera` — the general form of lateral
     /// colour. Only through a precomputed map on the GPU.

@@ -1,6 +1,6 @@
 //! Seed 004 Sec. 3.5's accumulation: each cell's perspective image, morphed onto its film
 //! grid and weighted by `W_i(x')` at the grid vertices, is added into a float film image
-//! (additive blending; the seed's accumulation buffer).
+//! (additive blending; Heidrich et al.'s accumulation buffer).
 //!
 //! Embedding: [`FilmPass::record_clear`], then any number of [`FilmPass::record_cell`]
 //! (each after the cell's image was rendered), then [`FilmTarget::record_download`] or the

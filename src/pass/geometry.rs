@@ -1,8 +1,8 @@
-//! The geometry path (seed 000 Sec. 3.2): meshes drawn with Alg. 1 in the vertex shader and
+//! The geometry path (Lambers et al. Sec. 3.2): meshes drawn with Alg. 1 in the vertex shader and
 //! triangles outside `[-(1+δ+D), 1+δ+D]²` (undistorted NDC) dropped in a geometry shader —
 //! or, for the warp path's first pass, a plain pinhole render with the Sec. 3.1 frustum.
 //!
-//! Outputs (seed 000 Table 1), each only when asked for: colour (RGBA8 or RGBA16F), object ID
+//! Outputs (Lambers et al. Table 1), each only when asked for: colour (RGBA8 or RGBA16F), object ID
 //! (R32_UINT, flat, never blended), 2D flow (RG32F: pixel motion since a previous pose, NaN
 //! where unknown) and camera depth (R32F, metres; +inf where nothing was drawn).
 //!
@@ -520,7 +520,7 @@ impl GeometryPass {
         }
     }
 
-    /// `count` extra camera-and-pose slots, so that many views (seed 004's cells, a batch of
+    /// `count` extra camera-and-pose slots, so that many views (Heidrich et al.'s cells, a batch of
     /// poses) record into one command buffer: each slot has its own uniforms and descriptor
     /// set, filled with [`Self::set_slot`] and drawn with [`Self::record_slot`].
     pub fn slots(&self, count: u32) -> Result<GeometrySlots> {

@@ -3,9 +3,9 @@
 //!
 //! - **Route.** A calibrated camera goes by a pinhole render (no distortion wanted), Alg. 1
 //!   (tessellated as far as the budget needs) or a pinhole render + warp (overscanned), by
-//!   estimated cost; object IDs and flow force Alg. 1 (seed 000 Table 1); chromatic aberration
+//!   estimated cost; object IDs and flow force Alg. 1 (Lambers et al. Table 1); chromatic aberration
 //!   needs the warp's fused per-channel pass, so colour then goes by the warp and the data by
-//!   Alg. 1. A lens prescription goes by seed 004's image-based model.
+//!   Alg. 1. A lens prescription goes by Heidrich et al.'s image-based model.
 //! - **Accuracy.** The inverse method is the cheapest whose error, *measured* on this camera
 //!   (the f64 model over a grid of the image), meets the budget; the tessellation is the
 //!   coarsest whose straight-line error, measured on this scene and pose, meets it; for a
@@ -256,7 +256,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             let max_angle_deg = file.max_error_px * px_deg;
             let samples = if e.depth_of_field { e.lens_samples } else { 1 };
             steps.push(step(
-                "image-based lens model (seed 004)",
+                "image-based lens model (Heidrich et al.)",
                 format!(
                     "optics is a lens prescription; {} lens sample{} ({}), quad-tree until {:.2e}° = {} px",
                     samples,
@@ -484,7 +484,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 };
                 steps.push(step(
                     "pinhole render (overscanned)",
-                    "the warp's source, covering every valid output pixel (seed 000 Sec. 3.3)"
+                    "the warp's source, covering every valid output pixel (Lambers et al. Sec. 3.3)"
                         .into(),
                 ));
                 steps.push(step(
@@ -511,7 +511,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     steps.push(step(
                         "Alg. 1 (vertex + discard) for IDs/flow/depth",
                         format!(
-                            "IDs and flow cannot be warped (seed 000 Table 1); {}; {terms_note}",
+                            "IDs and flow cannot be warped (Lambers et al. Table 1); {}; {terms_note}",
                             describe_tess(l, verr, tris)
                         ),
                     ));
@@ -540,7 +540,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 };
                 let why = if data_needs_vertex {
                     format!(
-                        "{} need the geometry path: a warp cannot carry them (seed 000 Table 1)",
+                        "{} need the geometry path: a warp cannot carry them (Lambers et al. Table 1)",
                         match (o.ids, o.flow) {
                             (true, true) => "IDs and flow",
                             (true, false) => "object IDs",

@@ -155,7 +155,7 @@ impl PlanRecorder {
                     Route::Warp { method, chromatic } => {
                         if o.ids || o.flow {
                             return Err(invalid(
-                                "IDs and flow take Alg. 1 (seed 000 Table 1): the planner never routes them through the warp",
+                                "IDs and flow take Alg. 1 (Lambers et al. Table 1): the planner never routes them through the warp",
                             ));
                         }
                         r.warp = Some(warp_stage(camera, *method, *chromatic, o.depth)?);

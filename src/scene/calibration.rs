@@ -1,4 +1,4 @@
-//! Board poses for a calibration set (seed 000 Sec. 4): varied 3D orientations, each placed as
+//! Board poses for a calibration set (Lambers et al. Sec. 4): varied 3D orientations, each placed as
 //! close to the camera as it can be while the whole board — every inner corner and the white
 //! frame around them — stays inside the *distorted* image, so the views fill the image and
 //! reach its borders, where the distortion is strongest and best measured.

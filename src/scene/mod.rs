@@ -1,4 +1,4 @@
-//! Scenes for the geometry path (seed 000 Sec. 3.2): triangle meshes with per-vertex colour,
+//! Scenes for the geometry path (Lambers et al. Sec. 3.2): triangle meshes with per-vertex colour,
 //! texture coordinates and an object ID, a camera pose, and where they come from — the
 //! built-in scenes ([`builtin`]), OBJ and glTF files ([`load`]) — plus the tessellation
 //! Alg. 1 needs ([`tessellate`]). Pure CPU, no Vulkan.

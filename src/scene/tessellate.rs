@@ -1,4 +1,4 @@
-//! Tessellation for Alg. 1 (seed 000 Sec. 3.2, first limitation): the vertex path moves only
+//! Tessellation for Alg. 1 (Lambers et al. Sec. 3.2, first limitation): the vertex path moves only
 //! vertices, so a straight edge stays straight between them; edges must be short in the image
 //! for the curved lens image to be followed. This splits every edge whose pinhole image is
 //! longer than `max_edge_px`, repeatedly, until none is.

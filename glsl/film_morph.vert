@@ -1,5 +1,5 @@
 #version 450
-// Seed 004 Sec. 3.1 and 3.5: one cell's perspective image is morphed onto the film grid its
+// Heidrich et al. Sec. 3.1 and 3.5: one cell's perspective image is morphed onto the film grid its
 // rays were shot from (texture coordinates = where the rays meet the virtual image plane),
 // and weighted by the radiometric term W_i(x') at the grid vertices, interpolated linearly
 // between them ("Gouraud-shaded grid of textured polygons having W_i as alpha").

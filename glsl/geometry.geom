@@ -1,5 +1,5 @@
 #version 450
-// Seed 000 Sec. 3.2's triangle discard: a triangle with any vertex whose *undistorted* NDC
+// Lambers et al. Sec. 3.2's triangle discard: a triangle with any vertex whose *undistorted* NDC
 // lies outside [-(1+δ+D), 1+δ+D]², or where the model does not apply (at or behind the
 // camera, outside the lens's valid domain), is dropped whole — never stretched across the
 // image. Everything else passes through unchanged.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Seed 000 Sec. 4's proof: calibrate from a `vklens calibration-set` with OpenCV and report how
+"""Lambers et al. Sec. 4's proof: calibrate from a `vklens calibration-set` with OpenCV and report how
 well the lens comes back.
 
     python3 tests/calibrate.py DIR [--json] [--limit PERCENT] [--floor F]

@@ -1,4 +1,4 @@
-//! Seed 000 Sec. 4's proof, in CI: render calibration sets through both paths for two
+//! Lambers et al. Sec. 4's proof, in CI: render calibration sets through both paths for two
 //! cameras, calibrate them with OpenCV (`tests/calibrate.py`), and check the lens comes back.
 //!
 //! Two claims per run: (1) nothing is biased — every parameter is within 3 of OpenCV's own

@@ -323,7 +323,7 @@ fn geometry_behind_the_camera_gives_holes_never_garbage() {
 
 #[test]
 fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
-    // Seed 000 Table 1: post-processing interpolates, which breaks IDs. The vertex path's
+    // Lambers et al. Table 1: post-processing interpolates, which breaks IDs. The vertex path's
     // IDs are all IDs of the scene; a bilinear warp of the pinhole IDs makes values that
     // belong to no object at every ID edge.
     let ctx = validated_context();

@@ -1,4 +1,4 @@
-//! Seed 004's image-based model rendered on the GPU against the CPU distribution ray tracer
+//! Heidrich et al.'s image-based model rendered on the GPU against the CPU distribution ray tracer
 //! through the same lens and scene.
 
 mod common;
@@ -14,7 +14,7 @@ use vklens::scene::builtin;
 
 #[test]
 fn image_based_render_matches_the_reference() {
-    // Seed 004 Fig. 6's pair (an achromatic doublet and an uncorrected bi-convex singlet), 10
+    // Heidrich et al. Fig. 6's pair (an achromatic doublet and an uncorrected bi-convex singlet), 10
     // lens samples, the boxes scene focused on its centre, 240 × 160 film of 36 × 24 mm.
     // Measured: 30.2 and 29.9 dB; what is left is mostly texture aliasing (the reference
     // point-samples the chart once per ray, the GPU renders it at the cell's pixel rate and

@@ -265,7 +265,7 @@ mod image_model {
 
     #[test]
     fn newton_reaches_the_optimum_of_the_angle_criterion_on_the_doublet() {
-        // Seed 004 Sec. 3.3 reports the angle COP "reduced the maximum angle by a factor of
+        // Heidrich et al. Sec. 3.3 reports the angle COP "reduced the maximum angle by a factor of
         // up to 10" over the least-squares-distance COP once cells are subdivided. On the
         // shipped doublet (and on the other three lenses) that did not reproduce: the two
         // centres' largest angles agree within 10 % at every cell size from the whole film

@@ -194,7 +194,7 @@ fn a_one_pixel_image_and_a_large_one() {
 
 #[test]
 fn object_ids_are_never_blended_but_bilinear_colour_is() {
-    // Seed 000 Table 1: post-processing breaks data that cannot be interpolated. Nearest
+    // Lambers et al. Table 1: post-processing breaks data that cannot be interpolated. Nearest
     // sampling of R32_UINT keeps every ID exact; bilinear on the same numbers mixes them.
     let ctx = common::validated_context();
     let cam = OpenCvCamera::from_coeffs(

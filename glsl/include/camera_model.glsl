@@ -293,7 +293,7 @@ bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
     return true;
 }
 
-// Seed 000 Eq. 2 (Heikkilä): closed-form approximate inverse, k1 k2 p1 p2 only.
+// Lambers et al. Eq. 2 (Heikkilä): closed-form approximate inverse, k1 k2 p1 p2 only.
 bool vkl_undistort_heikkila(VKL_VEC2 d, out VKL_VEC2 x) {
     x = VKL_VEC2(0.0);
     VKL_VEC2 t;

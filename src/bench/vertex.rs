@@ -264,7 +264,7 @@ pub fn run(
             "straight_line_error_px": straight_line_error(&camera, &pose, &mesh),
         }));
     }
-    // Seed 002's mesh warp beside the compute warp.
+    // The Durham radial-correction paper's mesh warp beside the compute warp.
     for &(w, h) in sizes {
         let camera = bench_camera(w, h);
         let geometry = WarpGeometry::distort(camera.clone(), InverseMethod::Newton);

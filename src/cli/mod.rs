@@ -169,7 +169,7 @@ enum BenchCommand {
     /// The geometry path (Alg. 1) beside a plain pinhole render and pinhole + compute warp on
     /// grids of growing size, what tessellation costs and leaves, and the Durham radial-correction paper's mesh warp.
     Vertex(bench::VertexArgs),
-    /// Seed 004's image-based lens model: lens samples, angle threshold and film grid
+    /// Heidrich et al.'s image-based lens model: lens samples, angle threshold and film grid
     /// against PSNR versus the CPU reference ray tracer, and the speed ratio between them.
     Lens(bench::LensArgs),
     /// The planner's choices for the example scenes beside the everything-on pipeline, and

@@ -82,7 +82,7 @@ pub struct RenderArgs {
     /// its distance to the scene centre.
     #[arg(long, value_name = "POSE", allow_hyphen_values = true)]
     previous_pose: Option<String>,
-    /// Seed 000 Sec. 3.2's discard tolerance δ (D is added automatically).
+    /// Lambers et al. Sec. 3.2's discard tolerance δ (D is added automatically).
     #[arg(long, default_value_t = DEFAULT_DELTA)]
     delta: f64,
     /// Inverse method of the warp path: newton, heikkila or fixed-point:N.

@@ -278,7 +278,7 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
     Ok(())
 }
 
-/// Seed 002's remark made visible: how far the closed-form inverse's round trip f(f⁻¹(r))
+/// The Durham radial-correction paper's remark made visible: how far the closed-form inverse's round trip f(f⁻¹(r))
 /// strays from r along the image diagonal, beside the exact inverse.
 fn report_round_trip(lens: &Lens, cam: &OpenCvCamera) {
     let worst = |model: &dyn CameraModel, method: InverseMethod| {

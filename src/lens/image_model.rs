@@ -312,7 +312,7 @@ impl Optics {
     }
 }
 
-/// Seed 004 Eq. 3's weight `W_i(x') = cos θ' cos θ'' / ‖x'' − x'‖²` (mm⁻²) for the film point
+/// Heidrich et al. Eq. 3's weight `W_i(x') = cos θ' cos θ'' / ‖x'' − x'‖²` (mm⁻²) for the film point
 /// `film` and the lens sample `lens_point`, both normals along the axis (the samples stand
 /// for equal areas of the disc normal to the axis).
 pub fn radiometric_weight(film: DVec3, lens_point: DVec3) -> f64 {
@@ -365,7 +365,7 @@ fn sin2_terms(rays: &[PlaneRay], e: DVec3) -> (f64, DVec3, DMat3) {
     (s, grad, hess)
 }
 
-/// Seed 004 Sec. 3.3: the COP that maximizes Σ c² — the cosine of the angle between each
+/// Heidrich et al. Sec. 3.3: the COP that maximizes Σ c² — the cosine of the angle between each
 /// traced ray and the projected one. Newton iteration as Heidrich et al.'s, from `e0` or from the
 /// least-squares-distance COP, whichever is better (for a bundle of nearly parallel rays, a
 /// start far away can sit where the objective is not concave at all). Returns the COP and its

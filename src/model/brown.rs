@@ -1,10 +1,10 @@
-//! Seed 002's Brown radial model for headset lenses.
+//! The Durham radial-correction paper's Brown radial model for headset lenses.
 //!
 //! Coordinates are normalized per axis to [-1, 1] over the image (the Durham radial-correction paper Sec. II-A:
 //! `p_norm = 2 p_uv − 1`), with OpenCV's pixel-centre convention: pixel centre `u` has
 //! `uv = (u + 0.5) / w`. Forward (Eq. 1) scales a point radially:
 //! `r_d = r_u + c1 r_u³ + c2 r_u⁵`, i.e. `p_d = p_u (1 + c1 r_u² + c2 r_u⁴)`.
-//! The seed's approximate inverse (Eq. 2 with Eq. 3, after Mallon & Whelan) is
+//! The Durham paper's approximate inverse (Eq. 2 with Eq. 3, after Mallon & Whelan) is
 //! `p_u = p_d (1 − g(r_d))`, `g = (c1 r² + c2 r⁴ + c1² r⁴ + c2² r⁸ + 2 c1 c2 r⁶) / (1 + 4 c1 r² + 6 c2 r⁴)`.
 
 use glam::{DMat2, DVec2};

@@ -501,7 +501,7 @@ impl OpenCvCamera {
     }
 }
 
-/// Seed 000 Eq. 2: Heikkilä's closed-form approximate inverse, k1 k2 p1 p2 only, applied
+/// Lambers et al. Eq. 2: Heikkilä's closed-form approximate inverse, k1 k2 p1 p2 only, applied
 /// to the pre-tilt distorted point. `None` where its denominator vanishes.
 pub fn heikkila(d: &OpenCvDistortion, y: DVec2) -> Option<DVec2> {
     let (s, t) = (y.x, y.y);

@@ -1,4 +1,4 @@
-//! Seed 000 Sec. 3.1: the pinhole frustum from intrinsics, as a Vulkan projection matrix.
+//! Lambers et al. Sec. 3.1: the pinhole frustum from intrinsics, as a Vulkan projection matrix.
 //!
 //! With OpenCV's pixel-centre convention the image spans `u ∈ [-0.5, w − 0.5]`, so at unit
 //! depth the frustum's side planes are
@@ -25,7 +25,7 @@ pub struct Frustum {
 }
 
 impl Frustum {
-    /// Seed 000 Sec. 3.1, in OpenCV's pixel-centre convention.
+    /// Lambers et al. Sec. 3.1, in OpenCV's pixel-centre convention.
     pub fn from_intrinsics(k: &Intrinsics, width: u32, height: u32) -> Self {
         let left = -(k.cx + 0.5) / k.fx;
         let top = -(k.cy + 0.5) / k.fy;

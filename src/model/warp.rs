@@ -14,7 +14,7 @@ pub enum Direction {
     /// (inverse model per output pixel; Lambers et al. Sec. 3.3).
     Distort,
     /// Rectify a lens image: the source is the lens image, the output a pinhole image (forward
-    /// model per output pixel, like OpenCV's initUndistortRectifyMap + remap). Seed 002's
+    /// model per output pixel, like OpenCV's initUndistortRectifyMap + remap). The Durham radial-correction paper's
     /// pre-correction is this direction with the Brown model (see [`super::BrownRadial::to_opencv`]).
     Undistort,
 }

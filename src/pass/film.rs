@@ -1,4 +1,4 @@
-//! Seed 004 Sec. 3.5's accumulation: each cell's perspective image, morphed onto its film
+//! Heidrich et al. Sec. 3.5's accumulation: each cell's perspective image, morphed onto its film
 //! grid and weighted by `W_i(x')` at the grid vertices, is added into a float film image
 //! (additive blending; Heidrich et al.'s accumulation buffer).
 //!

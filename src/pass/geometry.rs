@@ -87,7 +87,7 @@ impl Outputs {
     }
 }
 
-/// Seed 000 Sec. 3.2's default tolerance δ.
+/// Lambers et al. Sec. 3.2's default tolerance δ.
 pub const DEFAULT_DELTA: f64 = 0.1;
 
 /// What a [`GeometryPass`] renders.
@@ -132,7 +132,7 @@ pub struct GeometryFrame {
     pub viewport: [f32; 4],
 }
 
-/// Seed 000 Sec. 3.2's D for a camera: how far past ±1 the undistorted NDC of the distorted
+/// Lambers et al. Sec. 3.2's D for a camera: how far past ±1 the undistorted NDC of the distorted
 /// image border reaches. The seed undistorts the four corners; this uses the whole border
 /// (and the fold boundary where it lies inside the image), as the overscan does, because for
 /// mustache and strongly tangential lenses the extremes are not at the corners.

@@ -1,4 +1,4 @@
-//! Seed 004 Sec. 3.5's rendering loop on the GPU: for every lens sample and every quad-tree
+//! Heidrich et al. Sec. 3.5's rendering loop on the GPU: for every lens sample and every quad-tree
 //! cell of an [`ImageModel`], render the scene with that cell's perspective projection (a
 //! pinhole [`GeometryPass`] at the virtual centre of projection with the cell's frustum), then
 //! morph it onto the film grid with the radiometric weights and add it into the float film

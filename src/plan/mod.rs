@@ -54,7 +54,7 @@ pub enum Route {
         chromatic: Option<[f64; 3]>,
         tessellate: Option<f64>,
     },
-    /// Seed 004's image-based model through a lens prescription.
+    /// Heidrich et al.'s image-based model through a lens prescription.
     LensModel {
         samples: u32,
         chromatic: bool,

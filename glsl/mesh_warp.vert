@@ -1,5 +1,5 @@
 #version 450
-// Seed 002 Sec. II-B's mesh-based warp: an n×n grid over the output image whose vertices
+// The Durham radial-correction paper's Sec. II-B's mesh-based warp: an n×n grid over the output image whose vertices
 // carry the exact source coordinate of their output position (computed once per camera on
 // the host, in f64); the rasterizer interpolates it linearly in between.
 

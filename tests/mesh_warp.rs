@@ -1,4 +1,4 @@
-//! Seed 002 Sec. II-B's mesh warp against the exact (f64) warp coordinates and the compute
+//! The Durham radial-correction paper's Sec. II-B's mesh warp against the exact (f64) warp coordinates and the compute
 //! warp, validated.
 
 mod common;

@@ -92,7 +92,7 @@ proptest! {
 
 #[test]
 fn brown_eq2_is_approximate_and_worsens_with_stronger_lenses() {
-    // Seed 002: "the greater values of c1 and c2, the more f⁻¹(f(r)), f(f⁻¹(r)) and r diverge".
+    // The Durham radial-correction paper: "the greater values of c1 and c2, the more f⁻¹(f(r)), f(f⁻¹(r)) and r diverge".
     let corner = DVec2::new(0.0, 0.0);
     let mut last = 0.0;
     for (c1, c2) in [(0.02, 0.01), (0.08, 0.04), (0.15, 0.10)] {
@@ -106,7 +106,7 @@ fn brown_eq2_is_approximate_and_worsens_with_stronger_lenses() {
         );
         last = err;
     }
-    // The seed's own values leave a visible error at the corner; Newton leaves none.
+    // The Durham paper's own values leave a visible error at the corner; Newton leaves none.
     let m = BrownRadial::new(500, 500, 0.15, 0.10).unwrap();
     let d = m.distort_pixel(corner).unwrap();
     assert!((m.undistort_pixel(d, InverseMethod::Newton).unwrap() - corner).length() < 1e-9);
@@ -122,7 +122,7 @@ fn projection_lands_on_opencv_pinhole_pixels() {
     };
     let (w, h) = (800u32, 600u32);
     let f = Frustum::from_intrinsics(&k, w, h);
-    // The seed's Sec. 3.1 formulas.
+    // Lambers et al.'s Sec. 3.1 formulas.
     assert_eq!(f.left, -(k.cx + 0.5) / k.fx);
     assert_eq!(f.right, w as f64 / k.fx + f.left);
     let (near, far) = (0.1, 100.0);

@@ -278,7 +278,7 @@ fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
 #[test]
 fn a_full_camera_per_channel_matches_the_reference() {
     // The general form of lateral colour: each channel its own calibrated camera (here the
-    // seed's Fig. 2 lens with slightly different k1 and focal length for R and B).
+    // Lambers et al.'s Fig. 2 lens with slightly different k1 and focal length for R and B).
     let ctx = common::validated_context();
     let g_cam = common::reference_camera("seed_fig2");
     let variant = |dk1: f64, df: f64| {

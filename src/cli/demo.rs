@@ -21,7 +21,7 @@ pub struct DemoArgs {
     grid: u32,
 }
 
-/// The seed's Fig. 2 camera.
+/// Lambers et al.'s Fig. 2 camera.
 pub fn seed_fig2() -> OpenCvCamera {
     OpenCvCamera::from_coeffs(
         800,

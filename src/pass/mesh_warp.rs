@@ -1,4 +1,4 @@
-//! Seed 002 Sec. II-B's mesh-based warp, the alternative to the compute warp: an n×n grid
+//! The Durham radial-correction paper's Sec. II-B's mesh-based warp, the alternative to the compute warp: an n×n grid
 //! over the output image, each vertex carrying the exact source coordinate of its output
 //! position (the same f64 [`WarpGeometry::source_coordinate`] the reference warp uses,
 //! computed once per camera), drawn with a graphics pipeline that samples the source. In

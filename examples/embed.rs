@@ -18,7 +18,7 @@ use gpu_allocator::MemoryLocation;
 use vklens::gpu::{image_barrier, Buffer, EnabledFeatures, Gpu, Image};
 use vklens::imaging::cpu_warp::Sampling;
 use vklens::model::warp::WarpGeometry;
-use vklens::model::{Intrinsics, InverseMethod, OpenCvCamera};
+use vklens::model::{Intrinsics, InverseMethod, Camera};
 use vklens::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -80,7 +80,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 allocator.clone(),
                 EnabledFeatures::default(),
             )?;
-            let camera = OpenCvCamera::from_coeffs(
+            let camera = Camera::from_coeffs(
                 w,
                 h,
                 Intrinsics {

@@ -17,6 +17,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod bench;
+mod error;
+pub use error::{Error, ErrorKind, Result};
 pub mod cli;
 pub mod gpu;
 pub mod imaging;

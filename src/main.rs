@@ -8,7 +8,7 @@ fn main() {
     }
     let cli = vklens::cli::Cli::parse();
     if let Err(e) = vklens::cli::run(cli) {
-        eprintln!("vklens: {}", e.message);
-        std::process::exit(e.code);
+        eprintln!("vklens: {e}");
+        std::process::exit(vklens::cli::exit_code(&e));
     }
 }

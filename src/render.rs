@@ -17,18 +17,19 @@
 //! translates the lens image by −δ exactly (Alg. 1 normalizes with the same cx, cy), so
 //! every pass is the same image sampled elsewhere.
 
+use crate::{Error, Result};
 use ash::vk;
 use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{
-    image_barrier, record_compute_download, Buffer, Context, GpuError, Image, Result,
+    image_barrier, record_compute_download, Buffer, Context, Image,
 };
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
-use crate::model::{Intrinsics, InverseMethod, OpenCvCamera, OpenCvDistortion};
+use crate::model::{Intrinsics, InverseMethod, Camera, OpenCvDistortion};
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     Rendered,
@@ -55,7 +56,7 @@ pub enum RenderPath {
 /// What to render.
 #[derive(Debug, Clone)]
 pub struct RenderRequest {
-    pub camera: OpenCvCamera,
+    pub camera: Camera,
     pub pose: Pose,
     /// The pose flow is measured from.
     pub previous_pose: Pose,
@@ -73,10 +74,10 @@ pub struct RenderRequest {
 }
 
 /// The camera rendering `camera`'s image at `s×` its resolution.
-pub fn scaled_camera(camera: &OpenCvCamera, s: u32) -> std::result::Result<OpenCvCamera, String> {
+pub fn scaled_camera(camera: &Camera, s: u32) -> Result<Camera> {
     let k = camera.intrinsics;
     let f = s as f64;
-    OpenCvCamera::new(
+    Camera::new(
         camera.width * s,
         camera.height * s,
         Intrinsics {
@@ -88,15 +89,15 @@ pub fn scaled_camera(camera: &OpenCvCamera, s: u32) -> std::result::Result<OpenC
         },
         camera.distortion,
     )
-    .map_err(|e| e.to_string())
+    .map_err(Error::from)
 }
 
 /// The camera whose image is `camera`'s translated by `-shift` px (principal point moved).
-fn shifted(camera: &OpenCvCamera, shift: DVec2) -> std::result::Result<OpenCvCamera, String> {
+fn shifted(camera: &Camera, shift: DVec2) -> Result<Camera> {
     let mut k = camera.intrinsics;
     k.cx -= shift.x;
     k.cy -= shift.y;
-    OpenCvCamera::new(camera.width, camera.height, k, camera.distortion).map_err(|e| e.to_string())
+    Camera::new(camera.width, camera.height, k, camera.distortion).map_err(Error::from)
 }
 
 /// Radical inverse of `i` in `base` (Halton sequence), in [0, 1).
@@ -154,10 +155,10 @@ fn average(images: &[Raster]) -> Raster {
 /// scaled by `s` with its image translated by `-shift` (1× px); the results are box-filtered
 /// and averaged.
 fn antialiased(
-    camera: &OpenCvCamera,
+    camera: &Camera,
     s: u32,
     passes: u32,
-    pass: &mut dyn FnMut(OpenCvCamera, DVec2) -> Result<Raster>,
+    pass: &mut dyn FnMut(Camera, DVec2) -> Result<Raster>,
 ) -> Result<Raster> {
     let mut images = Vec::new();
     for offset in jitter_offsets(passes) {
@@ -247,7 +248,7 @@ impl WarpStage {
     /// `background`), warped by `geometry` into its output size.
     pub fn new(
         gpu: &crate::gpu::Gpu,
-        source: OpenCvCamera,
+        source: Camera,
         geometry: WarpGeometry,
         coordinates: Coordinates,
         format: ColorFormat,
@@ -268,7 +269,7 @@ impl WarpStage {
     /// second warp (nearest, +inf where there is no source) carries it to the output.
     pub fn with_depth(
         gpu: &crate::gpu::Gpu,
-        source: OpenCvCamera,
+        source: Camera,
         geometry: WarpGeometry,
         coordinates: Coordinates,
         format: ColorFormat,
@@ -543,7 +544,7 @@ impl<'a> SceneRenderer<'a> {
         &mut self,
         mesh: &MeshBuffers,
         pose: &Pose,
-        source: OpenCvCamera,
+        source: Camera,
         geometry: WarpGeometry,
         format: ColorFormat,
         background: [f32; 4],
@@ -613,8 +614,8 @@ impl<'a> SceneRenderer<'a> {
     }
 }
 
-fn invalid(e: impl ToString) -> GpuError {
-    GpuError::Invalid(e.to_string())
+fn invalid(e: impl ToString) -> Error {
+    Error::Input(e.to_string())
 }
 
 fn geometry_kind(pass: &GeometryPass) -> &'static str {
@@ -666,7 +667,7 @@ fn render_with(
             };
             let o = request.outputs;
             let data = Outputs { color: None, ..o };
-            let mut run = |camera: OpenCvCamera, outputs: Outputs| {
+            let mut run = |camera: Camera, outputs: Outputs| {
                 let mut desc = GeometryDesc::new(camera, projection, outputs);
                 desc.background = request.background;
                 renderer.draw(desc, &buffers, &request.pose, &request.previous_pose)
@@ -720,7 +721,7 @@ fn render_warp_path(
     }
     let cam = &request.camera;
     let ov = overscan(cam, density).map_err(invalid)?;
-    let pinhole = OpenCvCamera::new(
+    let pinhole = Camera::new(
         ov.width,
         ov.height,
         ov.intrinsics,
@@ -777,7 +778,7 @@ fn render_warp_path(
             k.cx -= shift.x * s as f64;
             k.cy -= shift.y * s as f64;
             let source =
-                OpenCvCamera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
+                Camera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
                     .map_err(invalid)?;
             let mut geometry = WarpGeometry::distort(big, method)
                 .with_ideal(k, (big_ov.width, big_ov.height))
@@ -850,7 +851,7 @@ mod tests {
 
     #[test]
     fn scaled_camera_keeps_pixel_edges() {
-        let cam = OpenCvCamera::from_coeffs(
+        let cam = Camera::from_coeffs(
             800,
             600,
             Intrinsics {
@@ -864,7 +865,7 @@ mod tests {
         .unwrap();
         let big = scaled_camera(&cam, 4).unwrap();
         // The image's left edge (pixel −0.5) is at the same normalized x in both.
-        let edge = |c: &OpenCvCamera| (-0.5 - c.intrinsics.cx) / c.intrinsics.fx;
+        let edge = |c: &Camera| (-0.5 - c.intrinsics.cx) / c.intrinsics.fx;
         assert!((edge(&cam) - edge(&big)).abs() < 1e-15);
         assert_eq!((big.width, big.height), (3200, 2400));
         let img = Raster {

@@ -6,7 +6,7 @@ mod common;
 use common::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::{DVec2, DVec3};
 use vklens::imaging::{Depth, Pixels, Raster};
-use vklens::model::{InverseMethod, OpenCvCamera};
+use vklens::model::{InverseMethod, Camera};
 use vklens::pass::geometry::{
     render, ColorFormat, GeometryDesc, Outputs, Projection, Rendered, DEFAULT_DELTA,
 };
@@ -22,7 +22,7 @@ const DATA: Outputs = Outputs {
     depth: true,
 };
 
-fn lens(camera: &OpenCvCamera, delta: f64) -> GeometryDesc {
+fn lens(camera: &Camera, delta: f64) -> GeometryDesc {
     GeometryDesc::new(camera.clone(), Projection::Lens { delta }, DATA)
 }
 
@@ -32,7 +32,7 @@ fn lens(camera: &OpenCvCamera, delta: f64) -> GeometryDesc {
 /// the ray misses. Also says whether the hit is within `margin` quads of a quad border, where
 /// rasterization may pick either side.
 fn grid_oracle(
-    camera: &OpenCvCamera,
+    camera: &Camera,
     pose: &Pose,
     n: u32,
     p: DVec2,
@@ -72,7 +72,7 @@ struct Comparison {
     holes: usize,
 }
 
-fn compare_ids(camera: &OpenCvCamera, pose: &Pose, n: u32, r: &Rendered) -> Comparison {
+fn compare_ids(camera: &Camera, pose: &Pose, n: u32, r: &Rendered) -> Comparison {
     let ids = r.ids.as_ref().unwrap();
     let mut c = Comparison {
         checked: 0,

@@ -124,7 +124,7 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
         device: None,
     })
     .unwrap();
-    let camera = vklens::model::OpenCvCamera::from_coeffs(
+    let camera = vklens::model::Camera::from_coeffs(
         640,
         480,
         vklens::model::Intrinsics {

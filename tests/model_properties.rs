@@ -6,11 +6,11 @@ use glam::{DVec2, DVec3, DVec4};
 use proptest::prelude::*;
 use vklens::model::{
     vulkan_projection, BrownRadial, CameraModel, Frustum, Intrinsics, InverseMethod, ModelError,
-    OpenCvCamera,
+    Camera,
 };
 
-fn camera(w: u32, h: u32, f: f64, coeffs: &[f64]) -> OpenCvCamera {
-    OpenCvCamera::from_coeffs(
+fn camera(w: u32, h: u32, f: f64, coeffs: &[f64]) -> Camera {
+    Camera::from_coeffs(
         w,
         h,
         Intrinsics {
@@ -34,13 +34,13 @@ prop_compose! {
         rational in any::<bool>(), k4 in -0.2..0.2f64, k5 in -0.05..0.05f64, k6 in -0.01..0.01f64,
         prism in any::<bool>(), s in prop::array::uniform4(-0.003..0.003f64),
         tilt in any::<bool>(), tx in -0.03..0.03f64, ty in -0.03..0.03f64,
-    ) -> OpenCvCamera {
+    ) -> Camera {
         let (w, h) = (1280u32, 800u32);
         let mut c = vec![k1, k2, p1, p2, k3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         if rational { c[5] = k4; c[6] = k5; c[7] = k6; }
         if prism { c[8..12].copy_from_slice(&s); }
         if tilt { c[12] = tx; c[13] = ty; }
-        OpenCvCamera::from_coeffs(w, h, Intrinsics {
+        Camera::from_coeffs(w, h, Intrinsics {
             fx: f, fy: f * aspect, cx: 639.5 + dcx, cy: 399.5 + dcy,
         }, &c).expect("valid camera")
     }
@@ -161,8 +161,8 @@ fn projection_lands_on_opencv_pinhole_pixels() {
 /// a distorted table read off chords (in-domain points refused before the inverse ran), and an
 /// ideal table whose interpolation between rays reached past the fold (Newton started where
 /// the Jacobian determinant is already negative).
-fn cameras_with_a_fold_in_view() -> [OpenCvCamera; 2] {
-    let barrel = OpenCvCamera::from_coeffs(
+fn cameras_with_a_fold_in_view() -> [Camera; 2] {
+    let barrel = Camera::from_coeffs(
         1280,
         800,
         Intrinsics {
@@ -176,7 +176,7 @@ fn cameras_with_a_fold_in_view() -> [OpenCvCamera; 2] {
             0.0029677,
         ],
     );
-    let wide = OpenCvCamera::from_coeffs(
+    let wide = Camera::from_coeffs(
         1280,
         800,
         Intrinsics {
@@ -346,7 +346,7 @@ fn huge_images_work() {
     let d = cam.distort_pixel(p).unwrap();
     let back = cam.undistort_pixel(d, InverseMethod::Newton).unwrap();
     assert!((back - p).length() < 1e-6, "{back} vs {p}");
-    let too_big = OpenCvCamera::from_coeffs(
+    let too_big = Camera::from_coeffs(
         70000,
         10,
         Intrinsics {
@@ -400,26 +400,26 @@ fn bad_parameters_are_typed_errors() {
         cx: 0.0,
         cy: 0.0,
     };
-    let nan = OpenCvCamera::from_coeffs(10, 10, Intrinsics { fx: f64::NAN, ..k }, &[0.0; 4]);
+    let nan = Camera::from_coeffs(10, 10, Intrinsics { fx: f64::NAN, ..k }, &[0.0; 4]);
     assert!(matches!(nan, Err(ModelError::NotFinite { name: "fx", .. })));
-    let neg = OpenCvCamera::from_coeffs(10, 10, Intrinsics { fy: 0.0, ..k }, &[0.0; 4]);
+    let neg = Camera::from_coeffs(10, 10, Intrinsics { fy: 0.0, ..k }, &[0.0; 4]);
     assert!(matches!(
         neg,
         Err(ModelError::NotPositive { name: "fy", .. })
     ));
-    let inf = OpenCvCamera::from_coeffs(10, 10, k, &[0.0, f64::INFINITY, 0.0, 0.0]);
+    let inf = Camera::from_coeffs(10, 10, k, &[0.0, f64::INFINITY, 0.0, 0.0]);
     assert!(matches!(inf, Err(ModelError::NotFinite { name: "k2", .. })));
-    let absurd = OpenCvCamera::from_coeffs(10, 10, k, &[1e12, 0.0, 0.0, 0.0]);
+    let absurd = Camera::from_coeffs(10, 10, k, &[1e12, 0.0, 0.0, 0.0]);
     assert!(matches!(absurd, Err(ModelError::Absurd { name: "k1", .. })));
     for n in [0, 1, 3, 6, 7, 9, 13, 15] {
         let c = vec![0.0; n];
         assert_eq!(
-            OpenCvCamera::from_coeffs(10, 10, k, &c).unwrap_err(),
+            Camera::from_coeffs(10, 10, k, &c).unwrap_err(),
             ModelError::CoefficientCount(n)
         );
     }
     for n in [4, 5, 8, 12, 14] {
-        assert!(OpenCvCamera::from_coeffs(10, 10, k, &vec![0.0; n]).is_ok());
+        assert!(Camera::from_coeffs(10, 10, k, &vec![0.0; n]).is_ok());
     }
     assert!(BrownRadial::new(10, 10, f64::NAN, 0.0).is_err());
     for bad in [

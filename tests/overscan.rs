@@ -5,10 +5,10 @@ use glam::DVec2;
 use vklens::io::reference::load_reference;
 use vklens::model::overscan::overscan;
 use vklens::model::warp::WarpGeometry;
-use vklens::model::{Intrinsics, InverseMethod, OpenCvCamera};
+use vklens::model::{Intrinsics, InverseMethod, Camera};
 
 /// Valid output pixels (inverse defined) whose source falls off the frame.
-fn uncovered(cam: &OpenCvCamera, geometry: &WarpGeometry) -> usize {
+fn uncovered(cam: &Camera, geometry: &WarpGeometry) -> usize {
     let mut n = 0;
     for y in 0..cam.height {
         for x in 0..cam.width {
@@ -24,7 +24,7 @@ fn uncovered(cam: &OpenCvCamera, geometry: &WarpGeometry) -> usize {
 trait Valid {
     fn undistort_pixel_valid(&self, p: DVec2) -> bool;
 }
-impl Valid for OpenCvCamera {
+impl Valid for Camera {
     fn undistort_pixel_valid(&self, p: DVec2) -> bool {
         self.undistort_normalized(self.intrinsics.to_normalized(p), InverseMethod::Newton)
             .is_some()
@@ -56,7 +56,7 @@ fn overscan_covers_every_valid_pixel_on_every_shared_camera() {
 fn the_four_corner_rule_misses_a_mustache_lens() {
     // Barrel near the centre turning pincushion outside: the border's extreme ideal points are
     // not at the corners.
-    let cam = OpenCvCamera::from_coeffs(
+    let cam = Camera::from_coeffs(
         800,
         600,
         Intrinsics {
@@ -106,7 +106,7 @@ fn the_four_corner_rule_misses_a_mustache_lens() {
 
 #[test]
 fn density_scales_the_source() {
-    let cam = OpenCvCamera::from_coeffs(
+    let cam = Camera::from_coeffs(
         800,
         600,
         Intrinsics {

@@ -243,7 +243,7 @@ fn scene_file_errors_name_the_file_the_key_and_what_was_expected() {
         "[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"../cameras/barrel_k1k2.json\"\n[effects]\nvignetting = true\n",
     );
     let scene = load_geometry(&file).unwrap();
-    let e = plan(&file, &scene).unwrap_err();
+    let e = plan(&file, &scene).unwrap_err().to_string();
     assert!(e.contains("[effects] vignetting"), "{e}");
 }
 
@@ -484,7 +484,7 @@ fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
     // A lens scene cannot take the keys.
     let lens = std::fs::read_to_string(examples().join("lens_chromatic.toml")).unwrap();
     let lens = scene_file(&format!("{lens}\n[render]\nsupersample = 2\n"));
-    let e = plan(&lens, &load_geometry(&lens).unwrap()).unwrap_err();
+    let e = plan(&lens, &load_geometry(&lens).unwrap()).unwrap_err().to_string();
     assert!(e.contains("[render] supersample"), "{e}");
     assert_no_validation_messages(&ctx);
 }

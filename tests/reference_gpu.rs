@@ -298,7 +298,7 @@ fn specialization_constants_compile_out_unused_terms() {
     let mut cpu = cam.clone();
     let mut d = cam.distortion;
     (d.s1, d.s2, d.s3, d.s4) = (0.0, 0.0, 0.0, 0.0);
-    cpu = vklens::model::OpenCvCamera::new(cpu.width, cpu.height, cpu.intrinsics, d).unwrap();
+    cpu = vklens::model::Camera::new(cpu.width, cpu.height, cpu.intrinsics, d).unwrap();
     let (mut moved, mut worst) = (0.0f64, 0.0f64);
     for ((p, a), b) in case.points.iter().zip(&full).zip(&no_prism) {
         moved = moved.max(((a[0] - b[0]) as f64).hypot((a[1] - b[1]) as f64));

@@ -287,7 +287,7 @@ fn a_full_camera_per_channel_matches_the_reference() {
         let mut k = g_cam.intrinsics;
         k.fx *= 1.0 + df;
         k.fy *= 1.0 + df;
-        vklens::model::OpenCvCamera::new(g_cam.width, g_cam.height, k, d).unwrap()
+        vklens::model::Camera::new(g_cam.width, g_cam.height, k, d).unwrap()
     };
     let mut geometry = WarpGeometry::distort(g_cam.clone(), InverseMethod::Newton);
     geometry.channel_cameras = Some(Box::new([
@@ -325,7 +325,7 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
     // Each map is of another camera (principal point moved by a third of a pixel), so that a
     // pixel left unwritten cannot pass on what an earlier map left in reused memory.
     use glam::DVec2;
-    use vklens::model::{Intrinsics, OpenCvCamera};
+    use vklens::model::{Intrinsics, Camera};
     use vklens::pass::warp::read_maps;
     let ctx = common::validated_context();
     let mut variant = 0.0;
@@ -338,7 +338,7 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
             variant += 1.0;
             // A mild lens, so that interpolation is accurate even across a whole tiny image.
             let f = 2.0 * w.max(h) as f64 + 2.0;
-            let cam = OpenCvCamera::from_coeffs(
+            let cam = Camera::from_coeffs(
                 w,
                 h,
                 Intrinsics {

@@ -7,7 +7,7 @@ use glam::DVec2;
 use vklens::imaging::cpu_warp::Sampling;
 use vklens::imaging::{Depth, Pixels, Raster};
 use vklens::model::warp::WarpGeometry;
-use vklens::model::{Intrinsics, InverseMethod, OpenCvCamera};
+use vklens::model::{Intrinsics, InverseMethod, Camera};
 use vklens::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
 
 fn flat(w: u32, h: u32, v: u8) -> Raster {
@@ -111,7 +111,7 @@ fn folding_lenses_get_a_clean_masked_border_not_streaks() {
 #[test]
 fn a_one_pixel_image_and_a_large_one() {
     let ctx = common::validated_context();
-    let tiny = OpenCvCamera::from_coeffs(
+    let tiny = Camera::from_coeffs(
         1,
         1,
         Intrinsics {
@@ -136,7 +136,7 @@ fn a_one_pixel_image_and_a_large_one() {
     .unwrap();
     assert_eq!((out.width, out.height, mask.clone()), (1, 1, vec![255]));
     assert_eq!(out.pixels, Pixels::Rgba8(vec![[77, 77, 77, 255]]));
-    let big = OpenCvCamera::from_coeffs(
+    let big = Camera::from_coeffs(
         4096,
         4096,
         Intrinsics {
@@ -164,7 +164,7 @@ fn a_one_pixel_image_and_a_large_one() {
     // Larger than the device can hold: a clear error, not a Vulkan failure.
     let max = ctx.gpu().max_image_side();
     if max < 65536 {
-        let huge = OpenCvCamera::from_coeffs(
+        let huge = Camera::from_coeffs(
             max + 1,
             8,
             Intrinsics {
@@ -197,7 +197,7 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
     // Lambers et al. Table 1: post-processing breaks data that cannot be interpolated. Nearest
     // sampling of R32_UINT keeps every ID exact; bilinear on the same numbers mixes them.
     let ctx = common::validated_context();
-    let cam = OpenCvCamera::from_coeffs(
+    let cam = Camera::from_coeffs(
         320,
         240,
         Intrinsics {
@@ -262,7 +262,7 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
         ctx.gpu(),
         desc(
             WarpGeometry::distort(
-                OpenCvCamera::from_coeffs(
+                Camera::from_coeffs(
                     8,
                     8,
                     Intrinsics {

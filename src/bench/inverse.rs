@@ -8,6 +8,7 @@
 //! invalid. CPU time is wall time over repeated passes; GPU time is from timestamps over
 //! back-to-back dispatches of a large batch, so the per-dispatch overhead is amortised.
 
+use crate::{Error, Result};
 use std::time::Instant;
 
 use ash::vk;
@@ -17,7 +18,7 @@ use serde::Serialize;
 
 use crate::gpu::{host_read_barrier, memory_barrier, Buffer, Context, QueryPool};
 use crate::io::reference::{ReferenceCase, ReferenceFile};
-use crate::model::{CameraModel, InverseMethod, OpenCvCamera};
+use crate::model::{CameraModel, InverseMethod, Camera};
 use crate::pass::{PointsMode, PointsPass, Precision};
 
 /// The methods measured by default.
@@ -74,7 +75,7 @@ struct Truth {
     in_domain: Vec<bool>,
 }
 
-fn truth_of(case: &ReferenceCase, cam: &OpenCvCamera) -> Truth {
+fn truth_of(case: &ReferenceCase, cam: &Camera) -> Truth {
     let truth: Vec<DVec2> = case
         .points
         .iter()
@@ -91,7 +92,7 @@ fn truth_of(case: &ReferenceCase, cam: &OpenCvCamera) -> Truth {
 }
 
 /// (max, median, refused, measured) of results against the truth, in pixels.
-fn stats(cam: &OpenCvCamera, t: &Truth, got: &[Option<DVec2>]) -> (f64, f64, usize, usize) {
+fn stats(cam: &Camera, t: &Truth, got: &[Option<DVec2>]) -> (f64, f64, usize, usize) {
     let mut errors = Vec::new();
     let mut refused = 0;
     for ((truth, inside), g) in t.truth.iter().zip(&t.in_domain).zip(got) {
@@ -123,12 +124,12 @@ pub fn run(
     ctx: Option<&Context>,
     options: &InverseBenchOptions,
     mut progress: impl FnMut(&str),
-) -> Result<Vec<InverseRow>, String> {
+) -> Result<Vec<InverseRow>> {
     let mut rows = Vec::new();
     for case in &reference.cases {
         let cam = case
             .camera()
-            .map_err(|e| format!("reference case {}: {e}", case.name))?;
+            .map_err(|e| Error::input(format!("reference case {}: {e}", case.name)))?;
         let t = truth_of(case, &cam);
         for (label, pick) in [
             ("opencv default (5 it.)", 0usize),
@@ -202,7 +203,7 @@ pub fn run(
                     }
                     progress(&format!("{} {method} gpu-{precision}", case.name));
                     let (got, ns) = gpu_run(ctx, &cam, method, precision, &t.pixels, options)
-                        .map_err(|e| format!("GPU run failed: {e}"))?;
+                        .map_err(|e| Error::input(format!("GPU run failed: {e}")))?;
                     let (max, median, refused, points) = stats(&cam, &t, &got);
                     rows.push(InverseRow {
                         bench: "inverse",
@@ -225,7 +226,7 @@ pub fn run(
 /// Results for `pixels` and GPU nanoseconds per point over a large batch.
 fn gpu_run(
     ctx: &Context,
-    cam: &OpenCvCamera,
+    cam: &Camera,
     method: InverseMethod,
     precision: Precision,
     pixels: &[[f64; 2]],

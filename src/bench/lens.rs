@@ -20,7 +20,7 @@ use std::time::Instant;
 use super::fixed as f;
 use serde_json::{json, Value};
 
-use crate::gpu::{Context, GpuError, Result};
+use crate::gpu::{Context, Error, Result};
 use crate::lens::image_model::{ImageModel, ModelOptions, ALL_CHANNELS};
 use crate::lens::reference::{psnr, render_reference, Channel, ReferenceFrame};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};
@@ -58,13 +58,13 @@ pub fn run(
         unsafe { mesh.record_upload(cmd) };
         Ok(())
     })?;
-    let invalid = GpuError::Invalid;
+    let invalid = Error::Input;
     let mut rows = Vec::new();
     for name in LENSES {
         let lens = Prescription::load(&lens_dir.join(name)).map_err(|e| invalid(e.to_string()))?;
         let pitch = FILM_MM / pixels as f64;
         let (optics, pose) = frame_scene(&lens, (pixels, pixels), pitch, None, None, None, &scene)
-            .map_err(invalid)?;
+            .map_err(|e| invalid(e.to_string()))?;
         // The references, one per sample count (shared by the rows that use it).
         let mut references: Vec<(u32, ReferenceFrame)> = Vec::new();
         let mut reference =
@@ -84,7 +84,7 @@ pub fn run(
                     &pose,
                     &|_| {},
                 )
-                .map_err(invalid)?;
+                .map_err(|e| invalid(e.to_string()))?;
                 references.push((samples, r.clone()));
                 Ok(r)
             };
@@ -111,7 +111,7 @@ pub fn run(
                 options.samples, options.max_angle_deg, options.grid
             ));
             let start = Instant::now();
-            let model = ImageModel::build(&optics, &options).map_err(invalid)?;
+            let model = ImageModel::build(&optics, &options).map_err(|e| invalid(e.to_string()))?;
             let preprocess_ms = start.elapsed().as_secs_f64() * 1e3;
             let max_angle = model.max_angle_deg();
             let mut renderer = LensRenderer::new(

@@ -16,15 +16,15 @@ use std::path::Path;
 use super::{fixed as f, sci as e};
 use serde_json::{json, Value};
 
-use crate::gpu::{Context, GpuError, Result};
+use crate::gpu::{Context, Error, Result};
 use crate::plan::scene_file::OpticsSpec;
 use crate::plan::{
     execute, inverse_candidates, inverse_error_px, load_geometry, plan, Plan, Route, SceneFile,
 };
 use crate::scene::Scene;
 
-fn invalid(e: impl ToString) -> GpuError {
-    GpuError::Invalid(e.to_string())
+fn invalid(e: impl ToString) -> Error {
+    Error::Input(e.to_string())
 }
 
 /// Median frame time of `frames` renders of the plan's first pose (ms).

@@ -24,7 +24,7 @@ use crate::gpu::{Context, Result};
 use crate::imaging::cpu_warp::Sampling;
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
-use crate::model::{InverseMethod, OpenCvCamera, OpenCvDistortion};
+use crate::model::{InverseMethod, Camera, OpenCvDistortion};
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     Texture, DEFAULT_DELTA,
@@ -47,7 +47,7 @@ pub const MESH_SIZES: [u32; 4] = [8, 32, 128, 512];
 /// The largest distance (px) between an edge's true image through the lens and the straight
 /// segment the rasterizer draws between its moved end points, over the edges whose image is
 /// inside the frame (sampled at t = 1/4, 1/2, 3/4).
-pub fn straight_line_error(camera: &OpenCvCamera, pose: &Pose, mesh: &Mesh) -> f64 {
+pub fn straight_line_error(camera: &Camera, pose: &Pose, mesh: &Mesh) -> f64 {
     let project = |i: u32| camera.project(pose.apply(mesh.vertices[i as usize].position()));
     let inside = |p: DVec2| {
         p.x >= -0.5
@@ -93,7 +93,7 @@ struct Drawn {
 
 fn prepare(
     ctx: &Context,
-    camera: &OpenCvCamera,
+    camera: &Camera,
     projection: Projection,
     scene: &Scene,
     mesh: &Mesh,
@@ -133,7 +133,7 @@ fn time_render(ctx: &Context, d: &Drawn) -> Result<f64> {
 /// GPU ms per frame of drawing `mesh` with `projection` (colour only).
 fn time_scene(
     ctx: &Context,
-    camera: &OpenCvCamera,
+    camera: &Camera,
     projection: Projection,
     scene: &Scene,
     mesh: &Mesh,
@@ -159,14 +159,14 @@ const LENS: Projection = Projection::Lens {
 /// warp path's [`WarpStage`]).
 fn time_pinhole_and_warp(
     ctx: &Context,
-    camera: &OpenCvCamera,
+    camera: &Camera,
     scene: &Scene,
     pose: &Pose,
     coordinates: Coordinates,
 ) -> Result<f64> {
-    let invalid = |e: String| crate::gpu::GpuError::Invalid(e);
+    let invalid = |e: String| crate::Error::Input(e);
     let ov = overscan(camera, 1.0).map_err(|e| invalid(e.to_string()))?;
-    let source = OpenCvCamera::new(
+    let source = Camera::new(
         ov.width,
         ov.height,
         ov.intrinsics,
@@ -252,7 +252,7 @@ pub fn run(
         progress(&format!("tessellation: {w}×{h}, L = {edge:?}"));
         let mesh = match edge {
             Some(l) => {
-                tessellate(&scene.mesh, &pose, &camera, l).map_err(crate::gpu::GpuError::Invalid)?
+                tessellate(&scene.mesh, &pose, &camera, l)?
             }
             None => scene.mesh.clone(),
         };

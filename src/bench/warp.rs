@@ -17,7 +17,7 @@ use crate::gpu::{memory_barrier, Context, QueryPool, Result};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
-use crate::model::{Intrinsics, InverseMethod, OpenCvCamera};
+use crate::model::{Intrinsics, InverseMethod, Camera};
 use crate::pass::copy::CopyPass;
 use crate::pass::mesh_warp::MeshWarpTarget;
 use crate::pass::warp::{
@@ -29,9 +29,9 @@ use crate::pass::warp_raster::RasterWarpPass;
 pub const SIZES: [(u32, u32); 3] = [(800, 600), (1920, 1080), (3840, 2160)];
 
 /// The bench camera at a size: the shared `prism_tilt` case (all 14 coefficients) scaled to it.
-pub fn bench_camera(w: u32, h: u32) -> OpenCvCamera {
+pub fn bench_camera(w: u32, h: u32) -> Camera {
     let s = w as f64 / 1024.0;
-    OpenCvCamera::from_coeffs(
+    Camera::from_coeffs(
         w,
         h,
         Intrinsics {

@@ -40,7 +40,7 @@ pub fn inverse(args: InverseArgs) -> Result<(), CliError> {
         eprintln!("device: {}", ctx.gpu().device_name());
     }
     let rows = inverse::run(&reference, ctx.as_ref(), &options, super::progress_line)
-        .map_err(CliError::runtime)?;
+        ?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     if let Some(ctx) = &ctx {
         finish(ctx)?;
@@ -49,7 +49,7 @@ pub fn inverse(args: InverseArgs) -> Result<(), CliError> {
         for r in &rows {
             println!(
                 "{}",
-                serde_json::to_string(r).map_err(|e| CliError::runtime(e.to_string()))?
+                serde_json::to_string(r).map_err(|e| CliError::internal(e.to_string()))?
             );
         }
     } else {
@@ -173,9 +173,9 @@ fn print_rows(rows: &[serde_json::Value], json: bool, table: fn(&[serde_json::Va
     }
 }
 
-fn bench_error(e: crate::gpu::GpuError) -> CliError {
+fn bench_error(e: crate::Error) -> CliError {
     match e {
-        crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+        crate::Error::Input(m) => CliError::input(m),
         other => CliError::from(other),
     }
 }
@@ -186,7 +186,7 @@ pub fn lens(args: LensArgs) -> Result<(), CliError> {
     eprintln!("device: {}", ctx.gpu().device_name());
     let rows = crate::bench::lens::run(&ctx, &dir, args.pixels, &mut |s| super::progress_line(s))
         .map_err(|e| match e {
-        crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+        crate::Error::Input(m) => CliError::input(m),
         other => CliError::from(other),
     })?;
     super::progress_done(&format!("measured {} rows", rows.len()));

@@ -53,7 +53,7 @@ pub struct CalibrationSetArgs {
 
 pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     let camera = load_camera(&args.camera)?;
-    let (columns, rows) = parse_board_size(&args.board).map_err(CliError::input)?;
+    let (columns, rows) = parse_board_size(&args.board)?;
     if !(args.square.is_finite() && args.square > 0.0) {
         return Err(CliError::input(format!(
             "--square {}: expected a positive number of metres",
@@ -109,8 +109,8 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
         let rendered = renderer.render(&scene, &request, &mut |_| {})?;
         let color = rendered
             .color
-            .ok_or_else(|| CliError::runtime("the render produced no colour image"))?;
-        image_io::save(&color, &args.out.join(&file)).map_err(CliError::runtime)?;
+            .ok_or_else(|| CliError::internal("the render produced no colour image"))?;
+        image_io::save(&color, &args.out.join(&file))?;
         let r = pose.rvec();
         let t = pose.translation;
         views.push(serde_json::json!({
@@ -135,9 +135,8 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     });
     let path = args.out.join("poses.json");
     image_io::write_atomically(&path, |tmp| {
-        std::fs::write(tmp, format!("{json:#}\n")).map_err(|e| e.to_string())
-    })
-    .map_err(CliError::runtime)?;
+        std::fs::write(tmp, format!("{json:#}\n"))
+    })?;
     progress_done(&format!(
         "wrote {} views and poses.json to {}",
         poses.len(),

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{context, finish, load_camera, CliError};
-use crate::model::{Intrinsics, OpenCvCamera};
+use crate::model::{Intrinsics, Camera};
 
 #[derive(Args, Debug)]
 pub struct DemoArgs {
@@ -22,8 +22,8 @@ pub struct DemoArgs {
 }
 
 /// Lambers et al.'s Fig. 2 camera.
-pub fn seed_fig2() -> OpenCvCamera {
-    OpenCvCamera::from_coeffs(
+pub fn seed_fig2() -> Camera {
+    Camera::from_coeffs(
         800,
         600,
         Intrinsics {
@@ -65,13 +65,12 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     let pixels = crate::pass::grid_demo::render_grid(&ctx, &camera, args.grid)?;
     finish(&ctx)?;
     let image = image::RgbaImage::from_raw(camera.width, camera.height, pixels)
-        .ok_or_else(|| CliError::runtime("internal: pixel count does not match the image size"))?;
+        .ok_or_else(|| CliError::internal("pixel count does not match the image size"))?;
     crate::imaging::io::write_atomically(&args.output, |tmp| {
         image
             .save_with_format(tmp, image::ImageFormat::Png)
-            .map_err(|e| e.to_string())
-    })
-    .map_err(CliError::input)?;
+            .map_err(std::io::Error::other)
+    })?;
     let invalid = image.pixels().filter(|p| p[3] == 0).count();
     eprintln!(
         "wrote {} ({} px outside the lens's valid domain, left transparent)",

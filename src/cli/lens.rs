@@ -279,9 +279,8 @@ fn fit(args: FitArgs) -> Result<(), CliError> {
     let text = format!("{camera:#}\n");
     match &args.out {
         Some(path) => crate::imaging::io::write_atomically(path, |tmp| {
-            std::fs::write(tmp, &text).map_err(|e| e.to_string())
-        })
-        .map_err(CliError::input)?,
+            std::fs::write(tmp, &text)
+        })?,
         None => print!("{text}"),
     }
     Ok(())
@@ -321,9 +320,9 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
         )));
     }
     let scene = builtin::parse(&args.scene).map_err(|e| CliError::input(e.to_string()))?;
-    let lens_error = |e: String| CliError::input(format!("{}: {e}", args.lens.display()));
+    let lens_error = |e: CliError| e.context(args.lens.display());
     let pose = match &args.pose {
-        Some(p) => Some(Pose::parse(p).map_err(CliError::input)?),
+        Some(p) => Some(Pose::parse(p)?),
         None => None,
     };
     let (optics, pose) = crate::lens::frame_scene(
@@ -380,8 +379,8 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
         progress_line("tracing the film grids through the lens samples");
         let models = channel_models(&optics, &options, args.chromatic).map_err(lens_error)?;
         let ctx = super::context()?;
-        let gpu_error = |e: crate::gpu::GpuError| match e {
-            crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+        let gpu_error = |e: crate::Error| match e {
+            crate::Error::Input(m) => CliError::input(m),
             other => CliError::from(other),
         };
         let mut renderer = crate::pass::lens_render::LensRenderer::new(
@@ -438,7 +437,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             depth: Depth::U8,
         }
     };
-    crate::imaging::io::save(&raster, &args.output).map_err(CliError::runtime)?;
+    crate::imaging::io::save(&raster, &args.output)?;
     eprintln!("wrote {}", args.output.display());
     Ok(())
 }

@@ -18,36 +18,21 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::model::warp::Direction;
-use crate::model::{InverseMethod, OpenCvCamera};
+use crate::model::{InverseMethod, Camera};
 use crate::pass::Precision;
 
-/// A failure to report: the message and the exit code.
-#[derive(Debug)]
-pub struct CliError {
-    pub code: i32,
-    pub message: String,
-}
+/// Errors of the command line are the library's: the kind decides the exit code.
+pub type CliError = crate::Error;
 
-impl CliError {
-    /// Bad input: exit code 2.
-    pub fn input(message: impl Into<String>) -> Self {
-        CliError {
-            code: 2,
-            message: message.into(),
-        }
-    }
-    /// A runtime failure: exit code 1.
-    pub fn runtime(message: impl Into<String>) -> Self {
-        CliError {
-            code: 1,
-            message: message.into(),
-        }
-    }
-}
-
-impl From<crate::gpu::GpuError> for CliError {
-    fn from(e: crate::gpu::GpuError) -> Self {
-        CliError::runtime(e.to_string())
+/// The exit code of a failure, decided here and nowhere else: 2 when the user can fix it (bad
+/// input, a path that does not exist or may not be opened, work the device cannot do), 1 for
+/// everything else (a failure of the machine, the driver, or of vklens itself).
+pub fn exit_code(e: &crate::Error) -> i32 {
+    use crate::ErrorKind;
+    match e.kind() {
+        ErrorKind::Input | ErrorKind::Unsupported => 2,
+        ErrorKind::Io if e.is_bad_path() => 2,
+        _ => 1,
     }
 }
 
@@ -193,18 +178,18 @@ fn parse_precision(s: &str) -> Result<Precision, String> {
 }
 
 /// Loads a camera file, as a one-line input error.
-pub(crate) fn load_camera(path: &std::path::Path) -> Result<OpenCvCamera, CliError> {
-    crate::io::load_camera(path).map_err(|e| CliError::input(e.to_string()))
+pub(crate) fn load_camera(path: &std::path::Path) -> Result<Camera, CliError> {
+    crate::io::load_camera(path)
 }
 
 /// A headless context from the environment; validation messages are checked by `finish`.
 pub(crate) fn context() -> Result<crate::gpu::Context, CliError> {
-    crate::gpu::Context::from_env().map_err(CliError::from)
+    crate::gpu::Context::from_env()
 }
 
 /// Fails if the validation layer (when on) reported anything.
 pub(crate) fn finish(ctx: &crate::gpu::Context) -> Result<(), CliError> {
-    ctx.check_validation().map_err(CliError::from)
+    ctx.check_validation()
 }
 
 /// Progress on stderr: one redrawn line on a terminal, plain lines otherwise (logs, CI).

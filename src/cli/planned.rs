@@ -119,10 +119,10 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
     };
     let file =
         SceneFile::load(Path::new(scene_path)).map_err(|e| CliError::input(e.to_string()))?;
-    let scene = load_geometry(&file).map_err(CliError::input)?;
-    let plan = plan(&file, &scene).map_err(CliError::input)?;
+    let scene = load_geometry(&file)?;
+    let plan = plan(&file, &scene)?;
     let frames = match args.frames() {
-        Some(f) => parse_frames(f, plan.poses.len()).map_err(CliError::input)?,
+        Some(f) => parse_frames(f, plan.poses.len()).map_err(CliError::Input)?,
         None => 0..plan.poses.len(),
     };
     if !out.is_dir() {
@@ -138,7 +138,7 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
     let color_ext = if o.exr { "exr" } else { "png" };
     let total = frames.len();
     let done: std::cell::RefCell<Vec<(usize, f64)>> = Default::default();
-    let mut write = |f: crate::plan::Frame| -> Result<(), crate::gpu::GpuError> {
+    let mut write = |f: crate::plan::Frame| -> Result<(), crate::Error> {
         let name = |kind: &str, ext: &str| out.join(format!("{kind}_{:04}.{ext}", f.index));
         let (c, i, fl, d) = (
             name("color", color_ext),
@@ -156,7 +156,7 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
             &f.rendered,
             Some("png"),
         )
-        .map_err(|e| crate::gpu::GpuError::Invalid(e.message))?;
+        ?;
         done.borrow_mut().push((f.index, f.ms));
         progress_line(&format!(
             "frame {}/{total} ({:.1} ms)",
@@ -165,8 +165,8 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
         ));
         Ok(())
     };
-    let gpu_error = |e: crate::gpu::GpuError| match e {
-        crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+    let gpu_error = |e: crate::Error| match e {
+        crate::Error::Input(m) => CliError::input(m),
         other => CliError::from(other),
     };
     let first = frames.start..frames.start + 1;
@@ -195,9 +195,8 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
     let done = done.into_inner();
     let json = format!("{:#}\n", plan_json(&plan, &done));
     crate::imaging::io::write_atomically(&out.join("plan.json"), |tmp| {
-        std::fs::write(tmp, &json).map_err(|e| e.to_string())
-    })
-    .map_err(CliError::runtime)?;
+        std::fs::write(tmp, &json)
+    })?;
     progress_done(&format!("{} frame(s) in {}", done.len(), out.display()));
     Ok(())
 }

@@ -68,12 +68,12 @@ fn write_results(results: &[Option<[f64; 2]>]) -> Result<(), CliError> {
     let mut out = std::io::stdout().lock();
     serde_json::to_writer(&mut out, &json)
         .and_then(|_| writeln!(out).map_err(serde_json::Error::io))
-        .map_err(|e| CliError::runtime(format!("stdout: {e}")))
+        .map_err(|e| CliError::io(std::path::Path::new("<stdout>"), "cannot write", &e.into()))
 }
 
 /// Runs the points pass on a headless context, checking validation messages when enabled.
 fn on_gpu(
-    cam: &crate::model::OpenCvCamera,
+    cam: &crate::model::Camera,
     mode: PointsMode,
     precision: Precision,
     points: &[[f64; 2]],

@@ -218,11 +218,11 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     }
     let scene = builtin::parse(&args.scene).map_err(|e| CliError::input(e.to_string()))?;
     let pose = match &args.pose {
-        Some(p) => Pose::parse(p).map_err(CliError::input)?,
+        Some(p) => Pose::parse(p)?,
         None => scene.default_pose(&camera),
     };
     let previous_pose = match &args.previous_pose {
-        Some(p) => Pose::parse(p).map_err(CliError::input)?,
+        Some(p) => Pose::parse(p)?,
         None => nudged(&pose, &scene),
     };
     let outputs = Outputs {
@@ -262,7 +262,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     ));
     let rendered =
         render_scene(&ctx, &scene, &request, &mut |s| progress_line(s)).map_err(|e| match e {
-            crate::gpu::GpuError::Invalid(m) => CliError::input(m),
+            crate::Error::Input(m) => CliError::input(m),
             other => CliError::from(other),
         })?;
     finish(&ctx)?;
@@ -324,7 +324,7 @@ pub(crate) fn write_outputs(
     ids_ext: Option<&str>,
 ) -> Result<(), CliError> {
     let save =
-        |raster: &Raster, path: &Path| image_io::save(raster, path).map_err(CliError::runtime);
+        |raster: &Raster, path: &Path| image_io::save(raster, path);
     let float_image = |pixels: Vec<[f32; 4]>| Raster {
         width: r.width,
         height: r.height,

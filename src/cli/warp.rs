@@ -8,10 +8,9 @@ use glam::DVec2;
 use super::{context, finish, CliError};
 use crate::imaging::cpu_warp::{self, Sampling};
 use crate::imaging::{io as image_io, Depth, Pixels, Raster};
-use crate::io::Lens;
 use crate::model::overscan::overscan;
 use crate::model::warp::{Direction, WarpGeometry};
-use crate::model::{CameraModel, InverseMethod, OpenCvCamera};
+use crate::model::{CameraModel, InverseMethod, Camera};
 use crate::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
 
 /// How coordinates are found: a method solved per pixel, or `lut` (a map built once with
@@ -110,7 +109,7 @@ pub struct WarpArgs {
     backend: super::Backend,
 }
 
-fn pinhole(path: &Path) -> Result<OpenCvCamera, CliError> {
+fn pinhole(path: &Path) -> Result<Camera, CliError> {
     let cam = super::load_camera(path)?;
     if cam.distortion.to_coeffs().iter().any(|&c| c != 0.0) {
         return Err(CliError::input(format!(
@@ -119,10 +118,6 @@ fn pinhole(path: &Path) -> Result<OpenCvCamera, CliError> {
         )));
     }
     Ok(cam)
-}
-
-fn load_lens(path: &Path) -> Result<Lens, CliError> {
-    crate::io::load_lens(path).map_err(|e| CliError::input(e.to_string()))
 }
 
 /// Checks an output path before any work is done (so that nothing is left half-done).
@@ -159,10 +154,7 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
     if let Some(m) = &args.mask {
         check_output(m, "mask", &["png"])?;
     }
-    let lens = load_lens(&args.camera)?;
-    let cam = lens
-        .to_opencv()
-        .map_err(|e| CliError::input(format!("{}: {e}", args.camera.display())))?;
+    let cam = super::load_camera(&args.camera)?;
     let method = match (args.method, direction) {
         (WarpMethod::Analytic(m), Direction::Distort) => m,
         (WarpMethod::Analytic(InverseMethod::Newton), Direction::Undistort) | (WarpMethod::Lut, _) => InverseMethod::Newton,
@@ -212,7 +204,7 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
         }
         geometry.channel_cameras = Some(Box::new(cams));
     }
-    let source = image_io::load(&args.input).map_err(CliError::input)?;
+    let source = image_io::load(&args.input)?;
     if (source.width, source.height) != geometry.source_size {
         let whose = match (direction, &args.source_camera) {
             (Direction::Distort, Some(src)) => src.display().to_string(),
@@ -254,7 +246,7 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
             )
         }
     };
-    image_io::save(&out, &args.output).map_err(CliError::input)?;
+    image_io::save(&out, &args.output)?;
     if let Some(m) = &args.mask {
         let raster = Raster {
             width: out.width,
@@ -262,7 +254,7 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
             pixels: Pixels::Rgba8(mask.iter().map(|&v| [v, v, v, 255]).collect()),
             depth: Depth::U8,
         };
-        image_io::save(&raster, m).map_err(CliError::input)?;
+        image_io::save(&raster, m)?;
     }
     let filled = mask.iter().filter(|&&m| m == 0).count();
     eprintln!(
@@ -273,14 +265,14 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
         if filled > 0 { ", filled" } else { "" }
     );
     if precorrect {
-        report_round_trip(&lens, &cam);
+        report_round_trip(&cam);
     }
     Ok(())
 }
 
 /// The Durham radial-correction paper's remark made visible: how far the closed-form inverse's round trip f(f⁻¹(r))
 /// strays from r along the image diagonal, beside the exact inverse.
-fn report_round_trip(lens: &Lens, cam: &OpenCvCamera) {
+fn report_round_trip(cam: &Camera) {
     let worst = |model: &dyn CameraModel, method: InverseMethod| {
         let (w, h) = model.size();
         let mut worst = 0.0f64;
@@ -295,13 +287,13 @@ fn report_round_trip(lens: &Lens, cam: &OpenCvCamera) {
         }
         worst
     };
-    let model: &dyn CameraModel = match lens {
-        Lens::Brown(b) => b,
-        Lens::OpenCv(_) => cam,
+    let brown = cam.brown();
+    let (model, paper): (&dyn CameraModel, &str) = match &brown {
+        Some(b) => (b, "the Durham radial-correction paper's"),
+        None => (cam, "Lambers et al.'s"),
     };
     eprintln!(
-        "round trip f(f⁻¹(r)) along the diagonal: closed-form inverse (seed {} Eq. 2) off by up to {:.3} px; Newton off by up to {:.1e} px",
-        if matches!(lens, Lens::Brown(_)) { "002" } else { "000" },
+        "round trip f(f⁻¹(r)) along the diagonal: closed-form inverse ({paper} Eq. 2) off by up to {:.3} px; Newton off by up to {:.1e} px",
         worst(model, InverseMethod::Heikkila),
         worst(model, InverseMethod::Newton)
     );

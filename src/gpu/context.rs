@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
-use super::{device_name, Gpu, GpuError, GpuInner, Result};
+use super::{device_name, Error, Gpu, GpuInner, Result};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -107,7 +107,7 @@ impl Context {
 
     /// Creates a context.
     pub fn new(options: ContextOptions) -> Result<Self> {
-        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loading(e.to_string()))?;
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::NoVulkan(format!("cannot load the Vulkan library ({e}); install it with: apt-get install libvulkan1 mesa-vulkan-drivers")))?;
         let messages = Arc::new(Mutex::new(Vec::new()));
 
         let mut layers = Vec::new();
@@ -120,7 +120,7 @@ impl Context {
                     .unwrap_or(false)
             });
             if !found {
-                return Err(GpuError::NoValidationLayer);
+                return Err(Error::NoVulkan("the Khronos validation layer was requested but is not installed (apt-get install vulkan-validationlayers)".into()));
             }
             layers.push(VALIDATION_LAYER.as_ptr());
             extensions.push(ash::ext::debug_utils::NAME.as_ptr());
@@ -166,7 +166,7 @@ impl Context {
             _messages: messages.clone(),
         });
         // On failure below, destroy the instance (and messenger) we made.
-        let fail = |owned: &mut Option<Owned>, e: GpuError| -> GpuError {
+        let fail = |owned: &mut Option<Owned>, e: Error| -> Error {
             if let Some(o) = owned.take() {
                 unsafe {
                     if let Some((loader, m)) = &o.debug {
@@ -194,7 +194,7 @@ impl Context {
         if supported.shader_storage_image_extended_formats != vk::TRUE {
             return Err(fail(
                 &mut owned,
-                GpuError::NoDevice("the device lacks shaderStorageImageExtendedFormats".into()),
+                Error::NoVulkan("no Vulkan device matches: the device lacks shaderStorageImageExtendedFormats".into()),
             ));
         }
         // The geometry path drops triangles in a geometry shader (lavapipe has them).
@@ -313,7 +313,7 @@ impl Context {
         if m.is_empty() {
             Ok(())
         } else {
-            Err(GpuError::Validation(m))
+            Err(Error::Validation(m))
         }
     }
 }
@@ -355,7 +355,7 @@ fn pick_device(
         .map(|c| format!("{}: {} ({:?})", c.0, c.4, c.3))
         .collect();
     if candidates.is_empty() {
-        return Err(GpuError::NoDevice(
+        return Err(Error::NoVulkan(
             "no Vulkan device with a compute+graphics queue (install mesa-vulkan-drivers for lavapipe)".into(),
         ));
     }
@@ -383,8 +383,8 @@ fn pick_device(
         },
     };
     let c = chosen.ok_or_else(|| {
-        GpuError::NoDevice(format!(
-            "VKLENS_DEVICE={} matches none of: {}",
+        Error::NoVulkan(format!(
+            "no Vulkan device matches: VKLENS_DEVICE={} matches none of: {}",
             wanted.unwrap_or(""),
             names.join("; ")
         ))

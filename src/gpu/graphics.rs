@@ -7,7 +7,7 @@ use ash::vk;
 use super::pipeline::{
     pipeline_layout, set_layout, shader_module, specialization_data, DescriptorLayout,
 };
-use super::{Gpu, GpuError, Result, SpecConstants};
+use super::{Error, Gpu, Result, SpecConstants};
 
 /// A one-subpass render pass: colour attachments by location (`None`: that location is
 /// unused), an optional depth attachment. Every attachment is cleared on load and stored
@@ -294,7 +294,7 @@ impl GraphicsPipeline {
             .iter()
             .fold(vk::ShaderStageFlags::empty(), |a, s| a | s.stage);
         if all_stages.contains(vk::ShaderStageFlags::GEOMETRY) && !gpu.supports_geometry_shader() {
-            return Err(GpuError::Invalid(
+            return Err(Error::Unsupported(
                 "the device was created without the geometryShader feature, which the geometry path needs".into(),
             ));
         }

@@ -35,28 +35,7 @@ pub use pipeline::{
 };
 pub use resources::{Buffer, Image, QueryPool};
 
-/// Errors from the GPU layer.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum GpuError {
-    #[error("cannot load the Vulkan library ({0}); install it with: apt-get install libvulkan1 mesa-vulkan-drivers")]
-    Loading(String),
-    #[error("Vulkan call failed: {0}")]
-    Vk(#[from] vk::Result),
-    #[error("GPU memory allocation failed: {0}")]
-    Allocation(#[from] gpu_allocator::AllocationError),
-    #[error("no Vulkan device matches: {0}")]
-    NoDevice(String),
-    #[error("the Khronos validation layer was requested but is not installed (apt-get install vulkan-validationlayers)")]
-    NoValidationLayer,
-    #[error("Vulkan validation reported {} message(s):\n{}", .0.len(), .0.join("\n"))]
-    Validation(Vec<String>),
-    #[error("{0}")]
-    Invalid(String),
-}
-
-/// Crate result for GPU work.
-pub type Result<T, E = GpuError> = std::result::Result<T, E>;
+pub use crate::error::{Error, Result};
 
 /// Optional device features vklens can use, as the caller enabled them.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -111,13 +90,13 @@ impl Gpu {
         features: EnabledFeatures,
     ) -> Result<Self> {
         if device.handle() == vk::Device::null() || queue == vk::Queue::null() {
-            return Err(GpuError::Invalid("null device or queue handle".into()));
+            return Err(Error::input("null device or queue handle"));
         }
         let props = unsafe { instance.get_physical_device_properties(physical_device) };
         let families =
             unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
         let family = families.get(queue_family as usize).ok_or_else(|| {
-            GpuError::Invalid(format!("queue family {queue_family} does not exist"))
+            Error::input(format!("queue family {queue_family} does not exist"))
         })?;
         Ok(Gpu {
             inner: Arc::new(GpuInner {

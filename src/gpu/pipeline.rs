@@ -2,7 +2,7 @@
 
 use ash::vk;
 
-use super::{Gpu, GpuError, Result};
+use super::{Error, Gpu, Result};
 
 /// Specialization constants: `(constant_id, 32-bit value)` pairs. Booleans are 32-bit in
 /// SPIR-V (0 or 1).
@@ -214,7 +214,7 @@ pub(crate) fn pipeline_layout(
 /// A shader module from SPIR-V bytes.
 pub(crate) fn shader_module(gpu: &Gpu, spirv: &[u8]) -> Result<vk::ShaderModule> {
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
-        .map_err(|e| GpuError::Invalid(format!("bad SPIR-V: {e}")))?;
+        .map_err(|e| Error::internal(format!("bad SPIR-V: {e}")))?;
     Ok(unsafe {
         gpu.device()
             .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)?

@@ -4,7 +4,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-use super::{Gpu, GpuError, Result};
+use super::{Error, Gpu, Result};
 
 /// A buffer with its allocation. Host-visible ones can be read and written directly.
 pub struct Buffer {
@@ -66,7 +66,7 @@ impl Buffer {
         self.allocation
             .as_ref()
             .and_then(|a| a.mapped_slice())
-            .ok_or_else(|| GpuError::Invalid("buffer is not host-visible".into()))
+            .ok_or_else(|| Error::internal("buffer is not host-visible"))
     }
 
     /// Writes bytes at `offset` (host-visible buffers only; memory is host-coherent).
@@ -74,12 +74,12 @@ impl Buffer {
         let alloc = self
             .allocation
             .as_ref()
-            .ok_or_else(|| GpuError::Invalid("buffer has no memory".into()))?;
+            .ok_or_else(|| Error::internal("buffer has no memory"))?;
         let ptr = alloc
             .mapped_ptr()
-            .ok_or_else(|| GpuError::Invalid("buffer is not host-visible".into()))?;
+            .ok_or_else(|| Error::internal("buffer is not host-visible"))?;
         if offset + bytes.len() > alloc.size() as usize {
-            return Err(GpuError::Invalid("write past the end of a buffer".into()));
+            return Err(Error::internal("write past the end of a buffer"));
         }
         // SAFETY: in bounds (checked above), the mapping lives as long as the allocation, and
         // the GPU does not use the buffer while the host writes it (callers wait on fences).
@@ -98,7 +98,7 @@ impl Buffer {
         let bytes = self.mapped()?;
         let n = count * std::mem::size_of::<T>();
         if n > bytes.len() {
-            return Err(GpuError::Invalid("read past the end of a buffer".into()));
+            return Err(Error::internal("read past the end of a buffer"));
         }
         Ok(bytemuck::pod_collect_to_vec(&bytes[..n]))
     }
@@ -123,7 +123,7 @@ fn allocate(
     let mut allocator = gpu
         .allocator()
         .lock()
-        .map_err(|_| GpuError::Invalid("allocator lock poisoned".into()))?;
+        .map_err(|_| Error::internal("allocator lock poisoned"))?;
     let allocation = allocator.allocate(&AllocationCreateDesc {
         name,
         requirements,
@@ -282,9 +282,7 @@ impl QueryPool {
     /// `count` timestamp queries; fails if the queue has no timestamps.
     pub fn timestamps(gpu: &Gpu, count: u32) -> Result<Self> {
         if gpu.timestamp_period_ns().is_none() {
-            return Err(GpuError::Invalid(
-                "this queue does not support timestamps".into(),
-            ));
+            return Err(Error::unsupported("this queue does not support timestamps"));
         }
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)

@@ -7,30 +7,31 @@ use std::path::Path;
 use image::{DynamicImage, ImageBuffer, Rgba};
 
 use super::{Depth, Pixels, Raster};
+use crate::{Error, Result};
 
 /// Reads an image; errors are one line naming the file.
-pub fn load(path: &Path) -> Result<Raster, String> {
+pub fn load(path: &Path) -> Result<Raster> {
     let shown = path.display();
     let reader = image::ImageReader::open(path)
-        .map_err(|e| format!("{shown}: cannot read: {e}"))?
+        .map_err(|e| Error::io(path, "cannot read", &e))?
         .with_guessed_format()
-        .map_err(|e| format!("{shown}: cannot read: {e}"))?;
+        .map_err(|e| Error::io(path, "cannot read", &e))?;
     match reader.format() {
         Some(image::ImageFormat::Png) | Some(image::ImageFormat::OpenExr) => {}
         Some(f) => {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "{shown}: {f:?} images are not supported (vklens reads PNG and OpenEXR)"
-            ))
+            )))
         }
         None => {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "{shown}: not an image vklens can read (PNG or OpenEXR)"
-            ))
+            )))
         }
     }
     let img = reader
         .decode()
-        .map_err(|e| format!("{shown}: cannot decode: {e}"))?;
+        .map_err(|e| Error::input(format!("{shown}: cannot decode: {e}")))?;
     let (width, height) = (img.width(), img.height());
     let raster = match img {
         DynamicImage::ImageLuma8(_)
@@ -76,7 +77,7 @@ pub fn load(path: &Path) -> Result<Raster, String> {
 
 /// Writes `raster` to `path` (`.png` or `.exr`), keeping its depth where the format allows
 /// (8-bit or 16-bit PNG; float data becomes 16-bit PNG or float EXR).
-pub fn save(raster: &Raster, path: &Path) -> Result<(), String> {
+pub fn save(raster: &Raster, path: &Path) -> Result<()> {
     let shown = path.display();
     let ext = path
         .extension()
@@ -85,16 +86,20 @@ pub fn save(raster: &Raster, path: &Path) -> Result<(), String> {
     let exr = match ext.as_deref() {
         Some("png") => false,
         Some("exr") => true,
-        _ => return Err(format!("{shown}: the output must be a .png or .exr file")),
+        _ => {
+            return Err(Error::input(format!(
+                "{shown}: the output must be a .png or .exr file"
+            )))
+        }
     };
     let (w, h) = (raster.width, raster.height);
     let image: DynamicImage = match (&raster.pixels, exr) {
         (Pixels::Rgba8(p), false) => DynamicImage::ImageRgba8(
-            ImageBuffer::from_raw(w, h, p.iter().flatten().copied().collect()).ok_or("size")?,
+            ImageBuffer::from_raw(w, h, p.iter().flatten().copied().collect()).ok_or_else(size_mismatch)?,
         ),
         (Pixels::R32Uint(p), false) => {
             let v: Vec<u16> = p.iter().map(|&id| id.min(u16::MAX as u32) as u16).collect();
-            DynamicImage::ImageLuma16(ImageBuffer::from_raw(w, h, v).ok_or("size")?)
+            DynamicImage::ImageLuma16(ImageBuffer::from_raw(w, h, v).ok_or_else(size_mismatch)?)
         }
         (Pixels::Rgba32F(p), false) if raster.depth == Depth::U8 => {
             let v: Vec<u8> = p
@@ -102,7 +107,7 @@ pub fn save(raster: &Raster, path: &Path) -> Result<(), String> {
                 .flatten()
                 .map(|&c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
                 .collect();
-            DynamicImage::ImageRgba8(ImageBuffer::from_raw(w, h, v).ok_or("size")?)
+            DynamicImage::ImageRgba8(ImageBuffer::from_raw(w, h, v).ok_or_else(size_mismatch)?)
         }
         (Pixels::Rgba32F(p), false) => {
             let v: Vec<u16> = p
@@ -110,11 +115,11 @@ pub fn save(raster: &Raster, path: &Path) -> Result<(), String> {
                 .flatten()
                 .map(|&c| (c.clamp(0.0, 1.0) * 65535.0).round() as u16)
                 .collect();
-            DynamicImage::ImageRgba16(ImageBuffer::<Rgba<u16>, _>::from_raw(w, h, v).ok_or("size")?)
+            DynamicImage::ImageRgba16(ImageBuffer::<Rgba<u16>, _>::from_raw(w, h, v).ok_or_else(size_mismatch)?)
         }
         (_, true) => {
             let v: Vec<f32> = (0..raster.len()).flat_map(|i| raster.rgba_f32(i)).collect();
-            DynamicImage::ImageRgba32F(ImageBuffer::from_raw(w, h, v).ok_or("size")?)
+            DynamicImage::ImageRgba32F(ImageBuffer::from_raw(w, h, v).ok_or_else(size_mismatch)?)
         }
     };
     write_atomically(path, |tmp| {
@@ -123,24 +128,32 @@ pub fn save(raster: &Raster, path: &Path) -> Result<(), String> {
         } else {
             image::ImageFormat::Png
         };
-        image
-            .save_with_format(tmp, format)
-            .map_err(|e| e.to_string())
+        image.save_with_format(tmp, format).map_err(|e| match e {
+            image::ImageError::IoError(e) => e,
+            other => std::io::Error::other(other),
+        })
     })
+}
+
+fn size_mismatch() -> Error {
+    Error::internal("the pixel count does not match the image size")
 }
 
 /// Runs `write` on a temporary path beside `path`, then renames it into place.
 pub fn write_atomically(
     path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), String> {
+    write: impl FnOnce(&Path) -> std::io::Result<()>,
+) -> Result<()> {
     let shown = path.display();
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     if !dir.is_dir() {
-        return Err(format!("{shown}: folder {} does not exist", dir.display()));
+        return Err(Error::input(format!(
+            "{shown}: folder {} does not exist",
+            dir.display()
+        )));
     }
     let name = path
         .file_name()
@@ -148,10 +161,8 @@ pub fn write_atomically(
         .unwrap_or("output");
     let tmp = dir.join(format!(".{name}.vklens-tmp"));
     let result = write(&tmp)
-        .map_err(|e| format!("{shown}: cannot write: {e}"))
-        .and_then(|_| {
-            std::fs::rename(&tmp, path).map_err(|e| format!("{shown}: cannot write: {e}"))
-        });
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| Error::io(path, "cannot write", &e));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }

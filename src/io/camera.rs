@@ -1,4 +1,4 @@
-//! Camera files as users bring them, all read into one [`OpenCvCamera`]:
+//! Camera files as users bring them, all read into one [`Camera`]:
 //!
 //! * vklens JSON: `{"width", "height", "fx", "fy", "cx", "cy", "dist_coeffs": [...]}`;
 //!   unknown keys are ignored (the cases of the shared reference file load as they stand).
@@ -13,82 +13,24 @@
 //! Every format is first turned into a JSON tree, then read by one function, so every format
 //! gets the same checks and the same error messages (file, field, value).
 
-use std::fmt;
 use std::path::Path;
 
 use serde_json::{Map, Value};
 
-use crate::model::{BrownRadial, Intrinsics, ModelError, OpenCvCamera};
+use crate::model::{BrownRadial, Camera, Intrinsics, ModelError};
+use crate::{Error, Result};
 
-/// A lens as a file describes it. (Loaded once per command; the size difference between the
-/// variants does not matter.)
-#[derive(Debug, Clone)]
-#[allow(clippy::large_enum_variant)]
-pub enum Lens {
-    OpenCv(OpenCvCamera),
-    Brown(BrownRadial),
-}
-
-impl Lens {
-    /// The lens as an OpenCV camera (Brown is the OpenCV model with fx = w/2, k1 = c1, k2 = c2).
-    pub fn to_opencv(&self) -> Result<OpenCvCamera, ModelError> {
-        match self {
-            Lens::OpenCv(c) => Ok(c.clone()),
-            Lens::Brown(b) => b.to_opencv(),
-        }
-    }
-}
-
-/// A camera file that could not be used: which file, and what is wrong with it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CameraFileError {
-    pub file: String,
-    pub message: String,
-}
-
-impl fmt::Display for CameraFileError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.file, self.message)
-    }
-}
-
-impl std::error::Error for CameraFileError {}
-
-/// Reads a camera file (format detected from its content) as an OpenCV camera.
-pub fn load_camera(path: &Path) -> Result<OpenCvCamera, CameraFileError> {
-    let file = path.display().to_string();
-    load_lens(path)?.to_opencv().map_err(|e| CameraFileError {
-        file,
-        message: e.to_string(),
-    })
-}
-
-/// Reads a camera or lens file, keeping a Brown lens as such.
-pub fn load_lens(path: &Path) -> Result<Lens, CameraFileError> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| CameraFileError {
-        file: file.clone(),
-        message: format!("cannot read camera file: {e}"),
-    })?;
-    parse_lens(&text, &file)
+/// Reads a camera file (format detected from its content). A Brown lens file gives a camera
+/// that remembers it ([`Camera::brown`]).
+pub fn load_camera(path: &Path) -> Result<Camera> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Error::io(path, "cannot read camera file", &e))?;
+    parse_camera(&text, &path.display().to_string())
 }
 
 /// Parses the text of a camera file; `origin` names it in errors.
-pub fn parse_camera(text: &str, origin: &str) -> Result<OpenCvCamera, CameraFileError> {
-    parse_lens(text, origin)?
-        .to_opencv()
-        .map_err(|e| CameraFileError {
-            file: origin.to_string(),
-            message: e.to_string(),
-        })
-}
-
-/// Parses the text of a camera or lens file.
-pub fn parse_lens(text: &str, origin: &str) -> Result<Lens, CameraFileError> {
-    let err = |message: String| CameraFileError {
-        file: origin.to_string(),
-        message,
-    };
+pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
+    let err = |message: String| Error::input(format!("{origin}: {message}"));
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
     let tree = if trimmed.starts_with('{') {
         serde_json::from_str::<Value>(trimmed).map_err(|e| err(format!("invalid JSON: {e}")))?
@@ -98,12 +40,13 @@ pub fn parse_lens(text: &str, origin: &str) -> Result<Lens, CameraFileError> {
         yaml_to_tree(trimmed).map_err(err)?
     };
     if tree.get("model").and_then(Value::as_str) == Some("brown") {
-        return brown_from_tree(&tree).map(Lens::Brown).map_err(err);
+        let brown = brown_from_tree(&tree).map_err(err)?;
+        return Camera::from_brown(&brown).map_err(|e| err(e.to_string()));
     }
-    camera_from_tree(&tree).map(Lens::OpenCv).map_err(err)
+    camera_from_tree(&tree).map_err(err)
 }
 
-fn brown_from_tree(tree: &Value) -> Result<BrownRadial, String> {
+fn brown_from_tree(tree: &Value) -> std::result::Result<BrownRadial, String> {
     let obj = tree.as_object().ok_or("expected an object")?;
     let width = dimension(obj, &["width", "image_width"])?;
     let height = dimension(obj, &["height", "image_height"])?;
@@ -117,11 +60,11 @@ fn brown_from_tree(tree: &Value) -> Result<BrownRadial, String> {
 }
 
 /// Reads a camera from a parsed JSON object (any of the layouts above).
-pub fn camera_from_value(value: &Value) -> Result<OpenCvCamera, String> {
+pub fn camera_from_value(value: &Value) -> std::result::Result<Camera, String> {
     camera_from_tree(value)
 }
 
-fn camera_from_tree(tree: &Value) -> Result<OpenCvCamera, String> {
+fn camera_from_tree(tree: &Value) -> std::result::Result<Camera, String> {
     let obj = tree
         .as_object()
         .ok_or_else(|| "expected an object/mapping at the top level".to_string())?;
@@ -184,7 +127,7 @@ fn camera_from_tree(tree: &Value) -> Result<OpenCvCamera, String> {
     } else {
         coeffs
     };
-    OpenCvCamera::from_coeffs(width, height, intrinsics, &coeffs).map_err(|e| match e {
+    Camera::from_coeffs(width, height, intrinsics, &coeffs).map_err(|e| match e {
         ModelError::CoefficientCount(n) => format!(
             "distortion coefficients: OpenCV accepts 4, 5, 8, 12 or 14 values, this file has {n}"
         ),
@@ -211,14 +154,14 @@ fn parse_float(s: &str) -> Option<f64> {
     }
 }
 
-fn number_field(obj: &Map<String, Value>, key: &str) -> Result<f64, String> {
+fn number_field(obj: &Map<String, Value>, key: &str) -> std::result::Result<f64, String> {
     let v = obj
         .get(key)
         .ok_or_else(|| format!("missing field `{key}`"))?;
     as_number(v).ok_or_else(|| format!("field `{key}` must be a number, got {v}"))
 }
 
-fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> Result<u32, String> {
+fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> std::result::Result<u32, String> {
     let (key, v) = keys
         .iter()
         .find_map(|k| obj.get(*k).map(|v| (*k, v)))
@@ -233,7 +176,7 @@ fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> Result<u32, String> {
     Ok(n as u32)
 }
 
-fn number_list(v: &Value, key: &str) -> Result<Vec<f64>, String> {
+fn number_list(v: &Value, key: &str) -> std::result::Result<Vec<f64>, String> {
     let arr = v
         .as_array()
         .ok_or_else(|| format!("field `{key}` must be a list of numbers, got {v}"))?;
@@ -249,7 +192,7 @@ fn number_list(v: &Value, key: &str) -> Result<Vec<f64>, String> {
 fn matrix_data<'a>(
     obj: &Map<String, Value>,
     keys: &[&'a str],
-) -> Result<Option<(&'a str, Vec<f64>)>, String> {
+) -> std::result::Result<Option<(&'a str, Vec<f64>)>, String> {
     let Some((key, v)) = keys.iter().find_map(|k| obj.get(*k).map(|v| (*k, v))) else {
         return Ok(None);
     };
@@ -278,7 +221,7 @@ fn matrix_data<'a>(
 
 /// YAML (OpenCV FileStorage or ROS) → JSON tree. OpenCV's `%YAML:1.0` directive is not valid
 /// YAML 1.1/1.2 syntax, so directive lines are dropped; `!!opencv-matrix` tags are ignored.
-fn yaml_to_tree(text: &str) -> Result<Value, String> {
+fn yaml_to_tree(text: &str) -> std::result::Result<Value, String> {
     use yaml_rust2::{Yaml, YamlLoader};
     let cleaned: String = text
         .lines()
@@ -307,7 +250,7 @@ fn yaml_to_tree(text: &str) -> Result<Value, String> {
 
 /// OpenCV FileStorage XML → JSON tree: `<opencv_storage>`'s children become keys; an element
 /// with children becomes an object; `data` text becomes a list of numbers.
-fn xml_to_tree(text: &str) -> Result<Value, String> {
+fn xml_to_tree(text: &str) -> std::result::Result<Value, String> {
     let doc = roxmltree::Document::parse(text).map_err(|e| format!("invalid XML: {e}"))?;
     let root = doc.root_element();
     fn convert(node: roxmltree::Node) -> Value {

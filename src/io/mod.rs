@@ -3,4 +3,4 @@
 pub mod camera;
 pub mod reference;
 
-pub use camera::{load_camera, load_lens, parse_camera, parse_lens, CameraFileError, Lens};
+pub use camera::{load_camera, parse_camera};

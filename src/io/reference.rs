@@ -1,6 +1,7 @@
 //! The shared reference data (`../shared/reference/`), read by tests and by `vklens bench`.
 //! It is never copied into the repository: this finds it beside the checkout.
 
+use crate::{Error, Result};
 use std::path::PathBuf;
 
 use serde::Deserialize;
@@ -37,8 +38,8 @@ pub struct ReferencePoint {
 
 impl ReferenceCase {
     /// The case as a camera (it is a valid camera object as it stands).
-    pub fn camera(&self) -> Result<crate::model::OpenCvCamera, crate::model::ModelError> {
-        crate::model::OpenCvCamera::from_coeffs(
+    pub fn camera(&self) -> Result<crate::model::Camera, crate::model::ModelError> {
+        crate::model::Camera::from_coeffs(
             self.width,
             self.height,
             crate::model::Intrinsics {
@@ -70,13 +71,9 @@ pub fn reference_path() -> PathBuf {
 }
 
 /// Loads the shared OpenCV reference file.
-pub fn load_reference() -> Result<ReferenceFile, String> {
+pub fn load_reference() -> Result<ReferenceFile> {
     let path = reference_path();
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        format!(
-            "{}: cannot read the shared reference file: {e}",
-            path.display()
-        )
-    })?;
-    serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| Error::io(&path, "cannot read the shared reference file", &e))?;
+    serde_json::from_str(&text).map_err(|e| Error::input(format!("{}: {e}", path.display())))
 }

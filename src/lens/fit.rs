@@ -7,6 +7,7 @@
 //! it to `f·t·(1 + k1 t² + k2 t⁴ + k3 t⁶)` pixels with t = tan θ — linear in
 //! (f, f·k1, f·k2, f·k3), so the fit is an exact linear least-squares problem.
 
+use crate::{Error, Result};
 use glam::DMat4;
 use glam::DVec4;
 
@@ -46,22 +47,22 @@ pub fn fit_opencv(
     pixels: (u32, u32),
     focus_m: f64,
     lambda_um: f64,
-) -> Result<OpenCvFit, String> {
+) -> Result<OpenCvFit> {
     let pitch_x = sensor_mm.0 / pixels.0 as f64;
     let pitch_y = sensor_mm.1 / pixels.1 as f64;
     if !(pitch_x > 0.0 && pitch_y > 0.0) || ((pitch_x - pitch_y) / pitch_x).abs() > 1e-3 {
-        return Err(format!(
+        return Err(Error::input(format!(
             "pixels must be square: {pitch_x:.6} × {pitch_y:.6} mm (sensor / pixels)"
-        ));
+        )));
     }
     let par = analyse(p, lambda_um);
     let (Some(efl), Some(bfl)) = (par.efl, par.bfl) else {
-        return Err("the lens is afocal: it has no focal length to fit".into());
+        return Err(Error::input("the lens is afocal: it has no focal length to fit"));
     };
     if efl <= 0.0 {
-        return Err(format!(
+        return Err(Error::input(format!(
             "the lens diverges (EFL {efl:.3} mm): no real image to fit"
-        ));
+        )));
     }
     let image = if focus_m.is_infinite() {
         Some(bfl)
@@ -71,9 +72,9 @@ pub fn fit_opencv(
         None
     };
     let Some(image) = image.filter(|d| d.is_finite() && *d > 0.0) else {
-        return Err(format!(
+        return Err(Error::input(format!(
             "cannot focus at {focus_m} m: the image would not be behind the lens"
-        ));
+        )));
     };
     let film_z = par.rear_vertex_z + image;
     let half_diagonal = 0.5 * (sensor_mm.0.hypot(sensor_mm.1));
@@ -96,10 +97,10 @@ pub fn fit_opencv(
         }
     }
     if samples.len() < 8 {
-        return Err(format!(
+        return Err(Error::input(format!(
             "only {} chief rays reach the film: the lens vignettes the field",
             samples.len()
-        ));
+        )));
     }
     // Normal equations of r = a t + b t³ + c t⁵ + d t⁷.
     let mut ata = DMat4::ZERO;
@@ -110,7 +111,7 @@ pub fn fit_opencv(
         atb += row * r;
     }
     if ata.determinant().abs() < 1e-300 {
-        return Err("the fit is singular".into());
+        return Err(Error::input("the fit is singular"));
     }
     let c = ata.inverse() * atb;
     let f = c.x;

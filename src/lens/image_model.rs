@@ -21,12 +21,13 @@
 //! Z > 0). The film is read as a camera sensor is: pixel `(u, v)` (OpenCV centres) sits at
 //! film `x = −(u − c_x)·pitch, y = (v − c_y)·pitch`, so the image is upright.
 
+use crate::{Error, Result};
 use glam::{DMat3, DVec2, DVec3};
 
 use super::paraxial::{analyse, focus};
 use super::prescription::{Prescription, LAMBDA_D};
 use super::trace::{trace, Ray};
-use crate::model::{Intrinsics, OpenCvCamera, OpenCvDistortion};
+use crate::model::{Intrinsics, Camera, OpenCvDistortion};
 
 /// The film: its pixel grid and where it sits.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,32 +92,32 @@ impl Optics {
         pitch_mm: f64,
         focus_m: f64,
         f_number: Option<f64>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self> {
         if !(pitch_mm.is_finite() && pitch_mm > 0.0) {
-            return Err(format!("pixel pitch {pitch_mm} mm must be positive"));
+            return Err(Error::input(format!("pixel pitch {pitch_mm} mm must be positive")));
         }
         if pixels.0 == 0 || pixels.1 == 0 {
-            return Err("the film needs at least one pixel".into());
+            return Err(Error::input("the film needs at least one pixel"));
         }
         let par = analyse(lens, LAMBDA_D);
         let (Some(efl), Some(own_n)) = (par.efl, par.f_number) else {
-            return Err("the lens is afocal: it forms no image".into());
+            return Err(Error::input("the lens is afocal: it forms no image"));
         };
         if efl <= 0.0 {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "the lens diverges (EFL {efl:.3} mm): no real image"
-            ));
+            )));
         }
         let mut lens = lens.clone();
         let f_number = match f_number {
             None => own_n,
             Some(n) if !(n.is_finite() && n > 0.0) => {
-                return Err(format!("f-stop {n} must be a positive number"))
+                return Err(Error::input(format!("f-stop {n} must be a positive number")))
             }
             Some(n) if n < own_n * 0.999 => {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "f/{n} is faster than the lens opens: its widest is f/{own_n:.2}"
-                ))
+                )))
             }
             Some(n) => {
                 // The entrance pupil is the stop's (paraxial) image: its diameter scales with
@@ -127,7 +128,7 @@ impl Optics {
             }
         };
         if !(focus_m > 0.0) {
-            return Err(format!("focus distance {focus_m} m must be positive"));
+            return Err(Error::input(format!("focus distance {focus_m} m must be positive")));
         }
         let rear_z = par.rear_vertex_z;
         let image = if focus_m.is_infinite() {
@@ -136,10 +137,10 @@ impl Optics {
             focus(&lens, focus_m * 1000.0, LAMBDA_D)
         };
         let Some(image) = image.filter(|d| d.is_finite() && *d > 0.0) else {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "cannot focus at {focus_m} m: the image would not be behind the lens \
                  (closer than its front focal length?)"
-            ));
+            )));
         };
         Ok(Optics {
             reversed: lens.reversed(),
@@ -159,14 +160,14 @@ impl Optics {
     /// A lens with the film placed by hand (no focusing, no f-stop change): `film.z_mm` is
     /// where the film is, `focus_m` where the virtual image planes go. Any lens works here,
     /// afocal ones and bare stops (a pinhole camera) included.
-    pub fn with_film(lens: &Prescription, film: Film, focus_m: f64) -> Result<Self, String> {
+    pub fn with_film(lens: &Prescription, film: Film, focus_m: f64) -> Result<Self> {
         let rear_z = lens.vertex_positions()[lens.surfaces.len() - 1];
         if !(film.pitch_mm > 0.0 && film.z_mm > rear_z && focus_m > 0.0) {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "film at z {} mm must lie behind the rear vertex ({rear_z} mm), with a \
                  positive pitch and focus distance",
                 film.z_mm
-            ));
+            )));
         }
         Ok(Optics {
             reversed: lens.reversed(),
@@ -182,14 +183,14 @@ impl Optics {
     /// length in pixels = the distance from the rear principal plane to the film (the
     /// magnification of the focused plane), principal point at the film centre. Used to
     /// frame scenes, as the GPU paths' cameras do.
-    pub fn equivalent_camera(&self) -> Result<OpenCvCamera, String> {
+    pub fn equivalent_camera(&self) -> Result<Camera> {
         let par = analyse(&self.lens, LAMBDA_D);
         let h = par
             .rear_principal_z
-            .ok_or_else(|| "the lens is afocal".to_string())?;
+            .ok_or_else(|| Error::input("the lens is afocal"))?;
         let f = (self.film.z_mm - h) / self.film.pitch_mm;
         let (cx, cy) = self.film.centre_px();
-        OpenCvCamera::new(
+        Camera::new(
             self.film.width,
             self.film.height,
             Intrinsics {
@@ -200,7 +201,7 @@ impl Optics {
             },
             OpenCvDistortion::default(),
         )
-        .map_err(|e| e.to_string())
+        .map_err(Error::from)
     }
 
     /// The rear (image-side) surface point at radial position `xy` (mm) — on its sphere.
@@ -237,14 +238,14 @@ impl Optics {
 
     /// Radius (mm) of the disc on the rear surface through which the axial film point sees
     /// light (the exit pupil's footprint there), found by bisection.
-    pub fn sample_disc_radius(&self, lambda_um: f64) -> Result<f64, String> {
+    pub fn sample_disc_radius(&self, lambda_um: f64) -> Result<f64> {
         let centre = self.film.point(DVec2::from(self.film.centre_px()));
         let passes = |r: f64| {
             self.trace_from_film(centre, self.rear_point(DVec2::new(r, 0.0)), lambda_um)
                 .is_some()
         };
         if !passes(0.0) {
-            return Err("the axial ray does not pass the lens".into());
+            return Err(Error::input("the axial ray does not pass the lens"));
         }
         let mut lo = 0.0;
         let mut hi = 0.5 * self.reversed.surfaces[0].aperture;
@@ -265,9 +266,9 @@ impl Optics {
     /// `n` sample points on the rear surface over the disc of [`Self::sample_disc_radius`],
     /// each standing for an equal area (a Vogel spiral; one sample is the centre), and the
     /// disc's area (mm², projected on the plane normal to the axis).
-    pub fn lens_samples(&self, n: u32, lambda_um: f64) -> Result<(Vec<DVec3>, f64), String> {
+    pub fn lens_samples(&self, n: u32, lambda_um: f64) -> Result<(Vec<DVec3>, f64)> {
         if n == 0 {
-            return Err("at least one lens sample".into());
+            return Err(Error::input("at least one lens sample"));
         }
         let radius = self.sample_disc_radius(lambda_um)?;
         let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
@@ -297,7 +298,7 @@ pub struct WeightedSamples {
 
 impl Optics {
     /// [`Self::lens_samples`] with their normalization (see [`WeightedSamples`]).
-    pub fn weighted_samples(&self, n: u32, lambda_um: f64) -> Result<WeightedSamples, String> {
+    pub fn weighted_samples(&self, n: u32, lambda_um: f64) -> Result<WeightedSamples> {
         let (points, area) = self.lens_samples(n, lambda_um)?;
         let per_sample = area / points.len() as f64;
         let centre = self.film.point(DVec2::from(self.film.centre_px()));
@@ -451,7 +452,7 @@ pub fn channel_models(
     optics: &Optics,
     options: &ModelOptions,
     chromatic: bool,
-) -> Result<Vec<(ImageModel, [f32; 4])>, String> {
+) -> Result<Vec<(ImageModel, [f32; 4])>> {
     if !chromatic {
         return Ok(vec![(ImageModel::build(optics, options)?, ALL_CHANNELS)]);
     }
@@ -561,15 +562,15 @@ impl ImageModel {
     }
 
     /// Builds the model (the preprocessing of Heidrich et al. Sec. 3.5).
-    pub fn build(optics: &Optics, options: &ModelOptions) -> Result<Self, String> {
+    pub fn build(optics: &Optics, options: &ModelOptions) -> Result<Self> {
         if options.grid == 0 || options.grid > 256 {
-            return Err(format!("grid {} must be 1..256", options.grid));
+            return Err(Error::input(format!("grid {} must be 1..256", options.grid)));
         }
         if !(options.max_angle_deg.is_finite() && options.max_angle_deg > 0.0) {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "max angle {} must be a positive number of degrees",
                 options.max_angle_deg
-            ));
+            )));
         }
         let film = optics.film;
         let lambda = options.lambda_um;

@@ -8,6 +8,8 @@
 //! ([`image_model`]: virtual centres of projection, quad-tree, vignetting, radiometric
 //! weights) that the GPU renderer draws.
 
+use crate::Result;
+
 pub mod fit;
 pub mod image_model;
 pub mod paraxial;
@@ -30,7 +32,7 @@ pub fn frame_scene(
     focus_m: Option<f64>,
     pose: Option<crate::scene::Pose>,
     scene: &crate::scene::Scene,
-) -> Result<(image_model::Optics, crate::scene::Pose), String> {
+) -> Result<(image_model::Optics, crate::scene::Pose)> {
     let framing = image_model::Optics::new(lens, pixels, pitch_mm, f64::INFINITY, f_number)?;
     let pose = match pose {
         Some(p) => p,

@@ -8,6 +8,7 @@
 //! by resampling. At equal samples the difference is the cost of the model's approximations
 //! (perspective cells, morph interpolation, rasterization) plus the two ways of filtering.
 
+use crate::{Error, Result};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
@@ -44,7 +45,7 @@ pub fn render_reference(
     scene: &Scene,
     pose: &Pose,
     progress: &(dyn Fn(f64) + Sync),
-) -> Result<ReferenceFrame, String> {
+) -> Result<ReferenceFrame> {
     let start = Instant::now();
     let film = optics.film;
     let (w, h) = (film.width as usize, film.height as usize);
@@ -129,7 +130,7 @@ pub fn render_reference(
         filled += 1;
     }
     if filled != h {
-        return Err("a reference worker thread failed".into());
+        return Err(Error::input("a reference worker thread failed"));
     }
     Ok(ReferenceFrame {
         width: film.width,

@@ -53,9 +53,9 @@ impl BrownRadial {
     /// The same lens as an OpenCV camera: per-axis [-1, 1] normalisation is OpenCV's with
     /// `fx = w/2, fy = h/2, cx = (w-1)/2, cy = (h-1)/2`, and Eq. 1 is `k1 = c1, k2 = c2`.
     /// This is how the GPU warp runs the Brown model (the Durham radial-correction paper pre-correction).
-    pub fn to_opencv(&self) -> Result<super::OpenCvCamera, ModelError> {
+    pub fn to_opencv(&self) -> Result<super::Camera, ModelError> {
         let (w, h) = (self.width as f64, self.height as f64);
-        super::OpenCvCamera::from_coeffs(
+        super::Camera::from_coeffs(
             self.width,
             self.height,
             super::Intrinsics {

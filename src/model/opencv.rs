@@ -37,7 +37,7 @@ pub const NEWTON_ACCEPT_RESIDUAL: f64 = 1e-12;
 /// Newton: most step halvings per iteration (damping near the domain boundary).
 pub const NEWTON_MAX_HALVINGS: usize = 40;
 /// Steps of the continuation Newton falls back to when its radial start fails (see
-/// `OpenCvCamera::newton`). Only points next to a fold at wide angles ever need it.
+/// `Camera::newton`). Only points next to a fold at wide angles ever need it.
 pub const CONTINUATION_STEPS: usize = 8;
 
 /// Pinhole intrinsics in pixels (no skew).
@@ -243,19 +243,33 @@ impl OpenCvDistortion {
     }
 }
 
-/// A calibrated OpenCV camera: size, intrinsics, distortion, and (computed once) its tilt
-/// matrices and valid domain.
+/// A calibrated camera: size, intrinsics, the lens model, and (computed once) its tilt
+/// matrices and valid domain. This is the one camera noun of vklens: every pass, the planner
+/// and the front ends take it, whatever model it holds.
+///
+/// Today every model is evaluated through OpenCV's standard model: Brown's radial model (the
+/// Durham radial-correction paper) is exactly the standard model with `k1 = c1, k2 = c2` in
+/// per-axis normalized coordinates, and the camera remembers that it came from one
+/// ([`Camera::brown`]).
 #[derive(Debug, Clone)]
-pub struct OpenCvCamera {
+pub struct Camera {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// fx fy cx cy, in OpenCV's pixel-centre convention.
     pub intrinsics: Intrinsics,
+    /// OpenCV's 14 standard-model coefficients.
     pub distortion: OpenCvDistortion,
     tilt: Option<(DMat3, DMat3)>,
     domain: ValidDomain,
+    /// How many coefficients the camera was given (4, 5, 8, 12 or 14).
+    coeff_count: usize,
+    /// `Some((c1, c2))` for a Brown radial lens.
+    brown: Option<(f64, f64)>,
 }
 
-impl OpenCvCamera {
+impl Camera {
     /// Validates the parameters and computes the valid domain.
     pub fn new(
         width: u32,
@@ -283,13 +297,23 @@ impl OpenCvCamera {
             let m = distortion.tilt_matrix();
             (m, m.inverse())
         });
-        let mut camera = OpenCvCamera {
+        let coeffs = distortion.to_coeffs();
+        // The shortest of OpenCV's lengths that holds every non-zero coefficient (at least 5,
+        // the length `calibrateCamera` writes).
+        let used = coeffs.iter().rposition(|&c| c != 0.0).map_or(0, |i| i + 1);
+        let coeff_count = [5, 8, 12, 14]
+            .into_iter()
+            .find(|&n| n >= used)
+            .unwrap_or(14);
+        let mut camera = Camera {
             width,
             height,
             intrinsics,
             distortion,
             tilt,
             domain: ValidDomain::unbounded(),
+            coeff_count,
+            brown: None,
         };
         if distortion.terms() != Terms::default() {
             let d = distortion;
@@ -308,12 +332,55 @@ impl OpenCvCamera {
         intrinsics: Intrinsics,
         coeffs: &[f64],
     ) -> Result<Self, ModelError> {
-        Self::new(
+        let mut camera = Self::new(
             width,
             height,
             intrinsics,
             OpenCvDistortion::from_coeffs(coeffs)?,
-        )
+        )?;
+        camera.coeff_count = coeffs.len();
+        Ok(camera)
+    }
+
+    /// The camera of a Brown radial lens (evaluated as its exact standard-model twin, see
+    /// [`BrownRadial::to_opencv`](super::BrownRadial::to_opencv)).
+    pub fn from_brown(brown: &super::BrownRadial) -> Result<Self, ModelError> {
+        let mut camera = brown.to_opencv()?;
+        camera.brown = Some((brown.c1, brown.c2));
+        Ok(camera)
+    }
+
+    /// The Brown radial model this camera was made from, if it was.
+    pub fn brown(&self) -> Option<super::BrownRadial> {
+        let (c1, c2) = self.brown?;
+        super::BrownRadial::new(self.width, self.height, c1, c2).ok()
+    }
+
+    /// The model's name as camera files spell it: `opencv` or `brown`.
+    pub fn model_name(&self) -> &'static str {
+        if self.brown.is_some() {
+            "brown"
+        } else {
+            "opencv"
+        }
+    }
+
+    /// The distortion coefficients as OpenCV orders them, as many as the camera was given
+    /// (4, 5, 8, 12 or 14).
+    pub fn dist_coeffs(&self) -> Vec<f64> {
+        self.distortion.to_coeffs()[..self.coeff_count].to_vec()
+    }
+
+    /// The same camera with another size and intrinsics (the lens unchanged).
+    pub fn with_intrinsics(
+        &self,
+        width: u32,
+        height: u32,
+        intrinsics: Intrinsics,
+    ) -> Result<Self, ModelError> {
+        let mut camera = Self::new(width, height, intrinsics, self.distortion)?;
+        camera.coeff_count = self.coeff_count;
+        Ok(camera)
     }
 
     /// The valid domain (pre-tilt normalized coordinates).
@@ -334,7 +401,7 @@ impl OpenCvCamera {
         self.apply_tilt(pre).map(|(y, _)| y)
     }
 
-    /// Jacobian of [`OpenCvCamera::distort_normalized`].
+    /// Jacobian of [`Camera::distort_normalized`].
     pub fn jacobian_normalized(&self, x: DVec2) -> Option<DMat2> {
         let (pre, jac) = self.distortion.distort_pre_tilt(x)?;
         let (_, tilt_jac) = self.apply_tilt(pre)?;
@@ -553,9 +620,9 @@ fn locally_invertible(d: &OpenCvDistortion, x: DVec2, dir: DVec2) -> bool {
     jac.determinant() > 0.0 && y.dot(jac * dir) > 0.0
 }
 
-impl CameraModel for OpenCvCamera {
+impl CameraModel for Camera {
     fn model_name(&self) -> &'static str {
-        "opencv"
+        Camera::model_name(self)
     }
     fn size(&self) -> (u32, u32) {
         (self.width, self.height)

@@ -12,7 +12,7 @@ use std::f64::consts::TAU;
 
 use glam::DVec2;
 
-use super::{Intrinsics, InverseMethod, ModelError, OpenCvCamera, MAX_IMAGE_SIDE};
+use super::{Intrinsics, InverseMethod, ModelError, Camera, MAX_IMAGE_SIDE};
 
 /// The pinhole source camera for a distort warp.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,7 +23,7 @@ pub struct Overscan {
 }
 
 /// Ideal normalized points on the boundary of `camera`'s valid region (see module docs).
-pub fn valid_region_boundary(camera: &OpenCvCamera) -> Vec<DVec2> {
+pub fn valid_region_boundary(camera: &Camera) -> Vec<DVec2> {
     let (w, h) = (camera.width as f64, camera.height as f64);
     let mut pixels = Vec::new();
     for x in 0..camera.width {
@@ -60,7 +60,7 @@ pub fn valid_region_boundary(camera: &OpenCvCamera) -> Vec<DVec2> {
 /// The overscanned pinhole camera covering every valid pixel of `camera`, with `density`
 /// source pixels per output pixel at the principal point (1.0: the same focal length), and a
 /// one-pixel margin for bilinear taps.
-pub fn overscan(camera: &OpenCvCamera, density: f64) -> Result<Overscan, ModelError> {
+pub fn overscan(camera: &Camera, density: f64) -> Result<Overscan, ModelError> {
     if !(density.is_finite() && density > 0.0 && density <= 16.0) {
         return Err(ModelError::Other(format!(
             "density must be in (0, 16], got {density}"

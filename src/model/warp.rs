@@ -5,7 +5,7 @@
 
 use glam::DVec2;
 
-use super::{Intrinsics, InverseMethod, ModelError, OpenCvCamera};
+use super::{Intrinsics, InverseMethod, ModelError, Camera};
 
 /// Which way the warp goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -23,7 +23,7 @@ pub enum Direction {
 #[derive(Debug, Clone)]
 pub struct WarpGeometry {
     /// The lens: the output camera when distorting, the source camera when undistorting.
-    pub camera: OpenCvCamera,
+    pub camera: Camera,
     /// The pinhole side: the source's intrinsics when distorting (e.g. overscanned), the
     /// output's when undistorting.
     pub ideal: Intrinsics,
@@ -37,12 +37,12 @@ pub struct WarpGeometry {
     pub chromatic: Option<[f64; 3]>,
     /// A full camera per channel (R, G, B), overriding `camera` — the general form of lateral
     /// colour. Only through a precomputed map on the GPU.
-    pub channel_cameras: Option<Box<[OpenCvCamera; 3]>>,
+    pub channel_cameras: Option<Box<[Camera; 3]>>,
 }
 
 impl WarpGeometry {
     /// Distort a pinhole image of `camera`'s own intrinsics and size.
-    pub fn distort(camera: OpenCvCamera, method: InverseMethod) -> Self {
+    pub fn distort(camera: Camera, method: InverseMethod) -> Self {
         let size = (camera.width, camera.height);
         WarpGeometry {
             ideal: camera.intrinsics,
@@ -57,7 +57,7 @@ impl WarpGeometry {
     }
 
     /// Undistort a lens image of `camera` into a pinhole image of the same intrinsics and size.
-    pub fn undistort(camera: OpenCvCamera) -> Self {
+    pub fn undistort(camera: Camera) -> Self {
         WarpGeometry {
             direction: Direction::Undistort,
             ..Self::distort(camera, InverseMethod::Newton)
@@ -68,7 +68,7 @@ impl WarpGeometry {
     /// distorting; another output camera when undistorting).
     pub fn with_ideal(mut self, ideal: Intrinsics, size: (u32, u32)) -> Result<Self, ModelError> {
         // Reuse the camera checks for the pinhole side.
-        OpenCvCamera::from_coeffs(size.0, size.1, ideal, &[0.0; 4])?;
+        Camera::from_coeffs(size.0, size.1, ideal, &[0.0; 4])?;
         self.ideal = ideal;
         match self.direction {
             Direction::Distort => self.source_size = size,
@@ -95,7 +95,7 @@ impl WarpGeometry {
     }
 
     /// The camera of channel `c` (0 R, 1 G, 2 B).
-    pub fn channel_camera(&self, c: usize) -> &OpenCvCamera {
+    pub fn channel_camera(&self, c: usize) -> &Camera {
         match &self.channel_cameras {
             Some(cams) => &cams[c],
             None => &self.camera,
@@ -275,7 +275,7 @@ mod tests {
 
     #[test]
     fn cubic_interpolation_of_a_smooth_lens_is_far_below_bilinear() {
-        let camera = OpenCvCamera::new(
+        let camera = Camera::new(
             800,
             600,
             Intrinsics {

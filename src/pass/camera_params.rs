@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::SpecConstants;
-use crate::model::{OpenCvCamera, Terms, ValidDomain};
+use crate::model::{Camera, Terms, ValidDomain};
 
 /// Entries of the valid-domain table (same as the CPU table).
 pub const DOMAIN_SAMPLES: usize = ValidDomain::SAMPLES;
@@ -52,7 +52,7 @@ macro_rules! camera_params {
 
         impl $name {
             /// The camera's parameters for the shaders.
-            pub fn from_camera(camera: &OpenCvCamera) -> Self {
+            pub fn from_camera(camera: &Camera) -> Self {
                 let k = camera.intrinsics;
                 let d = camera.distortion;
                 let f = |v: f64| v as $t;

@@ -11,7 +11,7 @@ use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{
-    image_barrier, record_download, shaders, Buffer, DescriptorPool, Framebuffer, Gpu, GpuError,
+    image_barrier, record_download, shaders, Buffer, DescriptorPool, Framebuffer, Gpu, Error,
     GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 
@@ -221,7 +221,7 @@ pub struct FilmTarget {
 impl FilmTarget {
     pub fn new(gpu: &Gpu, pass: &FilmPass, width: u32, height: u32) -> Result<Self> {
         if width == 0 || height == 0 || width.max(height) > gpu.max_image_side() {
-            return Err(GpuError::Invalid(format!(
+            return Err(Error::Input(format!(
                 "film {width}×{height}: each side must be 1..={}",
                 gpu.max_image_side()
             )));

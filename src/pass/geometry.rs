@@ -18,12 +18,12 @@ use gpu_allocator::MemoryLocation;
 use super::camera_params::CameraParams;
 use crate::gpu::{
     image_barrier, record_download, shaders, Attribute, Buffer, Context, DescriptorPool,
-    Framebuffer, Gpu, GpuError, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
+    Framebuffer, Gpu, Error, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
     SpecConstants, Stage,
 };
 use crate::imaging::{Depth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
-use crate::model::{vulkan_projection, Frustum, OpenCvCamera};
+use crate::model::{vulkan_projection, Frustum, Camera};
 use crate::scene::{Mesh, Pose, Vertex};
 
 /// How vertices are projected.
@@ -95,7 +95,7 @@ pub const DEFAULT_DELTA: f64 = 0.1;
 pub struct GeometryDesc {
     /// The camera: image size, intrinsics (the Sec. 3.1 frustum) and, for
     /// [`Projection::Lens`], the distortion.
-    pub camera: OpenCvCamera,
+    pub camera: Camera,
     pub projection: Projection,
     pub outputs: Outputs,
     /// Near and far clipping depths (metres).
@@ -108,7 +108,7 @@ pub struct GeometryDesc {
 }
 
 impl GeometryDesc {
-    pub fn new(camera: OpenCvCamera, projection: Projection, outputs: Outputs) -> Self {
+    pub fn new(camera: Camera, projection: Projection, outputs: Outputs) -> Self {
         GeometryDesc {
             camera,
             projection,
@@ -136,7 +136,7 @@ pub struct GeometryFrame {
 /// image border reaches. The seed undistorts the four corners; this uses the whole border
 /// (and the fold boundary where it lies inside the image), as the overscan does, because for
 /// mustache and strongly tangential lenses the extremes are not at the corners.
-pub fn discard_margin(camera: &OpenCvCamera) -> f64 {
+pub fn discard_margin(camera: &Camera) -> f64 {
     let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
     valid_region_boundary(camera)
         .iter()
@@ -151,11 +151,11 @@ pub fn discard_margin(camera: &OpenCvCamera) -> f64 {
 }
 
 /// 1 + δ + D for a projection (infinite for a pinhole render).
-fn discard_bound(projection: &Projection, camera: &OpenCvCamera) -> Result<f64> {
+fn discard_bound(projection: &Projection, camera: &Camera) -> Result<f64> {
     match *projection {
         Projection::Lens { delta } => {
             if !(delta.is_finite() && delta >= 0.0) {
-                return Err(GpuError::Invalid(format!(
+                return Err(Error::Input(format!(
                     "δ = {delta}: the discard tolerance must be ≥ 0"
                 )));
             }
@@ -276,7 +276,7 @@ impl MeshBuffers {
     /// Uploads a (validated) mesh; the texture is staged for [`Self::record_upload`].
     pub fn new(gpu: &Gpu, mesh: &Mesh, texture: Option<&Raster>) -> Result<Self> {
         mesh.validate("mesh")
-            .map_err(|e| GpuError::Invalid(e.to_string()))?;
+            .map_err(|e| Error::Input(e.to_string()))?;
         let white = Raster {
             width: 1,
             height: 1,
@@ -329,7 +329,7 @@ impl GeometryPass {
     pub fn new(gpu: &Gpu, desc: GeometryDesc) -> Result<Self> {
         let cam = &desc.camera;
         if cam.width > gpu.max_image_side() || cam.height > gpu.max_image_side() {
-            return Err(GpuError::Invalid(format!(
+            return Err(Error::Input(format!(
                 "{}×{} is larger than the device's {} px image limit",
                 cam.width,
                 cam.height,
@@ -337,7 +337,7 @@ impl GeometryPass {
             )));
         }
         if !(desc.near > 0.0 && desc.far > desc.near && desc.far.is_finite()) {
-            return Err(GpuError::Invalid(format!(
+            return Err(Error::Input(format!(
                 "near {} / far {}: need 0 < near < far",
                 desc.near, desc.far
             )));
@@ -346,7 +346,7 @@ impl GeometryPass {
         let discard_bound = discard_bound(&desc.projection, cam)?;
         let formats = desc.outputs.formats();
         if formats.iter().all(|f| f.is_none()) {
-            return Err(GpuError::Invalid("no output was asked for".into()));
+            return Err(Error::Input("no output was asked for".into()));
         }
         let render_pass = RenderPass::new(
             gpu,
@@ -464,7 +464,7 @@ impl GeometryPass {
 
     /// Whether [`Self::set_camera`] can switch this pass to `camera` (same image size and the
     /// same distortion terms, which are compiled in).
-    pub fn accepts_camera(&self, camera: &OpenCvCamera) -> bool {
+    pub fn accepts_camera(&self, camera: &Camera) -> bool {
         let c = &self.desc.camera;
         (c.width, c.height) == (camera.width, camera.height)
             && c.distortion.terms() == camera.distortion.terms()
@@ -473,9 +473,9 @@ impl GeometryPass {
     /// Switches to another camera of the same size and terms without rebuilding the pipeline
     /// (jittered passes, a calibration set's views, a zoom). Call [`Self::set_frame`] after
     /// it: the projection changes with the intrinsics. Host write, like `set_frame`.
-    pub fn set_camera(&mut self, camera: &OpenCvCamera) -> Result<()> {
+    pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         if !self.accepts_camera(camera) {
-            return Err(GpuError::Invalid(
+            return Err(Error::Input(
                 "set_camera needs the same image size and distortion terms; build a new pass"
                     .into(),
             ));
@@ -496,7 +496,7 @@ impl GeometryPass {
 
     fn frame_data(
         &self,
-        c: &OpenCvCamera,
+        c: &Camera,
         discard_bound: f64,
         pose: &Pose,
         previous: &Pose,
@@ -560,19 +560,19 @@ impl GeometryPass {
         &self,
         slots: &GeometrySlots,
         i: usize,
-        camera: &OpenCvCamera,
+        camera: &Camera,
         pose: &Pose,
         previous: &Pose,
     ) -> Result<()> {
         if !self.accepts_camera(camera) {
-            return Err(GpuError::Invalid(
+            return Err(Error::Input(
                 "a slot needs the pass's image size and distortion terms".into(),
             ));
         }
         let slot = slots
             .slots
             .get(i)
-            .ok_or_else(|| GpuError::Invalid(format!("no slot {i}")))?;
+            .ok_or_else(|| Error::Input(format!("no slot {i}")))?;
         let bound = discard_bound(&self.desc.projection, camera)?;
         slot.camera
             .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))?;

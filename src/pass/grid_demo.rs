@@ -9,11 +9,11 @@ use crate::gpu::{
     host_read_barrier, shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context,
     DescriptorPool, Result,
 };
-use crate::model::OpenCvCamera;
+use crate::model::Camera;
 
 /// Renders `camera.width × camera.height` RGBA8 pixels (row-major), grid lines every `grid`
 /// ideal pixels.
-pub fn render_grid(ctx: &Context, camera: &OpenCvCamera, grid: u32) -> Result<Vec<u8>> {
+pub fn render_grid(ctx: &Context, camera: &Camera, grid: u32) -> Result<Vec<u8>> {
     let gpu = ctx.gpu();
     let constants = CameraParams::spec_constants(camera.distortion.terms()).u32(8, grid.max(2));
     let pipeline = ComputePipeline::new(

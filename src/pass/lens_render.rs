@@ -23,9 +23,9 @@ use super::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers,
 };
 use super::geometry::{Outputs, Projection};
-use crate::gpu::{Buffer, Context, Gpu, GpuError, Result};
+use crate::gpu::{Buffer, Context, Gpu, Error, Result};
 use crate::lens::image_model::{Cell, ImageModel};
-use crate::model::{Intrinsics, OpenCvCamera, OpenCvDistortion};
+use crate::model::{Intrinsics, Camera, OpenCvDistortion};
 use crate::scene::Pose;
 
 /// What the renderer draws with.
@@ -51,7 +51,7 @@ impl Default for LensRenderOptions {
 
 /// One cell to draw: its projection and its triangles in the film vertex buffer.
 struct CellDraw {
-    camera: OpenCvCamera,
+    camera: Camera,
     cop: glam::DVec3,
     bucket: usize,
     /// Its slot in the bucket's geometry pass.
@@ -106,13 +106,13 @@ impl LensRenderer {
         options: LensRenderOptions,
     ) -> Result<Self> {
         let Some(film) = models.first().map(|(m, _)| m.film) else {
-            return Err(GpuError::Invalid("no lens model to render".into()));
+            return Err(Error::Input("no lens model to render".into()));
         };
         if models.iter().any(|(m, _)| m.film != film) {
-            return Err(GpuError::Invalid("the models have different films".into()));
+            return Err(Error::Input("the models have different films".into()));
         }
         if !(options.oversample.is_finite() && options.oversample > 0.0) {
-            return Err(GpuError::Invalid(format!(
+            return Err(Error::Input(format!(
                 "oversample {} must be positive",
                 options.oversample
             )));
@@ -154,7 +154,7 @@ impl LensRenderer {
             }
         }
         if vertices.is_empty() {
-            return Err(GpuError::Invalid(
+            return Err(Error::Input(
                 "the lens passes no light to the film (every ray is blocked)".into(),
             ));
         }
@@ -166,7 +166,7 @@ impl LensRenderer {
                 .iter()
                 .find(|d| d.camera.width == size.0 && d.camera.height == size.1)
                 .map(|d| d.camera.clone())
-                .ok_or_else(|| GpuError::Invalid("bucket without a cell".into()))?;
+                .ok_or_else(|| Error::internal("bucket without a cell"))?;
             let mut desc = GeometryDesc::new(
                 camera,
                 Projection::Pinhole,
@@ -180,7 +180,7 @@ impl LensRenderer {
             let view = targets
                 .color()
                 .map(|i| i.view)
-                .ok_or_else(|| GpuError::Invalid("cell render without colour".into()))?;
+                .ok_or_else(|| Error::internal("cell render without colour"))?;
             let set = film_pass.bind_image(view)?;
             let count = draws.iter().filter(|d| d.bucket == index).count();
             let slots = pass.slots(count as u32)?;
@@ -306,11 +306,11 @@ fn render_size(cell: &Cell, oversample: f64, max_side: u32) -> (u32, u32) {
 
 /// The pinhole camera of a cell: its projected bounds fill the render but for a one-pixel
 /// margin (OpenCV convention: `min` lands on u = 0.5, the edge between pixels 0 and 1).
-fn cell_camera(cell: &Cell, (w, h): (u32, u32)) -> Result<OpenCvCamera> {
+fn cell_camera(cell: &Cell, (w, h): (u32, u32)) -> Result<Camera> {
     let span = (cell.max - cell.min).max(DVec2::splat(1e-9));
     let fx = (w as f64 - 2.0) / span.x;
     let fy = (h as f64 - 2.0) / span.y;
-    OpenCvCamera::new(
+    Camera::new(
         w,
         h,
         Intrinsics {
@@ -321,11 +321,11 @@ fn cell_camera(cell: &Cell, (w, h): (u32, u32)) -> Result<OpenCvCamera> {
         },
         OpenCvDistortion::default(),
     )
-    .map_err(|e| GpuError::Invalid(format!("cell projection: {e}")))
+    .map_err(|e| Error::Input(format!("cell projection: {e}")))
 }
 
 /// Two triangles per grid quad whose four rays all pass the lens.
-fn push_triangles(cell: &Cell, camera: &OpenCvCamera, out: &mut Vec<FilmVertex>) {
+fn push_triangles(cell: &Cell, camera: &Camera, out: &mut Vec<FilmVertex>) {
     let row = cell.n as usize + 1;
     let i = &camera.intrinsics;
     let vertex = |k: usize| -> Option<FilmVertex> {

@@ -15,7 +15,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::geometry::Texture;
 use crate::gpu::{
-    record_download, shaders, Buffer, Context, DescriptorPool, Framebuffer, Gpu, GpuError,
+    record_download, shaders, Buffer, Context, DescriptorPool, Framebuffer, Gpu, Error,
     GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 use crate::imaging::{Pixels, Raster};
@@ -49,7 +49,7 @@ impl MeshWarpGrid {
     /// Vertices at the output image's pixel edges (−0.5 … w − 0.5), so the grid covers it.
     pub fn new(geometry: &WarpGeometry, n: u32) -> Result<Self> {
         if !(1..=4096).contains(&n) {
-            return Err(GpuError::Invalid(format!(
+            return Err(Error::Input(format!(
                 "mesh size {n}: expected 1..=4096"
             )));
         }
@@ -83,7 +83,7 @@ impl MeshWarpGrid {
             }
         }
         if indices.is_empty() {
-            return Err(GpuError::Invalid(
+            return Err(Error::Input(
                 "no grid cell lies in the lens's valid domain".into(),
             ));
         }
@@ -339,7 +339,7 @@ pub fn run_mesh_warp(
 ) -> Result<Raster> {
     let gpu = ctx.gpu();
     if (source.width, source.height) != geometry.source_size {
-        return Err(GpuError::Invalid(format!(
+        return Err(Error::Input(format!(
             "the source is {}×{} but the warp expects {}×{}",
             source.width, source.height, geometry.source_size.0, geometry.source_size.1
         )));

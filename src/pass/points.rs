@@ -6,9 +6,9 @@ use gpu_allocator::MemoryLocation;
 use super::camera_params::{CameraParams, CameraParams64};
 use crate::gpu::{
     host_read_barrier, shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context,
-    DescriptorPool, Gpu, GpuError, Result,
+    DescriptorPool, Gpu, Error, Result,
 };
-use crate::model::{InverseMethod, OpenCvCamera};
+use crate::model::{InverseMethod, Camera};
 
 /// What the pass computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -74,12 +74,12 @@ impl PointsPass {
     /// `precision`. F64 needs a device with `shaderFloat64` enabled.
     pub fn new(
         gpu: &Gpu,
-        camera: &OpenCvCamera,
+        camera: &Camera,
         mode: PointsMode,
         precision: Precision,
     ) -> Result<Self> {
         if precision == Precision::F64 && !gpu.supports_float64() {
-            return Err(GpuError::Invalid(format!(
+            return Err(Error::Input(format!(
                 "{} has no shaderFloat64: use f32",
                 gpu.device_name()
             )));
@@ -187,7 +187,7 @@ pub const MAX_POINTS: usize = 65_535 * WORKGROUP as usize;
 /// (`None` = invalid / outside the valid domain). In f32, inputs are rounded to f32.
 pub fn run_points(
     ctx: &Context,
-    camera: &OpenCvCamera,
+    camera: &Camera,
     mode: PointsMode,
     precision: Precision,
     points: &[[f64; 2]],

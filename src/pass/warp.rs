@@ -15,13 +15,13 @@ use super::camera_params::CameraParams;
 use crate::gpu::{
     host_read_barrier, image_barrier, memory_barrier, shaders, write_buffer_descriptors,
     write_storage_image_descriptors, Buffer, ComputePipeline, Context, DescriptorPool, Gpu,
-    GpuError, Image, Result,
+    Error, Image, Result,
 };
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Depth, Pixels, Raster};
 pub use crate::model::warp::MapInterpolation;
 use crate::model::warp::{coarse_cells, coarse_size, Direction, WarpGeometry};
-use crate::model::{InverseMethod, OpenCvCamera, Terms};
+use crate::model::{InverseMethod, Camera, Terms};
 
 /// How output pixels get their source coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -170,19 +170,19 @@ impl WarpPass {
         if matches!(desc.format, PixelFormat::R32Uint | PixelFormat::R32Float)
             && (desc.sampling != Sampling::Nearest || g.is_chromatic())
         {
-            return Err(GpuError::Invalid(
+            return Err(Error::Input(
                 "object IDs (R32_UINT) and depth (R32_SFLOAT) are sampled nearest and without chromatic aberration".into(),
             ));
         }
         if let Coordinates::CoarseMap { stride, refine, .. } = desc.coordinates {
             if !(2..=64).contains(&stride) || refine > 8 || g.direction != Direction::Distort {
-                return Err(GpuError::Invalid(
+                return Err(Error::Input(
                     "a coarse map needs the distort direction, a stride in 2..=64 and at most 8 refinement steps".into(),
                 ));
             }
         }
         if g.channel_cameras.is_some() && desc.coordinates == Coordinates::Analytic {
-            return Err(GpuError::Invalid(
+            return Err(Error::Input(
                 "per-channel cameras need precomputed maps (Coordinates::Map)".into(),
             ));
         }
@@ -193,7 +193,7 @@ impl WarpPass {
             Direction::Distort => 0,
             Direction::Undistort => 1,
         };
-        let with_model = |cam: &OpenCvCamera| {
+        let with_model = |cam: &Camera| {
             CameraParams::spec_constants(cam.distortion.terms())
                 .u32(8, mode)
                 .u32(9, method)
@@ -417,7 +417,7 @@ impl WarpPass {
             && g.chromatic == geometry.chromatic
             && g.camera.distortion.terms() == geometry.camera.distortion.terms();
         if !same {
-            return Err(GpuError::Invalid(
+            return Err(Error::Input(
                 "retarget needs an analytic warp of the same sizes, direction, method, chromatic scales and terms".into(),
             ));
         }
@@ -547,7 +547,7 @@ fn check_sizes(gpu: &Gpu, g: &WarpGeometry) -> Result<()> {
     let max = gpu.max_image_side();
     for (what, (w, h)) in [("source", g.source_size), ("output", g.output_size)] {
         if w > max || h > max {
-            return Err(GpuError::Invalid(format!(
+            return Err(Error::Input(format!(
                 "the {what} is {w}×{h}, larger than {} supports ({max} px per side)",
                 gpu.device_name()
             )));
@@ -575,7 +575,7 @@ impl WarpImages {
         let g = &desc.geometry;
         check_sizes(gpu, g)?;
         if (source.width, source.height) != g.source_size {
-            return Err(GpuError::Invalid(format!(
+            return Err(Error::Input(format!(
                 "the source is {}×{} but the warp expects {}×{}",
                 source.width, source.height, g.source_size.0, g.source_size.1
             )));
@@ -592,7 +592,7 @@ impl WarpImages {
                 bytemuck::cast_slice(&v).to_vec()
             }
             _ => {
-                return Err(GpuError::Invalid(
+                return Err(Error::Input(
                     "the source's pixels do not match the warp's format".into(),
                 ))
             }

@@ -15,7 +15,7 @@ use super::mesh_warp::MeshWarpTarget;
 use super::warp::{PixelFormat, WarpDesc, WarpImages, WarpPass, WarpPush};
 use crate::gpu::{
     memory_barrier, shaders, write_storage_image_descriptors, Context, DescriptorPool, Framebuffer,
-    Gpu, GpuError, GraphicsDesc, GraphicsPipeline, RenderPass, Result, SpecConstants, Stage,
+    Gpu, Error, GraphicsDesc, GraphicsPipeline, RenderPass, Result, SpecConstants, Stage,
 };
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::Raster;
@@ -38,7 +38,7 @@ impl RasterWarpPass {
     pub fn new(gpu: &Gpu, warp: &WarpPass, final_layout: vk::ImageLayout) -> Result<Self> {
         let desc = warp.desc();
         if !desc.coordinates.uses_map() {
-            return Err(GpuError::Invalid(
+            return Err(Error::Input(
                 "the fragment-shader warp reads precomputed maps: build the warp with a map".into(),
             ));
         }
@@ -46,7 +46,7 @@ impl RasterWarpPass {
             PixelFormat::Rgba8 => (vk::Format::R8G8B8A8_UNORM, shaders::WARP_RASTER_FRAG_RGBA8),
             PixelFormat::Rgba32F => (vk::Format::R32G32B32A32_SFLOAT, shaders::WARP_RASTER_FRAG),
             PixelFormat::R32Uint | PixelFormat::R32Float => {
-                return Err(GpuError::Invalid(
+                return Err(Error::Input(
                     "the fragment-shader warp is for colour: IDs and depth take the compute warp"
                         .into(),
                 ))

@@ -22,14 +22,15 @@
 pub mod record;
 pub mod scene_file;
 
+use crate::{Error, Result};
 use std::time::Instant;
 
 use glam::{DVec2, DVec3};
 
-use crate::gpu::{Context, GpuError};
+use crate::gpu::Context;
 use crate::lens::image_model::{channel_models, ModelOptions};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};
-use crate::model::{InverseMethod, OpenCvCamera, OpenCvDistortion};
+use crate::model::{InverseMethod, Camera, OpenCvDistortion};
 use crate::pass::geometry::{ColorFormat, MeshBuffers, Outputs, Rendered};
 use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
 use crate::render::{RecordedPipeline, RenderPath, RenderRequest, SceneRenderer};
@@ -88,7 +89,7 @@ pub struct Plan {
     pub route: Route,
     pub steps: Vec<Step>,
     /// The camera of the fast paths (the file's, distortion removed if unwanted).
-    pub camera: Option<OpenCvCamera>,
+    pub camera: Option<Camera>,
     /// For a lens: the prescription and its setting.
     pub lens: Option<LensSetting>,
     /// Largest geometric error the plan's approximations leave (output pixels), as measured
@@ -104,8 +105,8 @@ pub struct Plan {
     pub estimated_ms: f64,
 }
 
-fn invalid(e: impl ToString) -> GpuError {
-    GpuError::Invalid(e.to_string())
+fn invalid(e: impl ToString) -> Error {
+    Error::Input(e.to_string())
 }
 
 /// Inverse methods the planner chooses between, cheapest first for `terms`, with a per-pixel
@@ -141,7 +142,7 @@ pub fn inverse_candidates() -> Vec<(InverseMethod, f64)> {
 /// The largest error (pixels) of `method` on `camera`: every pixel of a 48 × 36 grid over
 /// the image inside the valid domain is undistorted by the method and projected back by the
 /// exact forward model. `None` where the method refuses a pixel Newton accepts.
-pub fn inverse_error_px(camera: &OpenCvCamera, method: InverseMethod) -> Option<f64> {
+pub fn inverse_error_px(camera: &Camera, method: InverseMethod) -> Option<f64> {
     let k = &camera.intrinsics;
     let mut worst = 0f64;
     for j in 0..36 {
@@ -181,9 +182,9 @@ fn estimate_ms(pixels: f64, triangles: f64, route: &str, method_ns: f64) -> f64 
 }
 
 /// Loads the scene's geometry.
-pub fn load_geometry(file: &SceneFile) -> Result<Scene, String> {
+pub fn load_geometry(file: &SceneFile) -> Result<Scene> {
     builtin::parse(&file.geometry)
-        .map_err(|e| format!("{}: [geometry] scene: {e}", file.source.display()))
+        .map_err(|e| Error::input(format!("{}: [geometry] scene: {e}", file.source.display())))
 }
 
 /// The step that says colour is anti-aliased, when `[render]` asks for it.
@@ -200,7 +201,7 @@ fn push_antialias_step(steps: &mut Vec<Step>, aa: scene_file::Antialias, color: 
 }
 
 /// Plans `file` for `scene`.
-pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
+pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
     let src = file.source.display().to_string();
     let e = &file.effects;
     let o = &file.outputs;
@@ -218,38 +219,38 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             pixels,
         } => {
             if file.antialias.is_on() {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "{src}: [render] supersample / jitter: the image-based lens model renders one sample per pixel per lens sample; anti-aliasing is for camera-file scenes"
-                ));
+                )));
             }
             for (asked, key) in [(o.ids, "ids"), (o.flow, "flow"), (o.depth, "depth")] {
                 if asked {
-                    return Err(format!(
+                    return Err(Error::input(format!(
                         "{src}: [outputs] {key}: the image-based lens model blends many views, so it has no exact {key}; give a calibrated camera (optics.camera; `vklens lens fit-opencv` makes one from the lens) for {key}"
-                    ));
+                    )));
                 }
             }
             if !e.distortion {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "{src}: [effects] distortion = false: a real lens always distorts; use a camera file with the distortion switched off for a pinhole"
-                ));
+                )));
             }
-            let lens = Prescription::load(path).map_err(|e| e.to_string())?;
+            let lens = Prescription::load(path).map_err(Error::from)?;
             if e.chromatic_aberration && lens.surfaces.iter().all(|s| s.abbe.is_none()) {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "{src}: [effects] chromatic_aberration: {} has no Abbe numbers (5th column)",
                     path.display()
-                ));
+                )));
             }
             let pitch = sensor_mm.0 / pixels.0 as f64;
             if ((sensor_mm.1 / pixels.1 as f64) / pitch - 1.0).abs() > 1e-3 {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "{src}: [optics] sensor_mm and pixels give non-square pixels"
-                ));
+                )));
             }
             let first = file.poses.first().copied();
             let (optics, _) = frame_scene(&lens, *pixels, pitch, *f_number, *focus_m, first, scene)
-                .map_err(|e| format!("{}: {e}", path.display()))?;
+                .map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
             let efl = crate::lens::analyse(&lens, LAMBDA_D).efl.unwrap_or(1.0);
             // The budget in degrees: one pixel subtends pitch / EFL radians.
             let px_deg = (pitch / efl).atan().to_degrees();
@@ -294,7 +295,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 ..ModelOptions::default()
             };
             let models = channel_models(&optics, &options, e.chromatic_aberration)
-                .map_err(|e| format!("{}: {e}", path.display()))?;
+                .map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
             let model_angle = models
                 .iter()
                 .map(|(m, _)| m.max_angle_deg())
@@ -339,25 +340,25 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
             })
         }
         scene_file::OpticsSpec::Camera(path) => {
-            let mut camera = crate::io::load_camera(path).map_err(|e| e.to_string())?;
+            let mut camera = crate::io::load_camera(path).map_err(Error::from)?;
             if e.vignetting || e.depth_of_field {
                 let key = if e.vignetting {
                     "vignetting"
                 } else {
                     "depth_of_field"
                 };
-                return Err(format!(
+                return Err(Error::input(format!(
                     "{src}: [effects] {key}: a calibrated camera (OpenCV model) has no {key}; give a lens prescription (optics.lens)"
-                ));
+                )));
             }
             if !e.distortion {
-                camera = OpenCvCamera::new(
+                camera = Camera::new(
                     camera.width,
                     camera.height,
                     camera.intrinsics,
                     OpenCvDistortion::default(),
                 )
-                .map_err(|e| e.to_string())?;
+                .map_err(Error::from)?;
             }
             let poses = if file.poses.is_empty() {
                 vec![scene.default_pose(&camera)]
@@ -480,7 +481,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                     && (vertex.is_none() || warp_ms < vertex_ms))
             {
                 let Some((m, werr, _)) = warp else {
-                    return Err(format!("{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera"));
+                    return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera")));
                 };
                 steps.push(step(
                     "pinhole render (overscanned)",
@@ -506,7 +507,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 ));
                 if data_needs_vertex {
                     let Some((l, verr, tris)) = vertex else {
-                        return Err(format!("{src}: [accuracy] max_error_px = {budget}: tessellation cannot meet it for the ID/flow outputs"));
+                        return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: tessellation cannot meet it for the ID/flow outputs")));
                     };
                     steps.push(step(
                         "Alg. 1 (vertex + discard) for IDs/flow/depth",
@@ -536,7 +537,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan, String> {
                 }
             } else {
                 let Some((l, verr, tris)) = vertex else {
-                    return Err(format!("{src}: [accuracy] max_error_px = {budget}: even 1 px edges do not meet it, and the outputs (IDs/flow) need the vertex path"));
+                    return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: even 1 px edges do not meet it, and the outputs (IDs/flow) need the vertex path")));
                 };
                 let why = if data_needs_vertex {
                     format!(
@@ -622,8 +623,8 @@ pub fn execute(
     plan: &Plan,
     scene: &Scene,
     frames: std::ops::Range<usize>,
-    each: &mut dyn FnMut(Frame) -> Result<(), GpuError>,
-) -> Result<Recorded, GpuError> {
+    each: &mut dyn FnMut(Frame) -> Result<(), Error>,
+) -> Result<Recorded, Error> {
     let o = &plan.outputs;
     let color_format = if o.exr {
         ColorFormat::Rgba16F

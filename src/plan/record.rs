@@ -9,10 +9,10 @@
 use ash::vk;
 
 use super::{Plan, Route};
-use crate::gpu::{Gpu, GpuError, QueryPool, Result};
+use crate::gpu::{Gpu, Error, QueryPool, Result};
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
-use crate::model::{OpenCvCamera, OpenCvDistortion};
+use crate::model::{Camera, OpenCvDistortion};
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     DEFAULT_DELTA,
@@ -22,8 +22,8 @@ use crate::pass::warp::Coordinates;
 use crate::render::WarpStage;
 use crate::scene::{Pose, Scene};
 
-fn invalid(e: impl ToString) -> GpuError {
-    GpuError::Invalid(e.to_string())
+fn invalid(e: impl ToString) -> Error {
+    Error::Input(e.to_string())
 }
 
 /// The passes of one plan, built once; any number of frames recorded.
@@ -64,25 +64,25 @@ impl PlanRecorder {
             .poses
             .first()
             .ok_or_else(|| invalid("a plan without poses"))?;
-        let tessellated = |l: Option<f64>, camera: &OpenCvCamera| match l {
+        let tessellated = |l: Option<f64>, camera: &Camera| match l {
             Some(l) => crate::scene::tessellate::tessellate(&scene.mesh, &first, camera, l)
                 .map_err(invalid),
             None => Ok(scene.mesh.clone()),
         };
-        let geometry = |camera: &OpenCvCamera, projection, outputs| -> Result<_> {
+        let geometry = |camera: &Camera, projection, outputs| -> Result<_> {
             let mut desc = GeometryDesc::new(camera.clone(), projection, outputs);
             desc.background = plan.background;
             let pass = GeometryPass::new(gpu, desc)?;
             let targets = GeometryTargets::new(gpu, &pass)?;
             Ok((pass, targets))
         };
-        let warp_stage = |camera: &OpenCvCamera,
+        let warp_stage = |camera: &Camera,
                           method,
                           chromatic: Option<[f64; 3]>,
                           depth: bool|
          -> Result<WarpStage> {
             let ov = overscan(camera, 1.0).map_err(invalid)?;
-            let source = OpenCvCamera::new(
+            let source = Camera::new(
                 ov.width,
                 ov.height,
                 ov.intrinsics,

@@ -4,6 +4,7 @@
 //! default. Every face is its own patch of vertices, so colours and IDs change exactly at
 //! the geometric edges — which Alg. 1 bends with the lens, the point of the geometry path.
 
+use crate::{Error, Result};
 use glam::DVec3;
 
 use super::{Mesh, Scene, SceneError, Vertex};
@@ -230,7 +231,7 @@ pub fn parse(spec: &str) -> Result<Scene, SceneError> {
         "checkerboard" => {
             let (columns, rows) = match rest.first() {
                 None => (9, 6),
-                Some(s) => parse_board_size(s).map_err(err)?,
+                Some(s) => parse_board_size(s).map_err(|e| err(e.to_string()))?,
             };
             let square = match rest.get(1) {
                 None => 0.04,
@@ -273,10 +274,10 @@ pub fn parse(spec: &str) -> Result<Scene, SceneError> {
 }
 
 /// Parses `9x6` (inner corners per row × per column).
-pub fn parse_board_size(s: &str) -> Result<(u32, u32), String> {
+pub fn parse_board_size(s: &str) -> Result<(u32, u32)> {
     let (a, b) = s
         .split_once(['x', 'X'])
-        .ok_or_else(|| format!("board size {s:?}: expected COLSxROWS, e.g. 9x6"))?;
+        .ok_or_else(|| Error::input(format!("board size {s:?}: expected COLSxROWS, e.g. 9x6")))?;
     let parse = |t: &str| {
         t.trim()
             .parse::<u32>()
@@ -285,9 +286,9 @@ pub fn parse_board_size(s: &str) -> Result<(u32, u32), String> {
     };
     match (parse(a), parse(b)) {
         (Some(c), Some(r)) => Ok((c, r)),
-        _ => Err(format!(
+        _ => Err(Error::input(format!(
             "board size {s:?}: inner corners must be whole numbers in 2..=200, e.g. 9x6"
-        )),
+        ))),
     }
 }
 

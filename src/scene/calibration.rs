@@ -6,11 +6,12 @@
 //! Deterministic: view i's tilt and aim come from low-discrepancy sequences, so the same
 //! count gives the same set everywhere.
 
+use crate::{Error, Result};
 use glam::{DMat3, DVec2, DVec3};
 
 use super::builtin::Board;
 use super::Pose;
-use crate::model::OpenCvCamera;
+use crate::model::Camera;
 
 /// Fractional part of `i · alpha` (additive recurrence: evenly spread, never repeating).
 fn sequence(i: u32, alpha: f64) -> f64 {
@@ -41,7 +42,7 @@ fn outline(board: &Board) -> Vec<DVec3> {
 }
 
 /// Whether every point projects through the lens inside the image, `margin` px from the edge.
-fn fits(camera: &OpenCvCamera, pose: &Pose, points: &[DVec3], margin: f64) -> bool {
+fn fits(camera: &Camera, pose: &Pose, points: &[DVec3], margin: f64) -> bool {
     let (w, h) = (camera.width as f64, camera.height as f64);
     points.iter().all(|&p| {
         let q = pose.apply(p);
@@ -56,7 +57,7 @@ fn fits(camera: &OpenCvCamera, pose: &Pose, points: &[DVec3], margin: f64) -> bo
 }
 
 /// `count` board poses for `camera`; errors when a view cannot keep the board in the image.
-pub fn board_poses(camera: &OpenCvCamera, board: &Board, count: u32) -> Result<Vec<Pose>, String> {
+pub fn board_poses(camera: &Camera, board: &Board, count: u32) -> Result<Vec<Pose>> {
     let points = outline(board);
     let centre = DVec3::new(
         (board.columns as f64 - 1.0) * board.square / 2.0,
@@ -101,9 +102,9 @@ pub fn board_poses(camera: &OpenCvCamera, board: &Board, count: u32) -> Result<V
             far *= 1.5;
             tries += 1;
             if tries > 40 {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "view {i}: no distance keeps the whole board inside the image"
-                ));
+                )));
             }
         }
         let mut near = 0.0;
@@ -150,7 +151,7 @@ mod tests {
 
     #[test]
     fn every_inner_corner_is_in_the_image() {
-        let camera = OpenCvCamera::from_coeffs(
+        let camera = Camera::from_coeffs(
             800,
             600,
             Intrinsics {

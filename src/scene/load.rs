@@ -3,6 +3,7 @@
 //! mesh gets its own object ID (1, 2, ...). Files are taken as y-up (both formats' convention)
 //! and seen from +z by default. Textures are not loaded: colour comes from the materials.
 
+use crate::{Error, Result};
 use std::path::Path;
 
 use glam::{DMat4, DVec3};
@@ -30,8 +31,8 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
         ));
     }
     let mesh = match ext.as_deref() {
-        Some("obj") => load_obj(path).map_err(err)?,
-        Some("gltf") | Some("glb") => load_gltf(path).map_err(err)?,
+        Some("obj") => load_obj(path).map_err(|e| err(e.to_string()))?,
+        Some("gltf") | Some("glb") => load_gltf(path).map_err(|e| err(e.to_string()))?,
         _ => {
             return Err(err(
                 "unsupported scene file (vklens reads .obj, .gltf and .glb)".into(),
@@ -49,7 +50,7 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
     })
 }
 
-fn load_obj(path: &Path) -> Result<Mesh, String> {
+fn load_obj(path: &Path) -> Result<Mesh> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -57,7 +58,7 @@ fn load_obj(path: &Path) -> Result<Mesh, String> {
         ignore_lines: true,
     };
     let (models, materials) =
-        tobj::load_obj(path, &options).map_err(|e| format!("cannot read the OBJ: {e}"))?;
+        tobj::load_obj(path, &options).map_err(|e| Error::input(format!("cannot read the OBJ: {e}")))?;
     // A missing .mtl is not fatal: the mesh renders in white.
     let materials = materials.unwrap_or_default();
     let mut mesh = Mesh::default();
@@ -91,26 +92,26 @@ fn load_obj(path: &Path) -> Result<Mesh, String> {
             .iter()
             .find(|&&i| i as usize >= part.vertices.len())
         {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "model {:?}: index {bad} past its {} vertices",
                 model.name,
                 part.vertices.len()
-            ));
+            )));
         }
         mesh.append(&part);
     }
     Ok(mesh)
 }
 
-fn load_gltf(path: &Path) -> Result<Mesh, String> {
-    let gltf = gltf::Gltf::open(path).map_err(|e| format!("cannot read the glTF: {e}"))?;
+fn load_gltf(path: &Path) -> Result<Mesh> {
+    let gltf = gltf::Gltf::open(path).map_err(|e| Error::input(format!("cannot read the glTF: {e}")))?;
     let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
-        .map_err(|e| format!("cannot read the glTF's buffers: {e}"))?;
+        .map_err(|e| Error::input(format!("cannot read the glTF's buffers: {e}")))?;
     let scene = gltf
         .document
         .default_scene()
         .or_else(|| gltf.document.scenes().next())
-        .ok_or("the glTF has no scene")?;
+        .ok_or_else(|| Error::input("the glTF has no scene"))?;
     let mut mesh = Mesh::default();
     let mut next_id = 1u32;
     // Depth-first over the node tree, composing transforms.
@@ -119,7 +120,7 @@ fn load_gltf(path: &Path) -> Result<Mesh, String> {
     while let Some((node, parent)) = stack.pop() {
         visited += 1;
         if visited > 1_000_000 {
-            return Err("the glTF node tree does not end (a cycle?)".into());
+            return Err(Error::input("the glTF node tree does not end (a cycle?)"));
         }
         let local =
             DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(|v| v as f64)));
@@ -132,7 +133,7 @@ fn load_gltf(path: &Path) -> Result<Mesh, String> {
                 let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
                 let positions: Vec<[f32; 3]> = reader
                     .read_positions()
-                    .ok_or_else(|| format!("mesh {:?}: a primitive has no positions", m.name()))?
+                    .ok_or_else(|| Error::input(format!("mesh {:?}: a primitive has no positions", m.name())))?
                     .collect();
                 let uvs: Vec<[f32; 2]> = reader
                     .read_tex_coords(0)
@@ -160,11 +161,11 @@ fn load_gltf(path: &Path) -> Result<Mesh, String> {
                     ));
                 }
                 if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
-                    return Err(format!(
+                    return Err(Error::input(format!(
                         "mesh {:?}: index {bad} past its {} vertices",
                         m.name().unwrap_or("unnamed"),
                         positions.len()
-                    ));
+                    )));
                 }
                 part.indices = indices;
                 mesh.append(&part);

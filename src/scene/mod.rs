@@ -17,7 +17,7 @@ use glam::DVec3;
 pub use pose::Pose;
 
 use crate::imaging::Raster;
-use crate::model::{Frustum, OpenCvCamera};
+use crate::model::{Frustum, Camera};
 
 /// One vertex as the vertex shader reads it (`glsl/geometry.vert`, binding 0): 32 bytes.
 #[repr(C)]
@@ -186,7 +186,7 @@ pub struct Scene {
 impl Scene {
     /// A pose that shows the whole scene, centred, filling about 80 % of the smaller field of
     /// view of `camera` (its Sec. 3.1 frustum).
-    pub fn default_pose(&self, camera: &OpenCvCamera) -> Pose {
+    pub fn default_pose(&self, camera: &Camera) -> Pose {
         let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
         let half_tangents = [-f.left, f.right, -f.top, f.bottom];
         let (lo, hi) = self.mesh.bounds();

@@ -2,6 +2,7 @@
 //! y down, z forward; rotations as Rodrigues vectors (`rvec`) like `cv2.solvePnP` and
 //! `cv2.calibrateCamera` report them.
 
+use crate::{Error, Result};
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
 /// A rigid world-to-camera transform.
@@ -88,16 +89,16 @@ impl Pose {
     }
 
     /// Parses `rx,ry,rz,tx,ty,tz` (an OpenCV rvec then tvec).
-    pub fn parse(text: &str) -> Result<Pose, String> {
+    pub fn parse(text: &str) -> Result<Pose> {
         let v: Vec<f64> = text
             .split(',')
             .map(|s| s.trim().parse::<f64>())
             .collect::<Result<_, _>>()
-            .map_err(|_| format!("pose {text:?}: expected six numbers rx,ry,rz,tx,ty,tz"))?;
+            .map_err(|_| Error::input(format!("pose {text:?}: expected six numbers rx,ry,rz,tx,ty,tz")))?;
         if v.len() != 6 || v.iter().any(|x| !x.is_finite()) {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "pose {text:?}: expected six finite numbers rx,ry,rz,tx,ty,tz (an OpenCV rvec, then tvec in metres)"
-            ));
+            )));
         }
         Ok(Pose::from_rvec_tvec(
             DVec3::new(v[0], v[1], v[2]),

@@ -7,12 +7,13 @@
 //! two triangles sharing it agree and the mesh stays watertight (no T-junction cracks). A
 //! triangle with 1, 2 or 3 split edges becomes 2, 3 or 4 triangles with its winding kept.
 
+use crate::{Error, Result};
 use std::collections::HashMap;
 
 use glam::DVec2;
 
 use super::{Mesh, Pose, Vertex, MAX_TRIANGLES};
-use crate::model::{Intrinsics, OpenCvCamera};
+use crate::model::{Intrinsics, Camera};
 
 /// Depth below which a vertex is not measured (it is at or behind the camera, and the
 /// geometry path drops its triangles anyway).
@@ -24,9 +25,9 @@ const MIN_DEPTH: f64 = 1e-6;
 pub fn tessellate(
     mesh: &Mesh,
     pose: &Pose,
-    camera: &OpenCvCamera,
+    camera: &Camera,
     max_edge_px: f64,
-) -> Result<Mesh, String> {
+) -> Result<Mesh> {
     let intrinsics = &camera.intrinsics;
     let (w, h) = (camera.width as f64, camera.height as f64);
     // Whether the edge's bounding box meets the image grown by its own size on every side.
@@ -35,9 +36,9 @@ pub fn tessellate(
         hi.x > -w && lo.x < 2.0 * w && hi.y > -h && lo.y < 2.0 * h
     };
     if !(max_edge_px.is_finite() && max_edge_px >= 0.25) {
-        return Err(format!(
+        return Err(Error::input(format!(
             "tessellation edge length {max_edge_px} px: expected a number of pixels ≥ 0.25"
-        ));
+        )));
     }
     let mut out = mesh.clone();
     // Each round at least halves the longest edge; 40 rounds is far past any real need.
@@ -98,9 +99,9 @@ pub fn tessellate(
             }
             changed |= count > 0;
             if indices.len() / 3 > MAX_TRIANGLES {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "tessellating to {max_edge_px} px edges needs more than {MAX_TRIANGLES} triangles: choose a longer edge"
-                ));
+                )));
             }
         }
         out = Mesh { vertices, indices };
@@ -140,7 +141,7 @@ mod tests {
             cx: 399.5,
             cy: 299.5,
         };
-        let camera = OpenCvCamera::from_coeffs(800, 600, k, &[0.0; 4]).unwrap();
+        let camera = Camera::from_coeffs(800, 600, k, &[0.0; 4]).unwrap();
         let before = longest_edge_px(&scene.mesh, &pose, &k);
         let fine = tessellate(&scene.mesh, &pose, &camera, 10.0).unwrap();
         assert!(before > 100.0);

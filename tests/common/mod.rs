@@ -22,7 +22,7 @@ pub fn assert_no_validation_messages(ctx: &Context) {
 }
 
 /// The shared reference case named `name`, as a camera.
-pub fn reference_camera(name: &str) -> vklens::model::OpenCvCamera {
+pub fn reference_camera(name: &str) -> vklens::model::Camera {
     let reference = vklens::io::reference::load_reference().expect("shared reference file");
     reference
         .cases

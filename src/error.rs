@@ -1,0 +1,186 @@
+//! The one error type of vklens.
+//!
+//! Every fallible function of the library returns [`Result`]. An [`Error`] says what a caller
+//! can act on through its [`ErrorKind`]: fix the input, pick another device, retry or report.
+//! The command line maps kinds to exit codes in one place (`cli::exit_code`), the Python
+//! package to exception classes, the C API to `vkl_error_kind`.
+
+use std::path::{Path, PathBuf};
+
+use ash::vk;
+
+/// What kind of failure an [`Error`] is: what the caller can do about it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ErrorKind {
+    /// Bad input: a file, key, flag or value that cannot be meant. Fix the input.
+    Input,
+    /// The device lacks a feature or a limit the work needs. Pick another device or a smaller
+    /// job.
+    Unsupported,
+    /// A Vulkan call failed, the driver could not be loaded, or the validation layer spoke.
+    Vulkan,
+    /// Reading or writing a file failed.
+    Io,
+    /// A bug in vklens: please report it.
+    Internal,
+}
+
+/// A failure, with enough context to act on: the file, key or value for bad input, the feature
+/// for unsupported work, the call and `VkResult` for Vulkan, the path for I/O.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// Bad input. The message names the file, key or value and what was expected.
+    #[error("{0}")]
+    Input(String),
+    /// The device lacks a feature or limit (named in the message).
+    #[error("{0}")]
+    Unsupported(String),
+    /// A Vulkan call failed.
+    #[error("{call} failed: {result}")]
+    Vulkan {
+        /// The Vulkan entry point (or what vklens was doing).
+        call: &'static str,
+        /// What it returned.
+        result: vk::Result,
+    },
+    /// The Vulkan library or a device could not be had at all.
+    #[error("{0}")]
+    NoVulkan(String),
+    /// GPU memory could not be allocated.
+    #[error("GPU memory allocation failed: {0}")]
+    Allocation(#[from] gpu_allocator::AllocationError),
+    /// The Khronos validation layer reported messages (only when it is on).
+    #[error("Vulkan validation reported {} message(s):\n{}", .0.len(), .0.join("\n"))]
+    Validation(Vec<String>),
+    /// Reading or writing `path` failed.
+    #[error("{}: {message}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What was being done and what the system said.
+        message: String,
+        /// The system's own classification.
+        source_kind: std::io::ErrorKind,
+    },
+    /// A bug in vklens.
+    #[error("internal error (please report): {0}")]
+    Internal(String),
+}
+
+/// Result of every fallible vklens function.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    /// What kind of failure this is.
+    pub fn kind(&self) -> ErrorKind {
+        match self {
+            Error::Input(_) => ErrorKind::Input,
+            Error::Unsupported(_) => ErrorKind::Unsupported,
+            Error::Vulkan { .. }
+            | Error::NoVulkan(_)
+            | Error::Allocation(_)
+            | Error::Validation(_) => ErrorKind::Vulkan,
+            Error::Io { .. } => ErrorKind::Io,
+            Error::Internal(_) => ErrorKind::Internal,
+        }
+    }
+
+    /// Bad input, described by `message` (which names the file, key or value).
+    pub fn input(message: impl Into<String>) -> Self {
+        Error::Input(message.into())
+    }
+
+    /// Work the device cannot do, described by `message` (which names the feature or limit).
+    pub fn unsupported(message: impl Into<String>) -> Self {
+        Error::Unsupported(message.into())
+    }
+
+    /// A bug in vklens.
+    pub fn internal(message: impl Into<String>) -> Self {
+        Error::Internal(message.into())
+    }
+
+    /// An I/O failure on `path` while `doing` (e.g. "cannot read camera file").
+    pub fn io(path: &Path, doing: &str, e: &std::io::Error) -> Self {
+        Error::Io {
+            path: path.to_path_buf(),
+            message: format!("{doing}: {e}"),
+            source_kind: e.kind(),
+        }
+    }
+
+    /// Whether an I/O failure is about the path itself (it does not exist, is not a file or
+    /// folder as needed, or may not be opened) rather than a failure of the machine.
+    pub fn is_bad_path(&self) -> bool {
+        use std::io::ErrorKind as K;
+        matches!(
+            self,
+            Error::Io { source_kind, .. } if matches!(
+                source_kind,
+                K::NotFound
+                    | K::PermissionDenied
+                    | K::NotADirectory
+                    | K::IsADirectory
+                    | K::ReadOnlyFilesystem
+                    | K::InvalidFilename
+                    | K::InvalidInput
+            )
+        )
+    }
+
+    /// Prefixes the message with `context` (a file or key), keeping the kind.
+    pub fn context(self, context: impl std::fmt::Display) -> Self {
+        match self {
+            Error::Input(m) => Error::Input(format!("{context}: {m}")),
+            Error::Unsupported(m) => Error::Unsupported(format!("{context}: {m}")),
+            Error::Internal(m) => Error::Internal(format!("{context}: {m}")),
+            Error::NoVulkan(m) => Error::NoVulkan(format!("{context}: {m}")),
+            other => other,
+        }
+    }
+}
+
+impl From<vk::Result> for Error {
+    fn from(result: vk::Result) -> Self {
+        Error::Vulkan {
+            call: "a Vulkan call",
+            result,
+        }
+    }
+}
+
+impl From<crate::model::ModelError> for Error {
+    fn from(e: crate::model::ModelError) -> Self {
+        Error::Input(e.to_string())
+    }
+}
+
+/// Names the Vulkan call of a failed `VkResult`.
+pub(crate) trait VkCall<T> {
+    /// Maps a `vk::Result` error to [`Error::Vulkan`] naming `call`.
+    fn call(self, call: &'static str) -> Result<T>;
+}
+
+impl<T> VkCall<T> for std::result::Result<T, vk::Result> {
+    fn call(self, call: &'static str) -> Result<T> {
+        self.map_err(|result| Error::Vulkan { call, result })
+    }
+}
+
+/// Domain errors that name their own file, line or key are bad input.
+macro_rules! input_error_from {
+    ($($t:ty),*) => {$(
+        impl From<$t> for Error {
+            fn from(e: $t) -> Self {
+                Error::Input(e.to_string())
+            }
+        }
+    )*};
+}
+input_error_from!(
+    crate::lens::prescription::PrescriptionError,
+    crate::scene::SceneError,
+    crate::plan::scene_file::SceneFileError
+);

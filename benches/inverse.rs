@@ -2,11 +2,11 @@
 //! every inverse method on the shared reference cameras, CPU f64 and GPU f32/f64, beside
 //! OpenCV's own `undistortPoints` errors. Set VKLENS_BENCH_JSON=1 for JSON lines.
 
-use vklens::bench::inverse::{self, InverseBenchOptions};
-use vklens::gpu::Context;
+use vklens::internal::bench::inverse::{self, InverseBenchOptions};
+use vklens::internal::gpu::Context;
 
 fn main() {
-    let reference = match vklens::io::reference::load_reference() {
+    let reference = match vklens::internal::io::reference::load_reference() {
         Ok(r) => r,
         Err(e) => {
             eprintln!("{e}");

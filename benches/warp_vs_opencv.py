@@ -25,7 +25,7 @@ rows = [json.loads(l) for l in subprocess.run(cmd, check=True, capture_output=Tr
 
 
 def bench_camera(w, h):
-    """vklens::bench::warp::bench_camera: the shared prism_tilt case scaled to the size."""
+    """vklens::internal::bench::warp::bench_camera: the shared prism_tilt case scaled to the size."""
     s = w / 1024.0
     K = np.array([[800 * s, 0, (w - 1) / 2], [0, 790 * s, (h - 1) / 2], [0, 0, 1]])
     D = np.array([-0.12, 0.04, 0.002, -0.001, 0, 0, 0, 0, 0.003, -0.0005, -0.002, 0.0004, 0.01, -0.015])

@@ -15,11 +15,11 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
-use vklens::gpu::{image_barrier, Buffer, EnabledFeatures, Gpu, Image};
-use vklens::imaging::cpu_warp::Sampling;
-use vklens::model::warp::WarpGeometry;
-use vklens::model::{Intrinsics, InverseMethod, Camera};
-use vklens::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
+use vklens::internal::gpu::{image_barrier, Buffer, EnabledFeatures, Gpu, Image};
+use vklens::internal::imaging::cpu_warp::Sampling;
+use vklens::internal::model::warp::WarpGeometry;
+use vklens::internal::model::{Camera, Intrinsics, InverseMethod};
+use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (w, h) = (800u32, 600u32);
@@ -231,7 +231,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 readback.raw,
                 &region,
             );
-            vklens::gpu::memory_barrier(
+            vklens::internal::gpu::memory_barrier(
                 &gpu,
                 cmd,
                 xfer_w,

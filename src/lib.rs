@@ -1,31 +1,59 @@
 //! vklens: realistic, calibrated camera-lens effects with raw Vulkan.
 //!
-//! * [`model`] — camera models in plain f64 (OpenCV's 14-coefficient standard model, Brown
-//!   radial), their Jacobians, inverses and valid domains. No Vulkan.
-//! * [`io`] — camera files (JSON, OpenCV FileStorage YAML/XML/JSON, ROS camera_info).
-//! * [`imaging`] — host images (PNG, EXR) and the f64 reference warp.
-//! * [`gpu`] — Vulkan plumbing: a [`gpu::Gpu`] built from the caller's device, queue and
-//!   allocator, the headless [`gpu::Context`] that tests and the CLI use, owned resources.
-//! * [`pass`] — GPU passes that record into a command buffer the caller owns.
-//! * [`lens`] — real lens systems (Heidrich et al.): prescriptions, exact tracing, the image-based
-//!   model and its reference ray tracer. No Vulkan.
-//! * [`plan`] — scene files and the planner: the cheapest pipeline for what a scene asks.
-//! * [`bench`] — the accuracy-versus-time measurements behind `vklens bench`.
+//! A [`Camera`] is a calibrated lens: OpenCV's standard model with all 14 coefficients,
+//! applied exactly as `cv2.projectPoints` does, with a safe inverse that says explicitly where
+//! no inverse can be right (see [`Camera::undistort_points`]). Three things put it into
+//! images:
+//!
+//! * a [`Warper`]: the post-processing warp (distort, undistort, headset pre-correction),
+//!   built once and run on host images ([`Warper::run`]) or recorded into your own command
+//!   buffer with your own images ([`Warper::record`]);
+//! * a [`SceneRenderer`]: a scene file through the lens, planned to the cheapest pipeline for
+//!   what it asks (per vertex with Lambers et al.'s Alg. 1 for IDs, flow and depth; the warp;
+//!   or Heidrich et al.'s image-based model for a real lens prescription);
+//! * [`overscan`]: the pinhole source camera that covers every valid pixel of a lens.
+//!
+//! ```
+//! use vklens::{Camera, InverseMethod};
+//! let k = [[400.0, 0.0, 399.5], [0.0, 400.0, 299.5], [0.0, 0.0, 1.0]];
+//! let camera = Camera::from_opencv(k, &[-0.05, 0.01, 0.03, -0.01], (800, 600))?;
+//! let uv = camera.distort_points(&[[0.1, -0.2]]);
+//! let xy = camera.undistort_points(&[uv[0].unwrap()], InverseMethod::Newton);
+//! let [x, y] = xy[0].unwrap();
+//! assert!((x - 0.1).abs() < 1e-12 && (y + 0.2).abs() < 1e-12);
+//! # Ok::<(), vklens::Error>(())
+//! ```
+//!
+//! Every fallible call returns [`Result`]; an [`Error`]'s [`ErrorKind`] says what the caller
+//! can do about it. Everything under [`internal`] is the machinery behind this surface: usable,
+//! but not kept stable.
 
 // `!(x > 0.0)` is how this crate says "x is positive and not NaN": a NaN must fail every
 // check (the answer is an explicit invalid, never silent garbage). `partial_cmp` would hide that.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+#![warn(missing_docs)]
 
-pub mod bench;
 mod error;
+mod facade;
+
 pub use error::{Error, ErrorKind, Result};
-pub mod cli;
-pub mod gpu;
-pub mod imaging;
-pub mod io;
-pub mod lens;
-pub mod model;
-pub mod pass;
-pub mod plan;
-pub mod render;
-pub mod scene;
+pub use facade::{
+    overscan, warp_geometry, Device, Frame, ImageRef, Rendered, SceneRenderer, WarpDirection,
+    WarpMethod, WarpOptions, Warped, Warper,
+};
+pub use gpu::{EnabledFeatures, Gpu};
+pub use imaging::cpu_warp::Sampling;
+pub use imaging::{BitDepth, Pixels, Raster};
+pub use model::{Camera, Intrinsics, InverseMethod};
+pub use pass::warp::PixelFormat;
+
+/// The layers behind the public surface, bottom first: `model`, `lens`, `io`, `imaging` and
+/// `scene` (no Vulkan), `gpu` (one owning type per Vulkan object), `pass` (record-only GPU
+/// passes), `render` and `plan` (what to record for a scene), then `bench` and `cli` on top.
+/// See `docs/architecture.md`. Public for the tests, the benches and the command line; not
+/// kept stable.
+#[allow(missing_docs)]
+#[doc(hidden)]
+pub mod internal;
+// Inside the crate every layer keeps its short path (`crate::model`, `crate::gpu`, ...).
+use internal::{bench, gpu, imaging, io, lens, model, pass, plan, render, scene};

@@ -6,9 +6,9 @@ fn main() {
     if std::env::var_os("MESA_VK_IGNORE_CONFORMANCE_WARNING").is_none() {
         std::env::set_var("MESA_VK_IGNORE_CONFORMANCE_WARNING", "1");
     }
-    let cli = vklens::cli::Cli::parse();
-    if let Err(e) = vklens::cli::run(cli) {
+    let cli = vklens::internal::cli::Cli::parse();
+    if let Err(e) = vklens::internal::cli::run(cli) {
         eprintln!("vklens: {e}");
-        std::process::exit(vklens::cli::exit_code(&e));
+        std::process::exit(vklens::internal::cli::exit_code(&e));
     }
 }

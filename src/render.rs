@@ -22,14 +22,12 @@ use ash::vk;
 use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{
-    image_barrier, record_compute_download, Buffer, Context, Image,
-};
+use crate::gpu::{image_barrier, record_compute_download, Buffer, Context, Image};
 use crate::imaging::cpu_warp::Sampling;
-use crate::imaging::{Depth, Pixels, Raster};
+use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
-use crate::model::{Intrinsics, InverseMethod, Camera, OpenCvDistortion};
+use crate::model::{Camera, Intrinsics, InverseMethod, OpenCvDistortion};
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     Rendered,
@@ -216,7 +214,7 @@ pub fn downsample(image: &Raster, s: u32) -> Raster {
         width: w,
         height: h,
         pixels,
-        depth: image.depth,
+        bit_depth: image.bit_depth,
     }
 }
 
@@ -436,18 +434,18 @@ impl WarpStage {
         let (pixels, depth) = match self.format {
             PixelFormat::Rgba8 => (
                 Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
-                Depth::U8,
+                BitDepth::U8,
             ),
             _ => (
                 Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
-                Depth::F32,
+                BitDepth::F32,
             ),
         };
         Ok(Raster {
             width: e.width,
             height: e.height,
             pixels,
-            depth,
+            bit_depth: depth,
         })
     }
 }
@@ -777,9 +775,8 @@ fn render_warp_path(
             let mut k = big_ov.intrinsics;
             k.cx -= shift.x * s as f64;
             k.cy -= shift.y * s as f64;
-            let source =
-                Camera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
-                    .map_err(invalid)?;
+            let source = Camera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
+                .map_err(invalid)?;
             let mut geometry = WarpGeometry::distort(big, method)
                 .with_ideal(k, (big_ov.width, big_ov.height))
                 .map_err(invalid)?;
@@ -813,7 +810,7 @@ fn render_warp_path(
             width: ov.width,
             height: ov.height,
             pixels,
-            depth: Depth::F32,
+            bit_depth: BitDepth::F32,
         };
         if let Some(ids) = data.ids {
             progress("warping IDs (nearest)");
@@ -874,7 +871,7 @@ mod tests {
             pixels: Pixels::Rgba8(vec![
                 [0; 4], [255; 4], [10; 4], [10; 4], [255; 4], [0; 4], [10; 4], [10; 4],
             ]),
-            depth: Depth::U8,
+            bit_depth: BitDepth::U8,
         };
         let small = downsample(&img, 2);
         assert_eq!(small.pixels, Pixels::Rgba8(vec![[128; 4], [10; 4]]));

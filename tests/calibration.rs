@@ -18,7 +18,7 @@ fn calibrate(camera: &str, path: &str, require_target: bool) {
         have_cv2,
         "python3 with cv2 and numpy is needed: run scripts/bootstrap"
     );
-    let reference = vklens::io::reference::load_reference().unwrap();
+    let reference = vklens::internal::io::reference::load_reference().unwrap();
     let case = reference.cases.iter().find(|c| c.name == camera).unwrap();
     let dir = std::env::temp_dir().join(format!(
         "vklens-calib-{camera}-{path}-{}",

@@ -1,8 +1,8 @@
 //! Every calibration file in `../shared/reference/calibration-files/` loads and equals the
 //! camera `index.json` says it holds; bad files give one clear error naming the problem.
 
-use vklens::io::parse_camera;
-use vklens::io::reference::shared_dir;
+use vklens::internal::io::parse_camera;
+use vklens::internal::io::reference::shared_dir;
 
 #[test]
 fn every_shared_calibration_file_loads_with_the_true_parameters() {
@@ -20,7 +20,7 @@ fn every_shared_calibration_file_loads_with_the_true_parameters() {
             .collect();
         for file in cam["files"].as_array().expect("files") {
             let path = dir.join(file.as_str().unwrap());
-            let got = vklens::io::load_camera(&path).unwrap_or_else(|e| panic!("{e}"));
+            let got = vklens::internal::io::load_camera(&path).unwrap_or_else(|e| panic!("{e}"));
             assert_eq!(
                 got.width as u64,
                 cam["width"].as_u64().unwrap(),
@@ -54,10 +54,12 @@ fn every_shared_calibration_file_loads_with_the_true_parameters() {
 
 #[test]
 fn reference_cases_are_camera_files_as_they_stand() {
-    let text = std::fs::read_to_string(vklens::io::reference::reference_path()).expect("reference");
+    let text = std::fs::read_to_string(vklens::internal::io::reference::reference_path())
+        .expect("reference");
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     for case in v["cases"].as_array().unwrap() {
-        let cam = vklens::io::camera::camera_from_value(case).unwrap_or_else(|e| panic!("{e}"));
+        let cam =
+            vklens::internal::io::camera::camera_from_value(case).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(cam.distortion.to_coeffs().len(), 14);
     }
 }

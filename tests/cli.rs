@@ -3,7 +3,7 @@
 use std::io::Write;
 use std::process::{Command, Output, Stdio};
 
-use vklens::io::reference::{load_reference, shared_dir};
+use vklens::internal::io::reference::{load_reference, shared_dir};
 
 fn vklens(args: &[&str], stdin: &str) -> Output {
     let mut child = Command::new(env!("CARGO_BIN_EXE_vklens"))

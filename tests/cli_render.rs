@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use vklens::imaging::{io as image_io, Pixels};
-use vklens::io::reference::shared_dir;
+use vklens::internal::imaging::{io as image_io, Pixels};
+use vklens::internal::io::reference::shared_dir;
 
 fn vklens(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_vklens"))

@@ -3,8 +3,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use vklens::imaging::{io as image_io, Depth, Pixels, Raster};
-use vklens::io::reference::shared_dir;
+use vklens::internal::imaging::{io as image_io, BitDepth, Pixels, Raster};
+use vklens::internal::io::reference::shared_dir;
 
 fn vklens(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_vklens"))
@@ -43,7 +43,7 @@ fn write_png(path: &Path, w: u32, h: u32, sixteen: bool) {
         width: w,
         height: h,
         pixels: Pixels::Rgba32F(pixels),
-        depth: if sixteen { Depth::U16 } else { Depth::U8 },
+        bit_depth: if sixteen { BitDepth::U16 } else { BitDepth::U8 },
     };
     image_io::save(&raster, path).unwrap();
 }
@@ -126,7 +126,7 @@ fn every_direction_writes_the_right_size_and_depth() {
         s(&exr),
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    assert_eq!(image_io::load(&exr).unwrap().depth, Depth::F32);
+    assert_eq!(image_io::load(&exr).unwrap().bit_depth, BitDepth::F32);
 }
 
 #[test]

@@ -8,10 +8,10 @@ use ash::vk;
 use glam::DVec2;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
-use vklens::gpu::host_read_barrier;
-use vklens::gpu::{Buffer, EnabledFeatures, Gpu};
-use vklens::model::InverseMethod;
-use vklens::pass::{PointsMode, PointsPass, Precision};
+use vklens::internal::gpu::host_read_barrier;
+use vklens::internal::gpu::{Buffer, EnabledFeatures, Gpu};
+use vklens::internal::model::InverseMethod;
+use vklens::internal::pass::{PointsMode, PointsPass, Precision};
 
 #[test]
 fn a_pass_records_into_the_callers_command_buffer_on_the_callers_device() {
@@ -81,7 +81,7 @@ fn a_pass_records_into_the_callers_command_buffer_on_the_callers_device() {
                 EnabledFeatures::default(),
             )
             .unwrap();
-            let reference = vklens::io::reference::load_reference().unwrap();
+            let reference = vklens::internal::io::reference::load_reference().unwrap();
             let case = &reference.cases[0];
             let cam = case.camera().unwrap();
             let pixels: Vec<[f32; 2]> = case

@@ -5,15 +5,15 @@ mod common;
 
 use common::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::{DVec2, DVec3};
-use vklens::imaging::{Depth, Pixels, Raster};
-use vklens::model::{InverseMethod, Camera};
-use vklens::pass::geometry::{
+use vklens::internal::imaging::{BitDepth, Pixels, Raster};
+use vklens::internal::model::{Camera, InverseMethod};
+use vklens::internal::pass::geometry::{
     render, ColorFormat, GeometryDesc, Outputs, Projection, Rendered, DEFAULT_DELTA,
 };
-use vklens::render::{render_scene, RenderPath, RenderRequest};
-use vklens::scene::builtin::{self, Board};
-use vklens::scene::tessellate::tessellate;
-use vklens::scene::{Mesh, Pose, Vertex};
+use vklens::internal::render::{render_scene, RenderPath, RenderRequest};
+use vklens::internal::scene::builtin::{self, Board};
+use vklens::internal::scene::tessellate::tessellate;
+use vklens::internal::scene::{Mesh, Pose, Vertex};
 
 const DATA: Outputs = Outputs {
     color: None,
@@ -159,7 +159,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
     // 3D point; the centroid of its image must sit on OpenCV's pixel within rasterization
     // precision.
     let ctx = validated_context();
-    let reference = vklens::io::reference::load_reference().unwrap();
+    let reference = vklens::internal::io::reference::load_reference().unwrap();
     for name in ["seed_fig2", "webcam_plumb_bob", "prism_tilt"] {
         let case = reference.cases.iter().find(|c| c.name == name).unwrap();
         let camera = case.camera().unwrap();
@@ -195,7 +195,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
         // White squares on black, anti-aliased (4× supersampling, 4 jittered passes): the
         // intensity-weighted centroid of each marker locates it to a small fraction of a
         // pixel, unlike the pixel-centre count of an ID image (quantized to ±0.5 px).
-        let scene = vklens::scene::Scene {
+        let scene = vklens::internal::scene::Scene {
             name: name.into(),
             mesh,
             texture: None,
@@ -268,7 +268,7 @@ fn barrel_discard_shows_the_border_and_stretches_nothing() {
     // The middles of the image's sides lie outside the pinhole frustum (their undistorted
     // NDC is beyond ±1) and are drawn. (Its corners are past the lens's fold: no preimage.)
     let ids = r.ids.as_ref().unwrap();
-    let f = vklens::model::Frustum::from_intrinsics(&camera.intrinsics, 800, 600);
+    let f = vklens::internal::model::Frustum::from_intrinsics(&camera.intrinsics, 800, 600);
     for (x, y) in [(0, 300), (799, 300), (400, 0), (400, 599)] {
         let p = DVec2::new(x as f64, y as f64);
         let ideal = camera
@@ -398,17 +398,17 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
                 .map(|&i| [i as f32, 0.0, 0.0, 1.0])
                 .collect(),
         ),
-        depth: Depth::F32,
+        bit_depth: BitDepth::F32,
     };
     let geometry =
-        vklens::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
-    let (bilinear, _) = vklens::pass::warp::run_warp(
+        vklens::internal::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
+    let (bilinear, _) = vklens::internal::pass::warp::run_warp(
         &ctx,
-        vklens::pass::warp::WarpDesc {
+        vklens::internal::pass::warp::WarpDesc {
             geometry,
-            coordinates: vklens::pass::warp::Coordinates::Analytic,
-            sampling: vklens::imaging::cpu_warp::Sampling::Bilinear,
-            format: vklens::pass::warp::PixelFormat::Rgba32F,
+            coordinates: vklens::internal::pass::warp::Coordinates::Analytic,
+            sampling: vklens::internal::imaging::cpu_warp::Sampling::Bilinear,
+            format: vklens::internal::pass::warp::PixelFormat::Rgba32F,
             fill: [0.0; 4],
             write_mask: false,
         },

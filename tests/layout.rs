@@ -3,8 +3,8 @@
 
 use std::mem::offset_of;
 
-use vklens::gpu::{reflect, shaders};
-use vklens::pass::{CameraParams, CameraParams64, CAMERA_SPEC_IDS};
+use vklens::internal::gpu::{reflect, shaders};
+use vklens::internal::pass::{CameraParams, CameraParams64, CAMERA_SPEC_IDS};
 
 macro_rules! host_offsets {
     ($t:ty) => {
@@ -69,7 +69,7 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
 
 #[test]
 fn geometry_frame_matches_the_glsl_block() {
-    use vklens::pass::geometry::GeometryFrame;
+    use vklens::internal::pass::geometry::GeometryFrame;
     let host = vec![
         (
             "view_projection",
@@ -94,7 +94,7 @@ fn geometry_frame_matches_the_glsl_block() {
 
 #[test]
 fn mesh_warp_push_matches_the_glsl_block() {
-    use vklens::pass::mesh_warp::MeshWarpPush;
+    use vklens::internal::pass::mesh_warp::MeshWarpPush;
     let host = vec![("sizes", offset_of!(MeshWarpPush, sizes))];
     check(shaders::MESH_WARP_VERT, "MeshWarpPush", host.clone());
     check(shaders::MESH_WARP_FRAG, "MeshWarpPush", host);
@@ -102,7 +102,7 @@ fn mesh_warp_push_matches_the_glsl_block() {
 
 #[test]
 fn film_push_matches_the_glsl_block() {
-    use vklens::pass::film::FilmPush;
+    use vklens::internal::pass::film::FilmPush;
     let host = vec![
         ("film_size", offset_of!(FilmPush, film_size)),
         ("channel_mask", offset_of!(FilmPush, channel_mask)),
@@ -118,16 +118,16 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
     // stage with the rational/prism/tilt groups off and a fragment stage that writes no ID,
     // flow or depth.
     use ash::vk;
-    use vklens::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
-    let ctx = vklens::gpu::Context::new(vklens::gpu::ContextOptions {
+    use vklens::internal::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
+    let ctx = vklens::internal::gpu::Context::new(vklens::internal::gpu::ContextOptions {
         validation: true,
         device: None,
     })
     .unwrap();
-    let camera = vklens::model::Camera::from_coeffs(
+    let camera = vklens::internal::model::Camera::from_coeffs(
         640,
         480,
-        vklens::model::Intrinsics {
+        vklens::internal::model::Intrinsics {
             fx: 500.0,
             fy: 500.0,
             cx: 319.5,

@@ -3,7 +3,7 @@
 
 use std::process::Command;
 
-use vklens::lens::{analyse, trace, LAMBDA_D};
+use vklens::internal::lens::{analyse, trace, LAMBDA_D};
 
 mod common;
 
@@ -102,7 +102,7 @@ fn the_fitted_opencv_camera_reproduces_the_traced_lens() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let camera = vklens::io::load_camera(&out).unwrap();
+    let camera = vklens::internal::io::load_camera(&out).unwrap();
     let p = shipped("dgauss.50mm.dat");
     let par = analyse(&p, LAMBDA_D);
     let film = par.rear_vertex_z + par.bfl.unwrap();
@@ -149,7 +149,7 @@ fn the_achromat_matches_its_published_figures_and_corrects_colour() {
     assert!((bfl - 43.22).abs() < 0.43, "BFL {bfl}");
     // An achromat brings F and C light to (nearly) one focus: far less longitudinal colour
     // than a singlet of its crown glass, whose focal length changes by about f / V_d.
-    use vklens::lens::prescription::{LAMBDA_C, LAMBDA_F};
+    use vklens::internal::lens::prescription::{LAMBDA_C, LAMBDA_F};
     let shift = (analyse(&p, LAMBDA_F).bfl.unwrap() - analyse(&p, LAMBDA_C).bfl.unwrap()).abs();
     let singlet_shift = efl / 47.11;
     // Measured: 0.15 mm against 1.06 mm (7× less; the two-term Cauchy dispersion from n_d and
@@ -167,7 +167,7 @@ fn the_singlet_matches_its_published_figures_and_does_not_correct_colour() {
     let efl = analyse(&p, LAMBDA_D).efl.unwrap();
     assert!((efl - 50.0).abs() < 0.5, "EFL {efl}");
     // Its focal length moves by about f / V_d between F and C (no correction at all).
-    use vklens::lens::prescription::{LAMBDA_C, LAMBDA_F};
+    use vklens::internal::lens::prescription::{LAMBDA_C, LAMBDA_F};
     let shift = analyse(&p, LAMBDA_C).efl.unwrap() - analyse(&p, LAMBDA_F).efl.unwrap();
     let expected = efl / 64.17;
     assert!(
@@ -179,11 +179,11 @@ fn the_singlet_matches_its_published_figures_and_does_not_correct_colour() {
 mod image_model {
     use super::shipped;
     use glam::{DVec2, DVec3};
-    use vklens::lens::image_model::{
+    use vklens::internal::lens::image_model::{
         fit_cop, fit_cop_from, least_squares_cop, max_angle_deg, ImageModel, ModelOptions, Optics,
         PlaneRay,
     };
-    use vklens::lens::{Prescription, LAMBDA_D};
+    use vklens::internal::lens::{Prescription, LAMBDA_D};
 
     /// 36 × 24 mm film, 360 × 240 pixels, focused at 2 m.
     fn optics(p: &Prescription) -> Optics {
@@ -246,7 +246,7 @@ mod image_model {
         // stop as the rear surface, the film 40 mm behind it. Every lens sample lies in the
         // stop, every cell is one exact projection from its sample point.
         let p = Prescription::parse("0 1 1 20\n0 40 0 0.05\n", "pinhole").unwrap();
-        let film = vklens::lens::image_model::Film {
+        let film = vklens::internal::lens::image_model::Film {
             width: 120,
             height: 80,
             pitch_mm: 0.2,
@@ -258,7 +258,7 @@ mod image_model {
         assert!(m.max_angle_deg() < 1e-7, "{}", m.max_angle_deg());
         for s in &m.samples {
             let cop = s.cells[0].cop;
-            let expected = vklens::lens::image_model::lens_to_camera(s.point);
+            let expected = vklens::internal::lens::image_model::lens_to_camera(s.point);
             assert!((cop - expected).length() < 1e-9, "{cop} vs {expected}");
         }
     }
@@ -403,7 +403,7 @@ fn lens_render_cli_writes_the_film_and_refuses_bad_input() {
 
 #[test]
 fn fitting_at_a_finite_focus_scales_the_focal_length_by_the_magnification() {
-    use vklens::lens::fit_opencv;
+    use vklens::internal::lens::fit_opencv;
     let p = shipped("dgauss.50mm.dat");
     let par = analyse(&p, LAMBDA_D);
     let at_infinity = fit_opencv(&p, (36.0, 24.0), (1800, 1200), f64::INFINITY, LAMBDA_D).unwrap();

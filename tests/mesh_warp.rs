@@ -5,12 +5,12 @@ mod common;
 
 use common::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::DVec2;
-use vklens::imaging::cpu_warp::Sampling;
-use vklens::imaging::{Depth, Pixels, Raster};
-use vklens::model::warp::WarpGeometry;
-use vklens::model::InverseMethod;
-use vklens::pass::mesh_warp::{run_mesh_warp, MeshWarpOutput};
-use vklens::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
+use vklens::internal::imaging::cpu_warp::Sampling;
+use vklens::internal::imaging::{BitDepth, Pixels, Raster};
+use vklens::internal::model::warp::WarpGeometry;
+use vklens::internal::model::InverseMethod;
+use vklens::internal::pass::mesh_warp::{run_mesh_warp, MeshWarpOutput};
+use vklens::internal::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
 
 #[test]
 fn mesh_error_shrinks_with_n_and_the_image_matches_the_compute_warp() {
@@ -34,7 +34,7 @@ fn mesh_error_shrinks_with_n_and_the_image_matches_the_compute_warp() {
                 })
                 .collect(),
         ),
-        depth: Depth::U8,
+        bit_depth: BitDepth::U8,
     };
     let error = |n: u32| {
         let m = run_mesh_warp(&ctx, &g, n, MeshWarpOutput::Coordinates, &source).unwrap();

@@ -4,9 +4,9 @@
 
 use glam::{DVec2, DVec3, DVec4};
 use proptest::prelude::*;
-use vklens::model::{
-    vulkan_projection, BrownRadial, CameraModel, Frustum, Intrinsics, InverseMethod, ModelError,
-    Camera,
+use vklens::internal::model::{
+    vulkan_projection, BrownRadial, Camera, CameraModel, Frustum, Intrinsics, InverseMethod,
+    ModelError,
 };
 
 fn camera(w: u32, h: u32, f: f64, coeffs: &[f64]) -> Camera {

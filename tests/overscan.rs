@@ -2,10 +2,10 @@
 //! mustache and folding lenses — where Lambers et al.'s four-corner rule does not.
 
 use glam::DVec2;
-use vklens::io::reference::load_reference;
-use vklens::model::overscan::overscan;
-use vklens::model::warp::WarpGeometry;
-use vklens::model::{Intrinsics, InverseMethod, Camera};
+use vklens::internal::io::reference::load_reference;
+use vklens::internal::model::overscan::overscan;
+use vklens::internal::model::warp::WarpGeometry;
+use vklens::internal::model::{Camera, Intrinsics, InverseMethod};
 
 /// Valid output pixels (inverse defined) whose source falls off the frame.
 fn uncovered(cam: &Camera, geometry: &WarpGeometry) -> usize {

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use ash::vk;
 use common::{assert_no_validation_messages, validated_context};
-use vklens::plan::{execute, load_geometry, plan, Route, SceneFile};
+use vklens::internal::plan::{execute, load_geometry, plan, Route, SceneFile};
 
 fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes")
@@ -25,7 +25,7 @@ fn error(text: &str) -> String {
 
 /// The recorded constants of a pipeline kind's stage.
 fn constant(
-    recorded: &vklens::plan::Recorded,
+    recorded: &vklens::internal::plan::Recorded,
     kind: &str,
     stage: vk::ShaderStageFlags,
     id: u32,
@@ -39,7 +39,12 @@ fn constant(
         .and_then(|(_, c)| c.get(id))
 }
 
-fn run(file: &SceneFile) -> (vklens::plan::Plan, vklens::plan::Recorded) {
+fn run(
+    file: &SceneFile,
+) -> (
+    vklens::internal::plan::Plan,
+    vklens::internal::plan::Recorded,
+) {
     let ctx = validated_context();
     let scene = load_geometry(file).unwrap();
     let p = plan(file, &scene).unwrap();
@@ -306,8 +311,8 @@ fn render_scene_cli_writes_every_output_of_every_frame() {
 
 #[test]
 fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
-    use vklens::gpu::QueryPool;
-    use vklens::plan::record::{pass_times, PlanRecorder};
+    use vklens::internal::gpu::QueryPool;
+    use vklens::internal::plan::record::{pass_times, PlanRecorder};
     let ctx = validated_context();
     let file = SceneFile::load(&examples().join("ids_and_flow.toml")).unwrap();
     let scene = load_geometry(&file).unwrap();
@@ -351,7 +356,7 @@ fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
     // Chromatic colour takes the warp; depth asked beside it goes through the same warp as a
     // second, nearest one (+inf where there is no source). An engine recording the plan gets
     // the very depth the headless execution writes.
-    use vklens::gpu::{record_compute_download, Buffer};
+    use vklens::internal::gpu::{record_compute_download, Buffer};
     let ctx = validated_context();
     let gpu = ctx.gpu();
     let text = std::fs::read_to_string(examples().join("chromatic.toml")).unwrap()
@@ -367,7 +372,7 @@ fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
     })
     .unwrap();
     let expected = expected.unwrap().depth.expect("execute() writes depth");
-    let mut recorder = vklens::plan::record::PlanRecorder::new(gpu, &p, &scene).unwrap();
+    let mut recorder = vklens::internal::plan::record::PlanRecorder::new(gpu, &p, &scene).unwrap();
     recorder.prepare(0).unwrap();
     let image = recorder
         .warped_depth()
@@ -476,7 +481,7 @@ fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
     assert!(changed > 0, "anti-aliasing changed no pixel");
     assert!(mean < 0.05, "mean change {mean}");
     // The engine recorder draws one sample per pixel and says so rather than ignore the keys.
-    let e = match vklens::plan::record::PlanRecorder::new(ctx.gpu(), &p4, &scene) {
+    let e = match vklens::internal::plan::record::PlanRecorder::new(ctx.gpu(), &p4, &scene) {
         Ok(_) => panic!("the recorder accepted an anti-aliased plan"),
         Err(e) => e.to_string(),
     };
@@ -484,7 +489,9 @@ fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
     // A lens scene cannot take the keys.
     let lens = std::fs::read_to_string(examples().join("lens_chromatic.toml")).unwrap();
     let lens = scene_file(&format!("{lens}\n[render]\nsupersample = 2\n"));
-    let e = plan(&lens, &load_geometry(&lens).unwrap()).unwrap_err().to_string();
+    let e = plan(&lens, &load_geometry(&lens).unwrap())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("[render] supersample"), "{e}");
     assert_no_validation_messages(&ctx);
 }

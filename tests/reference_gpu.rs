@@ -4,10 +4,10 @@
 mod common;
 
 use glam::DVec2;
-use vklens::io::reference::load_reference;
-use vklens::model::{CameraModel, InverseMethod};
-use vklens::pass::points::run_points;
-use vklens::pass::{PointsMode, Precision};
+use vklens::internal::io::reference::load_reference;
+use vklens::internal::model::{CameraModel, InverseMethod};
+use vklens::internal::pass::points::run_points;
+use vklens::internal::pass::{PointsMode, Precision};
 
 #[test]
 fn gpu_forward_within_2e3_px_of_opencv() {
@@ -192,9 +192,11 @@ fn gpu_approximations_agree_with_their_cpu_twins() {
 fn specialization_constants_compile_out_unused_terms() {
     use ash::vk;
     use gpu_allocator::MemoryLocation;
-    use vklens::gpu::host_read_barrier;
-    use vklens::gpu::{shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool};
-    use vklens::pass::{CameraParams, PointsPass};
+    use vklens::internal::gpu::host_read_barrier;
+    use vklens::internal::gpu::{
+        shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool,
+    };
+    use vklens::internal::pass::{CameraParams, PointsPass};
 
     let ctx = common::validated_context();
     let gpu = ctx.gpu();
@@ -217,7 +219,7 @@ fn specialization_constants_compile_out_unused_terms() {
         .unwrap();
     let cam = case.camera().unwrap();
     let mut terms = cam.distortion.terms();
-    let run = |terms: vklens::model::Terms| -> Vec<[f32; 4]> {
+    let run = |terms: vklens::internal::model::Terms| -> Vec<[f32; 4]> {
         let constants = CameraParams::spec_constants(terms)
             .u32(8, 0)
             .u32(9, 0)
@@ -298,7 +300,7 @@ fn specialization_constants_compile_out_unused_terms() {
     let mut cpu = cam.clone();
     let mut d = cam.distortion;
     (d.s1, d.s2, d.s3, d.s4) = (0.0, 0.0, 0.0, 0.0);
-    cpu = vklens::model::Camera::new(cpu.width, cpu.height, cpu.intrinsics, d).unwrap();
+    cpu = vklens::internal::model::Camera::new(cpu.width, cpu.height, cpu.intrinsics, d).unwrap();
     let (mut moved, mut worst) = (0.0f64, 0.0f64);
     for ((p, a), b) in case.points.iter().zip(&full).zip(&no_prism) {
         moved = moved.max(((a[0] - b[0]) as f64).hypot((a[1] - b[1]) as f64));

@@ -3,13 +3,15 @@
 
 mod common;
 
-use vklens::imaging::cpu_warp::{self, Sampling};
-use vklens::imaging::{Depth, Pixels, Raster};
-use vklens::io::reference::load_reference;
-use vklens::model::warp::WarpGeometry;
-use vklens::model::InverseMethod;
-use vklens::pass::warp::{run_warp, Coordinates, MapInterpolation, PixelFormat, WarpDesc};
-use vklens::pass::warp_raster::run_raster_warp;
+use vklens::internal::imaging::cpu_warp::{self, Sampling};
+use vklens::internal::imaging::{BitDepth, Pixels, Raster};
+use vklens::internal::io::reference::load_reference;
+use vklens::internal::model::warp::WarpGeometry;
+use vklens::internal::model::InverseMethod;
+use vklens::internal::pass::warp::{
+    run_warp, Coordinates, MapInterpolation, PixelFormat, WarpDesc,
+};
+use vklens::internal::pass::warp_raster::run_raster_warp;
 
 /// A test image with edges and smooth gradients in every channel.
 fn test_image(w: u32, h: u32) -> Raster {
@@ -30,7 +32,7 @@ fn test_image(w: u32, h: u32) -> Raster {
         width: w,
         height: h,
         pixels: Pixels::Rgba32F(p),
-        depth: Depth::F32,
+        bit_depth: BitDepth::F32,
     }
 }
 
@@ -73,7 +75,7 @@ fn check(
     geometry: WarpGeometry,
     coordinates: Coordinates,
     format: PixelFormat,
-    ctx: &vklens::gpu::Context,
+    ctx: &vklens::internal::gpu::Context,
 ) -> Diff {
     let (w, h) = geometry.source_size;
     let mut source = test_image(w, h);
@@ -86,7 +88,7 @@ fn check(
                 .map(|v| v.map(|c| (c * 255.0).round() as u8))
                 .collect(),
         );
-        source.depth = Depth::U8;
+        source.bit_depth = BitDepth::U8;
     }
     let fill = [0.0; 4];
     let (cpu, cpu_mask) = cpu_warp::warp(&geometry, &source, Sampling::Bilinear, fill);
@@ -196,8 +198,8 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
 #[test]
 fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
     use glam::DVec2;
-    use vklens::model::CameraModel;
-    use vklens::pass::warp::read_maps;
+    use vklens::internal::model::CameraModel;
+    use vklens::internal::pass::warp::read_maps;
     let ctx = common::validated_context();
     for name in ["prism_tilt", "rational_wide"] {
         let cam = common::reference_camera(name);
@@ -287,7 +289,7 @@ fn a_full_camera_per_channel_matches_the_reference() {
         let mut k = g_cam.intrinsics;
         k.fx *= 1.0 + df;
         k.fy *= 1.0 + df;
-        vklens::model::Camera::new(g_cam.width, g_cam.height, k, d).unwrap()
+        vklens::internal::model::Camera::new(g_cam.width, g_cam.height, k, d).unwrap()
     };
     let mut geometry = WarpGeometry::distort(g_cam.clone(), InverseMethod::Newton);
     geometry.channel_cameras = Some(Box::new([
@@ -313,7 +315,7 @@ fn a_full_camera_per_channel_matches_the_reference() {
         fill: [0.0; 4],
         write_mask: true,
     };
-    assert!(vklens::pass::warp::WarpPass::new(ctx.gpu(), desc).is_err());
+    assert!(vklens::internal::pass::warp::WarpPass::new(ctx.gpu(), desc).is_err());
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -325,8 +327,8 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
     // Each map is of another camera (principal point moved by a third of a pixel), so that a
     // pixel left unwritten cannot pass on what an earlier map left in reused memory.
     use glam::DVec2;
-    use vklens::model::{Intrinsics, Camera};
-    use vklens::pass::warp::read_maps;
+    use vklens::internal::model::{Camera, Intrinsics};
+    use vklens::internal::pass::warp::read_maps;
     let ctx = common::validated_context();
     let mut variant = 0.0;
     for (w, h) in [(1, 1), (17, 9), (33, 20), (70, 9)] {
@@ -376,7 +378,7 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
 
 #[test]
 fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
-    use vklens::pass::warp::WarpPass;
+    use vklens::internal::pass::warp::WarpPass;
     let ctx = common::validated_context();
     let interpolations = [MapInterpolation::Bilinear, MapInterpolation::Cubic];
     for ((name, expect_check), interpolation) in [
@@ -443,7 +445,7 @@ fn the_fragment_shader_warp_matches_the_compute_warp() {
                 .map(|p| p.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8))
                 .collect(),
         ),
-        depth: Depth::U8,
+        bit_depth: BitDepth::U8,
     };
     for (geometry, name) in [(plain, "plain"), (chroma, "chromatic")] {
         for (format, source) in [

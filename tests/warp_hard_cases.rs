@@ -4,18 +4,18 @@
 mod common;
 
 use glam::DVec2;
-use vklens::imaging::cpu_warp::Sampling;
-use vklens::imaging::{Depth, Pixels, Raster};
-use vklens::model::warp::WarpGeometry;
-use vklens::model::{Intrinsics, InverseMethod, Camera};
-use vklens::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
+use vklens::internal::imaging::cpu_warp::Sampling;
+use vklens::internal::imaging::{BitDepth, Pixels, Raster};
+use vklens::internal::model::warp::WarpGeometry;
+use vklens::internal::model::{Camera, Intrinsics, InverseMethod};
+use vklens::internal::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
 
 fn flat(w: u32, h: u32, v: u8) -> Raster {
     Raster {
         width: w,
         height: h,
         pixels: Pixels::Rgba8(vec![[v, v, v, 255]; (w * h) as usize]),
-        depth: Depth::U8,
+        bit_depth: BitDepth::U8,
     }
 }
 
@@ -41,7 +41,7 @@ fn folding_lenses_get_a_clean_masked_border_not_streaks() {
     for name in ["rational_wide", "strong_pincushion"] {
         let cam = common::reference_camera(name);
         // Overscanned source, so every pixel without a source is one the lens cannot invert.
-        let o = vklens::model::overscan::overscan(&cam, 1.0).unwrap();
+        let o = vklens::internal::model::overscan::overscan(&cam, 1.0).unwrap();
         let g = WarpGeometry::distort(cam.clone(), InverseMethod::Newton)
             .with_ideal(o.intrinsics, (o.width, o.height))
             .unwrap();
@@ -217,7 +217,7 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
         width: 320,
         height: 240,
         pixels: Pixels::R32Uint(ids.clone()),
-        depth: Depth::F32,
+        bit_depth: BitDepth::F32,
     };
     let g = WarpGeometry::distort(cam, InverseMethod::Newton);
     let (out, mask) = run_warp(
@@ -240,7 +240,7 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
         width: 320,
         height: 240,
         pixels: Pixels::Rgba32F(ids.iter().map(|&i| [i as f32, 0.0, 0.0, 1.0]).collect()),
-        depth: Depth::F32,
+        bit_depth: BitDepth::F32,
     };
     let (blended, _) = run_warp(
         &ctx,
@@ -258,7 +258,7 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
     println!("bilinear produced {mixed} pixels whose 'ID' exists nowhere in the source; nearest produced none");
     assert!(mixed > 1000);
     // R32_UINT refuses bilinear outright.
-    let e = vklens::pass::warp::WarpPass::new(
+    let e = vklens::internal::pass::warp::WarpPass::new(
         ctx.gpu(),
         desc(
             WarpGeometry::distort(

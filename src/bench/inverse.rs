@@ -18,7 +18,7 @@ use serde::Serialize;
 
 use crate::gpu::{host_read_barrier, memory_barrier, Buffer, Context, QueryPool};
 use crate::io::reference::{ReferenceCase, ReferenceFile};
-use crate::model::{CameraModel, InverseMethod, Camera};
+use crate::model::{Camera, CameraModel, InverseMethod};
 use crate::pass::{PointsMode, PointsPass, Precision};
 
 /// The methods measured by default.

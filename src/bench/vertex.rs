@@ -24,7 +24,7 @@ use crate::gpu::{Context, Result};
 use crate::imaging::cpu_warp::Sampling;
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
-use crate::model::{InverseMethod, Camera, OpenCvDistortion};
+use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     Texture, DEFAULT_DELTA,
@@ -251,9 +251,7 @@ pub fn run(
     for edge in EDGES {
         progress(&format!("tessellation: {w}×{h}, L = {edge:?}"));
         let mesh = match edge {
-            Some(l) => {
-                tessellate(&scene.mesh, &pose, &camera, l)?
-            }
+            Some(l) => tessellate(&scene.mesh, &pose, &camera, l)?,
             None => scene.mesh.clone(),
         };
         let ms = time_scene(ctx, &camera, LENS, &scene, &mesh, &pose)?;

@@ -15,9 +15,9 @@ use serde_json::{json, Value};
 
 use crate::gpu::{memory_barrier, Context, QueryPool, Result};
 use crate::imaging::cpu_warp::Sampling;
-use crate::imaging::{Depth, Pixels, Raster};
+use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
-use crate::model::{Intrinsics, InverseMethod, Camera};
+use crate::model::{Camera, Intrinsics, InverseMethod};
 use crate::pass::copy::CopyPass;
 use crate::pass::mesh_warp::MeshWarpTarget;
 use crate::pass::warp::{
@@ -92,7 +92,7 @@ pub(crate) fn test_source(w: u32, h: u32) -> Raster {
         width: w,
         height: h,
         pixels: Pixels::Rgba8(pixels),
-        depth: Depth::U8,
+        bit_depth: BitDepth::U8,
     }
 }
 

@@ -39,8 +39,7 @@ pub fn inverse(args: InverseArgs) -> Result<(), CliError> {
     if let Some(ctx) = &ctx {
         eprintln!("device: {}", ctx.gpu().device_name());
     }
-    let rows = inverse::run(&reference, ctx.as_ref(), &options, super::progress_line)
-        ?;
+    let rows = inverse::run(&reference, ctx.as_ref(), &options, super::progress_line)?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     if let Some(ctx) = &ctx {
         finish(ctx)?;

@@ -14,9 +14,11 @@ use crate::scene::builtin::{self, parse_board_size, Board};
 use crate::scene::calibration::board_poses;
 
 #[derive(Args, Debug)]
-#[command(after_help = "Example (Lambers et al.'s proof, for one camera and path):
+#[command(
+    after_help = "Example (Lambers et al.'s proof, for one camera and path):
   vklens calibration-set --camera cam.yml --out set/ --path vertex
-  python3 tests/calibrate.py set/      # OpenCV calibrates; prints each parameter's error and σ")]
+  python3 tests/calibrate.py set/      # OpenCV calibrates; prints each parameter's error and σ"
+)]
 pub struct CalibrationSetArgs {
     /// The lens to be recovered: an OpenCV/ROS/vklens camera file. Views have its size.
     #[arg(long, value_name = "CAM")]
@@ -134,9 +136,7 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
         "views": views,
     });
     let path = args.out.join("poses.json");
-    image_io::write_atomically(&path, |tmp| {
-        std::fs::write(tmp, format!("{json:#}\n"))
-    })?;
+    image_io::write_atomically(&path, |tmp| std::fs::write(tmp, format!("{json:#}\n")))?;
     progress_done(&format!(
         "wrote {} views and poses.json to {}",
         poses.len(),

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::{context, finish, load_camera, CliError};
-use crate::model::{Intrinsics, Camera};
+use crate::model::{Camera, Intrinsics};
 
 #[derive(Args, Debug)]
 pub struct DemoArgs {

@@ -6,7 +6,7 @@ use clap::{Args, Subcommand};
 use serde_json::json;
 
 use super::{progress_done, progress_line, CliError};
-use crate::imaging::{Depth, Pixels, Raster};
+use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::lens::{analyse, distortion_curve, fit_opencv, Prescription, LAMBDA_D};
 
 #[derive(Subcommand, Debug)]
@@ -278,9 +278,7 @@ fn fit(args: FitArgs) -> Result<(), CliError> {
     );
     let text = format!("{camera:#}\n");
     match &args.out {
-        Some(path) => crate::imaging::io::write_atomically(path, |tmp| {
-            std::fs::write(tmp, &text)
-        })?,
+        Some(path) => crate::imaging::io::write_atomically(path, |tmp| std::fs::write(tmp, &text))?,
         None => print!("{text}"),
     }
     Ok(())
@@ -419,7 +417,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             width: w,
             height: h,
             pixels: Pixels::Rgba32F(pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect()),
-            depth: Depth::F32,
+            bit_depth: BitDepth::F32,
         }
     } else {
         Raster {
@@ -434,7 +432,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
                     })
                     .collect(),
             ),
-            depth: Depth::U8,
+            bit_depth: BitDepth::U8,
         }
     };
     crate::imaging::io::save(&raster, &args.output)?;

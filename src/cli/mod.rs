@@ -17,8 +17,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use crate::model::warp::Direction;
-use crate::model::{InverseMethod, Camera};
+use crate::model::{Camera, InverseMethod};
 use crate::pass::Precision;
 
 /// Errors of the command line are the library's: the kind decides the exit code.
@@ -232,9 +231,9 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Lens(args)) => bench::lens(args),
         Command::Bench(BenchCommand::Plan(args)) => bench::plan(args),
         Command::Demo(args) => demo::run(args),
-        Command::Distort(args) => warp::run(args, Direction::Distort, false),
-        Command::Undistort(args) => warp::run(args, Direction::Undistort, false),
-        Command::Precorrect(args) => warp::run(args, Direction::Undistort, true),
+        Command::Distort(args) => warp::run(args, crate::WarpDirection::Distort),
+        Command::Undistort(args) => warp::run(args, crate::WarpDirection::Undistort),
+        Command::Precorrect(args) => warp::run(args, crate::WarpDirection::Precorrect),
         Command::Overscan(args) => warp::overscan_command(args),
         Command::Render(args) => render::run(args),
         Command::CalibrationSet(args) => calibration::run(args),

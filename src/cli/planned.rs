@@ -155,8 +155,7 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
             },
             &f.rendered,
             Some("png"),
-        )
-        ?;
+        )?;
         done.borrow_mut().push((f.index, f.ms));
         progress_line(&format!(
             "frame {}/{total} ({:.1} ms)",
@@ -194,9 +193,7 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
     finish(&ctx)?;
     let done = done.into_inner();
     let json = format!("{:#}\n", plan_json(&plan, &done));
-    crate::imaging::io::write_atomically(&out.join("plan.json"), |tmp| {
-        std::fs::write(tmp, &json)
-    })?;
+    crate::imaging::io::write_atomically(&out.join("plan.json"), |tmp| std::fs::write(tmp, &json))?;
     progress_done(&format!("{} frame(s) in {}", done.len(), out.display()));
     Ok(())
 }

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, ValueEnum};
 
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
-use crate::imaging::{io as image_io, Depth, Pixels, Raster};
+use crate::imaging::{io as image_io, BitDepth, Pixels, Raster};
 use crate::model::InverseMethod;
 use crate::pass::geometry::{ColorFormat, Outputs, Rendered, DEFAULT_DELTA};
 use crate::render::{render_scene, RenderPath, RenderRequest};
@@ -323,13 +323,12 @@ pub(crate) fn write_outputs(
     r: &Rendered,
     ids_ext: Option<&str>,
 ) -> Result<(), CliError> {
-    let save =
-        |raster: &Raster, path: &Path| image_io::save(raster, path);
+    let save = |raster: &Raster, path: &Path| image_io::save(raster, path);
     let float_image = |pixels: Vec<[f32; 4]>| Raster {
         width: r.width,
         height: r.height,
         pixels: Pixels::Rgba32F(pixels),
-        depth: Depth::F32,
+        bit_depth: BitDepth::F32,
     };
     if let (Some(path), Some(c)) = (args.color, &r.color) {
         save(c, path)?;
@@ -347,7 +346,7 @@ pub(crate) fn write_outputs(
                     width: r.width,
                     height: r.height,
                     pixels: Pixels::R32Uint(ids.clone()),
-                    depth: Depth::U16,
+                    bit_depth: BitDepth::U16,
                 },
                 path,
             )?;

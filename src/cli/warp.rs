@@ -5,30 +5,16 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use glam::DVec2;
 
-use super::{context, finish, CliError};
+use super::{context, CliError};
 use crate::imaging::cpu_warp::{self, Sampling};
-use crate::imaging::{io as image_io, Depth, Pixels, Raster};
+use crate::imaging::{io as image_io, BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;
-use crate::model::warp::{Direction, WarpGeometry};
-use crate::model::{CameraModel, InverseMethod, Camera};
-use crate::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
-
-/// How coordinates are found: a method solved per pixel, or `lut` (a map built once with
-/// Newton, then sampled).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum WarpMethod {
-    Analytic(InverseMethod),
-    Lut,
-}
+use crate::model::{Camera, CameraModel, InverseMethod};
+use crate::pass::warp::PixelFormat;
+use crate::{warp_geometry, Device, WarpDirection, WarpMethod, WarpOptions, Warper};
 
 fn parse_warp_method(s: &str) -> Result<WarpMethod, String> {
-    if s == "lut" {
-        Ok(WarpMethod::Lut)
-    } else {
-        s.parse()
-            .map(WarpMethod::Analytic)
-            .map_err(|e: String| e.replace("newton, heikkila", "newton, lut, heikkila"))
-    }
+    s.parse().map_err(|e: crate::Error| e.to_string())
 }
 
 fn parse_numbers<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
@@ -149,44 +135,27 @@ fn check_output(path: &Path, what: &str, allowed: &[&str]) -> Result<(), CliErro
 }
 
 /// Runs one of the three warp directions.
-pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(), CliError> {
+pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     check_output(&args.output, "output", &["png", "exr"])?;
     if let Some(m) = &args.mask {
         check_output(m, "mask", &["png"])?;
     }
     let cam = super::load_camera(&args.camera)?;
-    let method = match (args.method, direction) {
-        (WarpMethod::Analytic(m), Direction::Distort) => m,
-        (WarpMethod::Analytic(InverseMethod::Newton), Direction::Undistort) | (WarpMethod::Lut, _) => InverseMethod::Newton,
-        (WarpMethod::Analytic(m), Direction::Undistort) => {
-            return Err(CliError::input(format!(
-                "--method {m}: undistort and precorrect use the forward model; choose newton (per pixel) or lut (a map)"
-            )))
-        }
+    let mut options = match direction {
+        WarpDirection::Distort => WarpOptions::distort(),
+        WarpDirection::Undistort => WarpOptions::undistort(),
+        WarpDirection::Precorrect => WarpOptions::precorrect(),
     };
-    let mut geometry = match direction {
-        Direction::Distort => WarpGeometry::distort(cam.clone(), method),
-        Direction::Undistort => WarpGeometry::undistort(cam.clone()),
-    };
+    options.method = args.method;
+    options.sampling = args.sampling;
+    options.chromatic = args.chromatic;
+    options.fill = args.fill.map(|f| f.map(|c| c as f32)).unwrap_or([0.0; 4]);
     if let Some(src) = &args.source_camera {
-        let p = pinhole(src)?;
-        geometry = geometry
-            .with_ideal(p.intrinsics, (p.width, p.height))
-            .map_err(|e| CliError::input(format!("{}: {e}", src.display())))?;
-    }
-    if let Some(c) = args.chromatic {
-        geometry = geometry
-            .with_chromatic(c)
-            .map_err(|e| CliError::input(format!("--chromatic: {e}")))?;
+        options.source_camera = Some(pinhole(src)?);
     }
     if !args.channel_cameras.is_empty() {
         let [r, g, b] = <[PathBuf; 3]>::try_from(args.channel_cameras.clone())
             .map_err(|_| CliError::input("--channel-cameras: expected three camera files R,G,B"))?;
-        if args.method != WarpMethod::Lut {
-            return Err(CliError::input(
-                "--channel-cameras runs through a map: add --method lut",
-            ));
-        }
         let cams = [
             super::load_camera(&r)?,
             super::load_camera(&g)?,
@@ -202,12 +171,13 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
                 )));
             }
         }
-        geometry.channel_cameras = Some(Box::new(cams));
+        options.channel_cameras = Some(Box::new(cams));
     }
+    let geometry = warp_geometry(&cam, &options)?;
     let source = image_io::load(&args.input)?;
     if (source.width, source.height) != geometry.source_size {
         let whose = match (direction, &args.source_camera) {
-            (Direction::Distort, Some(src)) => src.display().to_string(),
+            (WarpDirection::Distort, Some(src)) => src.display().to_string(),
             _ => args.camera.display().to_string(),
         };
         return Err(CliError::input(format!(
@@ -219,31 +189,19 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
             geometry.source_size.1
         )));
     }
-    let fill = args.fill.map(|f| f.map(|c| c as f32)).unwrap_or([0.0; 4]);
     let (out, mask) = match args.backend {
         // imaging::io::save writes float data read from an 8-bit file back as 8-bit.
-        super::Backend::Cpu => cpu_warp::warp(&geometry, &source, args.sampling, fill),
+        super::Backend::Cpu => {
+            let (out, mask) = cpu_warp::warp(&geometry, &source, args.sampling, options.fill);
+            (out, mask.iter().map(|&m| m > 127).collect::<Vec<_>>())
+        }
         super::Backend::Gpu => {
-            let ctx = context()?;
-            let desc = WarpDesc {
-                geometry: geometry.clone(),
-                coordinates: if args.method == WarpMethod::Lut {
-                    Coordinates::Map
-                } else {
-                    Coordinates::Analytic
-                },
-                sampling: args.sampling,
-                format: PixelFormat::of(&source),
-                fill,
-                // The mask also tells how many pixels were filled (reported below).
-                write_mask: true,
-            };
-            let r = run_warp(&ctx, desc, &source)?;
-            finish(&ctx)?;
-            (
-                r.0,
-                r.1.iter().map(|&m| if m > 127 { 255 } else { 0 }).collect(),
-            )
+            let device = Device::from_context(context()?);
+            options.format = PixelFormat::of(&source);
+            let mut warper = Warper::new(device.gpu(), &cam, &options)?;
+            let warped = warper.run(&device, &source)?;
+            device.check_validation()?;
+            (warped.image, warped.mask)
         }
     };
     image_io::save(&out, &args.output)?;
@@ -251,12 +209,16 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
         let raster = Raster {
             width: out.width,
             height: out.height,
-            pixels: Pixels::Rgba8(mask.iter().map(|&v| [v, v, v, 255]).collect()),
-            depth: Depth::U8,
+            pixels: Pixels::Rgba8(
+                mask.iter()
+                    .map(|&v| if v { [255; 4] } else { [0, 0, 0, 255] })
+                    .collect(),
+            ),
+            bit_depth: BitDepth::U8,
         };
         image_io::save(&raster, m)?;
     }
-    let filled = mask.iter().filter(|&&m| m == 0).count();
+    let filled = mask.iter().filter(|&&m| !m).count();
     eprintln!(
         "wrote {} ({}×{}, {filled} px without a source{})",
         args.output.display(),
@@ -264,7 +226,7 @@ pub fn run(args: WarpArgs, direction: Direction, precorrect: bool) -> Result<(),
         out.height,
         if filled > 0 { ", filled" } else { "" }
     );
-    if precorrect {
+    if direction == WarpDirection::Precorrect {
         report_round_trip(&cam);
     }
     Ok(())

@@ -1,6 +1,7 @@
 //! The headless context: vklens creates its own instance and device. Tests and the CLI use it;
 //! it is just one caller of the passes, which never depend on it.
 
+use crate::error::VkCall;
 use std::ffi::{c_void, CStr};
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex};
@@ -113,7 +114,11 @@ impl Context {
         let mut layers = Vec::new();
         let mut extensions = Vec::new();
         if options.validation {
-            let available = unsafe { entry.enumerate_instance_layer_properties()? };
+            let available = unsafe {
+                entry
+                    .enumerate_instance_layer_properties()
+                    .call("vkEnumerateInstanceLayerProperties")?
+            };
             let found = available.iter().any(|l| {
                 l.layer_name_as_c_str()
                     .map(|n| n == VALIDATION_LAYER)
@@ -133,7 +138,11 @@ impl Context {
             .application_info(&app)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
-        let instance = unsafe { entry.create_instance(&info, None)? };
+        let instance = unsafe {
+            entry
+                .create_instance(&info, None)
+                .call("vkCreateInstance")?
+        };
 
         let debug = if options.validation {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
@@ -194,7 +203,10 @@ impl Context {
         if supported.shader_storage_image_extended_formats != vk::TRUE {
             return Err(fail(
                 &mut owned,
-                Error::NoVulkan("no Vulkan device matches: the device lacks shaderStorageImageExtendedFormats".into()),
+                Error::NoVulkan(
+                    "no Vulkan device matches: the device lacks shaderStorageImageExtendedFormats"
+                        .into(),
+                ),
             ));
         }
         // The geometry path drops triangles in a geometry shader (lavapipe has them).
@@ -243,7 +255,11 @@ impl Context {
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        let command_pool = unsafe { gpu.device().create_command_pool(&pool_info, None)? };
+        let command_pool = unsafe {
+            gpu.device()
+                .create_command_pool(&pool_info, None)
+                .call("vkCreateCommandPool")?
+        };
         Ok(Context {
             gpu,
             command_pool,
@@ -269,7 +285,11 @@ impl Context {
             .command_pool(self.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
-        let cmd = unsafe { device.allocate_command_buffers(&alloc)?[0] };
+        let cmd = unsafe {
+            device
+                .allocate_command_buffers(&alloc)
+                .call("vkAllocateCommandBuffers")?[0]
+        };
         let fence = match unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) } {
             Ok(f) => f,
             Err(e) => {
@@ -279,19 +299,25 @@ impl Context {
         };
         let result = (|| {
             unsafe {
-                device.begin_command_buffer(
-                    cmd,
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                )?
+                device
+                    .begin_command_buffer(
+                        cmd,
+                        &vk::CommandBufferBeginInfo::default()
+                            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    )
+                    .call("vkBeginCommandBuffer")?
             };
             let value = record(cmd)?;
             unsafe {
-                device.end_command_buffer(cmd)?;
+                device.end_command_buffer(cmd).call("vkEndCommandBuffer")?;
                 let cmds = [cmd];
                 let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-                device.queue_submit(self.gpu.queue(), &submit, fence)?;
-                device.wait_for_fences(&[fence], true, u64::MAX)?;
+                device
+                    .queue_submit(self.gpu.queue(), &submit, fence)
+                    .call("vkQueueSubmit")?;
+                device
+                    .wait_for_fences(&[fence], true, u64::MAX)
+                    .call("vkWaitForFences")?;
             }
             Ok(value)
         })();
@@ -334,7 +360,11 @@ fn pick_device(
     instance: &ash::Instance,
     wanted: Option<&str>,
 ) -> Result<(vk::PhysicalDevice, u32)> {
-    let devices = unsafe { instance.enumerate_physical_devices()? };
+    let devices = unsafe {
+        instance
+            .enumerate_physical_devices()
+            .call("vkEnumeratePhysicalDevices")?
+    };
     let mut candidates = Vec::new();
     for (index, &pd) in devices.iter().enumerate() {
         let props = unsafe { instance.get_physical_device_properties(pd) };

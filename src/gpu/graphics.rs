@@ -2,6 +2,7 @@
 //! [`Sampler`] and [`GraphicsPipeline`]. Plain Vulkan 1.1 render passes (no dynamic rendering),
 //! so any Vulkan 1.1 device can embed the geometry path.
 
+use crate::error::VkCall;
 use ash::vk;
 
 use super::pipeline::{
@@ -153,7 +154,11 @@ impl RenderPass {
             .attachments(&attachments)
             .subpasses(&subpasses)
             .dependencies(&dependencies);
-        let raw = unsafe { gpu.device().create_render_pass(&info, None)? };
+        let raw = unsafe {
+            gpu.device()
+                .create_render_pass(&info, None)
+                .call("vkCreateRenderPass")?
+        };
         Ok(RenderPass {
             gpu: gpu.clone(),
             raw,
@@ -190,7 +195,11 @@ impl Framebuffer {
             .width(extent.width)
             .height(extent.height)
             .layers(1);
-        let raw = unsafe { gpu.device().create_framebuffer(&info, None)? };
+        let raw = unsafe {
+            gpu.device()
+                .create_framebuffer(&info, None)
+                .call("vkCreateFramebuffer")?
+        };
         Ok(Framebuffer {
             gpu: gpu.clone(),
             raw,
@@ -221,7 +230,11 @@ impl Sampler {
             .address_mode_v(address)
             .address_mode_w(address)
             .max_lod(0.0);
-        let raw = unsafe { gpu.device().create_sampler(&info, None)? };
+        let raw = unsafe {
+            gpu.device()
+                .create_sampler(&info, None)
+                .call("vkCreateSampler")?
+        };
         Ok(Sampler {
             gpu: gpu.clone(),
             raw,
@@ -425,7 +438,8 @@ impl GraphicsPipeline {
         pipeline.raw = unsafe {
             device
                 .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
-                .map_err(|(_, e)| e)?[0]
+                .map_err(|(_, e)| e)
+                .call("vkCreateGraphicsPipelines")?[0]
         };
         Ok(pipeline)
     }

@@ -95,9 +95,9 @@ impl Gpu {
         let props = unsafe { instance.get_physical_device_properties(physical_device) };
         let families =
             unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
-        let family = families.get(queue_family as usize).ok_or_else(|| {
-            Error::input(format!("queue family {queue_family} does not exist"))
-        })?;
+        let family = families
+            .get(queue_family as usize)
+            .ok_or_else(|| Error::input(format!("queue family {queue_family} does not exist")))?;
         Ok(Gpu {
             inner: Arc::new(GpuInner {
                 device,

@@ -1,5 +1,6 @@
 //! Compute pipelines (with specialization constants) and descriptor pools.
 
+use crate::error::VkCall;
 use ash::vk;
 
 use super::{Error, Gpu, Result};
@@ -97,7 +98,8 @@ impl ComputePipeline {
         pipeline.raw = unsafe {
             device
                 .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
-                .map_err(|(_, e)| e)?[0]
+                .map_err(|(_, e)| e)
+                .call("vkCreateComputePipelines")?[0]
         };
         Ok(pipeline)
     }
@@ -208,7 +210,11 @@ pub(crate) fn pipeline_layout(
     if push_size > 0 {
         info = info.push_constant_ranges(&ranges);
     }
-    Ok(unsafe { gpu.device().create_pipeline_layout(&info, None)? })
+    Ok(unsafe {
+        gpu.device()
+            .create_pipeline_layout(&info, None)
+            .call("vkCreatePipelineLayout")?
+    })
 }
 
 /// A shader module from SPIR-V bytes.
@@ -217,7 +223,8 @@ pub(crate) fn shader_module(gpu: &Gpu, spirv: &[u8]) -> Result<vk::ShaderModule>
         .map_err(|e| Error::internal(format!("bad SPIR-V: {e}")))?;
     Ok(unsafe {
         gpu.device()
-            .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)?
+            .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
+            .call("vkCreateShaderModule")?
     })
 }
 
@@ -264,7 +271,11 @@ impl DescriptorPool {
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(sets)
             .pool_sizes(&sizes);
-        let raw = unsafe { gpu.device().create_descriptor_pool(&info, None)? };
+        let raw = unsafe {
+            gpu.device()
+                .create_descriptor_pool(&info, None)
+                .call("vkCreateDescriptorPool")?
+        };
         Ok(DescriptorPool {
             gpu: gpu.clone(),
             raw,
@@ -277,7 +288,12 @@ impl DescriptorPool {
         let info = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.raw)
             .set_layouts(&layouts);
-        Ok(unsafe { self.gpu.device().allocate_descriptor_sets(&info)?[0] })
+        Ok(unsafe {
+            self.gpu
+                .device()
+                .allocate_descriptor_sets(&info)
+                .call("vkAllocateDescriptorSets")?[0]
+        })
     }
 }
 

@@ -1,5 +1,6 @@
 //! Buffers, images and query pools, each owning its handle and its memory.
 
+use crate::error::VkCall;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
@@ -29,7 +30,7 @@ impl Buffer {
             .size(size)
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        let raw = unsafe { device.create_buffer(&info, None)? };
+        let raw = unsafe { device.create_buffer(&info, None).call("vkCreateBuffer")? };
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
         let allocation = allocate(gpu, name, requirements, location, true, |a| unsafe {
             device.bind_buffer_memory(raw, a.memory(), a.offset())
@@ -183,7 +184,7 @@ impl Image {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
-        let raw = unsafe { device.create_image(&info, None)? };
+        let raw = unsafe { device.create_image(&info, None).call("vkCreateImage")? };
         let requirements = unsafe { device.get_image_memory_requirements(raw) };
         let allocation = allocate(
             gpu,
@@ -211,7 +212,11 @@ impl Image {
                 aspect_mask: Self::aspect_of(format),
                 ..Self::color_range()
             });
-        image.view = unsafe { device.create_image_view(&view_info, None)? };
+        image.view = unsafe {
+            device
+                .create_image_view(&view_info, None)
+                .call("vkCreateImageView")?
+        };
         Ok(image)
     }
 
@@ -287,7 +292,11 @@ impl QueryPool {
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(count);
-        let raw = unsafe { gpu.device().create_query_pool(&info, None)? };
+        let raw = unsafe {
+            gpu.device()
+                .create_query_pool(&info, None)
+                .call("vkCreateQueryPool")?
+        };
         Ok(QueryPool {
             gpu: gpu.clone(),
             raw,

@@ -3,7 +3,7 @@
 
 use glam::DVec2;
 
-use super::{Depth, Pixels, Raster};
+use super::{BitDepth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 
 /// How the source is sampled.
@@ -97,17 +97,17 @@ pub fn warp(
     } else {
         Pixels::Rgba32F(out)
     };
-    let depth = if source.depth == Depth::U8 {
-        Depth::U8
+    let depth = if source.bit_depth == BitDepth::U8 {
+        BitDepth::U8
     } else {
-        source.depth
+        source.bit_depth
     };
     (
         Raster {
             width: w,
             height: h,
             pixels,
-            depth,
+            bit_depth: depth,
         },
         mask,
     )

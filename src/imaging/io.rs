@@ -6,7 +6,7 @@ use std::path::Path;
 
 use image::{DynamicImage, ImageBuffer, Rgba};
 
-use super::{Depth, Pixels, Raster};
+use super::{BitDepth, Pixels, Raster};
 use crate::{Error, Result};
 
 /// Reads an image; errors are one line naming the file.
@@ -43,7 +43,7 @@ pub fn load(path: &Path) -> Result<Raster> {
                 width,
                 height,
                 pixels: Pixels::Rgba8(rgba.pixels().map(|p| p.0).collect()),
-                depth: Depth::U8,
+                bit_depth: BitDepth::U8,
             }
         }
         DynamicImage::ImageLuma16(_)
@@ -59,7 +59,7 @@ pub fn load(path: &Path) -> Result<Raster> {
                         .map(|p| p.0.map(|c| c as f32 / 65535.0))
                         .collect(),
                 ),
-                depth: Depth::U16,
+                bit_depth: BitDepth::U16,
             }
         }
         other => {
@@ -68,7 +68,7 @@ pub fn load(path: &Path) -> Result<Raster> {
                 width,
                 height,
                 pixels: Pixels::Rgba32F(rgba.pixels().map(|p| p.0).collect()),
-                depth: Depth::F32,
+                bit_depth: BitDepth::F32,
             }
         }
     };
@@ -95,13 +95,14 @@ pub fn save(raster: &Raster, path: &Path) -> Result<()> {
     let (w, h) = (raster.width, raster.height);
     let image: DynamicImage = match (&raster.pixels, exr) {
         (Pixels::Rgba8(p), false) => DynamicImage::ImageRgba8(
-            ImageBuffer::from_raw(w, h, p.iter().flatten().copied().collect()).ok_or_else(size_mismatch)?,
+            ImageBuffer::from_raw(w, h, p.iter().flatten().copied().collect())
+                .ok_or_else(size_mismatch)?,
         ),
         (Pixels::R32Uint(p), false) => {
             let v: Vec<u16> = p.iter().map(|&id| id.min(u16::MAX as u32) as u16).collect();
             DynamicImage::ImageLuma16(ImageBuffer::from_raw(w, h, v).ok_or_else(size_mismatch)?)
         }
-        (Pixels::Rgba32F(p), false) if raster.depth == Depth::U8 => {
+        (Pixels::Rgba32F(p), false) if raster.bit_depth == BitDepth::U8 => {
             let v: Vec<u8> = p
                 .iter()
                 .flatten()
@@ -115,7 +116,9 @@ pub fn save(raster: &Raster, path: &Path) -> Result<()> {
                 .flatten()
                 .map(|&c| (c.clamp(0.0, 1.0) * 65535.0).round() as u16)
                 .collect();
-            DynamicImage::ImageRgba16(ImageBuffer::<Rgba<u16>, _>::from_raw(w, h, v).ok_or_else(size_mismatch)?)
+            DynamicImage::ImageRgba16(
+                ImageBuffer::<Rgba<u16>, _>::from_raw(w, h, v).ok_or_else(size_mismatch)?,
+            )
         }
         (_, true) => {
             let v: Vec<f32> = (0..raster.len()).flat_map(|i| raster.rgba_f32(i)).collect();

@@ -20,7 +20,7 @@ pub enum Pixels {
 
 /// What the image was read from, so that it is written back the same way.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Depth {
+pub enum BitDepth {
     U8,
     U16,
     F32,
@@ -32,7 +32,7 @@ pub struct Raster {
     pub width: u32,
     pub height: u32,
     pub pixels: Pixels,
-    pub depth: Depth,
+    pub bit_depth: BitDepth,
 }
 
 impl Raster {

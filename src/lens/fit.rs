@@ -57,7 +57,9 @@ pub fn fit_opencv(
     }
     let par = analyse(p, lambda_um);
     let (Some(efl), Some(bfl)) = (par.efl, par.bfl) else {
-        return Err(Error::input("the lens is afocal: it has no focal length to fit"));
+        return Err(Error::input(
+            "the lens is afocal: it has no focal length to fit",
+        ));
     };
     if efl <= 0.0 {
         return Err(Error::input(format!(

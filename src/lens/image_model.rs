@@ -27,7 +27,7 @@ use glam::{DMat3, DVec2, DVec3};
 use super::paraxial::{analyse, focus};
 use super::prescription::{Prescription, LAMBDA_D};
 use super::trace::{trace, Ray};
-use crate::model::{Intrinsics, Camera, OpenCvDistortion};
+use crate::model::{Camera, Intrinsics, OpenCvDistortion};
 
 /// The film: its pixel grid and where it sits.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -94,7 +94,9 @@ impl Optics {
         f_number: Option<f64>,
     ) -> Result<Self> {
         if !(pitch_mm.is_finite() && pitch_mm > 0.0) {
-            return Err(Error::input(format!("pixel pitch {pitch_mm} mm must be positive")));
+            return Err(Error::input(format!(
+                "pixel pitch {pitch_mm} mm must be positive"
+            )));
         }
         if pixels.0 == 0 || pixels.1 == 0 {
             return Err(Error::input("the film needs at least one pixel"));
@@ -112,7 +114,9 @@ impl Optics {
         let f_number = match f_number {
             None => own_n,
             Some(n) if !(n.is_finite() && n > 0.0) => {
-                return Err(Error::input(format!("f-stop {n} must be a positive number")))
+                return Err(Error::input(format!(
+                    "f-stop {n} must be a positive number"
+                )))
             }
             Some(n) if n < own_n * 0.999 => {
                 return Err(Error::input(format!(
@@ -128,7 +132,9 @@ impl Optics {
             }
         };
         if !(focus_m > 0.0) {
-            return Err(Error::input(format!("focus distance {focus_m} m must be positive")));
+            return Err(Error::input(format!(
+                "focus distance {focus_m} m must be positive"
+            )));
         }
         let rear_z = par.rear_vertex_z;
         let image = if focus_m.is_infinite() {
@@ -419,7 +425,7 @@ pub fn fit_cop_from(rays: &[PlaneRay], e0: DVec3) -> (DVec3, f64) {
     (e, max_angle_deg(rays, e))
 }
 
-/// The COP Heidrich et al. reject (its ref. [7]): the point nearest to all rays in the
+/// The COP Heidrich et al. reject (its ref. \[7\]): the point nearest to all rays in the
 /// least-squares sense, Σ (I − d dᵀ)(e − o) = 0, with `o` the rays' plane points.
 pub fn least_squares_cop(rays: &[PlaneRay]) -> Option<DVec3> {
     let mut m = DMat3::ZERO;
@@ -564,7 +570,10 @@ impl ImageModel {
     /// Builds the model (the preprocessing of Heidrich et al. Sec. 3.5).
     pub fn build(optics: &Optics, options: &ModelOptions) -> Result<Self> {
         if options.grid == 0 || options.grid > 256 {
-            return Err(Error::input(format!("grid {} must be 1..256", options.grid)));
+            return Err(Error::input(format!(
+                "grid {} must be 1..256",
+                options.grid
+            )));
         }
         if !(options.max_angle_deg.is_finite() && options.max_angle_deg > 0.0) {
             return Err(Error::input(format!(

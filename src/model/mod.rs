@@ -33,7 +33,7 @@ use glam::{DMat2, DVec2};
 
 pub use brown::BrownRadial;
 pub use domain::ValidDomain;
-pub use opencv::{Intrinsics, Camera, OpenCvDistortion, Terms};
+pub use opencv::{Camera, Intrinsics, OpenCvDistortion, Terms};
 pub use projection::{vulkan_projection, Frustum};
 
 /// Largest magnitude accepted for any parameter; beyond it a model is certainly a unit or

@@ -12,7 +12,7 @@ use std::f64::consts::TAU;
 
 use glam::DVec2;
 
-use super::{Intrinsics, InverseMethod, ModelError, Camera, MAX_IMAGE_SIDE};
+use super::{Camera, Intrinsics, InverseMethod, ModelError, MAX_IMAGE_SIDE};
 
 /// The pinhole source camera for a distort warp.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -5,7 +5,7 @@
 
 use glam::DVec2;
 
-use super::{Intrinsics, InverseMethod, ModelError, Camera};
+use super::{Camera, Intrinsics, InverseMethod, ModelError};
 
 /// Which way the warp goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -11,7 +11,7 @@ use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{
-    image_barrier, record_download, shaders, Buffer, DescriptorPool, Framebuffer, Gpu, Error,
+    image_barrier, record_download, shaders, Buffer, DescriptorPool, Error, Framebuffer, Gpu,
     GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 

@@ -17,13 +17,13 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
 use crate::gpu::{
-    image_barrier, record_download, shaders, Attribute, Buffer, Context, DescriptorPool,
-    Framebuffer, Gpu, Error, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
+    image_barrier, record_download, shaders, Attribute, Buffer, Context, DescriptorPool, Error,
+    Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
     SpecConstants, Stage,
 };
-use crate::imaging::{Depth, Pixels, Raster};
+use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
-use crate::model::{vulkan_projection, Frustum, Camera};
+use crate::model::{vulkan_projection, Camera, Frustum};
 use crate::scene::{Mesh, Pose, Vertex};
 
 /// How vertices are projected.
@@ -281,7 +281,7 @@ impl MeshBuffers {
             width: 1,
             height: 1,
             pixels: Pixels::Rgba8(vec![[255; 4]]),
-            depth: Depth::U8,
+            bit_depth: BitDepth::U8,
         };
         Ok(MeshBuffers {
             vertices: Buffer::from_pod(
@@ -856,15 +856,15 @@ impl GeometryTargets {
                 _ => Pixels::Rgba8(t.download.read_pod::<[u8; 4]>(n)?),
             };
             let depth = if matches!(pixels, Pixels::Rgba8(_)) {
-                Depth::U8
+                BitDepth::U8
             } else {
-                Depth::F32
+                BitDepth::F32
             };
             out.color = Some(Raster {
                 width: w,
                 height: h,
                 pixels,
-                depth,
+                bit_depth: depth,
             });
         }
         if let Some(t) = &self.targets[1] {

@@ -23,9 +23,9 @@ use super::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers,
 };
 use super::geometry::{Outputs, Projection};
-use crate::gpu::{Buffer, Context, Gpu, Error, Result};
+use crate::gpu::{Buffer, Context, Error, Gpu, Result};
 use crate::lens::image_model::{Cell, ImageModel};
-use crate::model::{Intrinsics, Camera, OpenCvDistortion};
+use crate::model::{Camera, Intrinsics, OpenCvDistortion};
 use crate::scene::Pose;
 
 /// What the renderer draws with.

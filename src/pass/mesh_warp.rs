@@ -15,7 +15,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::geometry::Texture;
 use crate::gpu::{
-    record_download, shaders, Buffer, Context, DescriptorPool, Framebuffer, Gpu, Error,
+    record_download, shaders, Buffer, Context, DescriptorPool, Error, Framebuffer, Gpu,
     GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 use crate::imaging::{Pixels, Raster};
@@ -49,9 +49,7 @@ impl MeshWarpGrid {
     /// Vertices at the output image's pixel edges (−0.5 … w − 0.5), so the grid covers it.
     pub fn new(geometry: &WarpGeometry, n: u32) -> Result<Self> {
         if !(1..=4096).contains(&n) {
-            return Err(Error::Input(format!(
-                "mesh size {n}: expected 1..=4096"
-            )));
+            return Err(Error::Input(format!("mesh size {n}: expected 1..=4096")));
         }
         let (w, h) = geometry.output_size;
         let row = n + 1;
@@ -310,19 +308,19 @@ impl MeshWarpTarget {
         let (pixels, depth) = if self.format == vk::Format::R8G8B8A8_UNORM {
             (
                 Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
-                crate::imaging::Depth::U8,
+                crate::imaging::BitDepth::U8,
             )
         } else {
             (
                 Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
-                crate::imaging::Depth::F32,
+                crate::imaging::BitDepth::F32,
             )
         };
         Ok(Raster {
             width: e.width,
             height: e.height,
             pixels,
-            depth,
+            bit_depth: depth,
         })
     }
 }

@@ -6,9 +6,9 @@ use gpu_allocator::MemoryLocation;
 use super::camera_params::{CameraParams, CameraParams64};
 use crate::gpu::{
     host_read_barrier, shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context,
-    DescriptorPool, Gpu, Error, Result,
+    DescriptorPool, Error, Gpu, Result,
 };
-use crate::model::{InverseMethod, Camera};
+use crate::model::{Camera, InverseMethod};
 
 /// What the pass computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,12 +72,7 @@ pub struct PointsPass {
 impl PointsPass {
     /// Builds the pipeline for `camera` (terms it does not use are compiled out), `mode` and
     /// `precision`. F64 needs a device with `shaderFloat64` enabled.
-    pub fn new(
-        gpu: &Gpu,
-        camera: &Camera,
-        mode: PointsMode,
-        precision: Precision,
-    ) -> Result<Self> {
+    pub fn new(gpu: &Gpu, camera: &Camera, mode: PointsMode, precision: Precision) -> Result<Self> {
         if precision == Precision::F64 && !gpu.supports_float64() {
             return Err(Error::Input(format!(
                 "{} has no shaderFloat64: use f32",

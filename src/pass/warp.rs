@@ -14,14 +14,14 @@ use gpu_allocator::MemoryLocation;
 use super::camera_params::CameraParams;
 use crate::gpu::{
     host_read_barrier, image_barrier, memory_barrier, shaders, write_buffer_descriptors,
-    write_storage_image_descriptors, Buffer, ComputePipeline, Context, DescriptorPool, Gpu,
-    Error, Image, Result,
+    write_storage_image_descriptors, Buffer, ComputePipeline, Context, DescriptorPool, Error, Gpu,
+    Image, Result,
 };
 use crate::imaging::cpu_warp::Sampling;
-use crate::imaging::{Depth, Pixels, Raster};
+use crate::imaging::{BitDepth, Pixels, Raster};
 pub use crate::model::warp::MapInterpolation;
 use crate::model::warp::{coarse_cells, coarse_size, Direction, WarpGeometry};
-use crate::model::{InverseMethod, Camera, Terms};
+use crate::model::{Camera, InverseMethod, Terms};
 
 /// How output pixels get their source coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -580,23 +580,7 @@ impl WarpImages {
                 source.width, source.height, g.source_size.0, g.source_size.1
             )));
         }
-        let bytes: Vec<u8> = match (&source.pixels, desc.format) {
-            (Pixels::Rgba8(p), PixelFormat::Rgba8) => p.iter().flatten().copied().collect(),
-            (Pixels::R32Uint(p), PixelFormat::R32Uint) => bytemuck::cast_slice(p).to_vec(),
-            (Pixels::Rgba32F(p), PixelFormat::R32Float) => {
-                let v: Vec<f32> = p.iter().map(|q| q[0]).collect();
-                bytemuck::cast_slice(&v).to_vec()
-            }
-            (_, PixelFormat::Rgba32F) => {
-                let v: Vec<[f32; 4]> = (0..source.len()).map(|i| source.rgba_f32(i)).collect();
-                bytemuck::cast_slice(&v).to_vec()
-            }
-            _ => {
-                return Err(Error::Input(
-                    "the source's pixels do not match the warp's format".into(),
-                ))
-            }
-        };
+        let bytes = source_bytes(source, desc.format)?;
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::TRANSFER_SRC
             | vk::ImageUsageFlags::TRANSFER_DST;
@@ -631,6 +615,19 @@ impl WarpImages {
             format: desc.format,
             output_size: (ow, oh),
         })
+    }
+
+    /// Stages a new source image (same size and format) for the next [`WarpImages::record_upload`].
+    /// Host write: not while recorded work using these images is pending.
+    pub fn stage(&self, source: &Raster) -> Result<()> {
+        let (w, h) = (self.source.extent.width, self.source.extent.height);
+        if (source.width, source.height) != (w, h) {
+            return Err(Error::Input(format!(
+                "the source is {}×{} but the warp expects {w}×{h}",
+                source.width, source.height
+            )));
+        }
+        self.upload.write(0, &source_bytes(source, self.format)?)
     }
 
     /// Records the upload of the source and the layout transitions the warp expects.
@@ -712,7 +709,7 @@ impl WarpImages {
     }
 
     /// Reads output and mask back (after the submission completed).
-    pub fn read(&self, depth: Depth) -> Result<(Raster, Vec<u8>)> {
+    pub fn read(&self, bit_depth: BitDepth) -> Result<(Raster, Vec<u8>)> {
         let (w, h) = self.output_size;
         let n = w as usize * h as usize;
         let pixels = match self.format {
@@ -733,11 +730,32 @@ impl WarpImages {
                 width: w,
                 height: h,
                 pixels,
-                depth,
+                bit_depth,
             },
             mask,
         ))
     }
+}
+
+/// The bytes of `source` as the warp's `format` stores them.
+fn source_bytes(source: &Raster, format: PixelFormat) -> Result<Vec<u8>> {
+    Ok(match (&source.pixels, format) {
+        (Pixels::Rgba8(p), PixelFormat::Rgba8) => p.iter().flatten().copied().collect(),
+        (Pixels::R32Uint(p), PixelFormat::R32Uint) => bytemuck::cast_slice(p).to_vec(),
+        (Pixels::Rgba32F(p), PixelFormat::R32Float) => {
+            let v: Vec<f32> = p.iter().map(|q| q[0]).collect();
+            bytemuck::cast_slice(&v).to_vec()
+        }
+        (_, PixelFormat::Rgba32F) => {
+            let v: Vec<[f32; 4]> = (0..source.len()).map(|i| source.rgba_f32(i)).collect();
+            bytemuck::cast_slice(&v).to_vec()
+        }
+        _ => {
+            return Err(Error::Input(
+                "the source's pixels do not match the warp's format".into(),
+            ))
+        }
+    })
 }
 
 /// Runs a warp once through a headless context: upload, prepare, warp, download.
@@ -756,7 +774,7 @@ pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raste
         }
         Ok(())
     })?;
-    images.read(source.depth)
+    images.read(source.bit_depth)
 }
 
 /// Builds `geometry`'s coordinate maps on the GPU and reads them back: per built channel

@@ -14,8 +14,8 @@ use ash::vk;
 use super::mesh_warp::MeshWarpTarget;
 use super::warp::{PixelFormat, WarpDesc, WarpImages, WarpPass, WarpPush};
 use crate::gpu::{
-    memory_barrier, shaders, write_storage_image_descriptors, Context, DescriptorPool, Framebuffer,
-    Gpu, Error, GraphicsDesc, GraphicsPipeline, RenderPass, Result, SpecConstants, Stage,
+    memory_barrier, shaders, write_storage_image_descriptors, Context, DescriptorPool, Error,
+    Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, RenderPass, Result, SpecConstants, Stage,
 };
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::Raster;

@@ -30,7 +30,7 @@ use glam::{DVec2, DVec3};
 use crate::gpu::Context;
 use crate::lens::image_model::{channel_models, ModelOptions};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};
-use crate::model::{InverseMethod, Camera, OpenCvDistortion};
+use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::geometry::{ColorFormat, MeshBuffers, Outputs, Rendered};
 use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
 use crate::render::{RecordedPipeline, RenderPath, RenderRequest, SceneRenderer};
@@ -675,10 +675,10 @@ pub fn execute(
                             .collect(),
                     )
                 },
-                depth: if o.exr {
-                    crate::imaging::Depth::F32
+                bit_depth: if o.exr {
+                    crate::imaging::BitDepth::F32
                 } else {
-                    crate::imaging::Depth::U8
+                    crate::imaging::BitDepth::U8
                 },
             };
             each(Frame {

@@ -9,7 +9,7 @@
 use ash::vk;
 
 use super::{Plan, Route};
-use crate::gpu::{Gpu, Error, QueryPool, Result};
+use crate::gpu::{Error, Gpu, QueryPool, Result};
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, OpenCvDistortion};

@@ -8,7 +8,7 @@ use crate::{Error, Result};
 use glam::DVec3;
 
 use super::{Mesh, Scene, SceneError, Vertex};
-use crate::imaging::{Depth, Pixels, Raster};
+use crate::imaging::{BitDepth, Pixels, Raster};
 
 /// A calibration board: inner corners and square size.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -126,7 +126,7 @@ pub fn chart_texture(size: u32) -> Raster {
         width: size,
         height: size,
         pixels: Pixels::Rgba8(pixels),
-        depth: Depth::U8,
+        bit_depth: BitDepth::U8,
     }
 }
 

@@ -57,8 +57,8 @@ fn load_obj(path: &Path) -> Result<Mesh> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) =
-        tobj::load_obj(path, &options).map_err(|e| Error::input(format!("cannot read the OBJ: {e}")))?;
+    let (models, materials) = tobj::load_obj(path, &options)
+        .map_err(|e| Error::input(format!("cannot read the OBJ: {e}")))?;
     // A missing .mtl is not fatal: the mesh renders in white.
     let materials = materials.unwrap_or_default();
     let mut mesh = Mesh::default();
@@ -104,7 +104,8 @@ fn load_obj(path: &Path) -> Result<Mesh> {
 }
 
 fn load_gltf(path: &Path) -> Result<Mesh> {
-    let gltf = gltf::Gltf::open(path).map_err(|e| Error::input(format!("cannot read the glTF: {e}")))?;
+    let gltf =
+        gltf::Gltf::open(path).map_err(|e| Error::input(format!("cannot read the glTF: {e}")))?;
     let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
         .map_err(|e| Error::input(format!("cannot read the glTF's buffers: {e}")))?;
     let scene = gltf
@@ -133,7 +134,9 @@ fn load_gltf(path: &Path) -> Result<Mesh> {
                 let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
                 let positions: Vec<[f32; 3]> = reader
                     .read_positions()
-                    .ok_or_else(|| Error::input(format!("mesh {:?}: a primitive has no positions", m.name())))?
+                    .ok_or_else(|| {
+                        Error::input(format!("mesh {:?}: a primitive has no positions", m.name()))
+                    })?
                     .collect();
                 let uvs: Vec<[f32; 2]> = reader
                     .read_tex_coords(0)

@@ -17,7 +17,7 @@ use glam::DVec3;
 pub use pose::Pose;
 
 use crate::imaging::Raster;
-use crate::model::{Frustum, Camera};
+use crate::model::{Camera, Frustum};
 
 /// One vertex as the vertex shader reads it (`glsl/geometry.vert`, binding 0): 32 bytes.
 #[repr(C)]

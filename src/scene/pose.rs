@@ -94,7 +94,11 @@ impl Pose {
             .split(',')
             .map(|s| s.trim().parse::<f64>())
             .collect::<Result<_, _>>()
-            .map_err(|_| Error::input(format!("pose {text:?}: expected six numbers rx,ry,rz,tx,ty,tz")))?;
+            .map_err(|_| {
+                Error::input(format!(
+                    "pose {text:?}: expected six numbers rx,ry,rz,tx,ty,tz"
+                ))
+            })?;
         if v.len() != 6 || v.iter().any(|x| !x.is_finite()) {
             return Err(Error::input(format!(
                 "pose {text:?}: expected six finite numbers rx,ry,rz,tx,ty,tz (an OpenCV rvec, then tvec in metres)"

@@ -13,7 +13,7 @@ use std::collections::HashMap;
 use glam::DVec2;
 
 use super::{Mesh, Pose, Vertex, MAX_TRIANGLES};
-use crate::model::{Intrinsics, Camera};
+use crate::model::{Camera, Intrinsics};
 
 /// Depth below which a vertex is not measured (it is at or behind the camera, and the
 /// geometry path drops its triangles anyway).
@@ -22,12 +22,7 @@ const MIN_DEPTH: f64 = 1e-6;
 /// Splits edges longer than `max_edge_px` in the pinhole image of `camera` at `pose`. Edges
 /// that lie wholly off the image (by more than the image's own size) are left alone: nothing
 /// of them is drawn, and near the camera plane they would otherwise split without end.
-pub fn tessellate(
-    mesh: &Mesh,
-    pose: &Pose,
-    camera: &Camera,
-    max_edge_px: f64,
-) -> Result<Mesh> {
+pub fn tessellate(mesh: &Mesh, pose: &Pose, camera: &Camera, max_edge_px: f64) -> Result<Mesh> {
     let intrinsics = &camera.intrinsics;
     let (w, h) = (camera.width as f64, camera.height as f64);
     // Whether the edge's bounding box meets the image grown by its own size on every side.

@@ -1,7 +1,7 @@
 //! Shared test helpers.
 #![allow(dead_code)]
 
-use vklens::gpu::{Context, ContextOptions};
+use vklens::internal::gpu::{Context, ContextOptions};
 
 /// A headless context with the Khronos validation layer on (tests always validate).
 pub fn validated_context() -> Context {
@@ -22,8 +22,9 @@ pub fn assert_no_validation_messages(ctx: &Context) {
 }
 
 /// The shared reference case named `name`, as a camera.
-pub fn reference_camera(name: &str) -> vklens::model::Camera {
-    let reference = vklens::io::reference::load_reference().expect("shared reference file");
+pub fn reference_camera(name: &str) -> vklens::internal::model::Camera {
+    let reference =
+        vklens::internal::io::reference::load_reference().expect("shared reference file");
     reference
         .cases
         .iter()
@@ -34,8 +35,8 @@ pub fn reference_camera(name: &str) -> vklens::model::Camera {
 }
 
 /// A lens file shipped in `lenses/`.
-pub fn shipped_lens(name: &str) -> vklens::lens::Prescription {
-    vklens::lens::Prescription::load(
+pub fn shipped_lens(name: &str) -> vklens::internal::lens::Prescription {
+    vklens::internal::lens::Prescription::load(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("lenses")
             .join(name),
@@ -46,10 +47,11 @@ pub fn shipped_lens(name: &str) -> vklens::lens::Prescription {
 /// Uploads a mesh (and its texture) for drawing.
 pub fn upload_mesh(
     ctx: &Context,
-    mesh: &vklens::scene::Mesh,
-    texture: Option<&vklens::imaging::Raster>,
-) -> vklens::pass::geometry::MeshBuffers {
-    let buffers = vklens::pass::geometry::MeshBuffers::new(ctx.gpu(), mesh, texture).unwrap();
+    mesh: &vklens::internal::scene::Mesh,
+    texture: Option<&vklens::internal::imaging::Raster>,
+) -> vklens::internal::pass::geometry::MeshBuffers {
+    let buffers =
+        vklens::internal::pass::geometry::MeshBuffers::new(ctx.gpu(), mesh, texture).unwrap();
     ctx.submit(|cmd| {
         unsafe { buffers.record_upload(cmd) };
         Ok(())

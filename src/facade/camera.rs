@@ -1,0 +1,138 @@
+//! What a user does with a [`Camera`] without a GPU: load it, build it from OpenCV's `K` and
+//! `D`, move points through it, write it back.
+
+use std::path::Path;
+
+use glam::{DVec2, DVec3};
+
+use crate::model::{Camera, Intrinsics, InverseMethod};
+use crate::{Error, Result};
+
+impl Camera {
+    /// Reads any camera file the command line reads: vklens JSON, OpenCV `FileStorage`
+    /// (YAML, XML, JSON), ROS `camera_info` YAML, or a Brown lens `{"model": "brown", ...}`.
+    ///
+    /// ```no_run
+    /// let camera = vklens::Camera::load("camera.yml")?;
+    /// println!("{}×{}, fx = {}", camera.width, camera.height, camera.intrinsics.fx);
+    /// # Ok::<(), vklens::Error>(())
+    /// ```
+    pub fn load(path: impl AsRef<Path>) -> Result<Camera> {
+        crate::io::load_camera(path.as_ref())
+    }
+
+    /// Parses the text of a camera file; `origin` names it in error messages.
+    pub fn parse(text: &str, origin: &str) -> Result<Camera> {
+        crate::io::parse_camera(text, origin)
+    }
+
+    /// Builds a camera from OpenCV's camera matrix `K` (row-major, as OpenCV stores it), its
+    /// distortion vector `D` (4, 5, 8, 12 or 14 coefficients) and the image size.
+    ///
+    /// `K` must be a pinhole matrix: `[fx, s, cx; 0, fy, cy; 0, 0, 1]` with no skew.
+    ///
+    /// ```
+    /// let k = [[400.0, 0.0, 399.5], [0.0, 400.0, 299.5], [0.0, 0.0, 1.0]];
+    /// let camera = vklens::Camera::from_opencv(k, &[-0.05, 0.01, 0.03, -0.01], (800, 600))?;
+    /// assert_eq!(camera.dist_coeffs().len(), 4);
+    /// # Ok::<(), vklens::Error>(())
+    /// ```
+    pub fn from_opencv(k: [[f64; 3]; 3], dist_coeffs: &[f64], size: (u32, u32)) -> Result<Camera> {
+        let bad = |what: &str| {
+            Error::input(format!(
+                "K: {what} (expected [fx, 0, cx; 0, fy, cy; 0, 0, 1])"
+            ))
+        };
+        if k.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(bad("every entry must be a finite number"));
+        }
+        if k[0][1] != 0.0 {
+            return Err(bad(&format!(
+                "K[0][1] = {} is a skew, which OpenCV's standard model does not have",
+                k[0][1]
+            )));
+        }
+        if k[1][0] != 0.0 || k[2][0] != 0.0 || k[2][1] != 0.0 || k[2][2] != 1.0 {
+            return Err(bad("its last row must be 0 0 1 and K[1][0] must be 0"));
+        }
+        let intrinsics = Intrinsics {
+            fx: k[0][0],
+            fy: k[1][1],
+            cx: k[0][2],
+            cy: k[1][2],
+        };
+        Camera::from_coeffs(size.0, size.1, intrinsics, dist_coeffs).map_err(Error::from)
+    }
+
+    /// OpenCV's camera matrix `K`, row-major.
+    pub fn k_matrix(&self) -> [[f64; 3]; 3] {
+        let k = self.intrinsics;
+        [[k.fx, 0.0, k.cx], [0.0, k.fy, k.cy], [0.0, 0.0, 1.0]]
+    }
+
+    /// Forward model on normalized undistorted coordinates `(X/Z, Y/Z)` → distorted pixels,
+    /// in f64, exactly as `cv2.projectPoints` computes them. `None` where the model is
+    /// undefined (a rational denominator vanishes, a non-finite input).
+    ///
+    /// ```
+    /// let k = [[400.0, 0.0, 399.5], [0.0, 400.0, 299.5], [0.0, 0.0, 1.0]];
+    /// let camera = vklens::Camera::from_opencv(k, &[-0.05, 0.01, 0.0, 0.0], (800, 600))?;
+    /// let uv = camera.distort_points(&[[0.0, 0.0], [0.5, 0.25]]);
+    /// assert_eq!(uv[0], Some([399.5, 299.5]));
+    /// # Ok::<(), vklens::Error>(())
+    /// ```
+    pub fn distort_points(&self, xy: &[[f64; 2]]) -> Vec<Option<[f64; 2]>> {
+        xy.iter()
+            .map(|&[x, y]| {
+                self.distort_normalized(DVec2::new(x, y))
+                    .map(|d| self.intrinsics.to_pixel(d).to_array())
+            })
+            .collect()
+    }
+
+    /// Inverse model: distorted pixels → normalized undistorted coordinates, `None` outside
+    /// the valid domain (the lens folds over there, or no preimage exists).
+    pub fn undistort_points(
+        &self,
+        uv: &[[f64; 2]],
+        method: InverseMethod,
+    ) -> Vec<Option<[f64; 2]>> {
+        uv.iter()
+            .map(|&[u, v]| {
+                let y = self.intrinsics.to_normalized(DVec2::new(u, v));
+                self.undistort_normalized(y, method).map(|x| x.to_array())
+            })
+            .collect()
+    }
+
+    /// Projects camera-frame points `(X, Y, Z)` to distorted pixels, as `cv2.projectPoints`
+    /// with a zero pose; `None` for points at or behind the camera plane.
+    pub fn project_points(&self, points: &[[f64; 3]]) -> Vec<Option<[f64; 2]>> {
+        points
+            .iter()
+            .map(|&p| self.project(DVec3::from_array(p)).map(|d| d.to_array()))
+            .collect()
+    }
+
+    /// The camera as a vklens JSON camera object (a Brown lens as `{"model": "brown", ...}`).
+    pub fn to_json(&self) -> serde_json::Value {
+        let k = self.intrinsics;
+        match self.brown() {
+            Some(b) => serde_json::json!({
+                "model": "brown", "width": self.width, "height": self.height,
+                "c1": b.c1, "c2": b.c2,
+            }),
+            None => serde_json::json!({
+                "width": self.width, "height": self.height,
+                "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy,
+                "dist_coeffs": self.dist_coeffs(),
+            }),
+        }
+    }
+
+    /// Writes the camera as vklens JSON (atomically: a failure leaves no partial file).
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
+        let text = format!("{:#}\n", self.to_json());
+        crate::imaging::io::write_atomically(path.as_ref(), |tmp| std::fs::write(tmp, &text))
+    }
+}

@@ -1,0 +1,54 @@
+//! A headless device: vklens's own Vulkan instance, device and queue, for programs that have
+//! no engine of their own (the command line, scripts, the Python package).
+
+use crate::gpu::{Context, Gpu};
+use crate::Result;
+
+/// A headless Vulkan device. `VKLENS_DEVICE` picks it (`cpu`/`lavapipe`, `gpu`, an index or a
+/// part of the name; default: the fastest), `VKLENS_VALIDATION=1` turns the Khronos validation
+/// layer on.
+///
+/// ```no_run
+/// let device = vklens::Device::new()?;
+/// println!("running on {}", device.name());
+/// # Ok::<(), vklens::Error>(())
+/// ```
+pub struct Device {
+    ctx: Context,
+}
+
+impl Device {
+    /// Opens the device the environment names.
+    pub fn new() -> Result<Self> {
+        Ok(Device {
+            ctx: Context::from_env()?,
+        })
+    }
+
+    /// The device's name, as the driver reports it.
+    pub fn name(&self) -> &str {
+        self.ctx.gpu().device_name()
+    }
+
+    /// The handles passes are built from.
+    pub fn gpu(&self) -> &Gpu {
+        self.ctx.gpu()
+    }
+
+    /// Fails if the validation layer (when on) has reported anything so far.
+    pub fn check_validation(&self) -> Result<()> {
+        self.ctx.check_validation()
+    }
+
+    /// The headless context (submission, timing) behind the device.
+    #[doc(hidden)]
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
+    /// Wraps an existing headless context.
+    #[doc(hidden)]
+    pub fn from_context(ctx: Context) -> Self {
+        Device { ctx }
+    }
+}

@@ -1,0 +1,13 @@
+//! The public surface of vklens: what the command line, the Python package and the C API
+//! wrap, and what a Rust program or engine uses.
+
+mod camera;
+mod device;
+mod scene;
+mod warper;
+
+pub use device::Device;
+pub use scene::{Frame, Rendered, SceneRenderer};
+pub use warper::{
+    overscan, warp_geometry, ImageRef, WarpDirection, WarpMethod, WarpOptions, Warped, Warper,
+};

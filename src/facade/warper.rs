@@ -1,0 +1,491 @@
+//! The post-processing warp as a reusable object: built once per camera, direction, method,
+//! chromatic setting and source camera, then run on host images or recorded into the caller's
+//! command buffer with the caller's images.
+
+use std::fmt;
+use std::str::FromStr;
+
+use ash::vk;
+
+use crate::gpu::{host_read_barrier, image_barrier, Gpu, Image};
+use crate::imaging::cpu_warp::Sampling;
+use crate::imaging::{Pixels, Raster};
+use crate::model::warp::WarpGeometry;
+use crate::model::{Camera, InverseMethod};
+use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
+use crate::{Device, Error, Result};
+
+/// Which way an image goes through the lens.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WarpDirection {
+    /// Simulate the lens: a pinhole image in, the lens image out (the inverse model per output
+    /// pixel; Lambers et al., Sec. 3.3).
+    Distort,
+    /// Rectify a lens image: the lens image in, a pinhole image out (the forward model per
+    /// output pixel, as `cv2.initUndistortRectifyMap` + `cv2.remap`).
+    Undistort,
+    /// Pre-distort an image for a headset lens: the screen shows what the lens will undo (the
+    /// Durham radial-correction paper). The same warp as [`WarpDirection::Undistort`].
+    Precorrect,
+}
+
+impl FromStr for WarpDirection {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "distort" => Ok(WarpDirection::Distort),
+            "undistort" => Ok(WarpDirection::Undistort),
+            "precorrect" => Ok(WarpDirection::Precorrect),
+            _ => Err(Error::input(format!(
+                "direction `{s}`: expected distort, undistort or precorrect"
+            ))),
+        }
+    }
+}
+
+/// How output pixels find their source: a coordinate map built once (`lut`), or a method
+/// solved per pixel every frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WarpMethod {
+    /// A map built once with Newton, then sampled (the cheapest per frame).
+    Lut,
+    /// Solve per pixel with this inverse (distort) or the forward model (`newton`, the other
+    /// directions).
+    PerPixel(InverseMethod),
+}
+
+impl FromStr for WarpMethod {
+    type Err = Error;
+    /// `lut`, `newton`, `heikkila` or `fixed-point:N`, as the command line's `--method`.
+    fn from_str(s: &str) -> Result<Self> {
+        if s == "lut" {
+            return Ok(WarpMethod::Lut);
+        }
+        s.parse().map(WarpMethod::PerPixel).map_err(|e: String| {
+            Error::input(e.replace("newton, heikkila", "newton, lut, heikkila"))
+        })
+    }
+}
+
+impl fmt::Display for WarpMethod {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            WarpMethod::Lut => write!(f, "lut"),
+            WarpMethod::PerPixel(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+/// What a [`Warper`] is built for. Start from [`WarpOptions::distort`],
+/// [`WarpOptions::undistort`] or [`WarpOptions::precorrect`] and change what differs.
+#[derive(Debug, Clone)]
+pub struct WarpOptions {
+    /// Which way the image goes.
+    pub direction: WarpDirection,
+    /// How coordinates are found (default `lut`).
+    pub method: WarpMethod,
+    /// Lateral chromatic aberration: magnification of the R, G and B images about the
+    /// principal point (e.g. `[1.002, 1.0, 0.998]`).
+    pub chromatic: Option<[f64; 3]>,
+    /// A full camera per channel (R, G, B), overriding the camera for each: the general form of
+    /// lateral colour. Needs `method: Lut`.
+    pub channel_cameras: Option<Box<[Camera; 3]>>,
+    /// The pinhole side, when it differs from the camera's own intrinsics and size: for
+    /// distort the input's (e.g. [`crate::overscan`]), for undistort and precorrect the
+    /// output's. It must have no distortion.
+    pub source_camera: Option<Camera>,
+    /// The images' format (default 8-bit RGBA).
+    pub format: PixelFormat,
+    /// Bilinear for colour, nearest for data that must not be blended (IDs, depth).
+    pub sampling: Sampling,
+    /// Value of output pixels with no source, in 0..1 (default transparent black).
+    pub fill: [f32; 4],
+}
+
+impl WarpOptions {
+    fn new(direction: WarpDirection) -> Self {
+        WarpOptions {
+            direction,
+            method: WarpMethod::Lut,
+            chromatic: None,
+            channel_cameras: None,
+            source_camera: None,
+            format: PixelFormat::Rgba8,
+            sampling: Sampling::Bilinear,
+            fill: [0.0; 4],
+        }
+    }
+    /// Simulate the lens on a pinhole image.
+    pub fn distort() -> Self {
+        Self::new(WarpDirection::Distort)
+    }
+    /// Rectify a lens image.
+    pub fn undistort() -> Self {
+        Self::new(WarpDirection::Undistort)
+    }
+    /// Pre-distort for a headset lens.
+    pub fn precorrect() -> Self {
+        Self::new(WarpDirection::Precorrect)
+    }
+}
+
+/// The warp's geometry for `camera` and `options`, checked: the f64 description the GPU warp,
+/// the CPU reference warp and the maps all follow.
+pub fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeometry> {
+    let method = match (options.method, options.direction) {
+        (WarpMethod::PerPixel(m), WarpDirection::Distort) => m,
+        (WarpMethod::PerPixel(InverseMethod::Newton), _) | (WarpMethod::Lut, _) => {
+            InverseMethod::Newton
+        }
+        (WarpMethod::PerPixel(m), _) => {
+            return Err(Error::input(format!(
+                "--method {m}: undistort and precorrect use the forward model; choose newton (per pixel) or lut (a map)"
+            )))
+        }
+    };
+    let mut geometry = match options.direction {
+        WarpDirection::Distort => WarpGeometry::distort(camera.clone(), method),
+        WarpDirection::Undistort | WarpDirection::Precorrect => {
+            WarpGeometry::undistort(camera.clone())
+        }
+    };
+    if let Some(p) = &options.source_camera {
+        if p.distortion.to_coeffs().iter().any(|&c| c != 0.0) {
+            return Err(Error::input(
+                "the source camera is the pinhole side of the warp and must have no distortion",
+            ));
+        }
+        geometry = geometry.with_ideal(p.intrinsics, (p.width, p.height))?;
+    }
+    if let Some(c) = options.chromatic {
+        geometry = geometry
+            .with_chromatic(c)
+            .map_err(|e| Error::input(format!("--chromatic: {e}")))?;
+    }
+    if let Some(cams) = &options.channel_cameras {
+        if options.method != WarpMethod::Lut {
+            return Err(Error::input(
+                "--channel-cameras runs through a map: add --method lut",
+            ));
+        }
+        for c in cams.iter() {
+            if (c.width, c.height) != (camera.width, camera.height) {
+                return Err(Error::input(format!(
+                    "a channel camera must have the camera's size {}×{}, not {}×{}",
+                    camera.width, camera.height, c.width, c.height
+                )));
+            }
+        }
+        geometry.channel_cameras = Some(cams.clone());
+    }
+    Ok(geometry)
+}
+
+/// One of the caller's images: a 2D storage image with a view, and its size.
+#[derive(Debug, Clone, Copy)]
+pub struct ImageRef {
+    /// The image.
+    pub image: vk::Image,
+    /// A view of its one mip level and layer.
+    pub view: vk::ImageView,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+/// The result of [`Warper::run`]: the warped image and its validity mask.
+#[derive(Debug, Clone)]
+pub struct Warped {
+    /// The output image, in the input's pixel type.
+    pub image: Raster,
+    /// Per output pixel: `true` where it has a source in the valid domain.
+    pub mask: Vec<bool>,
+}
+
+/// A warp built once and run on every frame.
+///
+/// ```no_run
+/// use vklens::{Camera, Device, WarpOptions, Warper};
+/// let device = Device::new()?;
+/// let camera = Camera::load("camera.yml")?;
+/// let mut warper = Warper::new(device.gpu(), &camera, &WarpOptions::distort())?;
+/// let pinhole = vklens::imaging::io::load("pinhole.png".as_ref())?;
+/// let lens = warper.run(&device, &pinhole)?;
+/// vklens::imaging::io::save(&lens.image, "lens.png".as_ref())?;
+/// # Ok::<(), vklens::Error>(())
+/// ```
+pub struct Warper {
+    gpu: Gpu,
+    pass: WarpPass,
+    geometry: WarpGeometry,
+    source_camera: Camera,
+    direction: WarpDirection,
+    /// The mask bound when the caller passes none (the shader always writes one).
+    own_mask: Image,
+    /// The views the pass is bound to now.
+    bound: Option<[vk::ImageView; 3]>,
+    /// Images for [`Warper::run`], made on its first call.
+    headless: Option<WarpImages>,
+    /// Whether the map build has been recorded (it runs once).
+    prepared_headless: bool,
+}
+
+impl Warper {
+    /// Builds the warp's pipelines and, for `lut`, its map images (the maps are built on the
+    /// GPU by [`Warper::record_prepare`] or the first [`Warper::run`]).
+    pub fn new(gpu: &Gpu, camera: &Camera, options: &WarpOptions) -> Result<Self> {
+        if matches!(options.format, PixelFormat::R32Uint | PixelFormat::R32Float)
+            && options.sampling == Sampling::Bilinear
+        {
+            return Err(Error::input(
+                "object IDs and depth must be warped with nearest sampling",
+            ));
+        }
+        let geometry = warp_geometry(camera, options)?;
+        // The pinhole side: the input when distorting, the output otherwise.
+        let (pw, ph) = match options.direction {
+            WarpDirection::Distort => geometry.source_size,
+            _ => geometry.output_size,
+        };
+        let source_camera = Camera::from_coeffs(pw, ph, geometry.ideal, &[0.0; 5])?;
+        let desc = WarpDesc {
+            geometry: geometry.clone(),
+            coordinates: match options.method {
+                WarpMethod::Lut => Coordinates::Map,
+                WarpMethod::PerPixel(_) => Coordinates::Analytic,
+            },
+            sampling: options.sampling,
+            format: options.format,
+            fill: options.fill,
+            write_mask: true,
+        };
+        let pass = WarpPass::new(gpu, desc)?;
+        let (ow, oh) = geometry.output_size;
+        let own_mask = Image::new_2d(
+            gpu,
+            "warper.mask",
+            vk::Format::R8_UNORM,
+            ow,
+            oh,
+            vk::ImageUsageFlags::STORAGE,
+        )?;
+        Ok(Warper {
+            gpu: gpu.clone(),
+            pass,
+            geometry,
+            source_camera,
+            direction: options.direction,
+            own_mask,
+            bound: None,
+            headless: None,
+            prepared_headless: false,
+        })
+    }
+
+    /// The pinhole side's camera actually used (the input's for distort, the output's for
+    /// undistort and precorrect).
+    pub fn source_camera(&self) -> &Camera {
+        &self.source_camera
+    }
+
+    /// Which way the warp goes.
+    pub fn direction(&self) -> WarpDirection {
+        self.direction
+    }
+
+    /// `(width, height)` of the images the warp takes.
+    pub fn input_size(&self) -> (u32, u32) {
+        self.geometry.source_size
+    }
+
+    /// `(width, height)` of the images the warp makes.
+    pub fn output_size(&self) -> (u32, u32) {
+        self.geometry.output_size
+    }
+
+    /// The f64 geometry the warp follows.
+    pub fn geometry(&self) -> &WarpGeometry {
+        &self.geometry
+    }
+
+    /// Records the one-off work: the map build (for `lut`) and the layout transitions of the
+    /// warp's own images, followed by the barrier the warp needs. Nothing of the caller's is
+    /// touched.
+    ///
+    /// # Safety
+    /// `cmd` must be recording, outside a render pass, on a queue with compute support of the
+    /// device this warper was built on. Record it once, before the first [`Warper::record`],
+    /// and not again while that work is pending.
+    pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
+        unsafe {
+            self.pass.record_prepare(cmd);
+            // The fallback mask is written by the warp as a storage image.
+            image_barrier(
+                &self.gpu,
+                cmd,
+                self.own_mask.raw,
+                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                (
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::AccessFlags::empty(),
+                ),
+                (
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::AccessFlags::SHADER_WRITE,
+                ),
+            );
+        }
+    }
+
+    /// Records the warp of `source` into `output` (and `mask`, `R8_UNORM`, 255 where the pixel
+    /// has a source, 0 where it has none). Checks the sizes first; on an error nothing is
+    /// recorded.
+    ///
+    /// Layouts: every image is in `VK_IMAGE_LAYOUT_GENERAL` on entry and is left so. Usage:
+    /// `STORAGE` for all three. The warp is one compute dispatch: it reads `source` and writes
+    /// `output` and `mask` with `SHADER_READ` / `SHADER_WRITE` in `COMPUTE_SHADER`. The
+    /// caller's barriers make the source's writes visible to it before, and its writes
+    /// visible to whatever reads them after. It never submits and never waits.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass, after [`Warper::record_prepare`] was
+    /// recorded (in this or an earlier submission that has completed or precedes it). The
+    /// images must be alive until the work completes. When the views differ from the last
+    /// call's, the warp's descriptor set is rewritten: no previously recorded warp of this
+    /// warper may still be pending then.
+    pub unsafe fn record(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        source: &ImageRef,
+        output: &ImageRef,
+        mask: Option<&ImageRef>,
+    ) -> Result<()> {
+        let check = |what: &str, image: &ImageRef, want: (u32, u32)| {
+            if (image.width, image.height) != want {
+                return Err(Error::input(format!(
+                    "{what}: the image is {}×{} but the warp expects {}×{}",
+                    image.width, image.height, want.0, want.1
+                )));
+            }
+            if image.view == vk::ImageView::null() {
+                return Err(Error::input(format!("{what}: null image view")));
+            }
+            Ok(())
+        };
+        check("source", source, self.input_size())?;
+        check("output", output, self.output_size())?;
+        if let Some(m) = mask {
+            check("mask", m, self.output_size())?;
+        }
+        let views = [
+            source.view,
+            output.view,
+            mask.map_or(self.own_mask.view, |m| m.view),
+        ];
+        // SAFETY: the caller guarantees no recorded warp of this warper is pending when the
+        // views change (see `# Safety`).
+        self.bind(views);
+        unsafe { self.pass.record(cmd) };
+        Ok(())
+    }
+
+    fn bind(&mut self, views: [vk::ImageView; 3]) {
+        if self.bound != Some(views) {
+            self.pass.bind(views[0], views[1], views[2]);
+            self.bound = Some(views);
+        }
+    }
+
+    /// Warps a host image on a headless device: upload, warp, read back, and wait. The image
+    /// must be `input_size()` and of the warper's format (8-bit RGBA for `Rgba8`; 16-bit and
+    /// float images for `Rgba32F`).
+    pub fn run(&mut self, device: &Device, image: &Raster) -> Result<Warped> {
+        let want = self.input_size();
+        if (image.width, image.height) != want {
+            return Err(Error::input(format!(
+                "the input is {}×{} but the warp expects {}×{}",
+                image.width, image.height, want.0, want.1
+            )));
+        }
+        let fits = matches!(
+            (&image.pixels, self.pass.desc().format),
+            (Pixels::Rgba8(_), PixelFormat::Rgba8)
+                | (Pixels::R32Uint(_), PixelFormat::R32Uint)
+                | (
+                    Pixels::Rgba32F(_),
+                    PixelFormat::Rgba32F | PixelFormat::R32Float
+                )
+                | (Pixels::Rgba8(_), PixelFormat::Rgba32F)
+        );
+        if !fits {
+            return Err(Error::input(format!(
+                "the input's pixels do not fit the warper's format {:?}",
+                self.pass.desc().format
+            )));
+        }
+        match &self.headless {
+            Some(images) => images.stage(image)?,
+            None => self.headless = Some(WarpImages::new(&self.gpu, self.pass.desc(), image)?),
+        }
+        let Some(images) = self.headless.as_ref() else {
+            return Err(Error::internal("headless warp images missing"));
+        };
+        let views = [images.source.view, images.output.view, images.mask.view];
+        // The previous run has completed (`submit` waits), so rebinding cannot race it.
+        if self.bound != Some(views) {
+            self.pass.bind(views[0], views[1], views[2]);
+            self.bound = Some(views);
+        }
+        let prepare = !self.prepared_headless;
+        let gpu = &self.gpu;
+        let pass = &self.pass;
+        device.context().submit(|cmd| {
+            // SAFETY: `cmd` is a fresh primary command buffer outside any render pass; every
+            // image recorded here lives in `self` until the submission has completed.
+            unsafe {
+                images.record_upload(cmd);
+                if prepare {
+                    pass.record_prepare(cmd);
+                }
+                pass.record(cmd);
+                images.record_download(cmd);
+                host_read_barrier(gpu, cmd);
+            }
+            Ok(())
+        })?;
+        self.prepared_headless = true;
+        let (raster, mask) = images.read(image.bit_depth)?;
+        Ok(Warped {
+            image: raster,
+            mask: mask.iter().map(|&m| m > 127).collect(),
+        })
+    }
+
+    /// The warp's coordinate map: per output pixel, the source position `[x, y]` its light
+    /// comes from (NaN where it has none in the valid domain), row-major, ready for
+    /// `cv2.remap`. Solved per pixel with Newton on the GPU (≤ 1e-3 px in f32).
+    pub fn maps(&self, device: &Device) -> Result<Vec<[f32; 2]>> {
+        let mut maps =
+            crate::pass::warp::read_maps(device.context(), &self.geometry, Coordinates::Map)?;
+        // G is the geometric map (the only one without chromatic aberration).
+        let index = if maps.len() == 3 { 1 } else { 0 };
+        Ok(maps.swap_remove(index))
+    }
+}
+
+/// The pinhole camera whose image covers every valid pixel of `camera` with `density` source
+/// pixels per output pixel at the principal point: the source a distort warp needs so that
+/// a barrel lens gets its borders (Lambers et al., Sec. 3.3).
+///
+/// ```
+/// let k = [[400.0, 0.0, 399.5], [0.0, 400.0, 299.5], [0.0, 0.0, 1.0]];
+/// let camera = vklens::Camera::from_opencv(k, &[-0.2, 0.03, 0.0, 0.0], (800, 600))?;
+/// let source = vklens::overscan(&camera, 1.0)?;
+/// assert!(source.width > 800 && source.height > 600);
+/// # Ok::<(), vklens::Error>(())
+/// ```
+pub fn overscan(camera: &Camera, density: f64) -> Result<Camera> {
+    let o = crate::model::overscan::overscan(camera, density)?;
+    Camera::from_coeffs(o.width, o.height, o.intrinsics, &[0.0; 5]).map_err(Error::from)
+}

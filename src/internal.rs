@@ -1,0 +1,23 @@
+//! The layers behind the public surface (see the crate root and `docs/architecture.md`).
+#[path = "bench/mod.rs"]
+pub mod bench;
+#[path = "cli/mod.rs"]
+pub mod cli;
+#[path = "gpu/mod.rs"]
+pub mod gpu;
+#[path = "imaging/mod.rs"]
+pub mod imaging;
+#[path = "io/mod.rs"]
+pub mod io;
+#[path = "lens/mod.rs"]
+pub mod lens;
+#[path = "model/mod.rs"]
+pub mod model;
+#[path = "pass/mod.rs"]
+pub mod pass;
+#[path = "plan/mod.rs"]
+pub mod plan;
+#[path = "render.rs"]
+pub mod render;
+#[path = "scene/mod.rs"]
+pub mod scene;

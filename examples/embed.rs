@@ -80,25 +80,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 allocator.clone(),
                 EnabledFeatures::default(),
             )?;
-            let camera = Camera::from_coeffs(
-                w,
-                h,
-                Intrinsics {
-                    fx: 400.0,
-                    fy: 400.0,
-                    cx: 399.5,
-                    cy: 299.5,
-                },
-                &[-0.05, 0.01, 0.03, -0.01],
-            )?;
-            let desc = WarpDesc {
-                geometry: WarpGeometry::distort(camera, InverseMethod::Newton),
-                coordinates: Coordinates::Map,
-                sampling: Sampling::Bilinear,
-                format: PixelFormat::Rgba8,
-                fill: [0.0, 0.0, 0.0, 1.0],
-                write_mask: true,
-            };
+            let k = [[400.0, 0.0, 399.5], [0.0, 400.0, 299.5], [0.0, 0.0, 1.0]];
+            let camera = Camera::from_opencv(k, &[-0.05, 0.01, 0.03, -0.01], (w, h))?;
+            let mut options = WarpOptions::distort();
+            options.fill = [0.0, 0.0, 0.0, 1.0];
 
             // The engine's images (vklens's owned wrappers are a convenience; any storage image
             // with a view will do).
@@ -123,8 +108,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 MemoryLocation::GpuToCpu,
             )?;
 
-            let mut warp = WarpPass::new(&gpu, desc)?;
-            warp.bind(pinhole.view, lens.view, mask.view);
+            let mut warper = Warper::new(&gpu, &camera, &options)?;
+            let image = |i: &Image| ImageRef {
+                image: i.raw,
+                view: i.view,
+                width: i.extent.width,
+                height: i.extent.height,
+            };
 
             device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;
             let none = (
@@ -195,8 +185,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
 
             // 2. vklens: build the map (once per camera), then warp.
-            warp.record_prepare(cmd);
-            warp.record(cmd);
+            warper.record_prepare(cmd);
+            warper.record(cmd, &image(&pinhole), &image(&lens), Some(&image(&mask)))?;
 
             // 3. The engine "presents": copies the lens image out.
             image_barrier(

@@ -36,6 +36,16 @@ use crate::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc, WarpPass};
 use crate::scene::tessellate::tessellate;
 use crate::scene::{Mesh, Pose, Scene};
 
+/// Largest colour supersampling factor per axis (`--supersample`, `[render] supersample`):
+/// at 8× an 800×600 frame is already rendered at 6400×4800.
+pub const MAX_SUPERSAMPLE: u32 = 8;
+/// Most jittered passes averaged (`--jitter`, `[render] jitter`).
+pub const MAX_JITTER: u32 = 64;
+/// The background a render clears to unless told otherwise: transparent black, so that what
+/// the scene does not cover can be told apart (the same on the command line and in scene
+/// files).
+pub const DEFAULT_BACKGROUND: [f32; 4] = [0.0; 4];
+
 /// Which path renders the lens.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum RenderPath {
@@ -640,7 +650,13 @@ fn render_with(
     request: &RenderRequest,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Rendered> {
-    let s = request.supersample.clamp(1, 16);
+    let s = request.supersample;
+    if !(1..=MAX_SUPERSAMPLE).contains(&s) || !(1..=MAX_JITTER).contains(&request.jitter) {
+        return Err(invalid(format!(
+            "supersample {s} and jitter {} must be in 1..={MAX_SUPERSAMPLE} and 1..={MAX_JITTER}",
+            request.jitter
+        )));
+    }
     match request.path {
         RenderPath::Vertex { .. } | RenderPath::Pinhole => {
             if request.chromatic.is_some() {

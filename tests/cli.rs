@@ -223,3 +223,93 @@ fn help_teaches() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("fixed-point:N") && text.contains("null"));
 }
+
+/// The exit code follows the error's kind, in every command: 2 for what the user can fix
+/// (bad input, a path that cannot be used, work the device cannot do), 1 for the rest.
+#[test]
+fn exit_codes_follow_the_error_kind() {
+    use vklens::internal::cli::exit_code;
+    use vklens::Error;
+    let missing = std::io::Error::from(std::io::ErrorKind::NotFound);
+    let full = std::io::Error::from(std::io::ErrorKind::StorageFull);
+    let p = std::path::Path::new("x.png");
+    assert_eq!(exit_code(&Error::input("bad")), 2);
+    assert_eq!(exit_code(&Error::unsupported("too big")), 2);
+    assert_eq!(exit_code(&Error::io(p, "cannot read", &missing)), 2);
+    assert_eq!(exit_code(&Error::io(p, "cannot write", &full)), 1);
+    assert_eq!(exit_code(&Error::internal("bug")), 1);
+    assert_eq!(
+        exit_code(&Error::from(ash::vk::Result::ERROR_DEVICE_LOST)),
+        1
+    );
+
+    let dir = std::env::temp_dir().join(format!("vklens-exit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let expect = |args: &[&str], code: i32, needle: &str| {
+        let out = vklens(args, "");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    };
+    // A bad camera file (a key out of range): bad input.
+    let cam = dir.join("negative_fx.json");
+    std::fs::write(&cam, r#"{"width": 64, "height": 48, "fx": -40, "fy": 40, "cx": 32, "cy": 24, "dist_coeffs": [0, 0, 0, 0]}"#).unwrap();
+    expect(&["overscan", "--camera", &s(&cam)], 2, "negative_fx.json");
+    // A bad scene key.
+    let scene = dir.join("bad.toml");
+    std::fs::write(
+        &scene,
+        "[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"x.json\"\n[effects]\nwobble = true\n",
+    )
+    .unwrap();
+    expect(
+        &["render", "--scene", &s(&scene), "--out", &s(&dir)],
+        2,
+        "wobble",
+    );
+    // An output that cannot be written (its folder does not exist), in two commands.
+    let good = camera_file("seed_fig2.opencv4.yml");
+    let nowhere = dir.join("no/such/folder/out.png");
+    expect(
+        &["demo", "--camera", &good, "--output", &s(&nowhere)],
+        2,
+        "does not exist",
+    );
+    let input = dir.join("in.png");
+    image::RgbaImage::new(800, 600).save(&input).unwrap();
+    expect(
+        &[
+            "distort",
+            "--camera",
+            &good,
+            "--input",
+            &s(&input),
+            "--output",
+            &s(&nowhere),
+        ],
+        2,
+        "does not exist",
+    );
+    // An image over the device's limit: unsupported, named before any work.
+    let wide = dir.join("wide.json");
+    std::fs::write(&wide, r#"{"width": 40000, "height": 8, "fx": 4000, "fy": 4000, "cx": 20000, "cy": 4, "dist_coeffs": [0.01, 0, 0, 0]}"#).unwrap();
+    let wide_in = dir.join("wide.png");
+    image::GrayImage::new(40000, 8).save(&wide_in).unwrap();
+    expect(
+        &[
+            "distort",
+            "--camera",
+            &s(&wide),
+            "--input",
+            &s(&wide_in),
+            "--output",
+            &s(&dir.join("o.png")),
+        ],
+        2,
+        "px per side",
+    );
+    assert!(!dir.join("o.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -32,6 +32,7 @@ use crate::pass::geometry::{
 use crate::pass::mesh_warp::{MeshWarpOutput, MeshWarpPass, MeshWarpTarget};
 use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
 use crate::render::WarpStage;
+pub use crate::scene::tessellate::straight_line_error;
 use crate::scene::tessellate::tessellate;
 use crate::scene::{builtin, Mesh, Pose, Scene};
 
@@ -43,46 +44,6 @@ pub const GRIDS: [u32; 3] = [8, 128, 512];
 pub const EDGES: [Option<f64>; 4] = [None, Some(32.0), Some(8.0), Some(2.0)];
 /// Mesh-warp grid sizes.
 pub const MESH_SIZES: [u32; 4] = [8, 32, 128, 512];
-
-/// The largest distance (px) between an edge's true image through the lens and the straight
-/// segment the rasterizer draws between its moved end points, over the edges whose image is
-/// inside the frame (sampled at t = 1/4, 1/2, 3/4).
-pub fn straight_line_error(camera: &Camera, pose: &Pose, mesh: &Mesh) -> f64 {
-    let project = |i: u32| camera.project(pose.apply(mesh.vertices[i as usize].position()));
-    let inside = |p: DVec2| {
-        p.x >= -0.5
-            && p.y >= -0.5
-            && p.x <= camera.width as f64 - 0.5
-            && p.y <= camera.height as f64 - 0.5
-    };
-    let mut seen = std::collections::HashSet::new();
-    let mut worst = 0f64;
-    for t in mesh.indices.chunks_exact(3) {
-        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-            if !seen.insert((a.min(b), a.max(b))) {
-                continue;
-            }
-            let (Some(pa), Some(pb)) = (project(a), project(b)) else {
-                continue;
-            };
-            if !inside(pa) || !inside(pb) {
-                continue;
-            }
-            let (wa, wb) = (
-                mesh.vertices[a as usize].position(),
-                mesh.vertices[b as usize].position(),
-            );
-            for s in [0.25, 0.5, 0.75] {
-                if let Some(p) = camera.project(pose.apply(wa + (wb - wa) * s)) {
-                    let d = pb - pa;
-                    let u = ((p - pa).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
-                    worst = worst.max((pa + d * u).distance(p));
-                }
-            }
-        }
-    }
-    worst
-}
 
 /// GPU-resident render of `mesh`: the pass, its targets and buffers, uploaded.
 struct Drawn {

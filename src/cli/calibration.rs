@@ -39,14 +39,14 @@ pub struct CalibrationSetArgs {
     square: f64,
     /// Anti-aliasing: colour rendered at S× per axis and box-filtered, so corners are
     /// located to a small fraction of a pixel.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=8))]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SUPERSAMPLE as i64))]
     supersample: u32,
     /// Warp path: source pixels per output pixel of the overscanned pinhole render.
     #[arg(long, default_value_t = 2.0)]
     density: f64,
     /// Anti-aliasing: this many jittered passes averaged (sub-sample offsets), so edge
     /// positions are not quantized to the 1/S grid (which calibration would mistake for lens distortion).
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_JITTER as i64))]
     jitter: u32,
     /// Vertex path: split board edges longer than L pixels (Alg. 1 needs fine geometry).
     #[arg(long, default_value_t = 4.0)]

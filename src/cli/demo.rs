@@ -34,7 +34,7 @@ pub fn seed_fig2() -> Camera {
         },
         &[-0.05, 0.01, 0.03, -0.01],
     )
-    .expect("Lambers et al.'s camera is valid")
+    .expect("Lambers et al.'s Fig. 2 camera is valid: its parameters are constants")
 }
 
 pub fn run(args: DemoArgs) -> Result<(), CliError> {
@@ -42,19 +42,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         Some(path) => load_camera(path)?,
         None => seed_fig2(),
     };
-    if !matches!(
-        args.output
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase())
-            .as_deref(),
-        Some("png")
-    ) {
-        return Err(CliError::input(format!(
-            "{}: the output must be a .png file",
-            args.output.display()
-        )));
-    }
+    super::output::check_output(&args.output, "demo", &["png"])?;
     let ctx = context()?;
     eprintln!(
         "rendering {}×{} through the lens on {}",

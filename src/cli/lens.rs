@@ -290,7 +290,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
     use crate::scene::{builtin, Pose};
 
     let lens = Prescription::load(&args.lens).map_err(|e| CliError::input(e.to_string()))?;
-    let ext = super::render::check_output(&args.output, "colour", &["png", "exr"])?;
+    let ext = super::output::check_output(&args.output, "colour", &["png", "exr"])?;
     if !(args.max_angle.is_finite() && args.max_angle > 0.0) {
         return Err(CliError::input(format!(
             "--max-angle {}: expected a positive number of degrees",

@@ -8,6 +8,7 @@ mod bench;
 mod calibration;
 mod demo;
 mod lens;
+mod output;
 mod planned;
 mod points;
 mod render;

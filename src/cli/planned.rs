@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde_json::json;
 
-use super::render::{write_outputs, RenderArgs, Targets};
+use super::output::{write_outputs, Targets};
 use super::{context, finish, progress_done, progress_line, CliError};
 use crate::plan::{execute, load_geometry, plan, Plan, Route, SceneFile};
 
@@ -106,13 +106,18 @@ fn plan_json(p: &Plan, frames: &[(usize, f64)]) -> serde_json::Value {
     })
 }
 
-pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
-    if let Some(flag) = args.conflicts_with_scene_file() {
-        return Err(CliError::input(format!(
-            "{flag} does not go with a scene file: it names its optics, outputs and poses; write into --out DIR"
-        )));
-    }
-    let Some(out) = args.out() else {
+/// What `render --scene FILE.toml` was asked for besides the file.
+pub struct SceneRun<'a> {
+    /// `--out DIR`.
+    pub out: Option<&'a Path>,
+    /// `--frames A..B`.
+    pub frames: Option<&'a str>,
+    /// `--explain`.
+    pub explain: bool,
+}
+
+pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
+    let Some(out) = args.out else {
         return Err(CliError::input(
             "a scene file renders into a folder: give --out DIR",
         ));
@@ -121,7 +126,7 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
         SceneFile::load(Path::new(scene_path)).map_err(|e| CliError::input(e.to_string()))?;
     let scene = load_geometry(&file)?;
     let plan = plan(&file, &scene)?;
-    let frames = match args.frames() {
+    let frames = match args.frames {
         Some(f) => parse_frames(f, plan.poses.len()).map_err(CliError::Input)?,
         None => 0..plan.poses.len(),
     };
@@ -170,7 +175,7 @@ pub fn run(scene_path: &str, args: &RenderArgs) -> Result<(), CliError> {
     };
     let first = frames.start..frames.start + 1;
     execute(&ctx, &plan, &scene, first, &mut write).map_err(gpu_error)?;
-    if args.explain() {
+    if args.explain {
         let measured = done.borrow().first().map(|(_, ms)| *ms);
         // Per-pass GPU times where the plan's passes can be recorded and timed as a whole.
         let passes = crate::plan::record::pass_times(&ctx, &plan, &scene, frames.start)

@@ -1,13 +1,13 @@
 //! `vklens render`: a scene through a calibrated lens, by the vertex or the warp path.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
+use super::output::{check_output, write_outputs, Targets};
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
-use crate::imaging::{io as image_io, BitDepth, Pixels, Raster};
 use crate::model::InverseMethod;
-use crate::pass::geometry::{ColorFormat, Outputs, Rendered, DEFAULT_DELTA};
+use crate::pass::geometry::{ColorFormat, Outputs, DEFAULT_DELTA};
 use crate::render::{render_scene, RenderPath, RenderRequest};
 use crate::scene::{builtin, Pose, Scene};
 
@@ -89,7 +89,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "newton", value_parser = super::parse_method)]
     method: InverseMethod,
     /// Render colour at S× per axis and box-filter down (anti-aliasing; 1 = off, max 8).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SUPERSAMPLE as i64))]
     supersample: u32,
     /// Warp path: source pixels per output pixel of the overscanned pinhole render. Above 1
     /// the bilinear warp minifies and aliases; for sharper output raise --supersample, which
@@ -98,7 +98,7 @@ pub struct RenderArgs {
     density: f64,
     /// Anti-aliasing: this many jittered passes averaged (sub-sample offsets), so edge
     /// positions are not quantized to the 1/S grid.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_JITTER as i64))]
     jitter: u32,
     /// Background colour R,G,B,A in 0..1.
     #[arg(long, default_value = "0,0,0,0", value_parser = parse_background)]
@@ -122,39 +122,6 @@ fn parse_background(s: &str) -> Result<Background, String> {
     }
 }
 
-fn extension(path: &Path) -> Option<String> {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-}
-
-pub(crate) fn check_output(path: &Path, what: &str, allowed: &[&str]) -> Result<String, CliError> {
-    let ext = extension(path).unwrap_or_default();
-    if !allowed.contains(&ext.as_str()) {
-        return Err(CliError::input(format!(
-            "{}: the {what} output must be {}",
-            path.display(),
-            allowed
-                .iter()
-                .map(|e| format!(".{e}"))
-                .collect::<Vec<_>>()
-                .join(" or ")
-        )));
-    }
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !dir.is_dir() {
-        return Err(CliError::input(format!(
-            "{}: folder {} does not exist",
-            path.display(),
-            dir.display()
-        )));
-    }
-    Ok(ext)
-}
-
 /// The default previous pose: the camera moved sideways by 1 % of its distance to `target`.
 fn nudged(pose: &Pose, scene: &Scene) -> Pose {
     let (lo, hi) = scene.mesh.bounds();
@@ -168,7 +135,19 @@ fn nudged(pose: &Pose, scene: &Scene) -> Pose {
 
 pub fn run(args: RenderArgs) -> Result<(), CliError> {
     if args.scene.to_ascii_lowercase().ends_with(".toml") {
-        return super::planned::run(&args.scene, &args);
+        if let Some(flag) = args.conflicts_with_scene_file() {
+            return Err(CliError::input(format!(
+                "{flag} does not go with a scene file: it names its optics, outputs and poses; write into --out DIR"
+            )));
+        }
+        return super::planned::run(
+            &args.scene,
+            super::planned::SceneRun {
+                out: args.out.as_deref(),
+                frames: args.frames.as_deref(),
+                explain: args.explain,
+            },
+        );
     }
     for (given, flag) in [
         (args.out.is_some(), "--out"),
@@ -280,14 +259,6 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Where each output of a frame goes.
-pub(crate) struct Targets<'a> {
-    pub color: Option<&'a Path>,
-    pub ids: Option<&'a Path>,
-    pub flow: Option<&'a Path>,
-    pub depth: Option<&'a Path>,
-}
-
 impl RenderArgs {
     pub(crate) fn conflicts_with_scene_file(&self) -> Option<&'static str> {
         if self.camera.is_some() {
@@ -304,78 +275,4 @@ impl RenderArgs {
             None
         }
     }
-
-    pub(crate) fn out(&self) -> Option<&Path> {
-        self.out.as_deref()
-    }
-
-    pub(crate) fn explain(&self) -> bool {
-        self.explain
-    }
-
-    pub(crate) fn frames(&self) -> Option<&str> {
-        self.frames.as_deref()
-    }
-}
-
-pub(crate) fn write_outputs(
-    args: &Targets,
-    r: &Rendered,
-    ids_ext: Option<&str>,
-) -> Result<(), CliError> {
-    let save = |raster: &Raster, path: &Path| image_io::save(raster, path);
-    let float_image = |pixels: Vec<[f32; 4]>| Raster {
-        width: r.width,
-        height: r.height,
-        pixels: Pixels::Rgba32F(pixels),
-        bit_depth: BitDepth::F32,
-    };
-    if let (Some(path), Some(c)) = (args.color, &r.color) {
-        save(c, path)?;
-    }
-    if let (Some(path), Some(ids)) = (args.ids, &r.ids) {
-        if ids_ext == Some("png") {
-            if let Some(&big) = ids.iter().find(|&&i| i > u16::MAX as u32) {
-                return Err(CliError::input(format!(
-                    "{}: object ID {big} does not fit a 16-bit PNG; write the IDs to .exr",
-                    path.display()
-                )));
-            }
-            save(
-                &Raster {
-                    width: r.width,
-                    height: r.height,
-                    pixels: Pixels::R32Uint(ids.clone()),
-                    bit_depth: BitDepth::U16,
-                },
-                path,
-            )?;
-        } else {
-            save(
-                &float_image(
-                    ids.iter()
-                        .map(|&i| [i as f32, i as f32, i as f32, 1.0])
-                        .collect(),
-                ),
-                path,
-            )?;
-        }
-    }
-    if let (Some(path), Some(flow)) = (args.flow, &r.flow) {
-        let pixels = flow
-            .iter()
-            .map(|f| {
-                let known = f[0].is_finite() && f[1].is_finite();
-                [f[0], f[1], 0.0, if known { 1.0 } else { 0.0 }]
-            })
-            .collect();
-        save(&float_image(pixels), path)?;
-    }
-    if let (Some(path), Some(depth)) = (args.depth, &r.depth) {
-        save(
-            &float_image(depth.iter().map(|&z| [z, z, z, 1.0]).collect()),
-            path,
-        )?;
-    }
-    Ok(())
 }

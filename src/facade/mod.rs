@@ -3,6 +3,7 @@
 
 mod camera;
 mod device;
+mod image;
 mod scene;
 mod warper;
 

@@ -210,9 +210,9 @@ pub struct Warped {
 /// let device = Device::new()?;
 /// let camera = Camera::load("camera.yml")?;
 /// let mut warper = Warper::new(device.gpu(), &camera, &WarpOptions::distort())?;
-/// let pinhole = vklens::imaging::io::load("pinhole.png".as_ref())?;
+/// let pinhole = vklens::Raster::load("pinhole.png")?;
 /// let lens = warper.run(&device, &pinhole)?;
-/// vklens::imaging::io::save(&lens.image, "lens.png".as_ref())?;
+/// lens.image.save("lens.png")?;
 /// # Ok::<(), vklens::Error>(())
 /// ```
 pub struct Warper {
@@ -243,6 +243,7 @@ impl Warper {
             ));
         }
         let geometry = warp_geometry(camera, options)?;
+        crate::pass::warp::check_sizes(gpu, &geometry)?;
         // The pinhole side: the input when distorting, the output otherwise.
         let (pw, ph) = match options.direction {
             WarpDirection::Distort => geometry.source_size,

@@ -17,6 +17,8 @@ pub unsafe fn memory_barrier(
     let barrier = [vk::MemoryBarrier::default()
         .src_access_mask(src.1)
         .dst_access_mask(dst.1)];
+    // SAFETY: the caller upholds `memory_barrier`'s contract: `cmd` is recording, outside a
+    // render pass or in one with a matching self-dependency; `barrier` outlives the call.
     unsafe {
         gpu.device().cmd_pipeline_barrier(
             cmd,

@@ -49,6 +49,9 @@ pub(crate) struct Owned {
 
 impl Owned {
     pub(crate) unsafe fn destroy(self, device: &ash::Device) {
+        // SAFETY: only `GpuInner::drop` calls this, once, with the last `Gpu` clone and after
+        // the allocator has gone; every object vklens makes from the device holds a `Gpu`, so
+        // none is left. The messenger goes before the instance it belongs to, the instance last.
         unsafe {
             device.destroy_device(None);
             if let Some((loader, messenger)) = &self.debug {
@@ -92,6 +95,8 @@ unsafe extern "system" fn on_debug_message(
                 .map(|m| m.to_string_lossy().into_owned())
                 .unwrap_or_default()
         };
+        // SAFETY: `user` is `Arc::as_ptr` of the message list, which `Owned` keeps alive until
+        // after the messenger is destroyed; only a shared reference is made (the Mutex syncs).
         let messages = unsafe { &*(user as *const Mutex<Vec<String>>) };
         if let Ok(mut m) = messages.lock() {
             m.push(format!("[{severity:?}] {text}"));
@@ -108,12 +113,17 @@ impl Context {
 
     /// Creates a context.
     pub fn new(options: ContextOptions) -> Result<Self> {
+        // SAFETY: loading libvulkan runs its initialisers; the system library is trusted to be
+        // a conforming Vulkan loader. `Owned` keeps `entry` (the library) loaded as long as any
+        // Vulkan object made through it lives.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::NoVulkan(format!("cannot load the Vulkan library ({e}); install it with: apt-get install libvulkan1 mesa-vulkan-drivers")))?;
         let messages = Arc::new(Mutex::new(Vec::new()));
 
         let mut layers = Vec::new();
         let mut extensions = Vec::new();
         if options.validation {
+            // SAFETY: `entry` holds a loaded Vulkan library; this global query has no other
+            // preconditions.
             let available = unsafe {
                 entry
                     .enumerate_instance_layer_properties()
@@ -138,6 +148,8 @@ impl Context {
             .application_info(&app)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
+        // SAFETY: `info` and everything it points at (`app`, the `'static` layer and extension
+        // names in `layers` and `extensions`) outlive the call; no allocation callbacks.
         let instance = unsafe {
             entry
                 .create_instance(&info, None)
@@ -158,9 +170,14 @@ impl Context {
                 )
                 .pfn_user_callback(Some(on_debug_message))
                 .user_data(Arc::as_ptr(&messages) as *mut c_void);
+            // SAFETY: the instance was created with VK_EXT_debug_utils (pushed above when
+            // validation is on); the user data points at `messages`, which `Owned` keeps alive
+            // until the messenger is destroyed, and `on_debug_message` checks for null.
             match unsafe { loader.create_debug_utils_messenger(&info, None) } {
                 Ok(m) => Some((loader, m)),
                 Err(e) => {
+                    // SAFETY: nothing was created from the instance (the messenger failed), and
+                    // it is not used again.
                     unsafe { instance.destroy_instance(None) };
                     return Err(e.into());
                 }
@@ -177,6 +194,9 @@ impl Context {
         // On failure below, destroy the instance (and messenger) we made.
         let fail = |owned: &mut Option<Owned>, e: Error| -> Error {
             if let Some(o) = owned.take() {
+                // SAFETY: no device exists when `fail` runs (each caller never made one or has
+                // destroyed it), so the messenger and then the instance it belongs to can go;
+                // `take` makes this happen at most once.
                 unsafe {
                     if let Some((loader, m)) = &o.debug {
                         loader.destroy_debug_utils_messenger(*m, None);
@@ -197,6 +217,7 @@ impl Context {
             .queue_priorities(&priorities)];
         // f64 shader variants (the precise inverse near folds) need shaderFloat64; enable it
         // where the device has it (lavapipe does) and fall back to f32 elsewhere.
+        // SAFETY: `physical` was enumerated from this live instance by `pick_device`.
         let supported = unsafe { instance.get_physical_device_features(physical) };
         let float64 = supported.shader_float64 == vk::TRUE;
         // rg32f coordinate maps and r8 masks are "extended" storage-image formats.
@@ -218,10 +239,14 @@ impl Context {
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_features(&features);
+        // SAFETY: `physical` belongs to `instance`; `family` is one of its queue families and
+        // one queue of it is requested; every enabled feature was checked as supported above;
+        // `device_info` and what it points at outlive the call.
         let device = match unsafe { instance.create_device(physical, &device_info, None) } {
             Ok(d) => d,
             Err(e) => return Err(fail(&mut owned, e.into())),
         };
+        // SAFETY: the device was created with one queue in `family`, so index 0 exists.
         let queue = unsafe { device.get_device_queue(family, 0) };
         let allocator = match Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
@@ -233,10 +258,13 @@ impl Context {
         }) {
             Ok(a) => a,
             Err(e) => {
+                // SAFETY: nothing has been created from the new device and nothing else holds
+                // it; `fail` then destroys the instance it came from, after it.
                 unsafe { device.destroy_device(None) };
                 return Err(fail(&mut owned, e.into()));
             }
         };
+        // SAFETY (both queries): `physical` was enumerated from this live instance.
         let props = unsafe { instance.get_physical_device_properties(physical) };
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let gpu = Gpu::from_inner(GpuInner {

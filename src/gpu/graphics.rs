@@ -154,6 +154,8 @@ impl RenderPass {
             .attachments(&attachments)
             .subpasses(&subpasses)
             .dependencies(&dependencies);
+        // SAFETY: `info` points at `attachments`, `subpasses` (whose references index into
+        // `attachments` or are ATTACHMENT_UNUSED) and `dependencies`, all alive across the call.
         let raw = unsafe {
             gpu.device()
                 .create_render_pass(&info, None)
@@ -170,6 +172,8 @@ impl RenderPass {
 
 impl Drop for RenderPass {
     fn drop(&mut self) {
+        // SAFETY: created from this device and destroyed only here; pipelines and framebuffers
+        // made with it may outlive it (Vulkan allows that); no pending work still uses it.
         unsafe { self.gpu.device().destroy_render_pass(self.raw, None) };
     }
 }
@@ -195,6 +199,10 @@ impl Framebuffer {
             .width(extent.width)
             .height(extent.height)
             .layers(1);
+        // SAFETY: `render_pass` is alive and of this device; `info` and `views` outlive the
+        // call. The views must be live views of this device matching the render pass's
+        // attachments and at least `extent` large: this safe function cannot check that and
+        // relies on its callers, which pass views of images they just made to fit.
         let raw = unsafe {
             gpu.device()
                 .create_framebuffer(&info, None)
@@ -210,6 +218,8 @@ impl Framebuffer {
 
 impl Drop for Framebuffer {
     fn drop(&mut self) {
+        // SAFETY: created from this device and destroyed only here; no pending work still uses
+        // it (recorded work's contract keeps it alive until the work completes).
         unsafe { self.gpu.device().destroy_framebuffer(self.raw, None) };
     }
 }
@@ -230,6 +240,8 @@ impl Sampler {
             .address_mode_v(address)
             .address_mode_w(address)
             .max_lod(0.0);
+        // SAFETY: a complete sampler create info (no anisotropy, no compare, lod 0) on a live
+        // device.
         let raw = unsafe {
             gpu.device()
                 .create_sampler(&info, None)
@@ -244,6 +256,8 @@ impl Sampler {
 
 impl Drop for Sampler {
     fn drop(&mut self) {
+        // SAFETY: created from this device and destroyed only here; no pending work or live
+        // descriptor in use still refers to it (its owners drop it with the passes using it).
         unsafe { self.gpu.device().destroy_sampler(self.raw, None) };
     }
 }
@@ -435,6 +449,11 @@ impl GraphicsPipeline {
         if desc.render_pass.depth.is_some() {
             info = info.depth_stencil_state(&depth);
         }
+        // SAFETY: every pointer in `info` (stages with their modules and specialization data,
+        // vertex input, fixed-function, blend and dynamic state) refers to locals alive across
+        // the call; the layout and render pass are live objects of this device; the blend state
+        // has one attachment per colour location of subpass 0, and depth state is given exactly
+        // when the subpass has a depth attachment. On error `pipeline`'s Drop cleans up.
         pipeline.raw = unsafe {
             device
                 .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
@@ -472,6 +491,11 @@ impl GraphicsPipeline {
             .framebuffer(framebuffer.raw)
             .render_area(area)
             .clear_values(clears);
+        // SAFETY: the caller upholds `begin`'s contract: `cmd` is recording outside a render
+        // pass, `framebuffer` belongs to `render_pass` and `set` to this layout, all alive until
+        // the work completes. `clears` (one per cleared attachment) and `push` (at most the
+        // layout's push range) are the caller's too: each pass passes its own. Viewport and
+        // scissor are dynamic state of this pipeline and cover exactly the framebuffer.
         unsafe {
             d.cmd_begin_render_pass(cmd, &begin, vk::SubpassContents::INLINE);
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.raw);
@@ -506,6 +530,9 @@ impl GraphicsPipeline {
 impl Drop for GraphicsPipeline {
     fn drop(&mut self) {
         let d = self.gpu.device();
+        // SAFETY: the pipeline, layouts and modules were created from this device for this
+        // pipeline and are destroyed only here (null ones, left by a failed `new`, are ignored
+        // by Vulkan); no pending work still uses them.
         unsafe {
             d.destroy_pipeline(self.raw, None);
             d.destroy_pipeline_layout(self.layout, None);

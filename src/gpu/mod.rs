@@ -92,6 +92,8 @@ impl Gpu {
         if device.handle() == vk::Device::null() || queue == vk::Queue::null() {
             return Err(Error::input("null device or queue handle"));
         }
+        // SAFETY (this and the next query): the caller upholds `from_caller`'s contract, so
+        // `physical_device` belongs to the live `instance`.
         let props = unsafe { instance.get_physical_device_properties(physical_device) };
         let families =
             unsafe { instance.get_physical_device_queue_family_properties(physical_device) };

@@ -95,6 +95,9 @@ impl ComputePipeline {
         let info = vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(pipeline.layout);
+        // SAFETY: `info` points at `stage`, `spec`, `map` and `data`, alive across the call; each
+        // map entry lies inside `data` (4 bytes per constant); `module` and the layout are live
+        // objects of this device. On error `pipeline`'s Drop destroys what was made.
         pipeline.raw = unsafe {
             device
                 .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
@@ -118,6 +121,9 @@ impl ComputePipeline {
         groups: (u32, u32),
     ) {
         let d = self.gpu.device();
+        // SAFETY: the caller upholds `record_dispatch`'s contract: `cmd` is recording outside a
+        // render pass on a compute queue and `set` matches this layout. `push` must fit the push
+        // range: each pass pushes the struct whose size it built the pipeline with.
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
             d.cmd_bind_descriptor_sets(
@@ -144,6 +150,9 @@ impl ComputePipeline {
 impl Drop for ComputePipeline {
     fn drop(&mut self) {
         let d = self.gpu.device();
+        // SAFETY: the four handles were created from this device for this pipeline and are
+        // destroyed only here (null ones, left by a failed `new`, are ignored by Vulkan); no
+        // pending work still uses them.
         unsafe {
             d.destroy_pipeline(self.raw, None);
             d.destroy_pipeline_layout(self.layout, None);
@@ -185,6 +194,8 @@ pub(crate) fn set_layout(
                 .stage_flags(stages)
         })
         .collect();
+    // SAFETY: the create info points at `layout_bindings` (binding i of type `bindings[i]`,
+    // one descriptor each, distinct binding numbers), alive across the call.
     Ok(unsafe {
         gpu.device().create_descriptor_set_layout(
             &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
@@ -210,6 +221,9 @@ pub(crate) fn pipeline_layout(
     if push_size > 0 {
         info = info.push_constant_ranges(&ranges);
     }
+    // SAFETY: `set_layout` is a live layout of this device (the caller just made it); the
+    // create info points at locals alive across the call, and the push range is only passed
+    // when non-empty, as Vulkan needs a non-zero size.
     Ok(unsafe {
         gpu.device()
             .create_pipeline_layout(&info, None)
@@ -221,6 +235,10 @@ pub(crate) fn pipeline_layout(
 pub(crate) fn shader_module(gpu: &Gpu, spirv: &[u8]) -> Result<vk::ShaderModule> {
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
         .map_err(|e| Error::internal(format!("bad SPIR-V: {e}")))?;
+    // SAFETY: `read_spv` gave u32-aligned words (code size a multiple of 4), alive across the
+    // call. Vulkan needs valid SPIR-V: every caller in the crate passes one of vklens's own
+    // compiled shaders, though the safe `ComputePipeline::new` / `GraphicsPipeline::new` would
+    // accept any bytes.
     Ok(unsafe {
         gpu.device()
             .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
@@ -271,6 +289,8 @@ impl DescriptorPool {
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(sets)
             .pool_sizes(&sizes);
+        // SAFETY: `info` points at `sizes` (one entry per descriptor type), alive across the
+        // call. Vulkan needs `sets` > 0; every caller passes at least 1.
         let raw = unsafe {
             gpu.device()
                 .create_descriptor_pool(&info, None)
@@ -288,6 +308,9 @@ impl DescriptorPool {
         let info = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.raw)
             .set_layouts(&layouts);
+        // SAFETY: the pool and `pipeline`'s set layout are live objects of this device; a pool
+        // out of sets or descriptors returns an error. Vulkan needs the pool externally
+        // synchronized: this `&self` method relies on no two threads allocating at once.
         Ok(unsafe {
             self.gpu
                 .device()
@@ -299,6 +322,8 @@ impl DescriptorPool {
 
 impl Drop for DescriptorPool {
     fn drop(&mut self) {
+        // SAFETY: created from this device and destroyed only here, which also frees its sets;
+        // no pending work still uses them.
         unsafe { self.gpu.device().destroy_descriptor_pool(self.raw, None) };
     }
 }
@@ -330,6 +355,9 @@ pub fn write_buffer_descriptors(
                 .buffer_info(info)
         })
         .collect();
+    // SAFETY: `writes` points at `infos`, both alive across the call, and every buffer is a
+    // live vklens `Buffer`. That `set` is live, has these bindings with these types, and is
+    // not used by pending work is up to the caller: this safe function cannot check it.
     unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
 }
 
@@ -360,5 +388,8 @@ pub fn write_storage_image_descriptors(
                 .image_info(info)
         })
         .collect();
+    // SAFETY: `writes` points at `infos`, both alive across the call. That `set` and the
+    // views are live objects of this device, that the bindings are storage images, and that
+    // no pending work uses `set` is up to the caller: this safe function cannot check it.
     unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
 }

@@ -30,11 +30,17 @@ impl Buffer {
             .size(size)
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: a complete exclusive-buffer create info (size at least 4, never 0) on a live
+        // device; no allocation callbacks.
         let raw = unsafe { device.create_buffer(&info, None).call("vkCreateBuffer")? };
+        // SAFETY: `raw` was just created from this device.
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        // SAFETY: `raw` has no memory bound yet, and the allocation was made for its memory
+        // requirements, so memory type, size and offset alignment fit.
         let allocation = allocate(gpu, name, requirements, location, true, |a| unsafe {
             device.bind_buffer_memory(raw, a.memory(), a.offset())
         })
+        // SAFETY: on error `raw` has no memory bound and was never handed out or used.
         .inspect_err(|_| unsafe { device.destroy_buffer(raw, None) })?;
         Ok(Buffer {
             gpu: gpu.clone(),
@@ -108,6 +114,9 @@ impl Buffer {
 impl Drop for Buffer {
     fn drop(&mut self) {
         free(&self.gpu, self.allocation.take());
+        // SAFETY: `raw` was created from this device and is destroyed only here (freeing its
+        // memory first is allowed: it is not used again). No submitted work may still use it:
+        // `Context::submit` waits, and recorded work's contract keeps buffers alive until done.
         unsafe { self.gpu.device().destroy_buffer(self.raw, None) };
     }
 }
@@ -184,7 +193,12 @@ impl Image {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: `info` fully describes a 2D image (one mip level, one layer, one sample) on a
+        // live device. Vulkan also needs a non-zero extent within maxImageDimension2D and a
+        // format that supports `usage`; this function does not check those, its callers do
+        // (validated camera and film sizes, `check_sizes`, formats chosen per usage).
         let raw = unsafe { device.create_image(&info, None).call("vkCreateImage")? };
+        // SAFETY: `raw` was just created from this device.
         let requirements = unsafe { device.get_image_memory_requirements(raw) };
         let allocation = allocate(
             gpu,
@@ -192,8 +206,11 @@ impl Image {
             requirements,
             MemoryLocation::GpuOnly,
             false,
+            // SAFETY: `raw` has no memory bound yet, and the allocation was made for its
+            // memory requirements (optimal tiling: `linear` false), so type, size and alignment fit.
             |a| unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) },
         )
+        // SAFETY: on error `raw` has no memory bound and was never handed out or used.
         .inspect_err(|_| unsafe { device.destroy_image(raw, None) })?;
         // From here on `image` owns the handle and the memory: Drop cleans up on early return.
         let mut image = Image {
@@ -212,6 +229,9 @@ impl Image {
                 aspect_mask: Self::aspect_of(format),
                 ..Self::color_range()
             });
+        // SAFETY: `raw` is a live image of this device with memory bound; the view has its
+        // format, 2D type, its one mip level and layer, and the aspect `aspect_of` gives for
+        // the format. On error `image`'s Drop destroys the image (the view stays null).
         image.view = unsafe {
             device
                 .create_image_view(&view_info, None)
@@ -266,12 +286,17 @@ impl Image {
 impl Drop for Image {
     fn drop(&mut self) {
         let device = self.gpu.device();
+        // SAFETY: the view was created from this device for `raw` and is destroyed only here
+        // (it is null when `new_2d` failed before making it); no pending work still uses it.
         unsafe {
             if self.view != vk::ImageView::null() {
                 device.destroy_image_view(self.view, None);
             }
         }
         free(&self.gpu, self.allocation.take());
+        // SAFETY: `raw` was created from this device and is destroyed only here, after its
+        // view (freeing its memory first is allowed: it is not used again); no pending work
+        // still uses it.
         unsafe { device.destroy_image(self.raw, None) };
     }
 }
@@ -292,6 +317,8 @@ impl QueryPool {
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(count);
+        // SAFETY: a timestamp query pool on a live device whose queue supports timestamps
+        // (checked above). Vulkan needs `count` > 0; every caller asks for at least 1.
         let raw = unsafe {
             gpu.device()
                 .create_query_pool(&info, None)

@@ -543,11 +543,11 @@ impl WarpPass {
 }
 
 /// Refuses images the device cannot hold, before any is created.
-fn check_sizes(gpu: &Gpu, g: &WarpGeometry) -> Result<()> {
+pub(crate) fn check_sizes(gpu: &Gpu, g: &WarpGeometry) -> Result<()> {
     let max = gpu.max_image_side();
     for (what, (w, h)) in [("source", g.source_size), ("output", g.output_size)] {
         if w > max || h > max {
-            return Err(Error::Input(format!(
+            return Err(Error::Unsupported(format!(
                 "the {what} is {w}×{h}, larger than {} supports ({max} px per side)",
                 gpu.device_name()
             )));

@@ -444,7 +444,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 if mesh.triangle_count() > 4_000_000 {
                     break;
                 }
-                let err = crate::bench::vertex::straight_line_error(&camera, &pose, &mesh);
+                let err = crate::scene::tessellate::straight_line_error(&camera, &pose, &mesh);
                 if err <= budget {
                     vertex = Some((l, err, mesh.triangle_count()));
                     break;

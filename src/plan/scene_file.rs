@@ -487,14 +487,19 @@ impl SceneFile {
         let render = r.table(&root, "render", &["background", "supersample", "jitter"])?;
         let background = match render.and_then(|t| t.get("background")) {
             Some(v) => r.numbers::<4>(v, "[render] background")?.map(|c| c as f32),
-            None => [0.0, 0.0, 0.0, 1.0],
+            None => crate::render::DEFAULT_BACKGROUND,
         };
         let antialias = Antialias {
             supersample: r
-                .opt_whole(render, "render", "supersample", 1..=8)?
+                .opt_whole(
+                    render,
+                    "render",
+                    "supersample",
+                    1..=crate::render::MAX_SUPERSAMPLE,
+                )?
                 .unwrap_or(1),
             jitter: r
-                .opt_whole(render, "render", "jitter", 1..=64)?
+                .opt_whole(render, "render", "jitter", 1..=crate::render::MAX_JITTER)?
                 .unwrap_or(1),
         };
 

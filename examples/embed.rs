@@ -15,11 +15,8 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
-use vklens::internal::gpu::{image_barrier, Buffer, EnabledFeatures, Gpu, Image};
-use vklens::internal::imaging::cpu_warp::Sampling;
-use vklens::internal::model::warp::WarpGeometry;
-use vklens::internal::model::{Camera, Intrinsics, InverseMethod};
-use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
+use vklens::internal::gpu::{image_barrier, Buffer, Image};
+use vklens::{Camera, EnabledFeatures, Gpu, ImageRef, WarpOptions, Warper};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (w, h) = (800u32, 600u32);

@@ -384,6 +384,11 @@ impl WarpStage {
             vk::PipelineStageFlags::COMPUTE_SHADER,
             vk::AccessFlags::SHADER_WRITE,
         );
+        // SAFETY: the caller upholds `record_prepare`'s contract: `cmd` is recording outside a
+        // render pass and no earlier work using these images is pending, so UNDEFINED is a
+        // valid old layout for this stage's own output, mask and depth images. The warps'
+        // `record_prepare` also need a compute queue, which this contract leaves implicit:
+        // every caller records on a queue with graphics and compute.
         unsafe {
             let depth = self.depth.iter().map(|d| &d.output);
             for img in [&self.output, &self.mask].into_iter().chain(depth) {
@@ -409,6 +414,10 @@ impl WarpStage {
     /// # Safety
     /// After [`Self::record_prepare`]; `mesh` uploaded and alive until the work completes.
     pub unsafe fn record(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+        // SAFETY: the caller upholds `record`'s contract: `cmd` is recording (outside a render
+        // pass, as for `record_prepare`) after `record_prepare`, `mesh` bound to `pass`,
+        // uploaded and alive. `targets` were made for `pass`, whose final layout GENERAL and
+        // end-of-pass dependency leave the colour (and depth) readable by the warps' compute.
         unsafe {
             self.pass.record(cmd, &self.targets, mesh);
             self.record_warps(cmd);
@@ -421,6 +430,10 @@ impl WarpStage {
     /// # Safety
     /// As [`Self::record`], with `self.pass` recorded first.
     pub unsafe fn record_warps(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds `record_warps`'s contract: `self.pass` was recorded first,
+        // so the warps' sources are in GENERAL with their writes visible to compute, and
+        // `record_prepare` put their outputs and mask in GENERAL; both warps were bound in
+        // `with_depth`.
         unsafe {
             self.warp.record(cmd);
             if let Some(d) = &self.depth {
@@ -434,6 +447,8 @@ impl WarpStage {
     /// # Safety
     /// As [`Self::record`].
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds `record_download`'s contract (after `record`): the warp
+        // left `output` in GENERAL, and `download` was sized for it whole in `with_depth`.
         unsafe { record_compute_download(&self.gpu, cmd, &self.output, &self.download) };
     }
 
@@ -530,6 +545,12 @@ impl<'a> SceneRenderer<'a> {
         pass.set_frame(pose, previous)?;
         let (pass, targets) = (&*pass, &*targets);
         self.ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
+            // on a graphics queue; the previous submission using `pass` completed (`submit`
+            // waits), so rebinding above raced nothing. `mesh` is bound, its texture uploaded
+            // first; `targets` were made for `pass`. The download needs the outputs in
+            // TRANSFER_SRC_OPTIMAL: `GeometryDesc::new`'s default, which this safe method
+            // assumes but does not check in `desc`. All outlive the submission.
             unsafe {
                 mesh.record_upload(cmd);
                 pass.record(cmd, targets, mesh);
@@ -600,6 +621,11 @@ impl<'a> SceneRenderer<'a> {
         st.pass.set_frame(pose, pose)?;
         let st = &*st;
         self.ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
+            // on the context's graphics+compute queue; the previous submission using `st`
+            // completed (`submit` waits), so the host writes above and re-preparing race
+            // nothing. The calls come in the order their contracts ask (upload, prepare,
+            // frame, download) and everything outlives the submission.
             unsafe {
                 mesh.record_upload(cmd);
                 st.record_prepare(cmd);

@@ -400,6 +400,8 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             crate::pass::geometry::MeshBuffers::new(ctx.gpu(), &scene.mesh, scene.texture.as_ref())
                 .map_err(gpu_error)?;
         ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+            // `mesh` outlives the submission, which `submit` waits for.
             unsafe { mesh.record_upload(cmd) };
             Ok(())
         })?;

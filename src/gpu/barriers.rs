@@ -37,6 +37,7 @@ pub unsafe fn memory_barrier(
 /// # Safety
 /// As [`memory_barrier`].
 pub unsafe fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
+    // SAFETY: the caller upholds `host_read_barrier`'s contract, which is `memory_barrier`'s.
     unsafe {
         memory_barrier(
             gpu,
@@ -71,6 +72,9 @@ pub unsafe fn image_barrier(
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .subresource_range(super::Image::color_range())];
+    // SAFETY: the caller upholds `image_barrier`'s contract: `cmd` is recording outside a
+    // render pass and `image` is in layout `from` (or `from` is UNDEFINED). The range is the
+    // one mip level and layer every vklens colour image has; `barrier` outlives the call.
     unsafe {
         gpu.device().cmd_pipeline_barrier(
             cmd,
@@ -95,6 +99,9 @@ pub unsafe fn record_download(
     image: &super::Image,
     buffer: &super::Buffer,
 ) {
+    // SAFETY: the caller upholds `record_download`'s contract: `cmd` is recording outside a
+    // render pass, `image` is in TRANSFER_SRC_OPTIMAL and `buffer` holds the whole image
+    // tightly packed. Every caller's images have TRANSFER_SRC and its buffers TRANSFER_DST usage.
     unsafe {
         gpu.device().cmd_copy_image_to_buffer(
             cmd,
@@ -126,6 +133,8 @@ pub unsafe fn record_compute_download(
     image: &super::Image,
     buffer: &super::Buffer,
 ) {
+    // SAFETY: the caller upholds `record_compute_download`'s contract: `image` is in GENERAL,
+    // which the transition starts from, and the rest is `record_download`'s contract.
     unsafe {
         image_barrier(
             gpu,

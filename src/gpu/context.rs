@@ -264,8 +264,9 @@ impl Context {
                 return Err(fail(&mut owned, e.into()));
             }
         };
-        // SAFETY (both queries): `physical` was enumerated from this live instance.
+        // SAFETY: `physical` was enumerated from this live instance.
         let props = unsafe { instance.get_physical_device_properties(physical) };
+        // SAFETY: the same physical device of the same live instance as the query above.
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let gpu = Gpu::from_inner(GpuInner {
             device,
@@ -283,6 +284,8 @@ impl Context {
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: `family` is the family of the device's queue; the pool is destroyed in
+        // `Drop for Context`, which runs before the `gpu` field (and so the device) drops.
         let command_pool = unsafe {
             gpu.device()
                 .create_command_pool(&pool_info, None)
@@ -313,19 +316,25 @@ impl Context {
             .command_pool(self.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
+        // SAFETY: the pool belongs to this device and lives as long as `self`. Vulkan needs the
+        // pool (and, below, the queue) externally synchronized: this relies on `submit` not
+        // running on two threads at once, which `Context` being `Sync` does not prevent.
         let cmd = unsafe {
             device
                 .allocate_command_buffers(&alloc)
                 .call("vkAllocateCommandBuffers")?[0]
         };
+        // SAFETY: an unsignalled fence on a live device; it is destroyed below in every case.
         let fence = match unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) } {
             Ok(f) => f,
             Err(e) => {
+                // SAFETY: `cmd` was just allocated from this pool and never submitted.
                 unsafe { device.free_command_buffers(self.command_pool, &[cmd]) };
                 return Err(e.into());
             }
         };
         let result = (|| {
+            // SAFETY: `cmd` is freshly allocated (initial state) from this context's pool.
             unsafe {
                 device
                     .begin_command_buffer(
@@ -336,6 +345,11 @@ impl Context {
                     .call("vkBeginCommandBuffer")?
             };
             let value = record(cmd)?;
+            // SAFETY: `record` is done, so `cmd` is recording with nothing left open (the
+            // unsafe recording functions it may call leave no render pass open); `fence` is
+            // unsignalled and unused; `cmd`'s pool is of the queue's family. Waiting on the
+            // fence keeps `cmd` and everything it uses alive until the GPU is done. The queue
+            // must be externally synchronized: see the note at the allocation above.
             unsafe {
                 device.end_command_buffer(cmd).call("vkEndCommandBuffer")?;
                 let cmds = [cmd];
@@ -349,6 +363,8 @@ impl Context {
             }
             Ok(value)
         })();
+        // SAFETY: either the fence wait above returned (the submission is done) or `cmd` was
+        // never submitted, so neither `fence` nor `cmd` is in use; both are of this device.
         unsafe {
             device.destroy_fence(fence, None);
             device.free_command_buffers(self.command_pool, &[cmd]);
@@ -374,6 +390,9 @@ impl Context {
 
 impl Drop for Context {
     fn drop(&mut self) {
+        // SAFETY: `submit` frees its buffers and waits for its work, so nothing from the pool
+        // is pending (the idle wait makes sure); the pool was created from this device and is
+        // destroyed only here, before the `gpu` field drops.
         unsafe {
             let _ = self.gpu.device().device_wait_idle();
             self.gpu
@@ -388,6 +407,7 @@ fn pick_device(
     instance: &ash::Instance,
     wanted: Option<&str>,
 ) -> Result<(vk::PhysicalDevice, u32)> {
+    // SAFETY: `instance` is live (kept by the caller until it is destroyed on failure).
     let devices = unsafe {
         instance
             .enumerate_physical_devices()
@@ -395,7 +415,9 @@ fn pick_device(
     };
     let mut candidates = Vec::new();
     for (index, &pd) in devices.iter().enumerate() {
+        // SAFETY: `pd` was just enumerated from this live instance.
         let props = unsafe { instance.get_physical_device_properties(pd) };
+        // SAFETY: the same physical device of the same live instance as the query above.
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
         let need = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
         if let Some(family) = families.iter().position(|f| f.queue_flags.contains(need)) {

@@ -92,10 +92,11 @@ impl Gpu {
         if device.handle() == vk::Device::null() || queue == vk::Queue::null() {
             return Err(Error::input("null device or queue handle"));
         }
-        // SAFETY (this and the next query): the caller upholds `from_caller`'s contract, so
-        // `physical_device` belongs to the live `instance`.
+        // SAFETY: the caller upholds `from_caller`'s contract, so `physical_device` belongs to
+        // the live `instance`.
         let props = unsafe { instance.get_physical_device_properties(physical_device) };
         let families =
+            // SAFETY: the same physical device of the same instance as the query above.
             unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
         let family = families
             .get(queue_family as usize)
@@ -165,6 +166,11 @@ impl Gpu {
 
 impl Drop for GpuInner {
     fn drop(&mut self) {
+        // SAFETY: this is the last `Gpu` clone, and every object vklens makes holds one, so
+        // nothing made from the device is left. `allocator` is dropped once, here, before
+        // `owner` (present only for a device vklens created) destroys device and instance.
+        // This assumes no clone of the allocator `Arc` (which `Gpu::allocator` hands out)
+        // outlives the device: its drop would free memory of a destroyed device.
         unsafe {
             // The allocator goes before the device it allocates from.
             ManuallyDrop::drop(&mut self.allocator);

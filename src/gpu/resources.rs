@@ -333,6 +333,10 @@ impl QueryPool {
 
     /// Records a reset of every query (must be outside a render pass).
     pub fn cmd_reset(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the pool is alive and of this device, and the range is the whole pool. That
+        // `cmd` is recording, outside a render pass, is the caller's duty: this function is
+        // safe but cannot check it (every caller passes a buffer `submit` or
+        // `PlanRecorder::record` is recording).
         unsafe {
             self.gpu
                 .device()
@@ -342,6 +346,10 @@ impl QueryPool {
 
     /// Records a timestamp into query `index` after all prior work.
     pub fn cmd_write(&self, cmd: vk::CommandBuffer, index: u32) {
+        // SAFETY: the pool is alive, of this device, and its queue has timestamps (`timestamps`
+        // checked). That `cmd` is recording, that the query was reset first and that `index`
+        // is below `count` are the caller's duty: this safe function checks none of them
+        // (every caller resets in the same buffer and writes indices below the count it asked for).
         unsafe {
             self.gpu.device().cmd_write_timestamp(
                 cmd,
@@ -355,6 +363,9 @@ impl QueryPool {
     /// Reads all timestamps (waiting for them) and returns them in nanoseconds.
     pub fn read_ns(&self) -> Result<Vec<f64>> {
         let mut ticks = vec![0u64; self.count as usize];
+        // SAFETY: the pool is alive and of this device; `ticks` holds `count` u64s, matching
+        // TYPE_64 and the whole query range. WAIT blocks until the queries are written (callers
+        // read after the submission that wrote them completed).
         unsafe {
             self.gpu.device().get_query_pool_results(
                 self.raw,
@@ -370,6 +381,8 @@ impl QueryPool {
 
 impl Drop for QueryPool {
     fn drop(&mut self) {
+        // SAFETY: created from this device and destroyed only here; no pending work still
+        // writes its queries (callers read them only after the submission completed).
         unsafe { self.gpu.device().destroy_query_pool(self.raw, None) };
     }
 }

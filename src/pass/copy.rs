@@ -50,6 +50,9 @@ impl CopyPass {
     pub unsafe fn record(&self, cmd: vk::CommandBuffer) {
         let (w, h) = self.size;
         let sizes = [w, h, w, h];
+        // SAFETY: the caller upholds `record`'s contract (`WarpPass::record`'s): `cmd` is
+        // recording outside a render pass on a compute queue, both images bound and in GENERAL;
+        // the 16 bytes pushed are the pipeline's whole push range.
         unsafe {
             self.pipeline.record_dispatch(
                 cmd,

@@ -108,6 +108,9 @@ impl FilmPass {
             .dst_binding(0)
             .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
             .image_info(&info);
+        // SAFETY: `set` was just allocated from this pass's pool for binding 0's
+        // combined-image-sampler, so no work uses it yet; the sampler is this pass's and `info`
+        // outlives the call. That `view` is a live view of this device is the caller's duty.
         unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
         Ok(set)
     }
@@ -123,6 +126,9 @@ impl FilmPass {
     /// work completes.
     pub unsafe fn record_clear(&self, cmd: vk::CommandBuffer, target: &FilmTarget) {
         let d = self.gpu.device();
+        // SAFETY: the caller upholds `record_clear`'s contract: `cmd` is recording outside a
+        // render pass and `target` outlives the work. The film image has TRANSFER_DST and
+        // COLOR_ATTACHMENT usage; UNDEFINED is a valid old layout as it is cleared whole.
         unsafe {
             image_barrier(
                 &self.gpu,
@@ -192,6 +198,11 @@ impl FilmPass {
             channel_mask,
         };
         let d = self.gpu.device();
+        // SAFETY: the caller upholds `record_cell`'s contract: `cmd` is recording outside a
+        // render pass after `record_clear` (the film in COLOR_ATTACHMENT_OPTIMAL, which this
+        // LOAD pass expects, so no clear values are needed), the cell image readable, all alive
+        // until the work completes. `first + count` must lie within `vertices`: every caller
+        // passes a range it pushed into that buffer. The render pass is ended here.
         unsafe {
             self.pipeline.begin(
                 cmd,
@@ -265,6 +276,9 @@ impl FilmTarget {
     /// # Safety
     /// `cmd` must be recording outside a render pass, after the cells.
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds `record_download`'s contract: `cmd` is recording outside a
+        // render pass after the cells, which leave the film in COLOR_ATTACHMENT_OPTIMAL (the
+        // transition's old layout); `download` holds width × height RGBA32F texels.
         unsafe {
             image_barrier(
                 &self.gpu,

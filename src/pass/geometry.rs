@@ -218,6 +218,10 @@ impl Texture {
     /// # Safety
     /// `cmd` must be recording outside a render pass.
     pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds `record_upload`'s contract: `cmd` is recording outside a
+        // render pass. The image has TRANSFER_DST and SAMPLED usage and UNDEFINED is a valid
+        // old layout as it is overwritten whole; `staging` holds it as tightly packed RGBA8,
+        // which relies on an RGBA8 raster having width × height pixels (`new` does not check).
         unsafe {
             image_barrier(
                 &self.gpu,
@@ -306,6 +310,7 @@ impl MeshBuffers {
     /// # Safety
     /// `cmd` must be recording outside a render pass.
     pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds this function's contract, which is `Texture::record_upload`'s.
         unsafe { self.texture.record_upload(cmd) }
     }
 }
@@ -600,6 +605,9 @@ impl GeometryPass {
         i: usize,
     ) {
         if let Some(slot) = slots.slots.get(i) {
+            // SAFETY: the caller upholds `record_slot`'s contract (`record`'s, with the slot
+            // filled and its texture bound); `slot.set` is of this pipeline's layout, allocated
+            // by `slots` from a pool made for it.
             unsafe { self.record_with_set(cmd, targets, mesh, slot.set) }
         }
     }
@@ -620,6 +628,10 @@ impl GeometryPass {
             .dst_binding(2)
             .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
             .image_info(&info);
+        // SAFETY: `set` is this pass's own or a slot's, of this layout, whose binding 2 is a
+        // combined image sampler; the sampler and `mesh`'s texture view are live objects of
+        // this device and `info` outlives the call. That no pending work uses `set` is the
+        // caller's duty (documented on `set_frame`/`set_slot`; this safe method cannot check).
         unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
     }
 
@@ -637,6 +649,8 @@ impl GeometryPass {
         targets: &GeometryTargets,
         mesh: &MeshBuffers,
     ) {
+        // SAFETY: the caller upholds `record`'s contract, which `record_with_set` shares;
+        // `self.set` is of this pipeline's layout, its uniforms written in `new`.
         unsafe { self.record_with_set(cmd, targets, mesh, self.set) }
     }
 
@@ -681,6 +695,12 @@ impl GeometryPass {
             },
         });
         let d = self.gpu.device();
+        // SAFETY: only `record` and `record_slot` call this, under `record`'s contract: `cmd`
+        // is recording outside a render pass on a graphics queue, `targets` were made for this
+        // pass (their framebuffer belongs to `render_pass`), `mesh` is bound and uploaded, all
+        // alive until the work completes. `clears` has one value per attachment in attachment
+        // order; there are no push constants; `mesh`'s indices address its vertices (checked by
+        // `Mesh::validate` in `MeshBuffers::new`); the render pass is ended here.
         unsafe {
             self.pipeline.begin(
                 cmd,
@@ -833,6 +853,10 @@ impl GeometryTargets {
     /// `cmd` must be recording outside a render pass, after [`GeometryPass::record`].
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
         for t in self.targets.iter().flatten() {
+            // SAFETY: the caller upholds `record_download`'s contract: `cmd` is recording
+            // outside a render pass after `GeometryPass::record`, with the outputs in
+            // TRANSFER_SRC_OPTIMAL (the doc's precondition); each `download` was sized for its
+            // image's format in `new`, and every output image has TRANSFER_SRC usage.
             unsafe { record_download(&self.gpu, cmd, &t.image, &t.download) };
         }
     }
@@ -929,6 +953,12 @@ pub fn render(
     pass.set_frame(pose, previous)?;
     let targets = GeometryTargets::new(gpu, &pass)?;
     ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // a graphics queue; the texture upload comes before the draw that samples it and
+        // `targets` were made for `pass`. The download needs the outputs in
+        // TRANSFER_SRC_OPTIMAL: `GeometryDesc::new`'s default final layout, which this safe
+        // function assumes but does not check in `desc`. Everything outlives the submission,
+        // which `submit` waits for.
         unsafe {
             buffers.record_upload(cmd);
             pass.record(cmd, &targets, &buffers);

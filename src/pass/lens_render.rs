@@ -239,6 +239,11 @@ impl LensRenderer {
     /// device, after [`Self::prepare`] with `mesh` (uploaded, its texture recorded); all must
     /// stay alive until the work completes.
     pub unsafe fn record(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+        // SAFETY: the caller upholds `record`'s contract: `cmd` is recording outside a render
+        // pass on a graphics queue, after `prepare` filled every slot and bound `mesh`'s
+        // texture. Each bucket's targets were made for its pass and its film set samples their
+        // colour, which the geometry pass leaves in SHADER_READ_ONLY_OPTIMAL; each draw's
+        // vertex range was pushed into `vertices` in `new`. Every render pass is ended inside.
         unsafe {
             self.film.record_clear(cmd, &self.target);
             for draw in &self.draws {
@@ -270,12 +275,18 @@ impl LensRenderer {
         let start = Instant::now();
         let this = &*self;
         ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
+            // on the context's graphics queue; `prepare` ran above with `mesh`, which the caller
+            // uploaded; `this` and `mesh` outlive the submission, which `submit` waits for.
             unsafe { this.record(cmd, mesh) };
             Ok(())
         })?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let target = &self.target;
         ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
+            // after the frame's submission completed, which left the film in
+            // COLOR_ATTACHMENT_OPTIMAL; `target` outlives this submission too.
             unsafe { target.record_download(cmd) };
             Ok(())
         })?;

@@ -209,6 +209,10 @@ impl MeshWarpPass {
             .dst_binding(0)
             .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
             .image_info(&info);
+        // SAFETY: `self.set` has binding 0 as a combined image sampler and `info` outlives the
+        // call. That no pending work uses the set (`&mut self` does not ensure it: recorded
+        // work does not borrow the pass) and that `source` is a live view of this device are
+        // the caller's duty, which this safe function cannot check.
         unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
     }
 
@@ -223,6 +227,10 @@ impl MeshWarpPass {
         let clears = [vk::ClearValue {
             color: vk::ClearColorValue { float32: [0.0; 4] },
         }];
+        // SAFETY: the caller upholds `record`'s contract: `cmd` is recording outside a render
+        // pass, the source bound and readable, everything alive until the work completes. One
+        // clear value for the one attachment and a `MeshWarpPush` for the push range; the grid
+        // indices all address `vertices` (built together in `new`); the render pass is ended here.
         unsafe {
             self.pipeline.begin(
                 cmd,
@@ -298,6 +306,9 @@ impl MeshWarpTarget {
     /// # Safety
     /// `cmd` must be recording outside a render pass, after the warp.
     pub unsafe fn record_download(&self, gpu: &Gpu, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds `record_download`'s contract: `cmd` is recording outside a
+        // render pass after the warp, whose render pass (final layout TRANSFER_SRC_OPTIMAL, as
+        // the doc asks) left the image ready; `download` holds it whole at the format's size.
         unsafe { record_download(gpu, cmd, &self.image, &self.download) };
     }
 
@@ -353,6 +364,10 @@ pub fn run_mesh_warp(
     pass.bind(texture.image.view);
     let target = MeshWarpTarget::new(gpu, &pass)?;
     ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.
+        // The upload leaves the texture in SHADER_READ_ONLY_OPTIMAL, visible to fragment
+        // shaders, before the warp samples it; the pass's final layout is TRANSFER_SRC_OPTIMAL,
+        // as the download needs; everything outlives the submission, which `submit` waits for.
         unsafe {
             texture.record_upload(cmd);
             pass.record(cmd, &target.framebuffer);

@@ -164,6 +164,9 @@ impl PointsPass {
     /// inputs must be visible to `COMPUTE_SHADER` reads, and reads of the outputs need a
     /// barrier from `COMPUTE_SHADER` / `SHADER_WRITE`.
     pub unsafe fn record(&self, cmd: vk::CommandBuffer, count: u32) {
+        // SAFETY: the caller upholds `record`'s contract: `cmd` is recording outside a render
+        // pass on a compute queue and the bound buffers hold `count` points; the 4 bytes pushed
+        // are the pipeline's push range.
         unsafe {
             self.pipeline.record_dispatch(
                 cmd,
@@ -212,6 +215,9 @@ pub fn run_points(
         )?;
         pass.bind(&in_buf, &out_buf);
         ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+            // `in_buf` and `out_buf` (bound above) hold `chunk.len()` points, at most
+            // MAX_POINTS, and outlive the submission, which `submit` waits for.
             unsafe {
                 pass.record(cmd, chunk.len() as u32);
                 // The host reads the outputs after the fence: make the shader writes visible.

@@ -492,6 +492,10 @@ impl WarpPass {
             vk::PipelineStageFlags::COMPUTE_SHADER,
             vk::AccessFlags::SHADER_READ,
         );
+        // SAFETY: the caller upholds `record_prepare`'s contract: `cmd` is recording outside a
+        // render pass on a compute queue, and no earlier prepare is pending. The maps are this
+        // pass's own images, so UNDEFINED is a valid old layout; each map-build set was written
+        // in `new` and pushes a `WarpPush`, the size the map pipelines were built with.
         unsafe {
             for map in self.maps.iter().chain(&self._coarse) {
                 // Maps are written (map builds) then read (warp) as storage images.
@@ -531,6 +535,9 @@ impl WarpPass {
     /// `SHADER_WRITE`s visible to whatever reads them next.
     pub unsafe fn record(&self, cmd: vk::CommandBuffer) {
         let (w, h) = self.desc.geometry.output_size;
+        // SAFETY: the caller upholds `record`'s contract: `cmd` is recording outside a render
+        // pass after `record_prepare` and `bind`, the images in GENERAL with the source's writes
+        // visible; `push` is a `WarpPush`, the pipeline's push range.
         unsafe {
             self.pipeline.record_dispatch(
                 cmd,
@@ -652,6 +659,11 @@ impl WarpImages {
             vk::PipelineStageFlags::COMPUTE_SHADER,
             vk::AccessFlags::SHADER_WRITE,
         );
+        // SAFETY: the caller upholds `record_upload`'s contract: `cmd` is recording outside a
+        // render pass. The images are this struct's, made in `new` with TRANSFER_DST and
+        // STORAGE usage; `upload` holds the source tightly packed in the pass's format, which
+        // relies on `source.pixels` having width × height entries (`new` and `stage` check the
+        // size but not the pixel count).
         unsafe {
             // Source: fill it by copy, then hand it to the shader for reading.
             image_barrier(
@@ -702,6 +714,9 @@ impl WarpImages {
     /// # Safety
     /// `cmd` must be recording outside a render pass, after the warp.
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds `record_download`'s contract: `cmd` is recording outside a
+        // render pass after the warp, which leaves output and mask in GENERAL; `download` and
+        // `download_mask` were sized in `new` for the whole output and mask, tightly packed.
         unsafe {
             record_compute_download(&self.gpu, cmd, &self.output, &self.download);
             record_compute_download(&self.gpu, cmd, &self.mask, &self.download_mask);
@@ -765,6 +780,10 @@ pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raste
     let mut pass = WarpPass::new(gpu, desc)?;
     pass.bind(images.source.view, images.output.view, images.mask.view);
     ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // the context's compute+graphics queue. The calls come in the order their contracts
+        // ask (upload, prepare, warp after `bind` above, download), and `images` and `pass`
+        // outlive the submission, which `submit` waits for.
         unsafe {
             images.record_upload(cmd);
             pass.record_prepare(cmd);
@@ -814,6 +833,10 @@ pub fn read_maps(
         })
         .collect::<Result<Vec<_>>>()?;
     ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+        // `record_prepare` leaves the maps in GENERAL, each channel's map is a real
+        // `w × h` RG32F image (8 bytes a texel, as each buffer is sized) with TRANSFER_SRC usage,
+        // and `pass` and `buffers` outlive the submission, which `submit` waits for.
         unsafe {
             pass.record_prepare(cmd);
             for (&c, buf) in channels.iter().zip(&buffers) {

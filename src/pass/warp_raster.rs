@@ -115,6 +115,11 @@ impl RasterWarpPass {
         let clears = [vk::ClearValue {
             color: vk::ClearColorValue { float32: [0.0; 4] },
         }];
+        // SAFETY: the caller upholds `record`'s contract: `cmd` is recording outside a render
+        // pass after the maps were built and `bind`, the source readable by fragment shaders,
+        // everything alive until the work completes. One clear value for the one attachment,
+        // a `WarpPush` for the push range; the full-screen triangle needs no vertex buffer,
+        // and the render pass is ended here.
         unsafe {
             self.pipeline.begin(
                 cmd,
@@ -141,6 +146,10 @@ pub fn run_raster_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result
     let target =
         MeshWarpTarget::for_render_pass(gpu, &pass.render_pass, pass.output_size, pass.format)?;
     ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.
+        // The upload and map builds come first and the barrier below makes their writes
+        // visible to the fragment shader, as `record` asks; `target` was made for this pass's
+        // render pass and size; everything outlives the submission, which `submit` waits for.
         unsafe {
             images.record_upload(cmd);
             maps.record_prepare(cmd);

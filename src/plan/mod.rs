@@ -641,6 +641,8 @@ pub fn execute(
             LensRenderer::new(ctx.gpu(), &setting.models, LensRenderOptions::default())?;
         let mesh = MeshBuffers::new(ctx.gpu(), &scene.mesh, scene.texture.as_ref())?;
         ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+            // `mesh` outlives the submission, which `submit` waits for.
             unsafe { mesh.record_upload(cmd) };
             Ok(())
         })?;

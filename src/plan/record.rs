@@ -226,6 +226,9 @@ impl PlanRecorder {
     /// `cmd` must be recording outside a render pass on a graphics queue of this recorder's
     /// device; once, before the first frame.
     pub unsafe fn record_setup(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds `record_setup`'s contract: `cmd` is recording outside a
+        // render pass on a graphics queue of this device (`Gpu::from_caller` requires compute
+        // on it too), once, before any frame, so nothing using these images is pending.
         unsafe {
             self.mesh.record_upload(cmd);
             if let Some(st) = &self.warp {

@@ -101,7 +101,7 @@ pub fn scaled_camera(camera: &Camera, s: u32) -> Result<Camera> {
 }
 
 /// The camera whose image is `camera`'s translated by `-shift` px (principal point moved).
-fn shifted(camera: &Camera, shift: DVec2) -> Result<Camera> {
+pub(crate) fn shifted(camera: &Camera, shift: DVec2) -> Result<Camera> {
     let mut k = camera.intrinsics;
     k.cx -= shift.x;
     k.cy -= shift.y;
@@ -133,7 +133,7 @@ pub fn jitter_offsets(passes: u32) -> Vec<DVec2> {
 }
 
 /// The mean of equally sized images (8-bit results rounded).
-fn average(images: &[Raster]) -> Raster {
+pub(crate) fn average(images: &[Raster]) -> Raster {
     let n = images.len().max(1) as f32;
     let first = &images[0];
     let mut sums = vec![[0f32; 4]; first.len()];
@@ -249,6 +249,29 @@ pub struct DepthWarp {
     pub warp: WarpPass,
     /// R32F, the warp's output size, `GENERAL` after the warp.
     pub output: Image,
+    /// Host copy of `output` for headless readback.
+    download: Buffer,
+}
+
+impl DepthWarp {
+    /// Records the copy of the warped depth to the host (after the warp).
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass, after the depth warp was recorded.
+    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds the contract above; `download` was sized for `output`
+        // (R32F, the warp's output size) and `output` has TRANSFER_SRC usage.
+        unsafe {
+            crate::gpu::record_compute_readback(self.warp.gpu(), cmd, &self.output, &self.download)
+        };
+    }
+
+    /// The warped depth (after the submission completed): metres, +inf without a source.
+    pub fn read(&self) -> Result<Vec<f32>> {
+        let e = self.output.extent;
+        self.download
+            .read_pod::<f32>(e.width as usize * e.height as usize)
+    }
 }
 
 impl WarpStage {
@@ -351,9 +374,17 @@ impl WarpStage {
                 let output = Image::new_2d(gpu, "warp_path.depth", r32f, ow, oh, usage)?;
                 // Neither warp writes its mask (write_mask is off): they can share one.
                 depth_warp.bind(source.view, output.view, mask.view);
+                let download = Buffer::new(
+                    gpu,
+                    "warp_path.depth.download",
+                    ow as u64 * oh as u64 * 4,
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryLocation::GpuToCpu,
+                )?;
                 Some(DepthWarp {
                     warp: depth_warp,
                     output,
+                    download,
                 })
             }
             None => None,
@@ -449,7 +480,9 @@ impl WarpStage {
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
         // SAFETY: the caller upholds `record_download`'s contract (after `record`): the warp
         // left `output` in GENERAL, and `download` was sized for it whole in `with_depth`.
-        unsafe { record_compute_download(&self.gpu, cmd, &self.output, &self.download) };
+        unsafe {
+            crate::gpu::record_compute_readback(&self.gpu, cmd, &self.output, &self.download)
+        };
     }
 
     /// The warped image (after the submission completed).
@@ -487,11 +520,39 @@ pub struct SceneRenderer<'a> {
     pub recorded: Vec<RecordedPipeline>,
 }
 
+/// What a pipeline does, as recorded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PassKind {
+    /// The pinhole projection (a warp's source, or a scene without distortion).
+    PinholeRender,
+    /// Lambers et al.'s Alg. 1: the lens per vertex, triangles discarded.
+    VertexRender,
+    /// The post-processing warp of colour.
+    Warp,
+    /// The nearest warp that carries depth along the colour's.
+    DepthWarp,
+    /// Heidrich et al.'s image-based lens model: cell renders accumulated on the film.
+    LensModel,
+}
+
+impl PassKind {
+    /// How `--explain` and the tables name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            PassKind::PinholeRender => "pinhole render",
+            PassKind::VertexRender => "Alg. 1 (vertex + discard)",
+            PassKind::Warp => "warp",
+            PassKind::DepthWarp => "depth warp",
+            PassKind::LensModel => "image-based lens model",
+        }
+    }
+}
+
 /// One recorded use of a pipeline.
 #[derive(Debug, Clone)]
 pub struct RecordedPipeline {
-    /// "pinhole render", "Alg. 1 (vertex + discard)" or "warp".
-    pub kind: &'static str,
+    /// What the pipeline does.
+    pub kind: PassKind,
     /// The constants of each stage.
     pub constants: Vec<(vk::ShaderStageFlags, crate::gpu::SpecConstants)>,
 }
@@ -611,7 +672,7 @@ impl<'a> SceneRenderer<'a> {
             constants: st.pass.pipeline().constants.clone(),
         });
         self.recorded.push(RecordedPipeline {
-            kind: "warp",
+            kind: PassKind::Warp,
             constants: vec![(
                 vk::ShaderStageFlags::COMPUTE,
                 st.warp.pipeline().constants.clone(),
@@ -652,10 +713,10 @@ fn invalid(e: impl ToString) -> Error {
     Error::Input(e.to_string())
 }
 
-fn geometry_kind(pass: &GeometryPass) -> &'static str {
+pub(crate) fn geometry_kind(pass: &GeometryPass) -> PassKind {
     match pass.desc().projection {
-        Projection::Lens { .. } => "Alg. 1 (vertex + discard)",
-        Projection::Pinhole => "pinhole render",
+        Projection::Lens { .. } => PassKind::VertexRender,
+        Projection::Pinhole => PassKind::PinholeRender,
     }
 }
 

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use ash::vk;
 use common::{assert_no_validation_messages, validated_context};
-use vklens::internal::plan::{execute, load_geometry, plan, Route, SceneFile};
+use vklens::internal::plan::{execute, load_geometry, plan, PassKind, Route, SceneFile};
 
 fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes")
@@ -26,7 +26,7 @@ fn error(text: &str) -> String {
 /// The recorded constants of a pipeline kind's stage.
 fn constant(
     recorded: &vklens::internal::plan::Recorded,
-    kind: &str,
+    kind: PassKind,
     stage: vk::ShaderStageFlags,
     id: u32,
 ) -> Option<u32> {
@@ -65,9 +65,9 @@ fn a_pinhole_scene_records_no_warp_and_no_lens_work() {
     let file = SceneFile::load(&examples().join("pinhole.toml")).unwrap();
     let (p, recorded) = run(&file);
     assert_eq!(p.route, Route::Pinhole);
-    assert!(recorded.has("pinhole render"));
-    assert!(!recorded.has("warp"), "{:?}", recorded.pipelines);
-    assert!(!recorded.has("Alg. 1 (vertex + discard)"));
+    assert!(recorded.has(PassKind::PinholeRender));
+    assert!(!recorded.has(PassKind::Warp), "{:?}", recorded.pipelines);
+    assert!(!recorded.has(PassKind::VertexRender));
 }
 
 #[test]
@@ -77,7 +77,7 @@ fn k1_k2_runs_shaders_with_the_other_terms_compiled_out() {
     let (p, recorded) = run(&file);
     assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
     let v = vk::ShaderStageFlags::VERTEX;
-    let kind = "Alg. 1 (vertex + discard)";
+    let kind = PassKind::VertexRender;
     assert_eq!(constant(&recorded, kind, v, 0), Some(1), "radial on");
     for (id, group) in [
         (1, "rational"),
@@ -91,7 +91,7 @@ fn k1_k2_runs_shaders_with_the_other_terms_compiled_out() {
             "{group} compiled out"
         );
     }
-    assert!(!recorded.has("warp"));
+    assert!(!recorded.has(PassKind::Warp));
     assert!(p.expected_error_px <= p.budget_px);
 }
 
@@ -117,9 +117,13 @@ fn without_chromatic_aberration_the_warp_is_the_single_fetch_variant() {
         "{:?}",
         p.route
     );
-    assert_eq!(constant(&recorded, "warp", c, 11), Some(0), "single fetch");
     assert_eq!(
-        constant(&recorded, "warp", c, 1),
+        constant(&recorded, PassKind::Warp, c, 11),
+        Some(0),
+        "single fetch"
+    );
+    assert_eq!(
+        constant(&recorded, PassKind::Warp, c, 1),
         Some(0),
         "rational compiled out"
     );
@@ -135,7 +139,11 @@ fn without_chromatic_aberration_the_warp_is_the_single_fetch_variant() {
         "{:?}",
         p.route
     );
-    assert_eq!(constant(&recorded, "warp", c, 11), Some(1), "three fetches");
+    assert_eq!(
+        constant(&recorded, PassKind::Warp, c, 11),
+        Some(1),
+        "three fetches"
+    );
 }
 
 #[test]
@@ -312,7 +320,7 @@ fn render_scene_cli_writes_every_output_of_every_frame() {
 #[test]
 fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
     use vklens::internal::gpu::QueryPool;
-    use vklens::internal::plan::record::{pass_times, PlanRecorder};
+    use vklens::internal::plan::record::PlanRecorder;
     let ctx = validated_context();
     let file = SceneFile::load(&examples().join("ids_and_flow.toml")).unwrap();
     let scene = load_geometry(&file).unwrap();
@@ -344,7 +352,10 @@ fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
     let got = targets.read().unwrap();
     assert_eq!(got.ids, expected.ids, "IDs differ");
     assert_eq!(got.width, expected.width);
-    let times = pass_times(&ctx, &p, &scene, 0).unwrap().unwrap();
+    // The headless path times each pass of the same recorder on its first frame.
+    let times = execute(&ctx, &p, &scene, 0..1, &mut |_| Ok(()))
+        .unwrap()
+        .pass_ms;
     assert_eq!(times.len(), 1);
     assert_eq!(times[0].0, "Alg. 1 (vertex + discard)");
     assert!(times[0].1 > 0.0);

@@ -258,6 +258,9 @@ fn gpu_run(
     // Warm-up run (the driver compiles the pipeline at its first dispatch); its results are
     // the ones checked for accuracy.
     ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // a compute queue; `inputs` and `outputs` (bound above) hold `n` points, at most
+        // MAX_POINTS, and outlive the submission, which `submit` waits for.
         unsafe {
             pass.record(cmd, n as u32);
             host_read_barrier(gpu, cmd);
@@ -282,6 +285,9 @@ fn gpu_run(
                 queries.cmd_reset(cmd);
                 queries.cmd_write(cmd, 0);
                 for i in 0..options.gpu_repeats {
+                    // SAFETY: as in the warm-up: `cmd` is the fresh buffer `submit` is
+                    // recording, outside any render pass, and the bound buffers hold `n` points
+                    // and outlive the submission; the barrier orders each dispatch's writes.
                     unsafe {
                         pass.record(cmd, n as u32);
                         if i + 1 < options.gpu_repeats {

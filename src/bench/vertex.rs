@@ -74,6 +74,8 @@ fn prepare(
     pass.bind_mesh(&buffers);
     pass.set_frame(pose, pose)?;
     ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+        // `buffers` outlives the submission, which `submit` waits for.
         unsafe { buffers.record_upload(cmd) };
         Ok(())
     })?;
@@ -85,6 +87,9 @@ fn prepare(
 }
 
 fn time_render(ctx: &Context, d: &Drawn) -> Result<f64> {
+    // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is recording,
+    // outside any render pass, and waits for each submission; `prepare` bound and uploaded
+    // the mesh and made the targets for this pass, all kept alive by `d`.
     let (wall, gpu) = time_batch(ctx, &|cmd| unsafe {
         d.pass.record(cmd, &d.targets, &d.buffers)
     })?;
@@ -150,12 +155,18 @@ fn time_pinhole_and_warp(
     stage.pass.bind_mesh(&mesh);
     stage.pass.set_frame(pose, pose)?;
     ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // the context's graphics+compute queue; `stage` is new, so nothing using its images is
+        // pending; `mesh` and `stage` outlive the submission, which `submit` waits for.
         unsafe {
             mesh.record_upload(cmd);
             stage.record_prepare(cmd);
         }
         Ok(())
     })?;
+    // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is recording,
+    // outside any render pass, and waits for each submission; `record_prepare` ran above and
+    // `mesh` is bound to the stage's pass and uploaded.
     let (wall, gpu_ms) = time_batch(ctx, &|cmd| unsafe { stage.record(cmd, &mesh) })?;
     Ok(gpu_ms.unwrap_or(wall))
 }
@@ -244,6 +255,8 @@ pub fn run(
         let gpu = ctx.gpu();
         let texture = Texture::new(gpu, &source)?;
         ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+            // `texture` outlives the submission, which `submit` waits for.
             unsafe { texture.record_upload(cmd) };
             Ok(())
         })?;
@@ -280,6 +293,10 @@ pub fn run(
             pass.bind(texture.image.view);
             let target = MeshWarpTarget::new(gpu, &pass)?;
             let (wall, gpu_ms) =
+                // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is
+                // recording, outside any render pass, and waits for each submission; the source
+                // is bound, and its upload (a completed submission above) left it in
+                // SHADER_READ_ONLY_OPTIMAL, visible to fragment shaders; `target` fits `pass`.
                 time_batch(ctx, &|cmd| unsafe { pass.record(cmd, &target.framebuffer) })?;
             rows.push(json!({
                 "bench": "vertex", "kind": "mesh_warp", "width": w, "height": h, "n": n,
@@ -305,12 +322,18 @@ pub fn run(
             let mut pass = WarpPass::new(gpu, desc)?;
             pass.bind(images.source.view, images.output.view, images.mask.view);
             ctx.submit(|cmd| {
+                // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render
+                // pass, on a compute queue; `pass` is new and bound above, so no prepare of it
+                // is pending; `images` and `pass` outlive the submission, which `submit` waits for.
                 unsafe {
                     images.record_upload(cmd);
                     pass.record_prepare(cmd);
                 }
                 Ok(())
             })?;
+            // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is
+            // recording, outside any render pass, and waits for each submission; the upload
+            // and `record_prepare` above left the images in GENERAL, the source visible to compute.
             let (wall, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd) })?;
             rows.push(json!({
                 "bench": "vertex", "kind": "compute_warp", "width": w, "height": h,

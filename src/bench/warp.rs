@@ -114,6 +114,8 @@ pub(crate) fn time_batch(
             frame(cmd);
             if i + 1 < n {
                 // Successive frames write the same output: order them, as an engine would.
+                // SAFETY: `record` only runs inside `ctx.submit` below, on the buffer it is
+                // recording, and every `frame` leaves no render pass open.
                 unsafe { memory_barrier(gpu, cmd, write, write) };
             }
         }
@@ -212,11 +214,16 @@ pub fn run(
         };
         let images = WarpImages::new(gpu, &desc(&plain, Coordinates::Analytic), &source)?;
         ctx.submit(|cmd| {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+            // `images` outlives the submission, which `submit` waits for.
             unsafe { images.record_upload(cmd) };
             Ok(())
         })?;
         let mut copy = CopyPass::new(gpu, w, h)?;
         copy.bind(images.source.view, images.output.view);
+        // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is recording,
+        // outside any render pass, and waits for each submission; the upload above left both
+        // bound images in GENERAL with the source's writes visible to compute.
         let (frame_ms, _) = time_batch(ctx, &|cmd| unsafe { copy.record(cmd) })?;
         rows.push(json!({"bench": "copy", "width": w, "height": h, "frame_ms": frame_ms}));
 
@@ -231,6 +238,9 @@ pub fn run(
             for _ in 0..4 {
                 let start = Instant::now();
                 ctx.submit(|cmd| {
+                    // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render
+                    // pass, on a compute queue; the previous build's submission has completed
+                    // (`submit` waits), so none is pending when it is recorded again.
                     unsafe { build.record_prepare(cmd) };
                     Ok(())
                 })?;
@@ -263,9 +273,14 @@ pub fn run(
                 let mut pass = WarpPass::new(gpu, desc(&g, coordinates))?;
                 pass.bind(images.source.view, images.output.view, images.mask.view);
                 ctx.submit(|cmd| {
+                    // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render
+                    // pass, on a compute queue; `pass` is new, so no prepare of it is pending.
                     unsafe { pass.record_prepare(cmd) };
                     Ok(())
                 })?;
+                // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is
+                // recording, outside any render pass, and waits for each submission; the
+                // images were uploaded and the pass prepared and bound above.
                 let (frame_ms, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd) })?;
                 rows.push(json!({
                     "bench": "warp", "width": w, "height": h, "method": label, "chromatic": chromatic,
@@ -286,6 +301,12 @@ pub fn run(
                         (w, h),
                         raster.format,
                     )?;
+                    // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is
+                    // recording, outside any render pass, and waits for each submission;
+                    // `target` fits the raster pass, which is bound to the source. Caveat:
+                    // `record` wants the maps and source visible to fragment-shader reads, but
+                    // the barriers that wrote them (upload, `record_prepare`) name only the
+                    // compute stage, and unlike `run_raster_warp` no fragment barrier follows.
                     let (frame_ms, gpu_ms) = time_batch(ctx, &|cmd| unsafe {
                         raster.record(cmd, &target.framebuffer)
                     })?;

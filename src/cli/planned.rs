@@ -162,6 +162,10 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
             Some("png"),
         )?;
         done.borrow_mut().push((f.index, f.ms));
+        if args.explain && done.borrow().len() == 1 {
+            // On stdout, as soon as the first frame has measured the plan's passes.
+            print!("{}", explain(&plan, Some(f.ms), &f.pass_ms));
+        }
         progress_line(&format!(
             "frame {}/{total} ({:.1} ms)",
             done.borrow().len(),
@@ -169,32 +173,8 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
         ));
         Ok(())
     };
-    let gpu_error = |e: crate::Error| match e {
-        crate::Error::Input(m) => CliError::input(m),
-        other => CliError::from(other),
-    };
-    let first = frames.start..frames.start + 1;
-    execute(&ctx, &plan, &scene, first, &mut write).map_err(gpu_error)?;
-    if args.explain {
-        let measured = done.borrow().first().map(|(_, ms)| *ms);
-        // Per-pass GPU times where the plan's passes can be recorded and timed as a whole.
-        let passes = crate::plan::record::pass_times(&ctx, &plan, &scene, frames.start)
-            .ok()
-            .flatten()
-            .unwrap_or_default();
-        // On stdout, before the remaining frames are rendered.
-        print!("{}", explain(&plan, measured, &passes));
-    }
-    if frames.len() > 1 {
-        execute(
-            &ctx,
-            &plan,
-            &scene,
-            frames.start + 1..frames.end,
-            &mut write,
-        )
-        .map_err(gpu_error)?;
-    }
+    // One recorder for every frame: `--explain` reads its pass times off the first.
+    execute(&ctx, &plan, &scene, frames, &mut write)?;
     finish(&ctx)?;
     let done = done.into_inner();
     let json = format!("{:#}\n", plan_json(&plan, &done));

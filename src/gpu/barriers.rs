@@ -156,3 +156,39 @@ pub unsafe fn record_compute_download(
         record_download(gpu, cmd, image, buffer);
     }
 }
+
+/// [`record_compute_download`], then the image back to `GENERAL` so that the next frame's
+/// compute pass can write it again without a one-off transition.
+///
+/// # Safety
+/// As [`record_compute_download`].
+pub unsafe fn record_compute_readback(
+    gpu: &Gpu,
+    cmd: vk::CommandBuffer,
+    image: &super::Image,
+    buffer: &super::Buffer,
+) {
+    // SAFETY: the caller upholds `record_compute_download`'s contract; the copy it records
+    // leaves the image in TRANSFER_SRC_OPTIMAL, which the second transition starts from.
+    unsafe {
+        record_compute_download(gpu, cmd, image, buffer);
+        // The next write (a compute shader's) waits for the copy's read.
+        image_barrier(
+            gpu,
+            cmd,
+            image.raw,
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::ImageLayout::GENERAL,
+            ),
+            (
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_READ,
+            ),
+            (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_WRITE,
+            ),
+        );
+    }
+}

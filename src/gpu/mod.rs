@@ -23,7 +23,8 @@ use ash::vk;
 use gpu_allocator::vulkan::Allocator;
 
 pub use barriers::{
-    host_read_barrier, image_barrier, memory_barrier, record_compute_download, record_download,
+    host_read_barrier, image_barrier, memory_barrier, record_compute_download,
+    record_compute_readback, record_download,
 };
 pub use context::{Context, ContextOptions};
 pub use graphics::{

@@ -206,8 +206,8 @@ impl Image {
             requirements,
             MemoryLocation::GpuOnly,
             false,
-            // SAFETY: `raw` has no memory bound yet, and the allocation was made for its
-            // memory requirements (optimal tiling: `linear` false), so type, size and alignment fit.
+            // SAFETY: `raw` has no memory bound yet, and the allocation was made for its memory
+            // requirements (optimal tiling: `linear` is false), so type, size and alignment fit.
             |a| unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) },
         )
         // SAFETY: on error `raw` has no memory bound and was never handed out or used.

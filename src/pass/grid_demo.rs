@@ -53,8 +53,8 @@ pub fn render_grid(ctx: &Context, camera: &Camera, grid: u32) -> Result<Vec<u8>>
     ctx.submit(|cmd| {
         let size = [w, h];
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
-        // `set` points at `params` and `pixels` (`w × h` packed pixels), which outlive the submission
-        // because `submit` waits on its fence; the 8 bytes pushed are the push range.
+        // `set` points at `params` and `pixels` (`w × h` packed pixels), which outlive the
+        // submission because `submit` waits on its fence; the 8 bytes pushed are the push range.
         unsafe {
             pipeline.record_dispatch(
                 cmd,

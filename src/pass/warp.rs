@@ -431,6 +431,11 @@ impl WarpPass {
         Ok(())
     }
 
+    /// The device the pass was built on.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
     /// What the pass was built from.
     pub fn desc(&self) -> &WarpDesc {
         &self.desc

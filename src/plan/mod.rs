@@ -27,14 +27,14 @@ use std::time::Instant;
 
 use glam::{DVec2, DVec3};
 
-use crate::gpu::Context;
+use crate::gpu::{Context, QueryPool};
 use crate::lens::image_model::{channel_models, ModelOptions};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};
 use crate::model::{Camera, InverseMethod, OpenCvDistortion};
-use crate::pass::geometry::{ColorFormat, MeshBuffers, Outputs, Rendered};
-use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
-use crate::render::{RecordedPipeline, RenderPath, RenderRequest, SceneRenderer};
+use crate::pass::geometry::Rendered;
+pub use crate::render::{PassKind, RecordedPipeline};
 use crate::scene::{builtin, Pose, Scene};
+pub use record::PlanRecorder;
 pub use scene_file::{SceneFile, SceneFileError};
 
 /// How the frames are made.
@@ -103,10 +103,6 @@ pub struct Plan {
     pub antialias: scene_file::Antialias,
     /// Estimated frame time from the measured tables (ms, lavapipe), for comparison.
     pub estimated_ms: f64,
-}
-
-fn invalid(e: impl ToString) -> Error {
-    Error::Input(e.to_string())
 }
 
 /// Inverse methods the planner chooses between, cheapest first for `terms`, with a per-pixel
@@ -600,223 +596,189 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
 pub struct Frame {
     pub index: usize,
     pub rendered: Rendered,
-    /// Wall time of the frame's GPU work (ms).
+    /// Wall time of the frame: its GPU work and readback (ms).
     pub ms: f64,
+    /// GPU time per pass (timestamps), on the first frame `execute` hands out; empty on the
+    /// others and where the queue has no timestamps.
+    pub pass_ms: Vec<(&'static str, f64)>,
 }
 
-/// What executing a plan recorded: the pipelines, with their specialization constants.
+/// What executing a plan recorded: the pipelines, with their specialization constants, and
+/// the GPU time of each pass on the first timed frame.
 #[derive(Debug, Clone, Default)]
 pub struct Recorded {
+    /// Every pipeline recorded, with its specialization constants.
     pub pipelines: Vec<RecordedPipeline>,
+    /// GPU time per pass (timestamps) of the first timed frame, in recording order; empty
+    /// where the queue has no timestamps.
+    pub pass_ms: Vec<(&'static str, f64)>,
 }
 
 impl Recorded {
-    pub fn has(&self, kind: &str) -> bool {
+    /// Whether a pipeline of `kind` was recorded.
+    pub fn has(&self, kind: PassKind) -> bool {
         self.pipelines.iter().any(|p| p.kind == kind)
     }
 }
 
-/// Renders the frames `frames` (indices into the plan's poses) of `scene` as `plan` says;
-/// `each` receives every frame as it is done.
+/// Renders the frames `frames` (indices into the plan's poses) of `scene` as `plan` says, on
+/// the headless context; `each` receives every frame as it is done.
+///
+/// This is the headless path of the one recorder: a [`PlanRecorder`] built once records each
+/// frame, and this only submits it and reads the outputs back. Anti-aliased colour
+/// (`[render] supersample`, `jitter`) is a second recorder of the colour alone at `s×` the
+/// resolution, its jittered passes box-filtered and averaged here; IDs, flow and depth stay one
+/// sample per pixel.
 pub fn execute(
     ctx: &Context,
     plan: &Plan,
     scene: &Scene,
-    frames: std::ops::Range<usize>,
-    each: &mut dyn FnMut(Frame) -> Result<(), Error>,
-) -> Result<Recorded, Error> {
-    let o = &plan.outputs;
-    let color_format = if o.exr {
-        ColorFormat::Rgba16F
+    frames: impl IntoIterator<Item = usize>,
+    each: &mut dyn FnMut(Frame) -> Result<()>,
+) -> Result<Recorded> {
+    let frames: Vec<usize> = frames.into_iter().collect();
+    if let Some(&bad) = frames.iter().find(|&&i| i >= plan.poses.len()) {
+        return Err(Error::input(format!(
+            "frame {bad}: the scene has {} pose(s)",
+            plan.poses.len()
+        )));
+    }
+    let gpu = ctx.gpu();
+    let o = plan.outputs;
+    let lens = matches!(plan.route, Route::LensModel { .. });
+    let antialias = plan.antialias.is_on() && o.color && !lens;
+    let mesh = record::plan_mesh(plan, scene)?;
+    let texture = scene.texture.as_ref();
+    // The 1× recorder: every output, or the data outputs alone when the colour is
+    // anti-aliased.
+    let mut main_plan = plan.clone();
+    if antialias {
+        main_plan.outputs.color = false;
+    }
+    let data = main_plan.outputs;
+    let mut main = if data.color || data.ids || data.flow || data.depth {
+        Some(PlanRecorder::build(gpu, &main_plan, &mesh, texture)?)
     } else {
-        ColorFormat::Rgba8
+        None
+    };
+    let s = plan.antialias.supersample;
+    let camera = plan.camera.clone();
+    let mut smooth = match (&camera, antialias) {
+        (Some(cam), true) => {
+            let mut p = plan.clone();
+            p.camera = Some(crate::render::scaled_camera(cam, s)?);
+            p.outputs = scene_file::OutputSpec {
+                ids: false,
+                flow: false,
+                depth: false,
+                ..o
+            };
+            if let Route::WarpAndVertex {
+                method, chromatic, ..
+            } = plan.route
+            {
+                p.route = Route::Warp { method, chromatic };
+            }
+            Some(PlanRecorder::build(gpu, &p, &mesh, texture)?)
+        }
+        _ => None,
     };
     let mut recorded = Recorded::default();
-    if let Route::LensModel { vignetting, .. } = plan.route {
-        let setting = plan
-            .lens
-            .as_ref()
-            .ok_or_else(|| invalid("lens plan without a lens"))?;
-        let mut renderer =
-            LensRenderer::new(ctx.gpu(), &setting.models, LensRenderOptions::default())?;
-        let mesh = MeshBuffers::new(ctx.gpu(), &scene.mesh, scene.texture.as_ref())?;
+    for r in main.iter().chain(smooth.iter()) {
+        recorded.pipelines.extend_from_slice(r.pipelines());
+    }
+    let queries = main
+        .as_ref()
+        .and_then(|r| QueryPool::timestamps(gpu, r.timestamp_count()).ok());
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is recording outside a render pass on the context's graphics and
+        // compute queue; each recorder's one-off work is recorded once, before any frame.
+        unsafe {
+            for r in main.iter().chain(smooth.iter()) {
+                r.record_setup(cmd);
+            }
+        }
+        Ok(())
+    })?;
+    // Run one recorder's prepared frame and read its outputs back.
+    let run = |r: &PlanRecorder, timestamps: Option<&QueryPool>| -> Result<Rendered> {
         ctx.submit(|cmd| {
-            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
-            // `mesh` outlives the submission, which `submit` waits for.
-            unsafe { mesh.record_upload(cmd) };
+            // SAFETY: `cmd` is recording outside a render pass; the recorder was set up and
+            // prepared, and `submit` waits, so nothing it records outlives the recorder.
+            unsafe {
+                r.record(cmd, timestamps);
+                r.record_download(cmd);
+                crate::gpu::host_read_barrier(gpu, cmd);
+            }
             Ok(())
         })?;
-        if let Some(first) = frames.clone().next() {
-            renderer.render(ctx, &mesh, &plan.poses[first])?; // warm-up: pipelines, caches
-        }
-        for index in frames {
-            let pose = plan.poses[index];
-            let frame = renderer.render(ctx, &mesh, &pose)?;
-            let pixels = frame
-                .pixels
-                .iter()
-                .map(|p| {
-                    let a = p[3];
-                    if vignetting || a <= 1e-6 {
-                        [p[0], p[1], p[2], 1.0]
-                    } else {
-                        [p[0] / a, p[1] / a, p[2] / a, 1.0]
-                    }
-                })
-                .collect::<Vec<_>>();
-            let raster = crate::imaging::Raster {
-                width: frame.width,
-                height: frame.height,
-                pixels: if o.exr {
-                    crate::imaging::Pixels::Rgba32F(pixels)
-                } else {
-                    crate::imaging::Pixels::Rgba8(
-                        pixels
-                            .iter()
-                            .map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
-                            .collect(),
-                    )
-                },
-                bit_depth: if o.exr {
-                    crate::imaging::BitDepth::F32
-                } else {
-                    crate::imaging::BitDepth::U8
-                },
-            };
-            each(Frame {
-                index,
-                rendered: Rendered {
-                    width: frame.width,
-                    height: frame.height,
-                    color: Some(raster),
-                    ..Default::default()
-                },
-                ms: frame.frame_ms,
-            })?;
-        }
-        recorded.pipelines.push(RecordedPipeline {
-            kind: "image-based lens model",
-            constants: Vec::new(),
-        });
-        return Ok(recorded);
-    }
-    let camera = plan
-        .camera
-        .clone()
-        .ok_or_else(|| invalid("plan without a camera"))?;
-    let mut renderer = SceneRenderer::new(ctx);
-    // The first frame once more before timing: pipelines are compiled on first use.
-    let warm_up = frames.clone().next();
+        r.read()
+    };
+    // The first frame once more before timing: caches warm up on first use.
+    let warm_up = frames.first().copied();
+    let mut first_timed = true;
     for (index, timed) in warm_up
         .map(|i| (i, false))
         .into_iter()
-        .chain(frames.map(|i| (i, true)))
+        .chain(frames.iter().map(|&i| (i, true)))
     {
-        let pose = plan.poses[index];
-        let previous = if index > 0 {
-            plan.poses[index - 1]
-        } else {
-            pose
-        };
-        let base = RenderRequest {
-            camera: camera.clone(),
-            pose,
-            previous_pose: previous,
-            path: RenderPath::Pinhole,
-            outputs: Outputs {
-                color: o.color.then_some(color_format),
-                ids: o.ids,
-                flow: o.flow,
-                depth: o.depth,
-            },
-            supersample: plan.antialias.supersample,
-            jitter: plan.antialias.jitter,
-            tessellate: None,
-            background: plan.background,
-            chromatic: None,
-        };
         let start = Instant::now();
-        let mut quiet = |_: &str| {};
-        let rendered = match &plan.route {
-            Route::Pinhole => renderer.render(scene, &base, &mut quiet)?,
-            Route::Vertex { tessellate } => renderer.render(
-                scene,
-                &RenderRequest {
-                    path: RenderPath::Vertex {
-                        delta: crate::pass::geometry::DEFAULT_DELTA,
-                    },
-                    tessellate: *tessellate,
-                    ..base
-                },
-                &mut quiet,
-            )?,
-            Route::Warp { method, chromatic } => renderer.render(
-                scene,
-                &RenderRequest {
-                    path: RenderPath::Warp {
-                        method: *method,
-                        density: 1.0,
-                    },
-                    chromatic: *chromatic,
-                    ..base
-                },
-                &mut quiet,
-            )?,
-            Route::WarpAndVertex {
-                method,
-                chromatic,
-                tessellate,
-            } => {
-                let mut colour = if o.color {
-                    renderer.render(
-                        scene,
-                        &RenderRequest {
-                            path: RenderPath::Warp {
-                                method: *method,
-                                density: 1.0,
-                            },
-                            chromatic: *chromatic,
-                            outputs: Outputs::color_only(Some(color_format)),
-                            ..base.clone()
-                        },
-                        &mut quiet,
-                    )?
+        let mut rendered = match &mut main {
+            Some(r) => {
+                r.prepare(index)?;
+                let stamps = if timed && first_timed {
+                    queries.as_ref()
                 } else {
-                    Rendered::default()
+                    None
                 };
-                let data = renderer.render(
-                    scene,
-                    &RenderRequest {
-                        path: RenderPath::Vertex {
-                            delta: crate::pass::geometry::DEFAULT_DELTA,
-                        },
-                        tessellate: *tessellate,
-                        outputs: Outputs {
-                            color: None,
-                            ..base.outputs
-                        },
-                        ..base
-                    },
-                    &mut quiet,
-                )?;
-                colour.width = data.width;
-                colour.height = data.height;
-                colour.ids = data.ids;
-                colour.flow = data.flow;
-                colour.depth = data.depth;
-                colour
+                run(r, stamps)?
             }
-            Route::LensModel { .. } => unreachable!("handled above"),
+            None => Rendered::default(),
         };
+        if let (Some(r), Some(cam)) = (&mut smooth, &camera) {
+            r.prepare(index)?;
+            let mut images = Vec::new();
+            for offset in crate::render::jitter_offsets(plan.antialias.jitter) {
+                let shift = offset / s as f64;
+                let big = crate::render::scaled_camera(&crate::render::shifted(cam, shift)?, s)?;
+                r.jitter(&big, shift * s as f64)?;
+                let colour = run(r, None)?
+                    .color
+                    .ok_or_else(|| Error::internal("the anti-aliased pass rendered no colour"))?;
+                images.push(crate::render::downsample(&colour, s));
+            }
+            rendered.color = Some(crate::render::average(&images));
+            rendered.width = cam.width;
+            rendered.height = cam.height;
+        }
+        if rendered.width == 0 {
+            if let Some(cam) = &camera {
+                (rendered.width, rendered.height) = (cam.width, cam.height);
+            }
+        }
         let ms = start.elapsed().as_secs_f64() * 1e3;
         if timed {
+            let mut pass_ms = Vec::new();
+            if first_timed {
+                if let (Some(q), Some(r)) = (&queries, &main) {
+                    let ns = q.read_ns()?;
+                    pass_ms = r
+                        .pass_names()
+                        .iter()
+                        .enumerate()
+                        .map(|(i, n)| (*n, (ns[i + 1] - ns[i]) / 1e6))
+                        .collect();
+                    recorded.pass_ms = pass_ms.clone();
+                }
+                first_timed = false;
+            }
             each(Frame {
                 index,
                 rendered,
                 ms,
+                pass_ms,
             })?;
         }
     }
-    recorded.pipelines = renderer.recorded.clone();
     Ok(recorded)
 }

@@ -1,5 +1,5 @@
 //! A plan as GPU passes that record into a command buffer the caller owns (an engine's), on
-//! any [`Gpu`]: [`PlanRecorder`]. It is also how `--explain` measures each pass's GPU time:
+//! any [`Gpu`]: [`PlanRecorder`]. The headless [`super::execute`] submits it and reads back;
 //! [`PlanRecorder::record`] can write a timestamp after every pass.
 //!
 //! What it records per route: a pinhole render or Alg. 1 (every output), the warp path's
@@ -7,12 +7,15 @@
 //! or the lens model's frame.
 
 use ash::vk;
+use glam::DVec2;
 
 use super::{Plan, Route};
 use crate::gpu::{Error, Gpu, QueryPool, Result};
+use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, OpenCvDistortion};
+use crate::pass::geometry::Rendered;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     DEFAULT_DELTA,
@@ -20,10 +23,38 @@ use crate::pass::geometry::{
 use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
 use crate::pass::warp::Coordinates;
 use crate::render::WarpStage;
-use crate::scene::{Pose, Scene};
+use crate::render::{geometry_kind, PassKind, RecordedPipeline};
+use crate::scene::{Mesh, Pose, Scene};
 
 fn invalid(e: impl ToString) -> Error {
     Error::Input(e.to_string())
+}
+
+/// A bug: a plan the planner cannot have made.
+fn internal(e: impl ToString) -> Error {
+    Error::Internal(e.to_string())
+}
+
+/// The mesh every pass of `plan` draws: tessellated where Alg. 1 needs it (at the first pose;
+/// the warp's pinhole render of warp + Alg. 1 does not mind the finer mesh).
+pub(crate) fn plan_mesh(plan: &Plan, scene: &Scene) -> Result<Mesh> {
+    let first = *plan
+        .poses
+        .first()
+        .ok_or_else(|| internal("a plan without poses"))?;
+    match (&plan.route, plan.camera.as_ref()) {
+        (
+            Route::Vertex {
+                tessellate: Some(l),
+            }
+            | Route::WarpAndVertex {
+                tessellate: Some(l),
+                ..
+            },
+            Some(camera),
+        ) => crate::scene::tessellate::tessellate(&scene.mesh, &first, camera, *l),
+        _ => Ok(scene.mesh.clone()),
+    }
 }
 
 /// The passes of one plan, built once; any number of frames recorded.
@@ -37,6 +68,15 @@ pub struct PlanRecorder {
     poses: Vec<Pose>,
     /// Names of the passes in recording order (for timings).
     names: Vec<&'static str>,
+    /// The warp route's pinhole source camera and warp geometry as built (jittered passes
+    /// shift both).
+    warp_source: Option<(Camera, WarpGeometry)>,
+    /// What the plan asks for (which images [`Self::read`] returns).
+    outputs: super::scene_file::OutputSpec,
+    /// The lens route keeps vignetting (else the accumulated weight is divided out).
+    vignetting: bool,
+    /// Every pipeline the recorder records, with its specialization constants.
+    pipelines: Vec<RecordedPipeline>,
 }
 
 impl PlanRecorder {
@@ -48,6 +88,16 @@ impl PlanRecorder {
                 "the recorder draws one sample per pixel: the scene's [render] supersample / jitter are averaged on the host by execute(); an engine anti-aliases its own way (MSAA, TAA)",
             ));
         }
+        Self::build(gpu, plan, &plan_mesh(plan, scene)?, scene.texture.as_ref())
+    }
+
+    /// Builds the passes of `plan` (anti-aliasing ignored) drawing `mesh` as it is.
+    pub(crate) fn build(
+        gpu: &Gpu,
+        plan: &Plan,
+        mesh: &Mesh,
+        texture: Option<&Raster>,
+    ) -> Result<Self> {
         let o = plan.outputs;
         let format = if o.exr {
             ColorFormat::Rgba16F
@@ -60,15 +110,6 @@ impl PlanRecorder {
             flow: o.flow,
             depth: o.depth,
         };
-        let first = *plan
-            .poses
-            .first()
-            .ok_or_else(|| invalid("a plan without poses"))?;
-        let tessellated = |l: Option<f64>, camera: &Camera| match l {
-            Some(l) => crate::scene::tessellate::tessellate(&scene.mesh, &first, camera, l)
-                .map_err(invalid),
-            None => Ok(scene.mesh.clone()),
-        };
         let geometry = |camera: &Camera, projection, outputs| -> Result<_> {
             let mut desc = GeometryDesc::new(camera.clone(), projection, outputs);
             desc.background = plan.background;
@@ -80,7 +121,7 @@ impl PlanRecorder {
                           method,
                           chromatic: Option<[f64; 3]>,
                           depth: bool|
-         -> Result<WarpStage> {
+         -> Result<(WarpStage, Camera, WarpGeometry)> {
             let ov = overscan(camera, 1.0).map_err(invalid)?;
             let source = Camera::new(
                 ov.width,
@@ -101,48 +142,60 @@ impl PlanRecorder {
             } else {
                 ColorFormat::Rgba32F
             };
-            WarpStage::with_depth(
+            let stage = WarpStage::with_depth(
                 gpu,
-                source,
-                g,
+                source.clone(),
+                g.clone(),
                 Coordinates::Analytic,
                 f,
                 plan.background,
                 depth,
-            )
-        };
-        // One mesh for every pass: tessellated where Alg. 1 needs it (the warp's pinhole
-        // render of warp + Alg. 1 does not mind the finer mesh).
-        let mesh = match (&plan.route, plan.camera.as_ref()) {
-            (
-                Route::Vertex { tessellate } | Route::WarpAndVertex { tessellate, .. },
-                Some(camera),
-            ) => tessellated(*tessellate, camera)?,
-            _ => scene.mesh.clone(),
+            )?;
+            Ok((stage, source, g))
         };
         let mut r = PlanRecorder {
             geometry: None,
             warp: None,
             lens: None,
-            mesh: MeshBuffers::new(gpu, &mesh, scene.texture.as_ref())?,
+            mesh: MeshBuffers::new(gpu, mesh, texture)?,
             poses: plan.poses.clone(),
             names: Vec::new(),
+            warp_source: None,
+            outputs: o,
+            vignetting: matches!(
+                plan.route,
+                Route::LensModel {
+                    vignetting: true,
+                    ..
+                }
+            ),
+            pipelines: Vec::new(),
         };
         let lens_delta = Projection::Lens {
             delta: DEFAULT_DELTA,
         };
         match &plan.route {
             Route::LensModel { .. } => {
-                let setting = plan.lens.as_ref().ok_or_else(|| invalid("no lens"))?;
+                let setting = plan
+                    .lens
+                    .as_ref()
+                    .ok_or_else(|| internal("a lens plan without a lens"))?;
                 r.lens = Some(LensRenderer::new(
                     gpu,
                     &setting.models,
                     LensRenderOptions::default(),
                 )?);
                 r.names.push("image-based lens model (cells + film)");
+                r.pipelines.push(RecordedPipeline {
+                    kind: PassKind::LensModel,
+                    constants: Vec::new(),
+                });
             }
             route => {
-                let camera = plan.camera.as_ref().ok_or_else(|| invalid("no camera"))?;
+                let camera = plan
+                    .camera
+                    .as_ref()
+                    .ok_or_else(|| internal("a camera plan without a camera"))?;
                 match route {
                     Route::Pinhole => {
                         r.geometry = Some(geometry(camera, Projection::Pinhole, outputs)?);
@@ -154,18 +207,18 @@ impl PlanRecorder {
                     }
                     Route::Warp { method, chromatic } => {
                         if o.ids || o.flow {
-                            return Err(invalid(
+                            return Err(internal(
                                 "IDs and flow take Alg. 1 (Lambers et al. Table 1): the planner never routes them through the warp",
                             ));
                         }
-                        r.warp = Some(warp_stage(camera, *method, *chromatic, o.depth)?);
+                        r.set_warp(warp_stage(camera, *method, *chromatic, o.depth)?);
                         r.names.extend(["pinhole render (overscanned)", "warp"]);
                     }
                     Route::WarpAndVertex {
                         method, chromatic, ..
                     } => {
                         if o.color {
-                            r.warp = Some(warp_stage(camera, *method, *chromatic, false)?);
+                            r.set_warp(warp_stage(camera, *method, *chromatic, false)?);
                             r.names.extend(["pinhole render (overscanned)", "warp"]);
                         }
                         r.geometry = Some(geometry(
@@ -178,11 +231,74 @@ impl PlanRecorder {
                         )?);
                         r.names.push("Alg. 1 (vertex + discard), data outputs");
                     }
-                    Route::LensModel { .. } => unreachable!(),
+                    Route::LensModel { .. } => {
+                        return Err(internal("the lens route is handled above"))
+                    }
                 }
             }
         }
+        if let Some((pass, _)) = &r.geometry {
+            r.pipelines.push(RecordedPipeline {
+                kind: geometry_kind(pass),
+                constants: pass.pipeline().constants.clone(),
+            });
+        }
         Ok(r)
+    }
+
+    fn set_warp(&mut self, (stage, source, geometry): (WarpStage, Camera, WarpGeometry)) {
+        self.pipelines.push(RecordedPipeline {
+            kind: geometry_kind(&stage.pass),
+            constants: stage.pass.pipeline().constants.clone(),
+        });
+        self.pipelines.push(RecordedPipeline {
+            kind: PassKind::Warp,
+            constants: vec![(
+                vk::ShaderStageFlags::COMPUTE,
+                stage.warp.pipeline().constants.clone(),
+            )],
+        });
+        if let Some(d) = &stage.depth {
+            self.pipelines.push(RecordedPipeline {
+                kind: PassKind::DepthWarp,
+                constants: vec![(
+                    vk::ShaderStageFlags::COMPUTE,
+                    d.warp.pipeline().constants.clone(),
+                )],
+            });
+        }
+        self.warp = Some(stage);
+        self.warp_source = Some((source, geometry));
+    }
+
+    /// Every pipeline this recorder records, with its specialization constants: what a plan
+    /// can be checked against.
+    pub fn pipelines(&self) -> &[RecordedPipeline] {
+        &self.pipelines
+    }
+
+    /// Moves the lens to `camera` (same size and terms as built) and the warp's pinhole source
+    /// by `source_shift` pixels: one jittered pass of anti-aliasing, which renders the same
+    /// image translated (Alg. 1 normalizes with the same cx, cy). Host writes: no recorded
+    /// frame may be executing.
+    pub(crate) fn jitter(&mut self, camera: &Camera, source_shift: DVec2) -> Result<()> {
+        if let Some((pass, _)) = &mut self.geometry {
+            pass.set_camera(camera)?;
+        }
+        if let (Some(st), Some((source, built))) = (&mut self.warp, &self.warp_source) {
+            let mut k = source.intrinsics;
+            k.cx -= source_shift.x;
+            k.cy -= source_shift.y;
+            let moved = Camera::new(source.width, source.height, k, OpenCvDistortion::default())?;
+            let mut g = WarpGeometry::distort(camera.clone(), built.method)
+                .with_ideal(k, (source.width, source.height))?;
+            if let Some(scales) = built.chromatic {
+                g = g.with_chromatic(scales)?;
+            }
+            st.pass.set_camera(&moved)?;
+            st.warp.retarget(g)?;
+        }
+        Ok(())
     }
 
     /// The passes [`Self::record`] times, in order.
@@ -227,8 +343,9 @@ impl PlanRecorder {
     /// device; once, before the first frame.
     pub unsafe fn record_setup(&self, cmd: vk::CommandBuffer) {
         // SAFETY: the caller upholds `record_setup`'s contract: `cmd` is recording outside a
-        // render pass on a graphics queue of this device (`Gpu::from_caller` requires compute
-        // on it too), once, before any frame, so nothing using these images is pending.
+        // render pass on a graphics queue of this device, once, before any frame, so nothing
+        // using these images is pending. The warp's `record_prepare` also needs compute on
+        // that queue, which this contract leaves implicit.
         unsafe {
             self.mesh.record_upload(cmd);
             if let Some(st) = &self.warp {
@@ -258,6 +375,11 @@ impl PlanRecorder {
             q.cmd_reset(cmd);
         }
         stamp();
+        // SAFETY: the caller upholds `record`'s contract: `cmd` is recording (outside a render
+        // pass on a graphics queue, as for `record_setup`) after `record_setup` and `prepare`,
+        // which bound `self.mesh` to every pass and uploaded its texture; each pass's targets
+        // were made for it in `new`, and the warp stage's pinhole render precedes its warps.
+        // `timestamps`, when given, must hold `timestamp_count` queries, as the doc asks.
         unsafe {
             if let Some(l) = &self.lens {
                 l.record(cmd, &self.mesh);
@@ -295,40 +417,92 @@ impl PlanRecorder {
         };
         (colour, self.geometry.as_ref().map(|(_, t)| t))
     }
-}
 
-/// Measures each pass of `plan` on frame `index` with GPU timestamps (after one warm-up
-/// frame): (pass, milliseconds). `None` where the queue has no timestamps.
-pub fn pass_times(
-    ctx: &crate::gpu::Context,
-    plan: &Plan,
-    scene: &Scene,
-    index: usize,
-) -> Result<Option<Vec<(&'static str, f64)>>> {
-    let mut recorder = PlanRecorder::new(ctx.gpu(), plan, scene)?;
-    let Ok(queries) = QueryPool::timestamps(ctx.gpu(), recorder.timestamp_count()) else {
-        return Ok(None);
-    };
-    recorder.prepare(index)?;
-    let r = &recorder;
-    ctx.submit(|cmd| {
+    /// Records the copies of every output the plan asks for into host buffers, for
+    /// [`Self::read`]: the headless path's readback.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass, after [`Self::record`].
+    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds the contract above; each download buffer was sized for
+        // its image when the pass was built, and `record` left every image in the layout its
+        // download expects (documented on `record`).
         unsafe {
-            r.record_setup(cmd);
-            r.record(cmd, None);
+            if let Some(l) = &self.lens {
+                l.film().record_download(cmd);
+            }
+            if let Some(st) = &self.warp {
+                if self.outputs.color {
+                    st.record_download(cmd);
+                }
+                if let Some(d) = &st.depth {
+                    d.record_download(cmd);
+                }
+            }
+            if let Some((_, targets)) = &self.geometry {
+                targets.record_download(cmd);
+            }
         }
-        Ok(())
-    })?;
-    ctx.submit(|cmd| {
-        unsafe { r.record(cmd, Some(&queries)) };
-        Ok(())
-    })?;
-    let ns = queries.read_ns()?;
-    Ok(Some(
-        recorder
-            .names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| (*n, (ns[i + 1] - ns[i]) / 1e6))
-            .collect(),
-    ))
+    }
+
+    /// The outputs of the last recorded frame (after [`Self::record_download`]'s submission
+    /// completed): colour, IDs, flow and depth as the plan asks for them.
+    pub fn read(&self) -> Result<Rendered> {
+        let mut out = match &self.geometry {
+            Some((_, targets)) => targets.read()?,
+            None => Rendered::default(),
+        };
+        if let Some(l) = &self.lens {
+            let film = l.film();
+            let pixels = film
+                .read()?
+                .iter()
+                .map(|p| {
+                    let a = p[3];
+                    // Without vignetting the accumulated weight is divided out.
+                    if self.vignetting || a <= 1e-6 {
+                        [p[0], p[1], p[2], 1.0]
+                    } else {
+                        [p[0] / a, p[1] / a, p[2] / a, 1.0]
+                    }
+                })
+                .collect::<Vec<_>>();
+            let (pixels, bit_depth) = if self.outputs.exr {
+                (Pixels::Rgba32F(pixels), BitDepth::F32)
+            } else {
+                (
+                    Pixels::Rgba8(
+                        pixels
+                            .iter()
+                            .map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+                            .collect(),
+                    ),
+                    BitDepth::U8,
+                )
+            };
+            out.width = film.width;
+            out.height = film.height;
+            out.color = Some(Raster {
+                width: film.width,
+                height: film.height,
+                pixels,
+                bit_depth,
+            });
+        }
+        if let Some(st) = &self.warp {
+            let e = st.output.extent;
+            out.width = e.width;
+            out.height = e.height;
+            if self.outputs.color {
+                out.color = Some(st.read()?);
+            }
+            if let Some(d) = &st.depth {
+                out.depth = Some(d.read()?);
+            }
+        }
+        if !self.outputs.color {
+            out.color = None;
+        }
+        Ok(out)
+    }
 }

@@ -22,7 +22,7 @@ use ash::vk;
 use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{image_barrier, record_compute_download, Buffer, Context, Image};
+use crate::gpu::{image_barrier, Buffer, Context, Image};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;

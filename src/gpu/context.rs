@@ -66,6 +66,9 @@ impl Owned {
 pub struct Context {
     gpu: Gpu,
     command_pool: vk::CommandPool,
+    /// Held for the whole of a `submit`: the command pool and the queue must be externally
+    /// synchronized (Vulkan spec, "Threading Behavior"), and a context is shared by threads.
+    submitting: Mutex<()>,
     messages: Arc<Mutex<Vec<String>>>,
     validation: bool,
 }
@@ -294,6 +297,7 @@ impl Context {
         Ok(Context {
             gpu,
             command_pool,
+            submitting: Mutex::new(()),
             messages,
             validation: options.validation,
         })
@@ -311,6 +315,11 @@ impl Context {
 
     /// Records work with `record` into a fresh command buffer, submits it and waits.
     pub fn submit<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
+        // A poisoned lock only means another submission panicked; the pool is still valid.
+        let _guard = self
+            .submitting
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
         let device = self.gpu.device();
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(self.command_pool)

@@ -40,6 +40,23 @@ impl Raster {
     pub fn len(&self) -> usize {
         self.width as usize * self.height as usize
     }
+    /// Checks that the pixel vector holds exactly `width × height` pixels (the fields are
+    /// public, and every upload copies the whole image).
+    pub fn check(&self) -> crate::Result<()> {
+        let n = match &self.pixels {
+            Pixels::Rgba8(p) => p.len(),
+            Pixels::Rgba32F(p) => p.len(),
+            Pixels::R32Uint(p) => p.len(),
+        };
+        if n != self.len() {
+            return Err(crate::Error::input(format!(
+                "the image is {}×{} but holds {n} pixels",
+                self.width, self.height
+            )));
+        }
+        Ok(())
+    }
+
     /// Whether it has no pixels.
     pub fn is_empty(&self) -> bool {
         self.len() == 0

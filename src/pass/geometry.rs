@@ -183,6 +183,7 @@ pub struct Texture {
 impl Texture {
     /// Stages `raster` (any pixel type, converted to 8-bit RGBA).
     pub fn new(gpu: &Gpu, raster: &Raster) -> Result<Self> {
+        raster.check()?;
         let bytes: Vec<u8> = match &raster.pixels {
             Pixels::Rgba8(p) => p.iter().flatten().copied().collect(),
             _ => (0..raster.len())

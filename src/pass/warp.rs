@@ -759,6 +759,7 @@ impl WarpImages {
 
 /// The bytes of `source` as the warp's `format` stores them.
 fn source_bytes(source: &Raster, format: PixelFormat) -> Result<Vec<u8>> {
+    source.check()?;
     Ok(match (&source.pixels, format) {
         (Pixels::Rgba8(p), PixelFormat::Rgba8) => p.iter().flatten().copied().collect(),
         (Pixels::R32Uint(p), PixelFormat::R32Uint) => bytemuck::cast_slice(p).to_vec(),

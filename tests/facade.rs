@@ -1,0 +1,351 @@
+//! The public surface as a user holds it: `Camera`, `Device`, `Warper`, `overscan`,
+//! `SceneRenderer`, `Error`. Checked against OpenCV's own numbers (the shared reference file),
+//! against the f64 reference warp, and on a caller's own Vulkan device under validation.
+
+mod common;
+
+use std::path::Path;
+
+use common::{assert_no_validation_messages, validated_context};
+use vklens::internal::imaging::cpu_warp;
+use vklens::internal::io::reference::{load_reference, shared_dir};
+use vklens::{
+    Camera, Device, ErrorKind, InverseMethod, PixelFormat, Pixels, Raster, SceneRenderer,
+    WarpDirection, WarpMethod, WarpOptions, Warper,
+};
+
+fn device() -> Device {
+    Device::from_context(validated_context())
+}
+
+fn pattern(width: u32, height: u32) -> Raster {
+    Raster {
+        width,
+        height,
+        pixels: Pixels::Rgba8(
+            (0..width * height)
+                .map(|i| {
+                    let (x, y) = (i % width, i / width);
+                    let check = ((x / 16 + y / 16) % 2) as u8 * 200;
+                    [check, (x % 251) as u8, (y % 241) as u8, 255]
+                })
+                .collect(),
+        ),
+        bit_depth: vklens::BitDepth::U8,
+    }
+}
+
+#[test]
+fn points_match_opencv_on_every_reference_camera() {
+    let reference = load_reference().unwrap();
+    for case in &reference.cases {
+        let k = [
+            [case.fx, 0.0, case.cx],
+            [0.0, case.fy, case.cy],
+            [0.0, 0.0, 1.0],
+        ];
+        let camera = Camera::from_opencv(k, &case.dist_coeffs, (case.width, case.height))
+            .unwrap_or_else(|e| panic!("{}: {e}", case.name));
+        assert_eq!(camera.dist_coeffs(), case.dist_coeffs, "{}", case.name);
+        assert_eq!(camera.k_matrix(), k);
+        let xy: Vec<[f64; 2]> = case
+            .points
+            .iter()
+            .map(|p| p.undistorted_normalized)
+            .collect();
+        let uv = camera.distort_points(&xy);
+        let projected = camera.project_points(
+            &xy.iter()
+                .map(|&[x, y]| [2.0 * x, 2.0 * y, 2.0])
+                .collect::<Vec<_>>(),
+        );
+        let back = camera.undistort_points(
+            &uv.iter().map(|p| p.unwrap()).collect::<Vec<_>>(),
+            InverseMethod::Newton,
+        );
+        let mut inverted = 0;
+        for (i, p) in case.points.iter().enumerate() {
+            let got = uv[i].unwrap();
+            let d = (got[0] - p.distorted_pixel[0]).hypot(got[1] - p.distorted_pixel[1]);
+            assert!(d <= 1e-9, "{} point {i}: forward off by {d} px", case.name);
+            let q = projected[i].unwrap();
+            assert!((q[0] - got[0]).abs() < 1e-9 && (q[1] - got[1]).abs() < 1e-9);
+            // Inside the valid domain the inverse returns the point; outside it says so.
+            if let Some(x) = back[i] {
+                let e = (x[0] - p.undistorted_normalized[0])
+                    .hypot(x[1] - p.undistorted_normalized[1]);
+                assert!(e < 1e-9, "{} point {i}: inverse off by {e}", case.name);
+                inverted += 1;
+            }
+        }
+        assert!(inverted > case.points.len() / 2, "{}", case.name);
+    }
+    // Behind the camera: no pixel.
+    let camera = common::reference_camera("seed_fig2");
+    assert_eq!(camera.project_points(&[[0.0, 0.0, -1.0], [1.0, 1.0, 0.0]]), [None, None]);
+}
+
+#[test]
+fn cameras_load_save_and_refuse_what_opencv_cannot_mean() {
+    let file = shared_dir().join("reference/calibration-files/seed_fig2.opencv4.yml");
+    let camera = Camera::load(&file).unwrap();
+    let dir = std::env::temp_dir().join(format!("vklens-facade-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let saved = dir.join("cam.json");
+    camera.save(&saved).unwrap();
+    let again = Camera::load(&saved).unwrap();
+    assert_eq!(again.intrinsics, camera.intrinsics);
+    assert_eq!(again.dist_coeffs(), camera.dist_coeffs());
+    assert_eq!((again.width, again.height), (camera.width, camera.height));
+    // A Brown lens stays one through save and load.
+    let brown = Camera::parse(
+        r#"{"model": "brown", "width": 64, "height": 48, "c1": 0.1, "c2": 0.05}"#,
+        "brown.json",
+    )
+    .unwrap();
+    assert_eq!(brown.model_name(), "brown");
+    assert_eq!(brown.to_json()["model"], "brown");
+
+    let k = [[400.0, 0.0, 399.5], [0.0, 400.0, 299.5], [0.0, 0.0, 1.0]];
+    let bad = |k: [[f64; 3]; 3], d: &[f64], size| Camera::from_opencv(k, d, size).unwrap_err();
+    let seven = bad(k, &[0.0; 7], (800, 600));
+    assert_eq!(seven.kind(), ErrorKind::Input);
+    assert!(seven.to_string().contains("got 7"), "{seven}");
+    let mut nan = k;
+    nan[0][0] = f64::NAN;
+    assert!(bad(nan, &[0.0; 5], (800, 600)).to_string().contains("K"));
+    let mut skew = k;
+    skew[0][1] = 0.5;
+    assert!(bad(skew, &[0.0; 5], (800, 600)).to_string().contains("skew"));
+    let mut negative = k;
+    negative[0][0] = -400.0;
+    assert!(bad(negative, &[0.0; 5], (800, 600)).to_string().contains("fx"));
+    assert_eq!(bad(k, &[0.0; 5], (0, 600)).kind(), ErrorKind::Input);
+    let missing = Camera::load(dir.join("none.json")).unwrap_err();
+    assert_eq!(missing.kind(), ErrorKind::Io);
+    assert!(missing.to_string().contains("none.json"), "{missing}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_warper_runs_like_the_reference_warp_and_its_maps_are_the_exact_coordinates() {
+    let device = device();
+    let camera = common::reference_camera("seed_fig2");
+    let source = vklens::overscan(&camera, 1.0).unwrap();
+    assert!(source.width > camera.width && source.dist_coeffs().iter().all(|&c| c == 0.0));
+    let mut options = WarpOptions::distort();
+    options.source_camera = Some(source.clone());
+    options.method = WarpMethod::PerPixel(InverseMethod::Newton);
+    let mut warper = Warper::new(device.gpu(), &camera, &options).unwrap();
+    assert_eq!(warper.input_size(), (source.width, source.height));
+    assert_eq!(warper.output_size(), (camera.width, camera.height));
+    assert_eq!(warper.source_camera().intrinsics, source.intrinsics);
+    assert_eq!(warper.direction(), WarpDirection::Distort);
+    let input = pattern(source.width, source.height);
+    let first = warper.run(&device, &input).unwrap();
+    // Built once, run again: the same image.
+    let second = warper.run(&device, &input).unwrap();
+    assert_eq!(first.image, second.image);
+    assert_eq!(first.mask, second.mask);
+    // Against the f64 reference warp: within one grey level where both have a source.
+    let (reference, mask) = cpu_warp::warp(
+        warper.geometry(),
+        &input,
+        vklens::Sampling::Bilinear,
+        [0.0; 4],
+    );
+    let mut worst = 0f32;
+    for i in 0..reference.len() {
+        if mask[i] == 255 && first.mask[i] {
+            let (a, b) = (reference.rgba_f32(i), first.image.rgba_f32(i));
+            worst = (0..4).map(|c| (a[c] - b[c]).abs()).fold(worst, f32::max);
+        }
+    }
+    assert!(worst <= 1.0 / 255.0 + 1e-6, "worst {worst}");
+    // The maps: the exact source coordinate of every pixel, NaN where there is none.
+    let maps = warper.maps(&device).unwrap();
+    let (w, h) = warper.output_size();
+    assert_eq!(maps.len(), (w * h) as usize);
+    let mut compared = 0;
+    for y in (0..h).step_by(37) {
+        for x in (0..w).step_by(41) {
+            let m = maps[(y * w + x) as usize];
+            let exact = warper
+                .geometry()
+                .source_coordinate(glam::DVec2::new(x as f64, y as f64), 1);
+            match exact {
+                Some(e) => {
+                    let d = (m[0] as f64 - e.x).hypot(m[1] as f64 - e.y);
+                    assert!(d < 1e-3, "({x}, {y}): map off by {d} px");
+                    compared += 1;
+                }
+                None => assert!(m[0].is_nan() && m[1].is_nan(), "({x}, {y}): {m:?}"),
+            }
+        }
+    }
+    assert!(compared > 100);
+    // Wrong input: named, nothing run.
+    let small = pattern(10, 10);
+    let e = warper.run(&device, &small).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Input);
+    assert!(e.to_string().contains("10×10"), "{e}");
+    assert_no_validation_messages(device.context());
+}
+
+#[test]
+fn warper_options_are_checked_with_the_reason() {
+    let device = device();
+    let camera = common::reference_camera("seed_fig2");
+    let mut options = WarpOptions::undistort();
+    options.method = WarpMethod::PerPixel(InverseMethod::Heikkila);
+    let e = Warper::new(device.gpu(), &camera, &options).err().unwrap();
+    assert!(e.to_string().contains("forward model"), "{e}");
+    let mut options = WarpOptions::distort();
+    options.source_camera = Some(camera.clone());
+    let e = Warper::new(device.gpu(), &camera, &options).err().unwrap();
+    assert!(e.to_string().contains("no distortion"), "{e}");
+    let mut options = WarpOptions::distort();
+    options.format = PixelFormat::R32Uint;
+    let e = Warper::new(device.gpu(), &camera, &options).err().unwrap();
+    assert!(e.to_string().contains("nearest"), "{e}");
+    assert!("bisection".parse::<WarpMethod>().is_err());
+    assert_eq!("lut".parse::<WarpMethod>().unwrap(), WarpMethod::Lut);
+    assert!("sideways".parse::<WarpDirection>().is_err());
+    assert_no_validation_messages(device.context());
+}
+
+#[test]
+fn a_scene_renderer_plans_once_and_renders_every_pose() {
+    let device = device();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/ids_and_flow.toml");
+    let scene = SceneRenderer::load(&path).unwrap();
+    assert!(!scene.plan().steps.is_empty());
+    let frames = scene.render_all(&device).unwrap();
+    assert_eq!(frames.len(), scene.frame_count());
+    for (i, f) in frames.iter().enumerate() {
+        assert_eq!(f.index, i);
+        assert!(f.rendered.ids.is_some() && f.rendered.flow.is_some());
+    }
+    let e = scene
+        .render(&device, 0..scene.frame_count() + 1, &mut |_| Ok(()))
+        .unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Input);
+    let e = SceneRenderer::parse("[geometry]\nscene = 3\n", &path)
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("[geometry] scene"), "{e}");
+    assert_no_validation_messages(device.context());
+}
+
+#[test]
+fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
+    use ash::vk;
+    use vklens::internal::gpu::{image_barrier, record_compute_download, Buffer, Image};
+    use vklens::ImageRef;
+    let device = device();
+    let gpu = device.gpu();
+    let camera = common::reference_camera("prism_tilt");
+    let (w, h) = (camera.width, camera.height);
+    let mut warper = Warper::new(gpu, &camera, &WarpOptions::distort()).unwrap();
+    let input = pattern(w, h);
+    let expected = warper.run(&device, &input).unwrap();
+    // The caller's images and staging, as an engine would have them.
+    let usage = vk::ImageUsageFlags::STORAGE
+        | vk::ImageUsageFlags::TRANSFER_SRC
+        | vk::ImageUsageFlags::TRANSFER_DST;
+    let fmt = vk::Format::R8G8B8A8_UNORM;
+    let source = Image::new_2d(gpu, "caller.source", fmt, w, h, usage).unwrap();
+    let output = Image::new_2d(gpu, "caller.output", fmt, w, h, usage).unwrap();
+    let Pixels::Rgba8(px) = &input.pixels else {
+        unreachable!()
+    };
+    let upload = Buffer::from_pod(
+        gpu,
+        "caller.upload",
+        bytemuck::cast_slice::<[u8; 4], u8>(px),
+        vk::BufferUsageFlags::TRANSFER_SRC,
+    )
+    .unwrap();
+    let download = Buffer::new(
+        gpu,
+        "caller.download",
+        (w * h * 4) as u64,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        gpu_allocator::MemoryLocation::GpuToCpu,
+    )
+    .unwrap();
+    let r = |i: &Image| ImageRef {
+        image: i.raw,
+        view: i.view,
+        width: i.extent.width,
+        height: i.extent.height,
+    };
+    // A wrong size is refused before anything is recorded.
+    let tiny = Image::new_2d(gpu, "caller.tiny", fmt, 8, 8, usage).unwrap();
+    let refused = device
+        .context()
+        .submit(|cmd| unsafe { warper.record(cmd, &r(&tiny), &r(&output), None) });
+    assert!(refused.unwrap_err().to_string().contains("8×8"));
+    device
+        .context()
+        .submit(|cmd| {
+            let top = (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty());
+            let copy_w = (
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            );
+            let read = (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_READ,
+            );
+            let write = (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_WRITE,
+            );
+            unsafe {
+                let d = gpu.device();
+                image_barrier(
+                    gpu,
+                    cmd,
+                    source.raw,
+                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+                    top,
+                    copy_w,
+                );
+                d.cmd_copy_buffer_to_image(
+                    cmd,
+                    upload.raw,
+                    source.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[source.whole_copy()],
+                );
+                image_barrier(
+                    gpu,
+                    cmd,
+                    source.raw,
+                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::GENERAL),
+                    copy_w,
+                    read,
+                );
+                image_barrier(
+                    gpu,
+                    cmd,
+                    output.raw,
+                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                    top,
+                    write,
+                );
+                // The map was built by `run` on this warper already; an engine records the
+                // prepare once. Recording it again rebuilds the same map.
+                warper.record_prepare(cmd);
+                warper.record(cmd, &r(&source), &r(&output), None)?;
+                record_compute_download(gpu, cmd, &output, &download);
+                vklens::internal::gpu::host_read_barrier(gpu, cmd);
+            }
+            Ok(())
+        })
+        .unwrap();
+    let got: Vec<[u8; 4]> = download.read_pod((w * h) as usize).unwrap();
+    assert_eq!(Pixels::Rgba8(got), expected.image.pixels, "record and run differ");
+    assert_no_validation_messages(device.context());
+}

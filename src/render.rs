@@ -349,7 +349,8 @@ impl WarpStage {
             },
         )?;
         let color = targets.color().ok_or_else(|| invalid("no colour target"))?;
-        warp.bind(color.view, output.view, mask.view);
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { warp.bind(color.view, output.view, mask.view) };
         let depth = match targets.depth() {
             Some(source) => {
                 // Depth follows the lens itself (the green channel's reference geometry,
@@ -373,7 +374,8 @@ impl WarpStage {
                 let r32f = PixelFormat::R32Float.vk();
                 let output = Image::new_2d(gpu, "warp_path.depth", r32f, ow, oh, usage)?;
                 // Neither warp writes its mask (write_mask is off): they can share one.
-                depth_warp.bind(source.view, output.view, mask.view);
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { depth_warp.bind(source.view, output.view, mask.view) };
                 let download = Buffer::new(
                     gpu,
                     "warp_path.depth.download",
@@ -587,7 +589,8 @@ impl<'a> SceneRenderer<'a> {
         };
         let index = match self.passes.iter().position(|(p, _)| reusable(p)) {
             Some(i) => {
-                self.passes[i].0.set_camera(&desc.camera)?;
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { self.passes[i].0.set_camera(&desc.camera) }?;
                 i
             }
             None => {
@@ -602,8 +605,10 @@ impl<'a> SceneRenderer<'a> {
             kind: geometry_kind(pass),
             constants: pass.pipeline().constants.clone(),
         });
-        pass.bind_mesh(mesh);
-        pass.set_frame(pose, previous)?;
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { pass.bind_mesh(mesh) };
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { pass.set_frame(pose, previous) }?;
         let (pass, targets) = (&*pass, &*targets);
         self.ctx.submit(|cmd| {
             // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
@@ -649,8 +654,10 @@ impl<'a> SceneRenderer<'a> {
         let index = match self.warp_stages.iter().position(reusable) {
             Some(i) => {
                 let st = &mut self.warp_stages[i];
-                st.pass.set_camera(&source)?;
-                st.warp.retarget(geometry)?;
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { st.pass.set_camera(&source) }?;
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { st.warp.retarget(geometry) }?;
                 i
             }
             None => {
@@ -678,8 +685,10 @@ impl<'a> SceneRenderer<'a> {
                 st.warp.pipeline().constants.clone(),
             )],
         });
-        st.pass.bind_mesh(mesh);
-        st.pass.set_frame(pose, pose)?;
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { st.pass.bind_mesh(mesh) };
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { st.pass.set_frame(pose, pose) }?;
         let st = &*st;
         self.ctx.submit(|cmd| {
             // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,

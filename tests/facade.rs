@@ -72,8 +72,8 @@ fn points_match_opencv_on_every_reference_camera() {
             assert!((q[0] - got[0]).abs() < 1e-9 && (q[1] - got[1]).abs() < 1e-9);
             // Inside the valid domain the inverse returns the point; outside it says so.
             if let Some(x) = back[i] {
-                let e = (x[0] - p.undistorted_normalized[0])
-                    .hypot(x[1] - p.undistorted_normalized[1]);
+                let e =
+                    (x[0] - p.undistorted_normalized[0]).hypot(x[1] - p.undistorted_normalized[1]);
                 assert!(e < 1e-9, "{} point {i}: inverse off by {e}", case.name);
                 inverted += 1;
             }
@@ -82,7 +82,10 @@ fn points_match_opencv_on_every_reference_camera() {
     }
     // Behind the camera: no pixel.
     let camera = common::reference_camera("seed_fig2");
-    assert_eq!(camera.project_points(&[[0.0, 0.0, -1.0], [1.0, 1.0, 0.0]]), [None, None]);
+    assert_eq!(
+        camera.project_points(&[[0.0, 0.0, -1.0], [1.0, 1.0, 0.0]]),
+        [None, None]
+    );
 }
 
 #[test]
@@ -116,10 +119,14 @@ fn cameras_load_save_and_refuse_what_opencv_cannot_mean() {
     assert!(bad(nan, &[0.0; 5], (800, 600)).to_string().contains("K"));
     let mut skew = k;
     skew[0][1] = 0.5;
-    assert!(bad(skew, &[0.0; 5], (800, 600)).to_string().contains("skew"));
+    assert!(bad(skew, &[0.0; 5], (800, 600))
+        .to_string()
+        .contains("skew"));
     let mut negative = k;
     negative[0][0] = -400.0;
-    assert!(bad(negative, &[0.0; 5], (800, 600)).to_string().contains("fx"));
+    assert!(bad(negative, &[0.0; 5], (800, 600))
+        .to_string()
+        .contains("fx"));
     assert_eq!(bad(k, &[0.0; 5], (0, 600)).kind(), ErrorKind::Input);
     let missing = Camera::load(dir.join("none.json")).unwrap_err();
     assert_eq!(missing.kind(), ErrorKind::Io);
@@ -155,8 +162,8 @@ fn a_warper_runs_like_the_reference_warp_and_its_maps_are_the_exact_coordinates(
         [0.0; 4],
     );
     let mut worst = 0f32;
-    for i in 0..reference.len() {
-        if mask[i] == 255 && first.mask[i] {
+    for (i, (&m, &valid)) in mask.iter().zip(&first.mask).enumerate() {
+        if m == 255 && valid {
             let (a, b) = (reference.rgba_f32(i), first.image.rgba_f32(i));
             worst = (0..4).map(|c| (a[c] - b[c]).abs()).fold(worst, f32::max);
         }
@@ -289,7 +296,10 @@ fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
     device
         .context()
         .submit(|cmd| {
-            let top = (vk::PipelineStageFlags::TOP_OF_PIPE, vk::AccessFlags::empty());
+            let top = (
+                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::AccessFlags::empty(),
+            );
             let copy_w = (
                 vk::PipelineStageFlags::TRANSFER,
                 vk::AccessFlags::TRANSFER_WRITE,
@@ -308,7 +318,10 @@ fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
                     gpu,
                     cmd,
                     source.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+                    (
+                        vk::ImageLayout::UNDEFINED,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    ),
                     top,
                     copy_w,
                 );
@@ -323,7 +336,10 @@ fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
                     gpu,
                     cmd,
                     source.raw,
-                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::GENERAL),
+                    (
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        vk::ImageLayout::GENERAL,
+                    ),
                     copy_w,
                     read,
                 );
@@ -346,6 +362,10 @@ fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
         })
         .unwrap();
     let got: Vec<[u8; 4]> = download.read_pod((w * h) as usize).unwrap();
-    assert_eq!(Pixels::Rgba8(got), expected.image.pixels, "record and run differ");
+    assert_eq!(
+        Pixels::Rgba8(got),
+        expected.image.pixels,
+        "record and run differ"
+    );
     assert_no_validation_messages(device.context());
 }

@@ -336,7 +336,8 @@ fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
     // … equals the same frame recorded by the caller (here the context's command buffer
     // stands for an engine's), IDs exactly.
     let mut recorder = PlanRecorder::new(ctx.gpu(), &p, &scene).unwrap();
-    recorder.prepare(1).unwrap();
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { recorder.prepare(1) }.unwrap();
     let queries = QueryPool::timestamps(ctx.gpu(), recorder.timestamp_count()).unwrap();
     let (_, targets) = recorder.images();
     let targets = targets.unwrap();
@@ -384,7 +385,8 @@ fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
     .unwrap();
     let expected = expected.unwrap().depth.expect("execute() writes depth");
     let mut recorder = vklens::internal::plan::record::PlanRecorder::new(gpu, &p, &scene).unwrap();
-    recorder.prepare(0).unwrap();
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { recorder.prepare(0) }.unwrap();
     let image = recorder
         .warped_depth()
         .expect("the warp route records depth");

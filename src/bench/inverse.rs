@@ -254,7 +254,8 @@ fn gpu_run(
         MemoryLocation::GpuToCpu,
     )?;
     let mut pass = PointsPass::new(gpu, cam, PointsMode::Undistort(method), precision)?;
-    pass.bind(&inputs, &outputs);
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.bind(&inputs, &outputs) };
     // Warm-up run (the driver compiles the pipeline at its first dispatch); its results are
     // the ones checked for accuracy.
     ctx.submit(|cmd| {

@@ -71,8 +71,10 @@ fn prepare(
     let mut pass = GeometryPass::new(gpu, desc)?;
     let targets = GeometryTargets::new(gpu, &pass)?;
     let buffers = MeshBuffers::new(gpu, mesh, scene.texture.as_ref())?;
-    pass.bind_mesh(&buffers);
-    pass.set_frame(pose, pose)?;
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.bind_mesh(&buffers) };
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.set_frame(pose, pose) }?;
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
         // `buffers` outlives the submission, which `submit` waits for.
@@ -152,8 +154,10 @@ fn time_pinhole_and_warp(
         [0.0; 4],
     )?;
     let mesh = MeshBuffers::new(gpu, &scene.mesh, scene.texture.as_ref())?;
-    stage.pass.bind_mesh(&mesh);
-    stage.pass.set_frame(pose, pose)?;
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { stage.pass.bind_mesh(&mesh) };
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { stage.pass.set_frame(pose, pose) }?;
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
         // the context's graphics+compute queue; `stage` is new, so nothing using its images is
@@ -290,7 +294,8 @@ pub fn run(
                 MeshWarpOutput::Image,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             )?;
-            pass.bind(texture.image.view);
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { pass.bind(texture.image.view) };
             let target = MeshWarpTarget::new(gpu, &pass)?;
             let (wall, gpu_ms) =
                 // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is
@@ -320,7 +325,8 @@ pub fn run(
             };
             let images = WarpImages::new(gpu, &desc, &source)?;
             let mut pass = WarpPass::new(gpu, desc)?;
-            pass.bind(images.source.view, images.output.view, images.mask.view);
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
             ctx.submit(|cmd| {
                 // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render
                 // pass, on a compute queue; `pass` is new and bound above, so no prepare of it

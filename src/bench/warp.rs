@@ -220,7 +220,8 @@ pub fn run(
             Ok(())
         })?;
         let mut copy = CopyPass::new(gpu, w, h)?;
-        copy.bind(images.source.view, images.output.view);
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { copy.bind(images.source.view, images.output.view) };
         // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is recording,
         // outside any render pass, and waits for each submission; the upload above left both
         // bound images in GENERAL with the source's writes visible to compute.
@@ -231,7 +232,8 @@ pub fn run(
         for (label, coordinates) in MAP_BUILDS {
             progress(&format!("{w}×{h} inverse map {label}"));
             let mut build = WarpPass::new(gpu, desc(&plain, coordinates))?;
-            build.bind(images.source.view, images.output.view, images.mask.view);
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { build.bind(images.source.view, images.output.view, images.mask.view) };
             // A map build is a once-per-camera cost: time single builds (median of 3) after a
             // warm-up build.
             let mut times = Vec::new();
@@ -271,7 +273,8 @@ pub fn run(
                     if chromatic { " chromatic" } else { "" }
                 ));
                 let mut pass = WarpPass::new(gpu, desc(&g, coordinates))?;
-                pass.bind(images.source.view, images.output.view, images.mask.view);
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
                 ctx.submit(|cmd| {
                     // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render
                     // pass, on a compute queue; `pass` is new, so no prepare of it is pending.
@@ -294,7 +297,8 @@ pub fn run(
                     ));
                     let mut raster =
                         RasterWarpPass::new(gpu, &pass, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)?;
-                    raster.bind(images.source.view);
+                    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                    unsafe { raster.bind(images.source.view) };
                     let target = MeshWarpTarget::for_render_pass(
                         gpu,
                         &raster.render_pass,

@@ -384,16 +384,19 @@ impl Warper {
             output.view,
             mask.map_or(self.own_mask.view, |m| m.view),
         ];
-        // SAFETY: the caller guarantees no recorded warp of this warper is pending when the
-        // views change (see `# Safety`).
-        self.bind(views);
+        // SAFETY: the caller guarantees that no recorded warp of this warper is pending when
+        // the views change (see `# Safety`).
+        unsafe { self.bind(views) };
         unsafe { self.pass.record(cmd) };
         Ok(())
     }
 
-    fn bind(&mut self, views: [vk::ImageView; 3]) {
+    /// # Safety
+    /// When `views` differ from the bound ones, no recorded warp of this warper may be pending.
+    unsafe fn bind(&mut self, views: [vk::ImageView; 3]) {
         if self.bound != Some(views) {
-            self.pass.bind(views[0], views[1], views[2]);
+            // SAFETY: the caller upholds this function's contract.
+            unsafe { self.pass.bind(views[0], views[1], views[2]) };
             self.bound = Some(views);
         }
     }
@@ -429,15 +432,16 @@ impl Warper {
             Some(images) => images.stage(image)?,
             None => self.headless = Some(WarpImages::new(&self.gpu, self.pass.desc(), image)?),
         }
+        let views = match &self.headless {
+            Some(i) => [i.source.view, i.output.view, i.mask.view],
+            None => return Err(Error::internal("headless warp images missing")),
+        };
+        // SAFETY: the previous run has completed (`submit` waits on its fence), and a caller's
+        // recorded warp is theirs to have waited for (`record`'s contract).
+        unsafe { self.bind(views) };
         let Some(images) = self.headless.as_ref() else {
             return Err(Error::internal("headless warp images missing"));
         };
-        let views = [images.source.view, images.output.view, images.mask.view];
-        // The previous run has completed (`submit` waits), so rebinding cannot race it.
-        if self.bound != Some(views) {
-            self.pass.bind(views[0], views[1], views[2]);
-            self.bound = Some(views);
-        }
         let prepare = !self.prepared_headless;
         let gpu = &self.gpu;
         let pass = &self.pass;

@@ -39,7 +39,12 @@ impl CopyPass {
     }
 
     /// Binds the source and destination (storage images in `GENERAL` layout).
-    pub fn bind(&mut self, source: vk::ImageView, target: vk::ImageView) {
+    ///
+    /// # Safety
+    /// This rewrites the pass's descriptor set: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn bind(&mut self, source: vk::ImageView, target: vk::ImageView) {
         write_storage_image_descriptors(&self.gpu, self.set, &[(0, source), (1, target)]);
     }
 

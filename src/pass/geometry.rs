@@ -439,7 +439,8 @@ impl GeometryPass {
             frame,
             discard_bound,
         };
-        pass.set_frame(&Pose::IDENTITY, &Pose::IDENTITY)?;
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { pass.set_frame(&Pose::IDENTITY, &Pose::IDENTITY) }?;
         Ok(pass)
     }
 
@@ -479,7 +480,12 @@ impl GeometryPass {
     /// Switches to another camera of the same size and terms without rebuilding the pipeline
     /// (jittered passes, a calibration set's views, a zoom). Call [`Self::set_frame`] after
     /// it: the projection changes with the intrinsics. Host write, like `set_frame`.
-    pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
+    ///
+    /// # Safety
+    /// This writes the pass's host-visible camera uniform: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         if !self.accepts_camera(camera) {
             return Err(Error::Input(
                 "set_camera needs the same image size and distortion terms; build a new pass"
@@ -495,7 +501,12 @@ impl GeometryPass {
 
     /// Sets the pose to render from and the pose flow is measured from. Host write: call it
     /// while no recorded draw of this pass is executing.
-    pub fn set_frame(&self, pose: &Pose, previous: &Pose) -> Result<()> {
+    ///
+    /// # Safety
+    /// This writes the pass's host-visible pose uniform: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn set_frame(&self, pose: &Pose, previous: &Pose) -> Result<()> {
         let frame = self.frame_data(&self.desc.camera, self.discard_bound, pose, previous);
         self.frame.write(0, bytemuck::bytes_of(&frame))
     }
@@ -562,7 +573,12 @@ impl GeometryPass {
     /// Fills slot `i` with `camera` (same size and terms as the pass, see
     /// [`Self::accepts_camera`]) seen from `pose`. Host write: no recorded draw of the slot
     /// may be executing.
-    pub fn set_slot(
+    ///
+    /// # Safety
+    /// This writes a slot's host-visible uniforms: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn set_slot(
         &self,
         slots: &GeometrySlots,
         i: usize,
@@ -587,7 +603,12 @@ impl GeometryPass {
     }
 
     /// Points every slot at `mesh`'s texture.
-    pub fn bind_slots_mesh(&self, slots: &GeometrySlots, mesh: &MeshBuffers) {
+    ///
+    /// # Safety
+    /// This rewrites the slots' descriptor sets: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn bind_slots_mesh(&self, slots: &GeometrySlots, mesh: &MeshBuffers) {
         for slot in &slots.slots {
             self.write_texture(slot.set, mesh);
         }
@@ -614,7 +635,12 @@ impl GeometryPass {
     }
 
     /// Points the pass at `mesh`'s texture.
-    pub fn bind_mesh(&mut self, mesh: &MeshBuffers) {
+    ///
+    /// # Safety
+    /// This rewrites the pass's descriptor set: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn bind_mesh(&mut self, mesh: &MeshBuffers) {
         self.write_texture(self.set, mesh);
     }
 
@@ -950,8 +976,10 @@ pub fn render(
     let gpu = ctx.gpu();
     let buffers = MeshBuffers::new(gpu, mesh, texture)?;
     let mut pass = GeometryPass::new(gpu, desc)?;
-    pass.bind_mesh(&buffers);
-    pass.set_frame(pose, previous)?;
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.bind_mesh(&buffers) };
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.set_frame(pose, previous) }?;
     let targets = GeometryTargets::new(gpu, &pass)?;
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on

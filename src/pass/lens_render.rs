@@ -214,7 +214,12 @@ impl LensRenderer {
     /// Prepares a frame of `mesh` seen from `pose` (world → camera frame, origin at the lens's
     /// front vertex): writes every cell's camera and pose. Host writes: no recorded frame of
     /// this renderer may be executing.
-    pub fn prepare(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<()> {
+    ///
+    /// # Safety
+    /// This writes host-visible uniforms and rewrites descriptor sets: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn prepare(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<()> {
         for b in &self.buckets {
             b.pass.bind_slots_mesh(&b.slots, mesh);
         }
@@ -271,7 +276,8 @@ impl LensRenderer {
     /// Renders and reads back one frame of `mesh` (uploaded, its texture recorded, see
     /// [`MeshBuffers::record_upload`]) seen from `pose`, on the headless context.
     pub fn render(&mut self, ctx: &Context, mesh: &MeshBuffers, pose: &Pose) -> Result<LensFrame> {
-        self.prepare(mesh, pose)?;
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { self.prepare(mesh, pose) }?;
         let start = Instant::now();
         let this = &*self;
         ctx.submit(|cmd| {

@@ -198,7 +198,12 @@ impl MeshWarpPass {
     }
 
     /// Points the pass at the source (a sampled image in `SHADER_READ_ONLY_OPTIMAL`).
-    pub fn bind(&mut self, source: vk::ImageView) {
+    ///
+    /// # Safety
+    /// This rewrites the pass's descriptor set: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn bind(&mut self, source: vk::ImageView) {
         let info = [vk::DescriptorImageInfo {
             sampler: self.sampler.raw,
             image_view: source,
@@ -361,7 +366,8 @@ pub fn run_mesh_warp(
         output,
         vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
     )?;
-    pass.bind(texture.image.view);
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.bind(texture.image.view) };
     let target = MeshWarpTarget::new(gpu, &pass)?;
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.

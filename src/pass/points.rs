@@ -143,7 +143,12 @@ impl PointsPass {
 
     /// Points the pass at `inputs` (`vec2` per point; `dvec2` in f64) and `outputs` (`vec4`
     /// per point: result xy, valid flag; `dvec4` in f64). Must not be called while a recorded dispatch is pending.
-    pub fn bind(&mut self, inputs: &Buffer, outputs: &Buffer) {
+    ///
+    /// # Safety
+    /// This rewrites the pass's descriptor set: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn bind(&mut self, inputs: &Buffer, outputs: &Buffer) {
         write_buffer_descriptors(
             &self.gpu,
             self.set,
@@ -213,7 +218,8 @@ pub fn run_points(
             usage,
             MemoryLocation::GpuToCpu,
         )?;
-        pass.bind(&in_buf, &out_buf);
+        // SAFETY: no submission using it is pending (`submit` waits on its fence).
+        unsafe { pass.bind(&in_buf, &out_buf) };
         ctx.submit(|cmd| {
             // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
             // `in_buf` and `out_buf` (bound above) hold `chunk.len()` points, at most

@@ -407,7 +407,12 @@ impl WarpPass {
     /// method, chromatic scales and distortion terms (all compiled in) — e.g. the same lens
     /// with its image translated (jittered passes) — without rebuilding the pipeline. Host
     /// write: not while recorded work using the pass is pending.
-    pub fn retarget(&mut self, geometry: WarpGeometry) -> Result<()> {
+    ///
+    /// # Safety
+    /// This writes the pass's host-visible camera uniform: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn retarget(&mut self, geometry: WarpGeometry) -> Result<()> {
         let g = &self.desc.geometry;
         let same = self.desc.coordinates == Coordinates::Analytic
             && geometry.channel_cameras.is_none()
@@ -470,7 +475,17 @@ impl WarpPass {
     /// `GENERAL` layout when the recorded work runs): the source (`source_size`, this pass's
     /// format), the output (`output_size`, same format) and the mask (`output_size`,
     /// `R8_UNORM`: 1 valid, 0 filled). Not while recorded work using the pass is pending.
-    pub fn bind(&mut self, source: vk::ImageView, output: vk::ImageView, mask: vk::ImageView) {
+    ///
+    /// # Safety
+    /// This rewrites the pass's descriptor set: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn bind(
+        &mut self,
+        source: vk::ImageView,
+        output: vk::ImageView,
+        mask: vk::ImageView,
+    ) {
         write_storage_image_descriptors(
             &self.gpu,
             self.set,
@@ -784,7 +799,8 @@ pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raste
     let gpu = ctx.gpu();
     let images = WarpImages::new(gpu, &desc, source)?;
     let mut pass = WarpPass::new(gpu, desc)?;
-    pass.bind(images.source.view, images.output.view, images.mask.view);
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
         // the context's compute+graphics queue. The calls come in the order their contracts

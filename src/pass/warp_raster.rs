@@ -97,7 +97,12 @@ impl RasterWarpPass {
 
     /// Points the pass at the source: a view of a storage image of the warp's source size and
     /// format, in `GENERAL` layout when the recorded work runs.
-    pub fn bind(&mut self, source: vk::ImageView) {
+    ///
+    /// # Safety
+    /// This rewrites the pass's descriptor set: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn bind(&mut self, source: vk::ImageView) {
         write_storage_image_descriptors(&self.gpu, self.set, &[(3, source)]);
     }
 
@@ -142,7 +147,8 @@ pub fn run_raster_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result
     let images = WarpImages::new(gpu, &desc, source)?;
     let maps = WarpPass::new(gpu, desc)?;
     let mut pass = RasterWarpPass::new(gpu, &maps, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
-    pass.bind(images.source.view);
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.bind(images.source.view) };
     let target =
         MeshWarpTarget::for_render_pass(gpu, &pass.render_pass, pass.output_size, pass.format)?;
     ctx.submit(|cmd| {

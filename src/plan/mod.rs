@@ -336,7 +336,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             })
         }
         scene_file::OpticsSpec::Camera(path) => {
-            let mut camera = crate::io::load_camera(path).map_err(Error::from)?;
+            let mut camera = crate::io::load_camera(path)?;
             if e.vignetting || e.depth_of_field {
                 let key = if e.vignetting {
                     "vignetting"
@@ -725,7 +725,8 @@ pub fn execute(
         let start = Instant::now();
         let mut rendered = match &mut main {
             Some(r) => {
-                r.prepare(index)?;
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { r.prepare(index) }?;
                 let stamps = if timed && first_timed {
                     queries.as_ref()
                 } else {
@@ -736,12 +737,14 @@ pub fn execute(
             None => Rendered::default(),
         };
         if let (Some(r), Some(cam)) = (&mut smooth, &camera) {
-            r.prepare(index)?;
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { r.prepare(index) }?;
             let mut images = Vec::new();
             for offset in crate::render::jitter_offsets(plan.antialias.jitter) {
                 let shift = offset / s as f64;
                 let big = crate::render::scaled_camera(&crate::render::shifted(cam, shift)?, s)?;
-                r.jitter(&big, shift * s as f64)?;
+                // SAFETY: the last pass's submission has completed (`submit` waits).
+                unsafe { r.jitter(&big, shift * s as f64) }?;
                 let colour = run(r, None)?
                     .color
                     .ok_or_else(|| Error::internal("the anti-aliased pass rendered no colour"))?;

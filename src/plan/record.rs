@@ -279,11 +279,14 @@ impl PlanRecorder {
 
     /// Moves the lens to `camera` (same size and terms as built) and the warp's pinhole source
     /// by `source_shift` pixels: one jittered pass of anti-aliasing, which renders the same
-    /// image translated (Alg. 1 normalizes with the same cx, cy). Host writes: no recorded
-    /// frame may be executing.
-    pub(crate) fn jitter(&mut self, camera: &Camera, source_shift: DVec2) -> Result<()> {
+    /// image translated (Alg. 1 normalizes with the same cx, cy).
+    ///
+    /// # Safety
+    /// Host writes to uniforms the recorded frames read: no recorded frame may be pending.
+    pub(crate) unsafe fn jitter(&mut self, camera: &Camera, source_shift: DVec2) -> Result<()> {
         if let Some((pass, _)) = &mut self.geometry {
-            pass.set_camera(camera)?;
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { pass.set_camera(camera) }?;
         }
         if let (Some(st), Some((source, built))) = (&mut self.warp, &self.warp_source) {
             let mut k = source.intrinsics;
@@ -295,8 +298,10 @@ impl PlanRecorder {
             if let Some(scales) = built.chromatic {
                 g = g.with_chromatic(scales)?;
             }
-            st.pass.set_camera(&moved)?;
-            st.warp.retarget(g)?;
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { st.pass.set_camera(&moved) }?;
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { st.warp.retarget(g) }?;
         }
         Ok(())
     }
@@ -312,7 +317,12 @@ impl PlanRecorder {
     }
 
     /// Sets frame `index`'s pose (host writes: no recorded frame may be executing).
-    pub fn prepare(&mut self, index: usize) -> Result<()> {
+    ///
+    /// # Safety
+    /// This writes host-visible uniforms and rewrites descriptor sets: no recorded work that uses
+    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// requires of descriptor sets and memory the device reads.
+    pub unsafe fn prepare(&mut self, index: usize) -> Result<()> {
         let pose = *self
             .poses
             .get(index)

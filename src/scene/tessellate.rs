@@ -120,6 +120,46 @@ pub fn longest_edge_px(mesh: &Mesh, pose: &Pose, intrinsics: &Intrinsics) -> f64
         .fold(0.0, f64::max)
 }
 
+/// The largest distance (px) between an edge's true image through the lens and the straight
+/// segment the rasterizer draws between its moved end points, over the edges whose image is
+/// inside the frame (sampled at t = 1/4, 1/2, 3/4).
+pub fn straight_line_error(camera: &Camera, pose: &Pose, mesh: &Mesh) -> f64 {
+    let project = |i: u32| camera.project(pose.apply(mesh.vertices[i as usize].position()));
+    let inside = |p: DVec2| {
+        p.x >= -0.5
+            && p.y >= -0.5
+            && p.x <= camera.width as f64 - 0.5
+            && p.y <= camera.height as f64 - 0.5
+    };
+    let mut seen = std::collections::HashSet::new();
+    let mut worst = 0f64;
+    for t in mesh.indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            if !seen.insert((a.min(b), a.max(b))) {
+                continue;
+            }
+            let (Some(pa), Some(pb)) = (project(a), project(b)) else {
+                continue;
+            };
+            if !inside(pa) || !inside(pb) {
+                continue;
+            }
+            let (wa, wb) = (
+                mesh.vertices[a as usize].position(),
+                mesh.vertices[b as usize].position(),
+            );
+            for s in [0.25, 0.5, 0.75] {
+                if let Some(p) = camera.project(pose.apply(wa + (wb - wa) * s)) {
+                    let d = pb - pa;
+                    let u = ((p - pa).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
+                    worst = worst.max((pa + d * u).distance(p));
+                }
+            }
+        }
+    }
+    worst
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -178,44 +218,4 @@ mod tests {
         assert!((area(&fine) - area(&scene.mesh)).abs() < 1e-6);
         assert!(tessellate(&scene.mesh, &pose, &camera, f64::NAN).is_err());
     }
-}
-
-/// The largest distance (px) between an edge's true image through the lens and the straight
-/// segment the rasterizer draws between its moved end points, over the edges whose image is
-/// inside the frame (sampled at t = 1/4, 1/2, 3/4).
-pub fn straight_line_error(camera: &Camera, pose: &Pose, mesh: &Mesh) -> f64 {
-    let project = |i: u32| camera.project(pose.apply(mesh.vertices[i as usize].position()));
-    let inside = |p: DVec2| {
-        p.x >= -0.5
-            && p.y >= -0.5
-            && p.x <= camera.width as f64 - 0.5
-            && p.y <= camera.height as f64 - 0.5
-    };
-    let mut seen = std::collections::HashSet::new();
-    let mut worst = 0f64;
-    for t in mesh.indices.chunks_exact(3) {
-        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-            if !seen.insert((a.min(b), a.max(b))) {
-                continue;
-            }
-            let (Some(pa), Some(pb)) = (project(a), project(b)) else {
-                continue;
-            };
-            if !inside(pa) || !inside(pb) {
-                continue;
-            }
-            let (wa, wb) = (
-                mesh.vertices[a as usize].position(),
-                mesh.vertices[b as usize].position(),
-            );
-            for s in [0.25, 0.5, 0.75] {
-                if let Some(p) = camera.project(pose.apply(wa + (wb - wa) * s)) {
-                    let d = pb - pa;
-                    let u = ((p - pa).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
-                    worst = worst.max((pa + d * u).distance(p));
-                }
-            }
-        }
-    }
-    worst
 }

@@ -56,4 +56,4 @@ pub use pass::warp::PixelFormat;
 #[doc(hidden)]
 pub mod internal;
 // Inside the crate every layer keeps its short path (`crate::model`, `crate::gpu`, ...).
-use internal::{bench, gpu, imaging, io, lens, model, pass, plan, render, scene};
+use internal::{bench, gpu, headless, imaging, io, lens, model, pass, plan, render, scene};

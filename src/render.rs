@@ -23,6 +23,7 @@ use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{image_barrier, Buffer, Context, Image};
+use crate::headless::warp::run_warp;
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;
@@ -32,7 +33,7 @@ use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     Rendered,
 };
-use crate::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc, WarpPass};
+use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
 use crate::scene::tessellate::tessellate;
 use crate::scene::{Mesh, Pose, Scene};
 

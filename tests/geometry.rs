@@ -5,10 +5,11 @@ mod common;
 
 use common::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::{DVec2, DVec3};
+use vklens::internal::headless::geometry::render;
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::model::{Camera, InverseMethod};
 use vklens::internal::pass::geometry::{
-    render, ColorFormat, GeometryDesc, Outputs, Projection, Rendered, DEFAULT_DELTA,
+    ColorFormat, GeometryDesc, Outputs, Projection, Rendered, DEFAULT_DELTA,
 };
 use vklens::internal::render::{render_scene, RenderPath, RenderRequest};
 use vklens::internal::scene::builtin::{self, Board};
@@ -402,7 +403,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
     };
     let geometry =
         vklens::internal::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
-    let (bilinear, _) = vklens::internal::pass::warp::run_warp(
+    let (bilinear, _) = vklens::internal::headless::warp::run_warp(
         &ctx,
         vklens::internal::pass::warp::WarpDesc {
             geometry,

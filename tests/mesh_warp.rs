@@ -5,12 +5,14 @@ mod common;
 
 use common::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::DVec2;
+use vklens::internal::headless::mesh_warp::run_mesh_warp;
+use vklens::internal::headless::warp::run_warp;
 use vklens::internal::imaging::cpu_warp::Sampling;
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::model::warp::WarpGeometry;
 use vklens::internal::model::InverseMethod;
-use vklens::internal::pass::mesh_warp::{run_mesh_warp, MeshWarpOutput};
-use vklens::internal::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
+use vklens::internal::pass::mesh_warp::MeshWarpOutput;
+use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc};
 
 #[test]
 fn mesh_error_shrinks_with_n_and_the_image_matches_the_compute_warp() {

@@ -3,15 +3,14 @@
 
 mod common;
 
+use vklens::internal::headless::warp::run_warp;
+use vklens::internal::headless::warp_raster::run_raster_warp;
 use vklens::internal::imaging::cpu_warp::{self, Sampling};
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::io::reference::load_reference;
 use vklens::internal::model::warp::WarpGeometry;
 use vklens::internal::model::InverseMethod;
-use vklens::internal::pass::warp::{
-    run_warp, Coordinates, MapInterpolation, PixelFormat, WarpDesc,
-};
-use vklens::internal::pass::warp_raster::run_raster_warp;
+use vklens::internal::pass::warp::{Coordinates, MapInterpolation, PixelFormat, WarpDesc};
 
 /// A test image with edges and smooth gradients in every channel.
 fn test_image(w: u32, h: u32) -> Raster {
@@ -198,8 +197,8 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
 #[test]
 fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
     use glam::DVec2;
+    use vklens::internal::headless::warp::read_maps;
     use vklens::internal::model::CameraModel;
-    use vklens::internal::pass::warp::read_maps;
     let ctx = common::validated_context();
     for name in ["prism_tilt", "rational_wide"] {
         let cam = common::reference_camera(name);
@@ -327,8 +326,8 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
     // Each map is of another camera (principal point moved by a third of a pixel), so that a
     // pixel left unwritten cannot pass on what an earlier map left in reused memory.
     use glam::DVec2;
+    use vklens::internal::headless::warp::read_maps;
     use vklens::internal::model::{Camera, Intrinsics};
-    use vklens::internal::pass::warp::read_maps;
     let ctx = common::validated_context();
     let mut variant = 0.0;
     for (w, h) in [(1, 1), (17, 9), (33, 20), (70, 9)] {

@@ -4,11 +4,12 @@
 mod common;
 
 use glam::DVec2;
+use vklens::internal::headless::warp::run_warp;
 use vklens::internal::imaging::cpu_warp::Sampling;
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::model::warp::WarpGeometry;
 use vklens::internal::model::{Camera, Intrinsics, InverseMethod};
-use vklens::internal::pass::warp::{run_warp, Coordinates, PixelFormat, WarpDesc};
+use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc};
 
 fn flat(w: u32, h: u32, v: u8) -> Raster {
     Raster {

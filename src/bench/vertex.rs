@@ -266,7 +266,7 @@ pub fn run(
         })?;
         for n in MESH_SIZES {
             progress(&format!("mesh warp: {w}×{h}, {n}×{n}"));
-            let coords = crate::pass::mesh_warp::run_mesh_warp(
+            let coords = crate::headless::mesh_warp::run_mesh_warp(
                 ctx,
                 &geometry,
                 n,

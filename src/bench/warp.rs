@@ -14,6 +14,7 @@ use glam::DVec2;
 use serde_json::{json, Value};
 
 use crate::gpu::{memory_barrier, Context, QueryPool, Result};
+use crate::headless::warp::read_maps;
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
@@ -21,7 +22,7 @@ use crate::model::{Camera, Intrinsics, InverseMethod};
 use crate::pass::copy::CopyPass;
 use crate::pass::mesh_warp::MeshWarpTarget;
 use crate::pass::warp::{
-    read_maps, Coordinates, MapInterpolation, PixelFormat, WarpDesc, WarpImages, WarpPass,
+    Coordinates, MapInterpolation, PixelFormat, WarpDesc, WarpImages, WarpPass,
 };
 use crate::pass::warp_raster::RasterWarpPass;
 

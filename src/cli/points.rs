@@ -7,8 +7,8 @@ use glam::DVec2;
 use serde_json::Value;
 
 use super::{context, finish, load_camera, Backend, CliError};
+use crate::headless::points::run_points;
 use crate::model::InverseMethod;
-use crate::pass::points::run_points;
 use crate::pass::{PointsMode, Precision};
 
 /// Most points accepted on stdin (a 16k × 16k image worth).

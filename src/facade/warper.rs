@@ -472,7 +472,7 @@ impl Warper {
     /// `cv2.remap`. Solved per pixel with Newton on the GPU (≤ 1e-3 px in f32).
     pub fn maps(&self, device: &Device) -> Result<Vec<[f32; 2]>> {
         let mut maps =
-            crate::pass::warp::read_maps(device.context(), &self.geometry, Coordinates::Map)?;
+            crate::headless::warp::read_maps(device.context(), &self.geometry, Coordinates::Map)?;
         // G is the geometric map (the only one without chromatic aberration).
         let index = if maps.len() == 3 { 1 } else { 0 };
         Ok(maps.swap_remove(index))

@@ -17,9 +17,8 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
 use crate::gpu::{
-    image_barrier, record_download, shaders, Attribute, Buffer, Context, DescriptorPool, Error,
-    Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
-    SpecConstants, Stage,
+    image_barrier, record_download, shaders, Attribute, Buffer, DescriptorPool, Error, Framebuffer,
+    Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
@@ -962,40 +961,6 @@ pub struct Rendered {
     pub flow: Option<Vec<[f32; 2]>>,
     /// Camera-frame z in metres; +inf where nothing was drawn.
     pub depth: Option<Vec<f32>>,
-}
-
-/// Renders `mesh` once through a headless context: upload, draw, read back.
-pub fn render(
-    ctx: &Context,
-    desc: GeometryDesc,
-    mesh: &Mesh,
-    texture: Option<&Raster>,
-    pose: &Pose,
-    previous: &Pose,
-) -> Result<Rendered> {
-    let gpu = ctx.gpu();
-    let buffers = MeshBuffers::new(gpu, mesh, texture)?;
-    let mut pass = GeometryPass::new(gpu, desc)?;
-    // SAFETY: no submission using it is pending (`submit` waits on its fence).
-    unsafe { pass.bind_mesh(&buffers) };
-    // SAFETY: no submission using it is pending (`submit` waits on its fence).
-    unsafe { pass.set_frame(pose, previous) }?;
-    let targets = GeometryTargets::new(gpu, &pass)?;
-    ctx.submit(|cmd| {
-        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
-        // a graphics queue; the texture upload comes before the draw that samples it and
-        // `targets` were made for `pass`. The download needs the outputs in
-        // TRANSFER_SRC_OPTIMAL: `GeometryDesc::new`'s default final layout, which this safe
-        // function assumes but does not check in `desc`. Everything outlives the submission,
-        // which `submit` waits for.
-        unsafe {
-            buffers.record_upload(cmd);
-            pass.record(cmd, &targets, &buffers);
-            targets.record_download(cmd);
-        }
-        Ok(())
-    })?;
-    targets.read()
 }
 
 #[cfg(test)]

@@ -13,8 +13,6 @@
 //! a pipeline and an image, in turn). [`LensRenderer::record`] records a frame into a
 //! command buffer the caller owns; [`LensRenderer::render`] is the headless caller.
 
-use std::time::Instant;
-
 use ash::vk;
 use glam::DVec2;
 
@@ -23,7 +21,7 @@ use super::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers,
 };
 use super::geometry::{Outputs, Projection};
-use crate::gpu::{Buffer, Context, Error, Gpu, Result};
+use crate::gpu::{Buffer, Error, Gpu, Result};
 use crate::lens::image_model::{Cell, ImageModel};
 use crate::model::{Camera, Intrinsics, OpenCvDistortion};
 use crate::scene::Pose;
@@ -50,7 +48,7 @@ impl Default for LensRenderOptions {
 }
 
 /// One cell to draw: its projection and its triangles in the film vertex buffer.
-struct CellDraw {
+pub(crate) struct CellDraw {
     camera: Camera,
     cop: glam::DVec3,
     bucket: usize,
@@ -89,9 +87,9 @@ pub struct LensFrame {
 /// of frames (poses) of one scene.
 pub struct LensRenderer {
     film: FilmPass,
-    target: FilmTarget,
+    pub(crate) target: FilmTarget,
     buckets: Vec<Bucket>,
-    draws: Vec<CellDraw>,
+    pub(crate) draws: Vec<CellDraw>,
     vertices: Buffer,
 }
 
@@ -271,38 +269,6 @@ impl LensRenderer {
     /// The film image the frame accumulates into.
     pub fn film(&self) -> &FilmTarget {
         &self.target
-    }
-
-    /// Renders and reads back one frame of `mesh` (uploaded, its texture recorded, see
-    /// [`MeshBuffers::record_upload`]) seen from `pose`, on the headless context.
-    pub fn render(&mut self, ctx: &Context, mesh: &MeshBuffers, pose: &Pose) -> Result<LensFrame> {
-        // SAFETY: no submission using it is pending (`submit` waits on its fence).
-        unsafe { self.prepare(mesh, pose) }?;
-        let start = Instant::now();
-        let this = &*self;
-        ctx.submit(|cmd| {
-            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
-            // on the context's graphics queue; `prepare` ran above with `mesh`, which the caller
-            // uploaded; `this` and `mesh` outlive the submission, which `submit` waits for.
-            unsafe { this.record(cmd, mesh) };
-            Ok(())
-        })?;
-        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        let target = &self.target;
-        ctx.submit(|cmd| {
-            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
-            // after the frame's submission completed, which left the film in
-            // COLOR_ATTACHMENT_OPTIMAL; `target` outlives this submission too.
-            unsafe { target.record_download(cmd) };
-            Ok(())
-        })?;
-        Ok(LensFrame {
-            width: target.width,
-            height: target.height,
-            pixels: target.read()?,
-            projections: self.draws.len(),
-            frame_ms,
-        })
     }
 }
 

@@ -13,10 +13,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
-use super::geometry::Texture;
 use crate::gpu::{
-    record_download, shaders, Buffer, Context, DescriptorPool, Error, Framebuffer, Gpu,
-    GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
+    record_download, shaders, Buffer, DescriptorPool, Error, Framebuffer, Gpu, GraphicsDesc,
+    GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 use crate::imaging::{Pixels, Raster};
 use crate::model::warp::WarpGeometry;
@@ -339,47 +338,4 @@ impl MeshWarpTarget {
             bit_depth: depth,
         })
     }
-}
-
-/// Runs a mesh warp once through a headless context: the warped image, or (with
-/// [`MeshWarpOutput::Coordinates`]) the interpolated source coordinates, alpha 0 where no cell
-/// was drawn.
-pub fn run_mesh_warp(
-    ctx: &Context,
-    geometry: &WarpGeometry,
-    n: u32,
-    output: MeshWarpOutput,
-    source: &Raster,
-) -> Result<Raster> {
-    let gpu = ctx.gpu();
-    if (source.width, source.height) != geometry.source_size {
-        return Err(Error::Input(format!(
-            "the source is {}×{} but the warp expects {}×{}",
-            source.width, source.height, geometry.source_size.0, geometry.source_size.1
-        )));
-    }
-    let texture = Texture::new(gpu, source)?;
-    let mut pass = MeshWarpPass::new(
-        gpu,
-        geometry,
-        n,
-        output,
-        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-    )?;
-    // SAFETY: no submission using it is pending (`submit` waits on its fence).
-    unsafe { pass.bind(texture.image.view) };
-    let target = MeshWarpTarget::new(gpu, &pass)?;
-    ctx.submit(|cmd| {
-        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.
-        // The upload leaves the texture in SHADER_READ_ONLY_OPTIMAL, visible to fragment
-        // shaders, before the warp samples it; the pass's final layout is TRANSFER_SRC_OPTIMAL,
-        // as the download needs; everything outlives the submission, which `submit` waits for.
-        unsafe {
-            texture.record_upload(cmd);
-            pass.record(cmd, &target.framebuffer);
-            target.record_download(gpu, cmd);
-        }
-        Ok(())
-    })?;
-    target.read()
 }

@@ -1,12 +1,10 @@
 //! The camera model on a list of points (`glsl/points.comp`).
 
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 
 use super::camera_params::{CameraParams, CameraParams64};
 use crate::gpu::{
-    host_read_barrier, shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context,
-    DescriptorPool, Error, Gpu, Result,
+    shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool, Error, Gpu, Result,
 };
 use crate::model::{Camera, InverseMethod};
 
@@ -28,7 +26,7 @@ pub enum Precision {
 
 impl Precision {
     /// Bytes per input point and per output point.
-    fn strides(self) -> (usize, usize) {
+    pub(crate) fn strides(self) -> (usize, usize) {
         match self {
             Precision::F32 => (8, 16),
             Precision::F64 => (16, 32),
@@ -185,61 +183,3 @@ impl PointsPass {
 
 /// Largest number of points one dispatch takes (the dispatch size limit × workgroup size).
 pub const MAX_POINTS: usize = 65_535 * WORKGROUP as usize;
-
-/// Runs the pass on `points` through a headless context and reads the results back
-/// (`None` = invalid / outside the valid domain). In f32, inputs are rounded to f32.
-pub fn run_points(
-    ctx: &Context,
-    camera: &Camera,
-    mode: PointsMode,
-    precision: Precision,
-    points: &[[f64; 2]],
-) -> Result<Vec<Option<[f64; 2]>>> {
-    if points.is_empty() {
-        return Ok(Vec::new());
-    }
-    let gpu = ctx.gpu();
-    let mut out = Vec::with_capacity(points.len());
-    let mut pass = PointsPass::new(gpu, camera, mode, precision)?;
-    let (_, out_stride) = precision.strides();
-    for chunk in points.chunks(MAX_POINTS) {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let in_buf = match precision {
-            Precision::F32 => {
-                let v: Vec<[f32; 2]> = chunk.iter().map(|p| [p[0] as f32, p[1] as f32]).collect();
-                Buffer::from_pod(gpu, "points.in", &v, usage)?
-            }
-            Precision::F64 => Buffer::from_pod(gpu, "points.in", chunk, usage)?,
-        };
-        let out_buf = Buffer::new(
-            gpu,
-            "points.out",
-            (chunk.len() * out_stride) as u64,
-            usage,
-            MemoryLocation::GpuToCpu,
-        )?;
-        // SAFETY: no submission using it is pending (`submit` waits on its fence).
-        unsafe { pass.bind(&in_buf, &out_buf) };
-        ctx.submit(|cmd| {
-            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
-            // `in_buf` and `out_buf` (bound above) hold `chunk.len()` points, at most
-            // MAX_POINTS, and outlive the submission, which `submit` waits for.
-            unsafe {
-                pass.record(cmd, chunk.len() as u32);
-                // The host reads the outputs after the fence: make the shader writes visible.
-                host_read_barrier(gpu, cmd);
-            }
-            Ok(())
-        })?;
-        let results: Vec<[f64; 4]> = match precision {
-            Precision::F32 => out_buf
-                .read_pod::<[f32; 4]>(chunk.len())?
-                .iter()
-                .map(|r| r.map(f64::from))
-                .collect(),
-            Precision::F64 => out_buf.read_pod::<[f64; 4]>(chunk.len())?,
-        };
-        out.extend(results.iter().map(|r| (r[2] > 0.5).then_some([r[0], r[1]])));
-    }
-    Ok(out)
-}

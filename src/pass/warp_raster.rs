@@ -11,14 +11,12 @@
 
 use ash::vk;
 
-use super::mesh_warp::MeshWarpTarget;
-use super::warp::{PixelFormat, WarpDesc, WarpImages, WarpPass, WarpPush};
+use super::warp::{PixelFormat, WarpPass, WarpPush};
 use crate::gpu::{
-    memory_barrier, shaders, write_storage_image_descriptors, Context, DescriptorPool, Error,
-    Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, RenderPass, Result, SpecConstants, Stage,
+    shaders, write_storage_image_descriptors, DescriptorPool, Error, Framebuffer, Gpu,
+    GraphicsDesc, GraphicsPipeline, RenderPass, Result, SpecConstants, Stage,
 };
 use crate::imaging::cpu_warp::Sampling;
-use crate::imaging::Raster;
 
 /// The fragment-shader map warp, built for one [`WarpPass`]'s maps, format and sampling.
 pub struct RasterWarpPass {
@@ -138,44 +136,4 @@ impl RasterWarpPass {
             d.cmd_end_render_pass(cmd);
         }
     }
-}
-
-/// Runs the fragment-shader map warp once through a headless context (the maps built by a
-/// [`WarpPass`] for `desc` first): the warped image.
-pub fn run_raster_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<Raster> {
-    let gpu = ctx.gpu();
-    let images = WarpImages::new(gpu, &desc, source)?;
-    let maps = WarpPass::new(gpu, desc)?;
-    let mut pass = RasterWarpPass::new(gpu, &maps, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)?;
-    // SAFETY: no submission using it is pending (`submit` waits on its fence).
-    unsafe { pass.bind(images.source.view) };
-    let target =
-        MeshWarpTarget::for_render_pass(gpu, &pass.render_pass, pass.output_size, pass.format)?;
-    ctx.submit(|cmd| {
-        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.
-        // The upload and map builds come first and the barrier below makes their writes
-        // visible to the fragment shader, as `record` asks; `target` was made for this pass's
-        // render pass and size; everything outlives the submission, which `submit` waits for.
-        unsafe {
-            images.record_upload(cmd);
-            maps.record_prepare(cmd);
-            // The maps (compute) and the source (upload) are read by the fragment shader.
-            memory_barrier(
-                gpu,
-                cmd,
-                (
-                    vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (
-                    vk::PipelineStageFlags::FRAGMENT_SHADER,
-                    vk::AccessFlags::SHADER_READ,
-                ),
-            );
-            pass.record(cmd, &target.framebuffer);
-            target.record_download(gpu, cmd);
-        }
-        Ok(())
-    })?;
-    target.read()
 }

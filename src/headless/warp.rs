@@ -1,0 +1,90 @@
+//! Headless helpers for `pass::warp`: upload, record, submit, wait and read back.
+
+use crate::gpu::record_compute_download;
+use crate::gpu::{host_read_barrier, Buffer, Context, Result};
+use crate::imaging::cpu_warp::Sampling;
+use crate::imaging::Raster;
+use crate::model::warp::WarpGeometry;
+use crate::pass::warp::*;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// Runs a warp once through a headless context: upload, prepare, warp, download.
+pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raster, Vec<u8>)> {
+    let gpu = ctx.gpu();
+    let images = WarpImages::new(gpu, &desc, source)?;
+    let mut pass = WarpPass::new(gpu, desc)?;
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // the context's compute+graphics queue. The calls come in the order their contracts
+        // ask (upload, prepare, warp after `bind` above, download), and `images` and `pass`
+        // outlive the submission, which `submit` waits for.
+        unsafe {
+            images.record_upload(cmd);
+            pass.record_prepare(cmd);
+            pass.record(cmd);
+            images.record_download(cmd);
+            host_read_barrier(gpu, cmd);
+        }
+        Ok(())
+    })?;
+    images.read(source.bit_depth)
+}
+
+/// Builds `geometry`'s coordinate maps on the GPU and reads them back: per built channel
+/// (G only without chromatic aberration; else R, G, B), row-major `[x, y]` source positions,
+/// NaN where there is none. The same code the warp runs per pixel in analytic mode.
+pub fn read_maps(
+    ctx: &Context,
+    geometry: &WarpGeometry,
+    coordinates: Coordinates,
+) -> Result<Vec<Vec<[f32; 2]>>> {
+    let gpu = ctx.gpu();
+    let desc = WarpDesc {
+        geometry: geometry.clone(),
+        coordinates,
+        sampling: Sampling::Bilinear,
+        format: PixelFormat::Rgba8,
+        fill: [0.0; 4],
+        write_mask: false,
+    };
+    let pass = WarpPass::new(gpu, desc)?;
+    let (w, h) = geometry.output_size;
+    let channels: Vec<usize> = if geometry.is_chromatic() {
+        vec![0, 1, 2]
+    } else {
+        vec![1]
+    };
+    let buffers = channels
+        .iter()
+        .map(|_| {
+            Buffer::new(
+                gpu,
+                "map.read",
+                w as u64 * h as u64 * 8,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+        // `record_prepare` leaves the maps in GENERAL, each channel's map is a real
+        // `w × h` RG32F image (8 bytes a texel, as each buffer is sized) with TRANSFER_SRC usage,
+        // and `pass` and `buffers` outlive the submission, which `submit` waits for.
+        unsafe {
+            pass.record_prepare(cmd);
+            for (&c, buf) in channels.iter().zip(&buffers) {
+                // The copy reads what the map build wrote.
+                record_compute_download(gpu, cmd, &pass.maps[c], buf);
+            }
+        }
+        Ok(())
+    })?;
+    buffers
+        .iter()
+        .map(|b| b.read_pod::<[f32; 2]>(w as usize * h as usize))
+        .collect()
+}

@@ -3,8 +3,9 @@
 
 use std::mem::offset_of;
 
+use vklens::internal::gpu::SpecId;
 use vklens::internal::gpu::{reflect, shaders};
-use vklens::internal::pass::{CameraParams, CameraParams64, CAMERA_SPEC_IDS};
+use vklens::internal::pass::{spec, CameraParams, CameraParams64};
 
 macro_rules! host_offsets {
     ($t:ty) => {
@@ -58,12 +59,80 @@ fn camera_params_f64_matches_the_glsl_block() {
 
 #[test]
 fn shaders_declare_the_spec_constants_the_host_sets() {
-    let declared = reflect::spec_constants(shaders::POINTS_COMP);
-    for (name, id) in CAMERA_SPEC_IDS {
-        assert!(
-            declared.iter().any(|(n, i)| n == name && *i == id),
-            "{name} (id {id}) missing from points.comp: {declared:?}"
-        );
+    // Every id the host sets, under its name, in every shader it is set on.
+    let camera = spec::CAMERA.to_vec();
+    let coords = [spec::MODE, spec::METHOD, spec::FIXED_POINT_ITERATIONS];
+    let with = |extra: &[SpecId]| camera.iter().chain(extra).copied().collect::<Vec<_>>();
+    let warp = with(&[
+        coords[0],
+        coords[1],
+        coords[2],
+        spec::CHROMATIC,
+        spec::USE_MAP,
+        spec::NEAREST,
+        spec::WRITE_MASK,
+    ]);
+    let table: Vec<(&str, &[u8], Vec<SpecId>)> = vec![
+        ("points.comp", shaders::POINTS_COMP, with(&coords)),
+        ("warp.comp", shaders::WARP_COMP, warp.clone()),
+        ("warp.comp (rgba8)", shaders::WARP_COMP_RGBA8, warp),
+        (
+            "warp_raster.frag",
+            shaders::WARP_RASTER_FRAG,
+            vec![spec::CHROMATIC, spec::NEAREST],
+        ),
+        (
+            "inverse_map.comp",
+            shaders::INVERSE_MAP_COMP,
+            vec![spec::STRIDE],
+        ),
+        (
+            "upsample_map.comp",
+            shaders::UPSAMPLE_MAP_COMP,
+            vec![
+                spec::STRIDE,
+                spec::REFINE,
+                spec::MAX_RESIDUAL_PX,
+                spec::CHECK_RESIDUAL,
+                spec::CUBIC,
+            ],
+        ),
+        (
+            "geometry.vert",
+            shaders::GEOMETRY_VERT,
+            with(&[spec::DISTORT]),
+        ),
+        (
+            "geometry.frag",
+            shaders::GEOMETRY_FRAG,
+            vec![
+                spec::WRITE_COLOR,
+                spec::WRITE_IDS,
+                spec::WRITE_FLOW,
+                spec::WRITE_DEPTH,
+            ],
+        ),
+        (
+            "grid_demo.comp",
+            shaders::GRID_DEMO_COMP,
+            with(&[spec::GRID]),
+        ),
+        (
+            "mesh_warp.frag",
+            shaders::MESH_WARP_FRAG,
+            vec![spec::WRITE_COORDINATES],
+        ),
+    ];
+    for (shader, spirv, ids) in table {
+        let declared = reflect::spec_constants(spirv);
+        for id in ids {
+            assert!(
+                declared.iter().any(|(n, i)| n == id.name && *i == id.id),
+                "{} (id {}) missing from {shader}: {declared:?}",
+                id.name,
+                id.id
+            );
+        }
     }
 }
 
@@ -142,21 +211,21 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
     )
     .unwrap();
     let stages = &pass.pipeline().constants;
-    let get = |stage: vk::ShaderStageFlags, id: u32| {
+    let get = |stage: vk::ShaderStageFlags, id: SpecId| {
         stages
             .iter()
             .find(|(s, _)| *s == stage)
             .and_then(|(_, c)| c.get(id))
     };
     let v = vk::ShaderStageFlags::VERTEX;
-    assert_eq!(get(v, 0), Some(1), "radial on");
-    for id in [1, 2, 3, 4] {
-        assert_eq!(get(v, id), Some(0), "term group {id} compiled out");
+    assert_eq!(get(v, spec::RADIAL), Some(1), "radial on");
+    for id in [spec::RATIONAL, spec::TANGENTIAL, spec::PRISM, spec::TILT] {
+        assert_eq!(get(v, id), Some(0), "{} compiled out", id.name);
     }
     let f = vk::ShaderStageFlags::FRAGMENT;
-    assert_eq!(get(f, 20), Some(1));
-    for id in [21, 22, 23] {
-        assert_eq!(get(f, id), Some(0), "output {id} compiled out");
+    assert_eq!(get(f, spec::WRITE_COLOR), Some(1));
+    for id in [spec::WRITE_IDS, spec::WRITE_FLOW, spec::WRITE_DEPTH] {
+        assert_eq!(get(f, id), Some(0), "{} compiled out", id.name);
     }
     assert!(stages
         .iter()

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use ash::vk;
 use common::{assert_no_validation_messages, validated_context};
+use vklens::internal::pass::spec;
 use vklens::internal::plan::{execute, load_geometry, plan, PassKind, Route, SceneFile};
 
 fn examples() -> PathBuf {
@@ -28,7 +29,7 @@ fn constant(
     recorded: &vklens::internal::plan::Recorded,
     kind: PassKind,
     stage: vk::ShaderStageFlags,
-    id: u32,
+    id: vklens::internal::gpu::SpecId,
 ) -> Option<u32> {
     recorded
         .pipelines
@@ -78,12 +79,16 @@ fn k1_k2_runs_shaders_with_the_other_terms_compiled_out() {
     assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
     let v = vk::ShaderStageFlags::VERTEX;
     let kind = PassKind::VertexRender;
-    assert_eq!(constant(&recorded, kind, v, 0), Some(1), "radial on");
+    assert_eq!(
+        constant(&recorded, kind, v, spec::RADIAL),
+        Some(1),
+        "radial on"
+    );
     for (id, group) in [
-        (1, "rational"),
-        (2, "tangential"),
-        (3, "prism"),
-        (4, "tilt"),
+        (spec::RATIONAL, "rational"),
+        (spec::TANGENTIAL, "tangential"),
+        (spec::PRISM, "prism"),
+        (spec::TILT, "tilt"),
     ] {
         assert_eq!(
             constant(&recorded, kind, v, id),
@@ -118,12 +123,12 @@ fn without_chromatic_aberration_the_warp_is_the_single_fetch_variant() {
         p.route
     );
     assert_eq!(
-        constant(&recorded, PassKind::Warp, c, 11),
+        constant(&recorded, PassKind::Warp, c, spec::CHROMATIC),
         Some(0),
         "single fetch"
     );
     assert_eq!(
-        constant(&recorded, PassKind::Warp, c, 1),
+        constant(&recorded, PassKind::Warp, c, spec::RATIONAL),
         Some(0),
         "rational compiled out"
     );
@@ -140,7 +145,7 @@ fn without_chromatic_aberration_the_warp_is_the_single_fetch_variant() {
         p.route
     );
     assert_eq!(
-        constant(&recorded, PassKind::Warp, c, 11),
+        constant(&recorded, PassKind::Warp, c, spec::CHROMATIC),
         Some(1),
         "three fetches"
     );

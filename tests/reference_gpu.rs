@@ -196,7 +196,7 @@ fn specialization_constants_compile_out_unused_terms() {
     use vklens::internal::gpu::{
         shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool,
     };
-    use vklens::internal::pass::{CameraParams, PointsPass};
+    use vklens::internal::pass::{spec, CameraParams, PointsPass};
 
     let ctx = common::validated_context();
     let gpu = ctx.gpu();
@@ -206,7 +206,13 @@ fn specialization_constants_compile_out_unused_terms() {
     let pass = PointsPass::new(gpu, &fig2, PointsMode::Distort, Precision::F32).unwrap();
     let c = &pass.pipeline().constants;
     assert_eq!(
-        (c.get(0), c.get(1), c.get(2), c.get(3), c.get(4)),
+        (
+            c.get(spec::RADIAL),
+            c.get(spec::RATIONAL),
+            c.get(spec::TANGENTIAL),
+            c.get(spec::PRISM),
+            c.get(spec::TILT)
+        ),
         (Some(1), Some(0), Some(1), Some(0), Some(0))
     );
 
@@ -221,9 +227,9 @@ fn specialization_constants_compile_out_unused_terms() {
     let mut terms = cam.distortion.terms();
     let run = |terms: vklens::internal::model::Terms| -> Vec<[f32; 4]> {
         let constants = CameraParams::spec_constants(terms)
-            .u32(8, 0)
-            .u32(9, 0)
-            .u32(10, 1);
+            .u32(spec::MODE, 0)
+            .u32(spec::METHOD, 0)
+            .u32(spec::FIXED_POINT_ITERATIONS, 1);
         let pipeline = ComputePipeline::new(
             gpu,
             shaders::POINTS_COMP,

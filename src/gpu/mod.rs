@@ -32,7 +32,7 @@ pub use graphics::{
 };
 pub use pipeline::{
     write_buffer_descriptors, write_storage_image_descriptors, ComputePipeline, DescriptorLayout,
-    DescriptorPool, SpecConstants,
+    DescriptorPool, SpecConstants, SpecId,
 };
 pub use resources::{Buffer, Image, QueryPool};
 

@@ -5,6 +5,22 @@ use ash::vk;
 
 use super::{Error, Gpu, Result};
 
+/// A specialization constant: its name in the GLSL and its `constant_id`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SpecId {
+    /// The name the GLSL declares it under.
+    pub name: &'static str,
+    /// Its `constant_id`.
+    pub id: u32,
+}
+
+impl SpecId {
+    /// A named id.
+    pub const fn new(name: &'static str, id: u32) -> Self {
+        SpecId { name, id }
+    }
+}
+
 /// Specialization constants: `(constant_id, 32-bit value)` pairs. Booleans are 32-bit in
 /// SPIR-V (0 or 1).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -17,22 +33,26 @@ impl SpecConstants {
         Self::default()
     }
     /// Sets a `bool` constant.
-    pub fn bool(mut self, id: u32, value: bool) -> Self {
+    pub fn bool(mut self, spec: SpecId, value: bool) -> Self {
+        let id = spec.id;
         self.entries.push((id, value as u32));
         self
     }
     /// Sets a `uint`/`int` constant.
-    pub fn u32(mut self, id: u32, value: u32) -> Self {
+    pub fn u32(mut self, spec: SpecId, value: u32) -> Self {
+        let id = spec.id;
         self.entries.push((id, value));
         self
     }
     /// Sets a `float` constant.
-    pub fn f32(mut self, id: u32, value: f32) -> Self {
+    pub fn f32(mut self, spec: SpecId, value: f32) -> Self {
+        let id = spec.id;
         self.entries.push((id, value.to_bits()));
         self
     }
     /// The value given for `id`, if any.
-    pub fn get(&self, id: u32) -> Option<u32> {
+    pub fn get(&self, spec: SpecId) -> Option<u32> {
+        let id = spec.id;
         self.entries
             .iter()
             .rev()

@@ -4,22 +4,12 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use super::spec;
 use crate::gpu::SpecConstants;
 use crate::model::{Camera, Terms, ValidDomain};
 
 /// Entries of the valid-domain table (same as the CPU table).
 pub const DOMAIN_SAMPLES: usize = ValidDomain::SAMPLES;
-
-/// Specialization-constant ids used by `camera_model.glsl`, in the order of [`Terms`]'s fields,
-/// then the Newton iteration count.
-pub const CAMERA_SPEC_IDS: [(&str, u32); 6] = [
-    ("VKL_RADIAL", 0),
-    ("VKL_RATIONAL", 1),
-    ("VKL_TANGENTIAL", 2),
-    ("VKL_PRISM", 3),
-    ("VKL_TILT", 4),
-    ("VKL_NEWTON_ITERATIONS", 5),
-];
 
 /// Newton iterations on the GPU (f32 converges in 3-6 from the radial start).
 pub const GPU_NEWTON_ITERATIONS: u32 = 20;
@@ -113,11 +103,11 @@ impl CameraParams {
     /// Specialization constants that compile out every term group the camera does not use.
     pub fn spec_constants(terms: Terms) -> SpecConstants {
         SpecConstants::new()
-            .bool(0, terms.radial)
-            .bool(1, terms.rational)
-            .bool(2, terms.tangential)
-            .bool(3, terms.prism)
-            .bool(4, terms.tilt)
-            .u32(5, GPU_NEWTON_ITERATIONS)
+            .bool(spec::RADIAL, terms.radial)
+            .bool(spec::RATIONAL, terms.rational)
+            .bool(spec::TANGENTIAL, terms.tangential)
+            .bool(spec::PRISM, terms.prism)
+            .bool(spec::TILT, terms.tilt)
+            .u32(spec::NEWTON_ITERATIONS, GPU_NEWTON_ITERATIONS)
     }
 }

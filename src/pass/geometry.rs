@@ -10,6 +10,7 @@
 //! buffer on [`GeometryTargets`] (images the pass made) — the colour attachments end in the
 //! desc's `final_layout`.
 
+use crate::pass::spec;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec2};
@@ -359,13 +360,14 @@ impl GeometryPass {
             Some(vk::Format::D32_SFLOAT),
             desc.final_layout,
         )?;
-        let vertex_constants = CameraParams::spec_constants(cam.distortion.terms()).bool(8, lens);
+        let vertex_constants =
+            CameraParams::spec_constants(cam.distortion.terms()).bool(spec::DISTORT, lens);
         let o = desc.outputs;
         let fragment_constants = SpecConstants::new()
-            .bool(20, o.color.is_some())
-            .bool(21, o.ids)
-            .bool(22, o.flow)
-            .bool(23, o.depth);
+            .bool(spec::WRITE_COLOR, o.color.is_some())
+            .bool(spec::WRITE_IDS, o.ids)
+            .bool(spec::WRITE_FLOW, o.flow)
+            .bool(spec::WRITE_DEPTH, o.depth);
         let mut stages = vec![Stage {
             stage: vk::ShaderStageFlags::VERTEX,
             spirv: if lens {

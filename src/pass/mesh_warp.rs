@@ -8,6 +8,7 @@
 //! Cells with a vertex that has no source (outside the lens's valid domain) are not drawn:
 //! those pixels keep the clear value (transparent black), never a smeared edge.
 
+use crate::pass::spec;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::DVec2;
@@ -148,8 +149,10 @@ impl MeshWarpPass {
                     Stage {
                         stage: vk::ShaderStageFlags::FRAGMENT,
                         spirv: shaders::MESH_WARP_FRAG,
-                        constants: SpecConstants::new()
-                            .bool(0, output == MeshWarpOutput::Coordinates),
+                        constants: SpecConstants::new().bool(
+                            spec::WRITE_COORDINATES,
+                            output == MeshWarpOutput::Coordinates,
+                        ),
                     },
                 ],
                 bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],

@@ -10,8 +10,9 @@ pub mod grid_demo;
 pub mod lens_render;
 pub mod mesh_warp;
 pub mod points;
+pub mod spec;
 pub mod warp;
 pub mod warp_raster;
 
-pub use camera_params::{CameraParams, CameraParams64, CAMERA_SPEC_IDS};
+pub use camera_params::{CameraParams, CameraParams64};
 pub use points::{PointsMode, PointsPass, Precision};

@@ -1,5 +1,6 @@
 //! The camera model on a list of points (`glsl/points.comp`).
 
+use crate::pass::spec;
 use ash::vk;
 
 use super::camera_params::{CameraParams, CameraParams64};
@@ -84,9 +85,9 @@ impl PointsPass {
             PointsMode::Undistort(InverseMethod::FixedPoint(n)) => (1, 2, n),
         };
         let constants = CameraParams::spec_constants(camera.distortion.terms())
-            .u32(8, mode_id)
-            .u32(9, method)
-            .u32(10, iterations);
+            .u32(spec::MODE, mode_id)
+            .u32(spec::METHOD, method)
+            .u32(spec::FIXED_POINT_ITERATIONS, iterations);
         let spirv = match precision {
             Precision::F32 => shaders::POINTS_COMP,
             Precision::F64 => shaders::POINTS_COMP_F64,

@@ -7,6 +7,7 @@
 //! layout, bound with [`WarpPass::bind`].
 
 use crate::gpu::record_compute_download;
+use crate::pass::spec;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
@@ -195,15 +196,15 @@ impl WarpPass {
         };
         let with_model = |cam: &Camera| {
             CameraParams::spec_constants(cam.distortion.terms())
-                .u32(8, mode)
-                .u32(9, method)
-                .u32(10, iterations)
+                .u32(spec::MODE, mode)
+                .u32(spec::METHOD, method)
+                .u32(spec::FIXED_POINT_ITERATIONS, iterations)
         };
         let constants = with_model(&g.camera)
-            .bool(11, chromatic)
-            .bool(12, desc.coordinates.uses_map())
-            .bool(13, desc.sampling == Sampling::Nearest)
-            .bool(14, desc.write_mask);
+            .bool(spec::CHROMATIC, chromatic)
+            .bool(spec::USE_MAP, desc.coordinates.uses_map())
+            .bool(spec::NEAREST, desc.sampling == Sampling::Nearest)
+            .bool(spec::WRITE_MASK, desc.write_mask);
         let spirv = match desc.format {
             PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,
             PixelFormat::Rgba32F => shaders::WARP_COMP,
@@ -285,9 +286,9 @@ impl WarpPass {
                 .map(|&c| g.channel_camera(c).distortion.terms())
                 .fold(Terms::default(), Terms::union);
             let base = CameraParams::spec_constants(terms)
-                .u32(8, mode)
-                .u32(9, method)
-                .u32(10, iterations);
+                .u32(spec::MODE, mode)
+                .u32(spec::METHOD, method)
+                .u32(spec::FIXED_POINT_ITERATIONS, iterations);
             let (stride, refine, interpolation) = match desc.coordinates {
                 Coordinates::CoarseMap {
                     stride,
@@ -302,7 +303,7 @@ impl WarpPass {
                 shaders::INVERSE_MAP_COMP,
                 &[uniform, storage],
                 std::mem::size_of::<WarpPush>() as u32,
-                base.clone().u32(11, stride),
+                base.clone().u32(spec::STRIDE, stride),
             )?);
             if stride > 1 {
                 // The per-pixel forward check is compiled out when the host's f64 estimate says
@@ -315,11 +316,11 @@ impl WarpPass {
                     shaders::UPSAMPLE_MAP_COMP,
                     &[uniform, storage, storage],
                     std::mem::size_of::<WarpPush>() as u32,
-                    base.u32(11, stride)
-                        .u32(12, refine)
-                        .f32(13, COARSE_MAX_RESIDUAL_PX)
-                        .bool(14, check)
-                        .bool(15, interpolation == MapInterpolation::Cubic),
+                    base.u32(spec::STRIDE, stride)
+                        .u32(spec::REFINE, refine)
+                        .f32(spec::MAX_RESIDUAL_PX, COARSE_MAX_RESIDUAL_PX)
+                        .bool(spec::CHECK_RESIDUAL, check)
+                        .bool(spec::CUBIC, interpolation == MapInterpolation::Cubic),
                 )?);
             }
             let steps_per_channel = if stride > 1 { 2 } else { 1 };
@@ -450,7 +451,7 @@ impl WarpPass {
     pub fn coarse_map_checked(&self) -> Option<bool> {
         self.map_pipelines
             .get(1)
-            .and_then(|p| p.constants.get(14))
+            .and_then(|p| p.constants.get(spec::CHECK_RESIDUAL))
             .map(|v| v != 0)
     }
 

@@ -9,6 +9,7 @@
 //! It reads the maps a [`WarpPass`] built (record that pass's `record_prepare` first) and
 //! writes no validity mask (a mask is a second attachment away, if a caller needs one).
 
+use crate::pass::spec;
 use ash::vk;
 
 use super::warp::{PixelFormat, WarpPass, WarpPush};
@@ -64,8 +65,8 @@ impl RasterWarpPass {
                         stage: vk::ShaderStageFlags::FRAGMENT,
                         spirv,
                         constants: SpecConstants::new()
-                            .bool(11, desc.geometry.is_chromatic())
-                            .bool(13, desc.sampling == Sampling::Nearest),
+                            .bool(spec::CHROMATIC, desc.geometry.is_chromatic())
+                            .bool(spec::NEAREST, desc.sampling == Sampling::Nearest),
                     },
                 ],
                 bindings: &[vk::DescriptorType::STORAGE_IMAGE; 4],

@@ -513,3 +513,74 @@ fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
     assert!(e.contains("[render] supersample"), "{e}");
     assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn a_scene_of_many_frames_warps_through_a_map_built_once() {
+    // Six chromatic frames at 0.01 px on a k1 k2 lens: a coarse cubic map (5e-4 px) built
+    // once beats solving fixed-point per pixel every frame, and --explain names both.
+    let text =
+        "[geometry]\nscene = \"grid:16\"\n[optics]\ncamera = \"../cameras/barrel_k1k2.json\"\n\
+        [effects]\nchromatic_aberration = true\nchromatic_scales = [1.004, 1.0, 0.996]\n\
+        [accuracy]\nmax_error_px = 0.01\n[pose_sequence]\n\
+        from = { rvec = [0.0, 0.0, 0.0], tvec = [0.0, 0.0, 3.0] }\n\
+        to = { rvec = [0.1, 0.2, 0.0], tvec = [0.2, 0.0, 3.0] }\nframes = 6\n";
+    let file = scene_file(text);
+    let scene = load_geometry(&file).unwrap();
+    let p = plan(&file, &scene).unwrap();
+    assert!(
+        matches!(p.route, Route::Warp { map: true, .. }),
+        "{:?}",
+        p.route
+    );
+    let why = &p
+        .steps
+        .iter()
+        .find(|s| s.pass.starts_with("warp"))
+        .unwrap()
+        .why;
+    assert!(
+        why.contains("per pixel") && why.contains("precomputed map"),
+        "{why}"
+    );
+    assert!(p.expected_error_px <= p.budget_px);
+    // The same frame solved per pixel (Newton) agrees with the map's within the map's error.
+    let ctx = validated_context();
+    let frame = |p: &vklens::internal::plan::Plan| {
+        let mut out = None;
+        let recorded = execute(&ctx, p, &scene, 2..3, &mut |f| {
+            out = Some(f.rendered.color.unwrap());
+            Ok(())
+        })
+        .unwrap();
+        (out.unwrap(), recorded)
+    };
+    let (mapped, recorded) = frame(&p);
+    let c = vk::ShaderStageFlags::COMPUTE;
+    assert_eq!(
+        constant(&recorded, PassKind::Warp, c, spec::USE_MAP),
+        Some(1)
+    );
+    let mut solved_plan = p.clone();
+    solved_plan.route = Route::Warp {
+        method: vklens::InverseMethod::Newton,
+        chromatic: Some([1.004, 1.0, 0.996]),
+        map: false,
+    };
+    let (solved, recorded) = frame(&solved_plan);
+    assert_eq!(
+        constant(&recorded, PassKind::Warp, c, spec::USE_MAP),
+        Some(0)
+    );
+    let differ = (0..mapped.len())
+        .filter(|&i| {
+            let (a, b) = (mapped.rgba_f32(i), solved.rgba_f32(i));
+            (0..4).any(|k| (a[k] - b[k]).abs() > 2.0 / 255.0)
+        })
+        .count();
+    assert!(
+        differ * 1000 < mapped.len(),
+        "{differ} of {} pixels differ by more than 2 grey levels",
+        mapped.len()
+    );
+    assert_no_validation_messages(&ctx);
+}

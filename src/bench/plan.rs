@@ -45,8 +45,17 @@ fn route_name(r: &Route) -> String {
             Some(l) => format!("Alg. 1, {l} px edges"),
             None => "Alg. 1".into(),
         },
-        Route::Warp { method, chromatic } => format!(
-            "warp {method}{}",
+        Route::Warp {
+            method,
+            chromatic,
+            map,
+        } => format!(
+            "warp {}{}",
+            if *map {
+                "map".to_string()
+            } else {
+                method.to_string()
+            },
             if chromatic.is_some() {
                 ", chromatic"
             } else {
@@ -54,9 +63,17 @@ fn route_name(r: &Route) -> String {
             }
         ),
         Route::WarpAndVertex {
-            method, tessellate, ..
+            method,
+            tessellate,
+            map,
+            ..
         } => format!(
-            "warp {method} + Alg. 1{}",
+            "warp {} + Alg. 1{}",
+            if *map {
+                "map".to_string()
+            } else {
+                method.to_string()
+            },
             tessellate.map(|l| format!(", {l} px")).unwrap_or_default()
         ),
         Route::LensModel {
@@ -116,11 +133,15 @@ pub fn run(ctx: &Context, examples: &Path, progress: &mut dyn FnMut(&str)) -> Re
         // Everything on: Newton, 3 fetches, every output by Alg. 1 with 2 px edges.
         let mut full = plan(&all, &scene).map_err(invalid)?;
         if let Route::WarpAndVertex {
-            tessellate, method, ..
+            tessellate,
+            method,
+            map,
+            ..
         } = &mut full.route
         {
             *tessellate = Some(2.0);
             *method = crate::model::InverseMethod::Newton;
+            *map = false;
         }
         progress(&format!(
             "{name}: everything on ({})",
@@ -156,6 +177,7 @@ pub fn run(ctx: &Context, examples: &Path, progress: &mut dyn FnMut(&str)) -> Re
             route: Route::Warp {
                 method,
                 chromatic: None,
+                map: false,
             },
             ..base.clone()
         };

@@ -50,16 +50,30 @@ pub fn explain(p: &Plan, measured_ms: Option<f64>, passes: &[(&str, f64)]) -> St
                     .map(|l| format!(", tessellated to {l} px"))
                     .unwrap_or_default()
             ),
-            Route::Warp { method, chromatic } => format!(
-                "pinhole render + warp ({method}{})",
+            Route::Warp {
+                method,
+                chromatic,
+                map,
+            } => format!(
+                "pinhole render + warp ({}{})",
+                if *map {
+                    "precomputed map".to_string()
+                } else {
+                    method.to_string()
+                },
                 if chromatic.is_some() {
                     ", chromatic"
                 } else {
                     ""
                 }
             ),
-            Route::WarpAndVertex { method, .. } => {
-                format!("warp ({method}, chromatic) for colour + vertex path for the data")
+            Route::WarpAndVertex { method, map, .. } => {
+                let how = if *map {
+                    "precomputed map".to_string()
+                } else {
+                    method.to_string()
+                };
+                format!("warp ({how}, chromatic) for colour + vertex path for the data")
             }
             Route::LensModel { samples, .. } => {
                 format!("image-based lens model, {samples} lens sample(s)")

@@ -32,6 +32,7 @@ use crate::lens::image_model::{channel_models, ModelOptions};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};
 use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::geometry::Rendered;
+use crate::pass::warp::{Coordinates, MapInterpolation};
 pub use crate::render::{PassKind, RecordedPipeline};
 use crate::scene::{builtin, Pose, Scene};
 pub use record::PlanRecorder;
@@ -48,12 +49,17 @@ pub enum Route {
     Warp {
         method: InverseMethod,
         chromatic: Option<[f64; 3]>,
+        /// Sample a map built once ([`MAP_COORDINATES`], with Newton) instead of solving
+        /// `method` per pixel every frame.
+        map: bool,
     },
     /// Colour by the warp (chromatic aberration), IDs / flow / depth by Alg. 1.
     WarpAndVertex {
         method: InverseMethod,
         chromatic: Option<[f64; 3]>,
         tessellate: Option<f64>,
+        /// As for [`Route::Warp`].
+        map: bool,
     },
     /// Heidrich et al.'s image-based model through a lens prescription.
     LensModel {
@@ -166,15 +172,98 @@ pub fn inverse_error_px(camera: &Camera, method: InverseMethod) -> Option<f64> {
     Some(worst)
 }
 
-/// Estimated frame times (ms) on lavapipe from the README's `bench vertex` table at 800×600:
-/// a pinhole render costs ~12 ns per pixel + 0.23 µs per triangle, Alg. 1 ~0.6 µs per
-/// triangle (geometry shader), a warp the method's per-pixel cost over an overscan of ~1.3×.
-fn estimate_ms(pixels: f64, triangles: f64, route: &str, method_ns: f64) -> f64 {
-    match route {
-        "vertex" => 12e-6 * pixels + 0.6e-3 * triangles,
-        "warp" => 12e-6 * 1.3 * pixels + 0.23e-3 * triangles + method_ns * 1e-6 * pixels,
-        _ => 12e-6 * pixels + 0.23e-3 * triangles,
+// The cost model: frame times on lavapipe (2 cores), from `vklens bench vertex` and
+// `vklens bench warp` at 800×600 (docs/benchmarks.md). Only their ratios matter to the choice.
+
+/// A pinhole render, per output pixel (ns): clear, raster and store (`bench vertex`, plain).
+const RENDER_NS_PER_PIXEL: f64 = 12.0;
+/// A pinhole render, per triangle (ns) (`bench vertex`, plain render at 128² and 512² quads).
+const RENDER_NS_PER_TRIANGLE: f64 = 230.0;
+/// Alg. 1 with its geometry-shader discard, per triangle (ns) (`bench vertex`, Alg. 1 column).
+const VERTEX_NS_PER_TRIANGLE: f64 = 600.0;
+/// The overscanned source a warp renders, in source pixels per output pixel (density 1 on
+/// the shipped barrel and prism cameras).
+const OVERSCAN_AREA: f64 = 1.3;
+/// Sampling a precomputed map in the warp, per output pixel (ns): `bench warp` "warp map",
+/// 6.0 ms at 800×600.
+const MAP_WARP_NS: f64 = 12.5;
+/// The same with three maps, one per channel: "warp map chromatic", 10.6 ms at 800×600.
+const MAP_WARP_CHROMATIC_NS: f64 = 22.0;
+/// Building a coarse map (every 8th pixel solved, cubic between), per output pixel and
+/// channel (ns): "inverse map build: coarse8+cubic", 3.2 ms at 800×600.
+const MAP_BUILD_NS: f64 = 6.7;
+/// The f32 floor of a coarse cubic map's coordinates (px): its measured error at 1080p on
+/// `prism_tilt` ("map max error px" in `bench warp`), where the f64 estimate is 3e-6 px.
+const MAP_F32_FLOOR_PX: f64 = 5.3e-4;
+
+/// How the warp route's coordinates come when the planner picks the precomputed map: solved
+/// every 8th pixel with Newton, cubic Lagrange between (error O(h⁴)), built once.
+pub const MAP_COORDINATES: Coordinates = Coordinates::CoarseMap {
+    stride: 8,
+    refine: 0,
+    interpolation: MapInterpolation::Cubic,
+};
+
+/// One way of warping, as the planner weighs it.
+#[derive(Debug, Clone, Copy)]
+struct WarpChoice {
+    /// The inverse solved per pixel (or the map's, Newton).
+    method: InverseMethod,
+    /// Whether the coordinates come from a precomputed map.
+    map: bool,
+    /// Its geometric error on the camera (px).
+    error_px: f64,
+    /// Its estimated frame time (ms).
+    ms: f64,
+}
+
+/// What a frame costs, by route.
+#[derive(Debug, Clone, Copy)]
+enum Cost {
+    /// A pinhole render of the camera.
+    Pinhole,
+    /// Alg. 1.
+    Vertex,
+    /// The overscanned pinhole render, then a warp spending `coordinate_ns` per output pixel
+    /// on its coordinates and samples.
+    Warp { coordinate_ns: f64 },
+}
+
+/// Estimated frame time (ms) of `pixels` output pixels and `triangles` triangles.
+fn estimate_ms(pixels: f64, triangles: f64, cost: Cost) -> f64 {
+    let ns = match cost {
+        Cost::Pinhole => RENDER_NS_PER_PIXEL * pixels + RENDER_NS_PER_TRIANGLE * triangles,
+        Cost::Vertex => RENDER_NS_PER_PIXEL * pixels + VERTEX_NS_PER_TRIANGLE * triangles,
+        Cost::Warp { coordinate_ns } => {
+            RENDER_NS_PER_PIXEL * OVERSCAN_AREA * pixels
+                + RENDER_NS_PER_TRIANGLE * triangles
+                + coordinate_ns * pixels
+        }
+    };
+    ns * 1e-6
+}
+
+/// The precomputed map's error (px) on `camera`'s warp geometry: the f64 estimate of the
+/// interpolation, at least the f32 floor. `None` where a fold is in view (a map there needs a
+/// per-pixel check, which the planner does not weigh).
+fn map_error_px(camera: &Camera, chromatic: Option<[f64; 3]>) -> Option<f64> {
+    let ov = crate::model::overscan::overscan(camera, 1.0).ok()?;
+    let mut g = crate::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton)
+        .with_ideal(ov.intrinsics, (ov.width, ov.height))
+        .ok()?;
+    if let Some(scales) = chromatic {
+        g = g.with_chromatic(scales).ok()?;
     }
+    let Coordinates::CoarseMap {
+        stride,
+        interpolation,
+        ..
+    } = MAP_COORDINATES
+    else {
+        return None;
+    };
+    g.coarse_interpolation_error(stride, interpolation)
+        .map(|e| e.max(MAP_F32_FLOOR_PX))
 }
 
 /// Loads the scene's geometry.
@@ -398,8 +487,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     estimated_ms: estimate_ms(
                         pixels,
                         scene.mesh.triangle_count() as f64,
-                        "pinhole",
-                        0.0,
+                        Cost::Pinhole,
                     ),
                     camera: Some(camera),
                     lens: None,
@@ -446,37 +534,107 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     break;
                 }
             }
-            // The warp: the cheapest inverse meeting the budget, measured on this camera.
-            let mut warp: Option<(InverseMethod, f64, f64)> = None;
+            let triangles = scene.mesh.triangle_count() as f64;
+            // Three fetches (and inverses, or maps) per pixel with chromatic aberration.
+            let fetches = if chromatic.is_some() { 3.0 } else { 1.0 };
+            // The warp solved per pixel: the cheapest inverse meeting the budget, measured on
+            // this camera.
+            let mut per_pixel: Option<WarpChoice> = None;
             for (m, ns) in inverse_candidates_for(terms) {
                 if let Some(err) = inverse_error_px(&camera, m) {
                     if err <= budget {
-                        warp = Some((m, err, ns));
+                        per_pixel = Some(WarpChoice {
+                            method: m,
+                            map: false,
+                            error_px: err,
+                            ms: estimate_ms(
+                                pixels,
+                                triangles,
+                                Cost::Warp {
+                                    coordinate_ns: ns * fetches,
+                                },
+                            ),
+                        });
                         break;
                     }
                 }
             }
-            let triangles = scene.mesh.triangle_count() as f64;
-            let vertex_ms = vertex.map(|(_, _, t)| estimate_ms(pixels, t as f64, "vertex", 0.0));
-            // Three fetches (and inverses) per pixel with chromatic aberration.
-            let fetches = if chromatic.is_some() { 3.0 } else { 1.0 };
-            let warp_ms =
-                warp.map(|(_, _, ns)| estimate_ms(pixels, triangles, "warp", ns * fetches));
+            // The warp from a precomputed map: built once, its build shared by the frames.
+            // Jittered anti-aliasing moves the lens every pass, so it solves per pixel.
+            let frames = poses.len().max(1) as f64;
+            let from_map = if file.antialias.is_on() {
+                None
+            } else {
+                map_error_px(&camera, chromatic)
+                    .filter(|&e| e <= budget)
+                    .map(|e| {
+                        let sample = if chromatic.is_some() {
+                            MAP_WARP_CHROMATIC_NS
+                        } else {
+                            MAP_WARP_NS
+                        };
+                        WarpChoice {
+                            method: InverseMethod::Newton,
+                            map: true,
+                            error_px: e,
+                            ms: estimate_ms(
+                                pixels,
+                                triangles,
+                                Cost::Warp {
+                                    coordinate_ns: sample + MAP_BUILD_NS * fetches / frames,
+                                },
+                            ),
+                        }
+                    })
+            };
+            let warp = match (per_pixel, from_map) {
+                (Some(a), Some(b)) => Some(if b.ms < a.ms { b } else { a }),
+                (a, b) => a.or(b),
+            };
+            let describe_option = |c: &Option<WarpChoice>, what: &str| match c {
+                Some(c) => format!(
+                    "{what} {:.1e} px, est. {:.1} ms per frame",
+                    c.error_px, c.ms
+                ),
+                None => format!("{what} does not meet the budget"),
+            };
+            let options_note = format!(
+                "options: {}; {}",
+                describe_option(
+                    &per_pixel,
+                    &per_pixel.map_or("solved per pixel:".to_string(), |c| format!(
+                        "{} per pixel:",
+                        c.method
+                    ))
+                ),
+                describe_option(
+                    &from_map,
+                    &format!(
+                        "precomputed map (coarse 8 px, cubic; built once over {frames} frame(s)):"
+                    )
+                )
+            );
+            let vertex_ms = vertex.map(|(_, _, t)| estimate_ms(pixels, t as f64, Cost::Vertex));
+            let warp_ms = warp.map(|c| c.ms);
             let describe_tess = |l: Option<f64>, err: f64, tris: usize| {
                 match l {
                 None => format!("the mesh as it is: its straight edges stay within {err:.1e} px of the true curves ({tris} triangles)"),
                 Some(l) => format!("edges split to {l} px: straight-line error {err:.1e} px ≤ budget ({tris} triangles)"),
             }
             };
-            let describe_warp = |m: InverseMethod, err: f64| {
-                format!("inverse {m}: the cheapest method whose error on this camera, {err:.1e} px, meets the budget; overscanned source so every valid pixel has one")
+            let describe_warp = |c: &WarpChoice| {
+                if c.map {
+                    format!("a precomputed map: its error on this camera, {:.1e} px, meets the budget, and it is the cheaper per frame ({options_note}); overscanned source so every valid pixel has one", c.error_px)
+                } else {
+                    format!("inverse {}: the cheapest method whose error on this camera, {:.1e} px, meets the budget ({options_note}); overscanned source so every valid pixel has one", c.method, c.error_px)
+                }
             };
             let (route, expected, estimated) = if chromatic.is_some()
                 || (!data_needs_vertex
                     && warp.is_some()
                     && (vertex.is_none() || warp_ms < vertex_ms))
             {
-                let Some((m, werr, _)) = warp else {
+                let Some(choice) = warp else {
                     return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera")));
                 };
                 steps.push(step(
@@ -492,7 +650,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     },
                     format!(
                         "{}; {}; {}",
-                        describe_warp(m, werr),
+                        describe_warp(&choice),
                         if chromatic.is_some() {
                             "chromatic aberration asked: each channel through its own radial scale"
                         } else {
@@ -514,21 +672,23 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     ));
                     (
                         Route::WarpAndVertex {
-                            method: m,
+                            method: choice.method,
                             chromatic,
                             tessellate: l,
+                            map: choice.map,
                         },
-                        werr.max(verr),
+                        choice.error_px.max(verr),
                         warp_ms.unwrap_or(0.0) + vertex_ms.unwrap_or(0.0),
                     )
                 } else {
                     (
                         Route::Warp {
-                            method: m,
+                            method: choice.method,
                             chromatic,
+                            map: choice.map,
                         },
-                        werr,
-                        warp_ms.unwrap_or(f64::NAN),
+                        choice.error_px,
+                        choice.ms,
                     )
                 }
             } else {
@@ -674,10 +834,17 @@ pub fn execute(
                 ..o
             };
             if let Route::WarpAndVertex {
-                method, chromatic, ..
+                method,
+                chromatic,
+                map,
+                ..
             } = plan.route
             {
-                p.route = Route::Warp { method, chromatic };
+                p.route = Route::Warp {
+                    method,
+                    chromatic,
+                    map,
+                };
             }
             Some(PlanRecorder::build(gpu, &p, &mesh, texture)?)
         }

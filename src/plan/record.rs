@@ -120,6 +120,7 @@ impl PlanRecorder {
         let warp_stage = |camera: &Camera,
                           method,
                           chromatic: Option<[f64; 3]>,
+                          map: bool,
                           depth: bool|
          -> Result<(WarpStage, Camera, WarpGeometry)> {
             let ov = overscan(camera, 1.0).map_err(invalid)?;
@@ -146,7 +147,11 @@ impl PlanRecorder {
                 gpu,
                 source.clone(),
                 g.clone(),
-                Coordinates::Analytic,
+                if map {
+                    super::MAP_COORDINATES
+                } else {
+                    Coordinates::Analytic
+                },
                 f,
                 plan.background,
                 depth,
@@ -205,20 +210,27 @@ impl PlanRecorder {
                         r.geometry = Some(geometry(camera, lens_delta, outputs)?);
                         r.names.push("Alg. 1 (vertex + discard)");
                     }
-                    Route::Warp { method, chromatic } => {
+                    Route::Warp {
+                        method,
+                        chromatic,
+                        map,
+                    } => {
                         if o.ids || o.flow {
                             return Err(internal(
                                 "IDs and flow take Alg. 1 (Lambers et al. Table 1): the planner never routes them through the warp",
                             ));
                         }
-                        r.set_warp(warp_stage(camera, *method, *chromatic, o.depth)?);
+                        r.set_warp(warp_stage(camera, *method, *chromatic, *map, o.depth)?);
                         r.names.extend(["pinhole render (overscanned)", "warp"]);
                     }
                     Route::WarpAndVertex {
-                        method, chromatic, ..
+                        method,
+                        chromatic,
+                        map,
+                        ..
                     } => {
                         if o.color {
-                            r.set_warp(warp_stage(camera, *method, *chromatic, false)?);
+                            r.set_warp(warp_stage(camera, *method, *chromatic, *map, false)?);
                             r.names.extend(["pinhole render (overscanned)", "warp"]);
                         }
                         r.geometry = Some(geometry(

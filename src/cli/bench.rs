@@ -221,3 +221,148 @@ pub fn plan(args: PlanArgs) -> Result<(), CliError> {
     print_rows(&rows, args.json, crate::bench::plan::table);
     Ok(())
 }
+
+#[derive(Args, Debug)]
+pub struct AllArgs {
+    /// One JSON object per line (each row with its "bench", "device", "driver" and "date")
+    /// instead of writing the tables.
+    #[arg(long)]
+    json: bool,
+    /// The Markdown file whose section for this device is written (the sections of other
+    /// devices are kept).
+    #[arg(long, value_name = "FILE", default_value = "docs/benchmarks.md")]
+    out: std::path::PathBuf,
+}
+
+/// Today's date (UTC) as YYYY-MM-DD, from the system clock.
+fn today() -> String {
+    let days = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() / 86_400)
+        .unwrap_or(0) as i64;
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!("{y:04}-{m:02}-{d:02}")
+}
+
+/// `vklens bench all`: every bench on one device, its tables written into one section of
+/// `--out` that names the device, the driver and the date.
+pub fn all(args: AllArgs) -> Result<(), CliError> {
+    use std::fmt::Write as _;
+    let reference = load_reference()?;
+    let lenses = data_folder(None, "lenses", "lenses")?;
+    let scenes = data_folder(None, "examples/scenes", "examples/scenes")?;
+    if !args.json {
+        super::output::check_output(&args.out, "benchmark", &["md"])?;
+    }
+    let ctx = context()?;
+    let (device, driver, date) = (
+        ctx.gpu().device_name().to_string(),
+        ctx.gpu().driver().to_string(),
+        today(),
+    );
+    eprintln!("device: {device} ({driver})");
+    let mut sections: Vec<(&str, String, f64)> = Vec::new();
+    let mut json_rows: Vec<serde_json::Value> = Vec::new();
+    let mut timed = |name: &'static str,
+                     run: &mut dyn FnMut() -> crate::Result<(Vec<serde_json::Value>, String)>|
+     -> Result<(), CliError> {
+        let start = std::time::Instant::now();
+        let (rows, table) = run()?;
+        let s = start.elapsed().as_secs_f64();
+        super::progress_done(&format!("bench {name}: {} rows in {s:.0} s", rows.len()));
+        for mut r in rows {
+            if let Some(o) = r.as_object_mut() {
+                o.insert("bench".into(), name.into());
+                o.insert("device".into(), device.clone().into());
+                o.insert("driver".into(), driver.clone().into());
+                o.insert("date".into(), date.clone().into());
+            }
+            json_rows.push(r);
+        }
+        sections.push((name, table, s));
+        Ok(())
+    };
+    timed("inverse", &mut || {
+        let rows = inverse::run(
+            &reference,
+            Some(&ctx),
+            &InverseBenchOptions::default(),
+            super::progress_line,
+        )?;
+        let json = rows
+            .iter()
+            .map(|r| serde_json::to_value(r).map_err(|e| crate::Error::internal(e.to_string())))
+            .collect::<crate::Result<Vec<_>>>()?;
+        Ok((json, inverse::table(&rows)))
+    })?;
+    timed("warp", &mut || {
+        let rows = crate::bench::warp::run(&ctx, &crate::bench::warp::SIZES, super::progress_line)?;
+        let table = crate::bench::warp::table(&rows);
+        Ok((rows, table))
+    })?;
+    timed("vertex", &mut || {
+        let rows = crate::bench::vertex::run(&ctx, &crate::bench::vertex::SIZES, &mut |s| {
+            super::progress_line(s)
+        })?;
+        let table = crate::bench::vertex::table(&rows);
+        Ok((rows, table))
+    })?;
+    timed("lens", &mut || {
+        let rows = crate::bench::lens::run(&ctx, &lenses, 256, &mut |s| super::progress_line(s))?;
+        let table = crate::bench::lens::table(&rows);
+        Ok((rows, table))
+    })?;
+    timed("plan", &mut || {
+        let rows = crate::bench::plan::run(&ctx, &scenes, &mut |s| super::progress_line(s))?;
+        let table = crate::bench::plan::table(&rows);
+        Ok((rows, table))
+    })?;
+    finish(&ctx)?;
+    if args.json {
+        let mut out = std::io::stdout().lock();
+        for r in &json_rows {
+            use std::io::Write as _;
+            writeln!(out, "{r}")
+                .map_err(|e| CliError::io(std::path::Path::new("<stdout>"), "cannot write", &e))?;
+        }
+        return Ok(());
+    }
+    let begin = format!("<!-- bench all: {device} -->");
+    let end = format!("<!-- end bench all: {device} -->");
+    let total: f64 = sections.iter().map(|s| s.2).sum();
+    let mut section = format!(
+        "{begin}\n## {device}\n\n`vklens bench all` on {device}, driver {driver}, {date} \
+         ({total:.0} s in all). Every table below is from this one run.\n"
+    );
+    for (name, table, s) in &sections {
+        let _ = write!(
+            section,
+            "\n### `vklens bench {name}` ({device}, {driver}, {date}; {s:.0} s)\n\n{}\n",
+            table.trim_end()
+        );
+    }
+    section.push_str(&end);
+    let old = match std::fs::read_to_string(&args.out) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(e) => return Err(CliError::io(&args.out, "cannot read", &e)),
+    };
+    let new = match (old.find(&begin), old.find(&end)) {
+        (Some(a), Some(b)) if b > a => {
+            format!("{}{section}{}", &old[..a], &old[b + end.len()..])
+        }
+        _ => format!("{}\n\n{section}\n", old.trim_end()),
+    };
+    crate::imaging::io::write_atomically(&args.out, |tmp| std::fs::write(tmp, &new))?;
+    eprintln!("wrote the {device} section of {}", args.out.display());
+    Ok(())
+}

@@ -160,6 +160,11 @@ enum BenchCommand {
     /// The planner's choices for the example scenes beside the everything-on pipeline, and
     /// the error-versus-time trade-off it picks from (inverse methods, tessellations).
     Plan(bench::PlanArgs),
+    /// Every bench above on the device VKLENS_DEVICE picks, in one run: writes (or replaces)
+    /// that device's section of docs/benchmarks.md, each table headed by the device, the
+    /// driver and the date. Run it on a machine with a real GPU to add its rows beside
+    /// lavapipe's: `VKLENS_DEVICE=gpu vklens bench all`.
+    All(bench::AllArgs),
 }
 
 /// Where the model runs.
@@ -231,6 +236,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Vertex(args)) => bench::vertex(args),
         Command::Bench(BenchCommand::Lens(args)) => bench::lens(args),
         Command::Bench(BenchCommand::Plan(args)) => bench::plan(args),
+        Command::Bench(BenchCommand::All(args)) => bench::all(args),
         Command::Demo(args) => demo::run(args),
         Command::Distort(args) => warp::run(args, crate::WarpDirection::Distort),
         Command::Undistort(args) => warp::run(args, crate::WarpDirection::Undistort),

@@ -279,6 +279,7 @@ impl Context {
             timestamp_period_ns: props.limits.timestamp_period as f64,
             timestamps: families[family as usize].timestamp_valid_bits > 0,
             device_name: device_name(&props),
+            driver: super::driver_name(&instance, physical, &props),
             float64,
             geometry_shader,
             max_image_side: props.limits.max_image_dimension2_d,

@@ -62,6 +62,8 @@ pub(crate) struct GpuInner {
     pub(crate) timestamp_period_ns: f64,
     pub(crate) timestamps: bool,
     pub(crate) device_name: String,
+    /// The driver, as it names itself (e.g. "llvmpipe, Mesa 22.3.6 (LLVM 15.0.6)").
+    pub(crate) driver: String,
     /// Whether `shaderFloat64` is enabled on the device (f64 shader variants).
     pub(crate) float64: bool,
     /// Whether `geometryShader` is enabled (the geometry path's triangle discard).
@@ -111,6 +113,7 @@ impl Gpu {
                 timestamp_period_ns: props.limits.timestamp_period as f64,
                 timestamps: family.timestamp_valid_bits > 0,
                 device_name: device_name(&props),
+                driver: driver_name(instance, physical_device, &props),
                 float64: features.shader_float64,
                 geometry_shader: features.geometry_shader,
                 max_image_side: props.limits.max_image_dimension2_d,
@@ -163,6 +166,11 @@ impl Gpu {
     pub fn device_name(&self) -> &str {
         &self.inner.device_name
     }
+
+    /// The driver and its version, as the driver reports them (for benchmark tables).
+    pub fn driver(&self) -> &str {
+        &self.inner.driver
+    }
 }
 
 impl Drop for GpuInner {
@@ -180,6 +188,42 @@ impl Drop for GpuInner {
             }
         }
     }
+}
+
+/// The driver's name and version: `VK_KHR_driver_properties` where the device has it (its
+/// name and info strings, e.g. "llvmpipe, Mesa 22.3.6 (LLVM 15.0.6)"), else the raw
+/// `driverVersion` (whose encoding is the vendor's).
+pub(crate) fn driver_name(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    props: &vk::PhysicalDeviceProperties,
+) -> String {
+    // SAFETY: `physical` is a physical device of the live `instance`.
+    let has_driver_properties = unsafe { instance.enumerate_device_extension_properties(physical) }
+        .map(|exts| {
+            exts.iter().any(|e| {
+                e.extension_name_as_c_str()
+                    .is_ok_and(|n| n == ash::khr::driver_properties::NAME)
+            })
+        })
+        .unwrap_or(false);
+    if has_driver_properties {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        // SAFETY: vkGetPhysicalDeviceProperties2 is core in the instance's Vulkan 1.1, and a
+        // physical device may be queried for the properties of an extension it supports.
+        unsafe { instance.get_physical_device_properties2(physical, &mut props2) };
+        let text = |s: Result<&std::ffi::CStr, _>| {
+            s.map(|c| c.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        };
+        let name = text(driver.driver_name_as_c_str());
+        let info = text(driver.driver_info_as_c_str());
+        if !name.is_empty() {
+            return format!("{name}, {info}");
+        }
+    }
+    format!("driver version {:#x}", props.driver_version)
 }
 
 pub(crate) fn device_name(props: &vk::PhysicalDeviceProperties) -> String {

@@ -63,6 +63,11 @@ layout(constant_id = 2) const bool VKL_TANGENTIAL = true;  // p1 p2
 layout(constant_id = 3) const bool VKL_PRISM = true;       // s1 s2 s3 s4
 layout(constant_id = 4) const bool VKL_TILT = true;        // tau_x tau_y
 layout(constant_id = 5) const uint VKL_NEWTON_ITERATIONS = 20;
+// Which camera model the shader is specialized for (pass::spec::MODEL). 0: OpenCV's standard
+// model (a Brown lens runs as its standard twin). A shader specialized for a model this file
+// does not implement answers "invalid" everywhere rather than evaluate the wrong model.
+#define VKL_MODEL_OPENCV 0u
+layout(constant_id = 6) const uint VKL_MODEL = VKL_MODEL_OPENCV;
 
 layout(set = VKL_CAMERA_SET, binding = VKL_CAMERA_BINDING, std140) uniform VKL_PARAMS_BLOCK {
     VKL_VEC4 intrinsics;        // fx fy cx cy
@@ -170,6 +175,7 @@ bool vkl_distort_jacobian(VKL_VEC2 x, out VKL_VEC2 d, out VKL_MAT2 J) {
     VKL_MAT2 T;
     d = x;
     J = VKL_MAT2(1.0);
+    if (VKL_MODEL != VKL_MODEL_OPENCV) return false;
     if (!vkl_distort_pre_tilt(x, pre, Jpre)) return false;
     if (!vkl_apply_tilt(pre, d, T)) return false;
     J = T * Jpre;

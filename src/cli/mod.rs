@@ -174,12 +174,14 @@ pub enum Backend {
     Gpu,
 }
 
+// clap shows a value parser's error as text.
 fn parse_method(s: &str) -> Result<InverseMethod, String> {
     s.parse()
+        .map_err(|e: crate::model::ModelError| e.to_string())
 }
 
 fn parse_precision(s: &str) -> Result<Precision, String> {
-    s.parse()
+    s.parse().map_err(|e: crate::Error| e.to_string())
 }
 
 /// Loads a camera file, as a one-line input error.

@@ -43,8 +43,9 @@ fn parse_fill(s: &str) -> Result<[f64; 4], String> {
     parse_numbers::<4>(s, "--fill R,G,B,A")
 }
 
+// clap shows a value parser's error as text.
 fn parse_sampling(s: &str) -> Result<Sampling, String> {
-    s.parse()
+    s.parse().map_err(|e: crate::Error| e.to_string())
 }
 
 /// Arguments shared by `distort`, `undistort` and `precorrect`.

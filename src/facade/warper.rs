@@ -61,9 +61,14 @@ impl FromStr for WarpMethod {
         if s == "lut" {
             return Ok(WarpMethod::Lut);
         }
-        s.parse().map(WarpMethod::PerPixel).map_err(|e: String| {
-            Error::input(e.replace("newton, heikkila", "newton, lut, heikkila"))
-        })
+        s.parse()
+            .map(WarpMethod::PerPixel)
+            .map_err(|e: crate::model::ModelError| {
+                Error::input(
+                    e.to_string()
+                        .replace("newton, heikkila", "newton, lut, heikkila"),
+                )
+            })
     }
 }
 

@@ -17,14 +17,14 @@ pub enum Sampling {
 }
 
 impl std::str::FromStr for Sampling {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
         match s {
             "bilinear" => Ok(Sampling::Bilinear),
             "nearest" => Ok(Sampling::Nearest),
-            _ => Err(format!(
+            _ => Err(crate::Error::input(format!(
                 "unknown sampling `{s}` (expected bilinear or nearest)"
-            )),
+            ))),
         }
     }
 }

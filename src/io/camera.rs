@@ -30,10 +30,11 @@ pub fn load_camera(path: &Path) -> Result<Camera> {
 
 /// Parses the text of a camera file; `origin` names it in errors.
 pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
-    let err = |message: String| Error::input(format!("{origin}: {message}"));
+    let err = |e: Error| e.context(origin);
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
     let tree = if trimmed.starts_with('{') {
-        serde_json::from_str::<Value>(trimmed).map_err(|e| err(format!("invalid JSON: {e}")))?
+        serde_json::from_str::<Value>(trimmed)
+            .map_err(|e| err(Error::input(format!("invalid JSON: {e}"))))?
     } else if trimmed.starts_with('<') {
         xml_to_tree(trimmed).map_err(err)?
     } else {
@@ -41,13 +42,15 @@ pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
     };
     if tree.get("model").and_then(Value::as_str) == Some("brown") {
         let brown = brown_from_tree(&tree).map_err(err)?;
-        return Camera::from_brown(&brown).map_err(|e| err(e.to_string()));
+        return Camera::from_brown(&brown).map_err(|e| err(Error::from(e)));
     }
     camera_from_tree(&tree).map_err(err)
 }
 
-fn brown_from_tree(tree: &Value) -> std::result::Result<BrownRadial, String> {
-    let obj = tree.as_object().ok_or("expected an object")?;
+fn brown_from_tree(tree: &Value) -> Result<BrownRadial> {
+    let obj = tree
+        .as_object()
+        .ok_or_else(|| Error::input("expected an object"))?;
     let width = dimension(obj, &["width", "image_width"])?;
     let height = dimension(obj, &["height", "image_height"])?;
     BrownRadial::new(
@@ -56,18 +59,18 @@ fn brown_from_tree(tree: &Value) -> std::result::Result<BrownRadial, String> {
         number_field(obj, "c1")?,
         number_field(obj, "c2")?,
     )
-    .map_err(|e| e.to_string())
+    .map_err(Error::from)
 }
 
 /// Reads a camera from a parsed JSON object (any of the layouts above).
-pub fn camera_from_value(value: &Value) -> std::result::Result<Camera, String> {
+pub fn camera_from_value(value: &Value) -> Result<Camera> {
     camera_from_tree(value)
 }
 
-fn camera_from_tree(tree: &Value) -> std::result::Result<Camera, String> {
+fn camera_from_tree(tree: &Value) -> Result<Camera> {
     let obj = tree
         .as_object()
-        .ok_or_else(|| "expected an object/mapping at the top level".to_string())?;
+        .ok_or_else(|| Error::input("expected an object/mapping at the top level"))?;
     let width = dimension(obj, &["width", "image_width"])?;
     let height = dimension(obj, &["height", "image_height"])?;
 
@@ -80,24 +83,27 @@ fn camera_from_tree(tree: &Value) -> std::result::Result<Camera, String> {
         }
     } else {
         let (key, k) = matrix_data(obj, &["camera_matrix", "K", "k"])?
-            .ok_or("missing `fx` (or `camera_matrix`)")?;
+            .ok_or_else(|| Error::input("missing `fx` (or `camera_matrix`)"))?;
         if k.len() != 9 {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "`{key}` must have 9 entries (3×3), got {}",
                 k.len()
-            ));
+            )));
         }
         let expected_zero = [(1, "skew"), (3, "[1][0]"), (6, "[2][0]"), (7, "[2][1]")];
         for (i, what) in expected_zero {
             if k[i] != 0.0 {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "`{key}` entry {what} is {}; vklens supports camera matrices without skew only ([[fx,0,cx],[0,fy,cy],[0,0,1]])",
                     k[i]
-                ));
+                )));
             }
         }
         if k[8] != 1.0 {
-            return Err(format!("`{key}` entry [2][2] must be 1, got {}", k[8]));
+            return Err(Error::input(format!(
+                "`{key}` entry [2][2] must be 1, got {}",
+                k[8]
+            )));
         }
         Intrinsics {
             fx: k[0],
@@ -109,9 +115,9 @@ fn camera_from_tree(tree: &Value) -> std::result::Result<Camera, String> {
 
     if let Some(model) = obj.get("distortion_model").and_then(Value::as_str) {
         if !["plumb_bob", "rational_polynomial", "opencv"].contains(&model) {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "`distortion_model` is `{model}`; vklens reads `plumb_bob` and `rational_polynomial` (the OpenCV standard model)"
-            ));
+            )));
         }
     }
     let coeffs = if let Some(v) = obj.get("dist_coeffs") {
@@ -128,10 +134,10 @@ fn camera_from_tree(tree: &Value) -> std::result::Result<Camera, String> {
         coeffs
     };
     Camera::from_coeffs(width, height, intrinsics, &coeffs).map_err(|e| match e {
-        ModelError::CoefficientCount(n) => format!(
+        ModelError::CoefficientCount(n) => Error::input(format!(
             "distortion coefficients: OpenCV accepts 4, 5, 8, 12 or 14 values, this file has {n}"
-        ),
-        other => other.to_string(),
+        )),
+        other => Error::from(other),
     })
 }
 
@@ -154,36 +160,44 @@ fn parse_float(s: &str) -> Option<f64> {
     }
 }
 
-fn number_field(obj: &Map<String, Value>, key: &str) -> std::result::Result<f64, String> {
+fn number_field(obj: &Map<String, Value>, key: &str) -> Result<f64> {
     let v = obj
         .get(key)
-        .ok_or_else(|| format!("missing field `{key}`"))?;
-    as_number(v).ok_or_else(|| format!("field `{key}` must be a number, got {v}"))
+        .ok_or_else(|| Error::input(format!("missing field `{key}`")))?;
+    as_number(v).ok_or_else(|| Error::input(format!("field `{key}` must be a number, got {v}")))
 }
 
-fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> std::result::Result<u32, String> {
+fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> Result<u32> {
     let (key, v) = keys
         .iter()
         .find_map(|k| obj.get(*k).map(|v| (*k, v)))
-        .ok_or_else(|| format!("missing field `{}` (image size)", keys.join("` or `")))?;
-    let n = as_number(v).ok_or_else(|| format!("field `{key}` must be a number, got {v}"))?;
+        .ok_or_else(|| {
+            Error::input(format!(
+                "missing field `{}` (image size)",
+                keys.join("` or `")
+            ))
+        })?;
+    let n = as_number(v)
+        .ok_or_else(|| Error::input(format!("field `{key}` must be a number, got {v}")))?;
     if !(n.fract() == 0.0 && n >= 1.0 && n <= crate::model::MAX_IMAGE_SIDE as f64) {
-        return Err(format!(
+        return Err(Error::input(format!(
             "field `{key}` must be a whole number of pixels in 1..={}, got {v}",
             crate::model::MAX_IMAGE_SIDE
-        ));
+        )));
     }
     Ok(n as u32)
 }
 
-fn number_list(v: &Value, key: &str) -> std::result::Result<Vec<f64>, String> {
+fn number_list(v: &Value, key: &str) -> Result<Vec<f64>> {
     let arr = v
         .as_array()
-        .ok_or_else(|| format!("field `{key}` must be a list of numbers, got {v}"))?;
+        .ok_or_else(|| Error::input(format!("field `{key}` must be a list of numbers, got {v}")))?;
     arr.iter()
         .enumerate()
         .map(|(i, x)| {
-            as_number(x).ok_or_else(|| format!("field `{key}`[{i}] must be a number, got {x}"))
+            as_number(x).ok_or_else(|| {
+                Error::input(format!("field `{key}`[{i}] must be a number, got {x}"))
+            })
         })
         .collect()
 }
@@ -192,14 +206,14 @@ fn number_list(v: &Value, key: &str) -> std::result::Result<Vec<f64>, String> {
 fn matrix_data<'a>(
     obj: &Map<String, Value>,
     keys: &[&'a str],
-) -> std::result::Result<Option<(&'a str, Vec<f64>)>, String> {
+) -> Result<Option<(&'a str, Vec<f64>)>> {
     let Some((key, v)) = keys.iter().find_map(|k| obj.get(*k).map(|v| (*k, v))) else {
         return Ok(None);
     };
     let data = match v {
         Value::Object(m) => m
             .get("data")
-            .ok_or_else(|| format!("field `{key}` has no `data`"))?,
+            .ok_or_else(|| Error::input(format!("field `{key}` has no `data`")))?,
         other => other,
     };
     let values = number_list(data, &format!("{key}.data"))?;
@@ -209,10 +223,10 @@ fn matrix_data<'a>(
             m.get("cols").and_then(as_number),
         ) {
             if (r * c) as usize != values.len() {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "field `{key}` says {r}×{c} but its data has {} values",
                     values.len()
-                ));
+                )));
             }
         }
     }
@@ -221,15 +235,19 @@ fn matrix_data<'a>(
 
 /// YAML (OpenCV FileStorage or ROS) → JSON tree. OpenCV's `%YAML:1.0` directive is not valid
 /// YAML 1.1/1.2 syntax, so directive lines are dropped; `!!opencv-matrix` tags are ignored.
-fn yaml_to_tree(text: &str) -> std::result::Result<Value, String> {
+fn yaml_to_tree(text: &str) -> Result<Value> {
     use yaml_rust2::{Yaml, YamlLoader};
     let cleaned: String = text
         .lines()
         .filter(|l| !l.starts_with('%'))
         .collect::<Vec<_>>()
         .join("\n");
-    let docs = YamlLoader::load_from_str(&cleaned).map_err(|e| format!("invalid YAML: {e}"))?;
-    let doc = docs.into_iter().next().ok_or("empty YAML file")?;
+    let docs = YamlLoader::load_from_str(&cleaned)
+        .map_err(|e| Error::input(format!("invalid YAML: {e}")))?;
+    let doc = docs
+        .into_iter()
+        .next()
+        .ok_or_else(|| Error::input("empty YAML file"))?;
     fn convert(y: &Yaml) -> Value {
         match y {
             Yaml::Real(s) => Value::String(s.clone()),
@@ -250,8 +268,9 @@ fn yaml_to_tree(text: &str) -> std::result::Result<Value, String> {
 
 /// OpenCV FileStorage XML → JSON tree: `<opencv_storage>`'s children become keys; an element
 /// with children becomes an object; `data` text becomes a list of numbers.
-fn xml_to_tree(text: &str) -> std::result::Result<Value, String> {
-    let doc = roxmltree::Document::parse(text).map_err(|e| format!("invalid XML: {e}"))?;
+fn xml_to_tree(text: &str) -> Result<Value> {
+    let doc =
+        roxmltree::Document::parse(text).map_err(|e| Error::input(format!("invalid XML: {e}")))?;
     let root = doc.root_element();
     fn convert(node: roxmltree::Node) -> Value {
         let children: Vec<_> = node.children().filter(|c| c.is_element()).collect();

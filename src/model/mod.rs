@@ -95,25 +95,27 @@ impl fmt::Display for InverseMethod {
 }
 
 impl FromStr for InverseMethod {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
+    type Err = ModelError;
+    fn from_str(s: &str) -> Result<Self, ModelError> {
         match s {
             "newton" => Ok(InverseMethod::Newton),
             "heikkila" => Ok(InverseMethod::Heikkila),
             _ => {
                 let Some(n) = s.strip_prefix("fixed-point:") else {
-                    return Err(format!(
+                    return Err(ModelError::Other(format!(
                         "unknown inverse method `{s}` (expected newton, heikkila or fixed-point:N)"
-                    ));
+                    )));
                 };
                 let n: u32 = n.parse().map_err(|_| {
-                    format!("`{s}`: N in fixed-point:N must be a whole number of iterations")
+                    ModelError::Other(format!(
+                        "`{s}`: N in fixed-point:N must be a whole number of iterations"
+                    ))
                 })?;
                 if n == 0 || n > Self::MAX_ITERATIONS {
-                    return Err(format!(
+                    return Err(ModelError::Other(format!(
                         "`{s}`: N must be between 1 and {}",
                         Self::MAX_ITERATIONS
-                    ));
+                    )));
                 }
                 Ok(InverseMethod::FixedPoint(n))
             }

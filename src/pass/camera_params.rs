@@ -109,5 +109,7 @@ impl CameraParams {
             .bool(spec::PRISM, terms.prism)
             .bool(spec::TILT, terms.tilt)
             .u32(spec::NEWTON_ITERATIONS, GPU_NEWTON_ITERATIONS)
+            // Every camera runs through the standard model on the GPU today.
+            .u32(spec::MODEL, spec::MODEL_OPENCV)
     }
 }

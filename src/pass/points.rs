@@ -36,12 +36,14 @@ impl Precision {
 }
 
 impl std::str::FromStr for Precision {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
         match s {
             "f32" => Ok(Precision::F32),
             "f64" => Ok(Precision::F64),
-            _ => Err(format!("unknown precision `{s}` (expected f32 or f64)")),
+            _ => Err(crate::Error::input(format!(
+                "unknown precision `{s}` (expected f32 or f64)"
+            ))),
         }
     }
 }

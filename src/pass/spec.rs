@@ -17,8 +17,21 @@ pub const PRISM: SpecId = SpecId::new("VKL_PRISM", 3);
 pub const TILT: SpecId = SpecId::new("VKL_TILT", 4);
 /// Newton iterations of the GPU inverse.
 pub const NEWTON_ITERATIONS: SpecId = SpecId::new("VKL_NEWTON_ITERATIONS", 5);
-/// Every camera-model constant, in the order of [`crate::model::Terms`]'s fields.
-pub const CAMERA: [SpecId; 6] = [RADIAL, RATIONAL, TANGENTIAL, PRISM, TILT, NEWTON_ITERATIONS];
+/// Which camera model the shader evaluates ([`MODEL_OPENCV`]).
+pub const MODEL: SpecId = SpecId::new("VKL_MODEL", 6);
+/// [`MODEL`]'s value for OpenCV's standard model (and a Brown lens, its exact twin).
+pub const MODEL_OPENCV: u32 = 0;
+/// Every camera-model constant: the term groups in the order of [`crate::model::Terms`]'s
+/// fields, the Newton iterations, the model.
+pub const CAMERA: [SpecId; 7] = [
+    RADIAL,
+    RATIONAL,
+    TANGENTIAL,
+    PRISM,
+    TILT,
+    NEWTON_ITERATIONS,
+    MODEL,
+];
 
 // glsl/include/warp_coords.glsl and glsl/points.comp: what a coordinate pass computes.
 /// Direction: 0 distort (inverse per pixel), 1 undistort (forward per pixel).

@@ -23,7 +23,6 @@ use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{image_barrier, Buffer, Context, Image};
-use crate::headless::warp::run_warp;
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;
@@ -842,26 +841,6 @@ fn render_warp_path(
     let geometry = WarpGeometry::distort(cam.clone(), method)
         .with_ideal(ov.intrinsics, (ov.width, ov.height))
         .map_err(invalid)?;
-    let ctx = renderer.ctx;
-    let warp = |geometry: WarpGeometry,
-                source: &Raster,
-                format: PixelFormat,
-                sampling: Sampling,
-                fill: [f32; 4]| {
-        run_warp(
-            ctx,
-            WarpDesc {
-                geometry,
-                coordinates: Coordinates::Analytic,
-                sampling,
-                format,
-                fill,
-                write_mask: false,
-            },
-            source,
-        )
-        .map(|(r, _)| r)
-    };
     let buffers = renderer.upload(&scene.mesh, scene.texture.as_ref())?;
     let mut out = Rendered {
         width: cam.width,
@@ -907,52 +886,152 @@ fn render_warp_path(
         })?);
     }
     if o.ids || o.depth {
-        progress("rendering pinhole IDs/depth at 1× (warp path)");
-        let desc = GeometryDesc::new(
-            pinhole.clone(),
-            Projection::Pinhole,
-            Outputs {
-                color: None,
-                ids: o.ids,
-                flow: false,
-                depth: o.depth,
-            },
-        );
-        let data = renderer.draw(desc, &buffers, &request.pose, &request.pose)?;
-        let raster = |pixels: Pixels| Raster {
-            width: ov.width,
-            height: ov.height,
-            pixels,
-            bit_depth: BitDepth::F32,
-        };
-        if let Some(ids) = data.ids {
-            progress("warping IDs (nearest)");
-            let r = warp(
-                geometry.clone(),
-                &raster(Pixels::R32Uint(ids)),
-                PixelFormat::R32Uint,
-                Sampling::Nearest,
-                [0.0; 4],
-            )?;
-            if let Pixels::R32Uint(p) = r.pixels {
-                out.ids = Some(p);
-            }
-        }
-        if let Some(depth) = data.depth {
-            progress("warping depth (nearest)");
-            let r = warp(
-                geometry.clone(),
-                &raster(Pixels::Rgba32F(
-                    depth.iter().map(|&z| [z, z, z, 1.0]).collect(),
-                )),
-                PixelFormat::R32Float,
-                Sampling::Nearest,
-                [f32::INFINITY; 4],
-            )?;
-            out.depth = Some((0..r.len()).map(|i| r.rgba_f32(i)[0]).collect());
-        }
+        progress("rendering pinhole IDs/depth at 1× and warping them (nearest) on the GPU");
+        let (ids, depth) = warp_data(
+            renderer.ctx,
+            &buffers,
+            &request.pose,
+            pinhole,
+            &geometry,
+            o.ids,
+            o.depth,
+        )?;
+        out.ids = ids;
+        out.depth = depth;
     }
     Ok(out)
+}
+
+/// The warp path's IDs and depth, without a round trip through the host: a pinhole render of
+/// them (left in `GENERAL`), each warped by a nearest warp of its own in the same submission
+/// (IDs filled with 0, depth with +inf where there is no source); only the warped images come
+/// back.
+#[allow(clippy::too_many_arguments)]
+fn warp_data(
+    ctx: &Context,
+    mesh: &MeshBuffers,
+    pose: &Pose,
+    pinhole: Camera,
+    geometry: &WarpGeometry,
+    ids: bool,
+    depth: bool,
+) -> Result<(Option<Vec<u32>>, Option<Vec<f32>>)> {
+    let gpu = ctx.gpu();
+    let mut desc = GeometryDesc::new(
+        pinhole,
+        Projection::Pinhole,
+        Outputs {
+            color: None,
+            ids,
+            flow: false,
+            depth,
+        },
+    );
+    desc.final_layout = vk::ImageLayout::GENERAL;
+    let mut pass = GeometryPass::new(gpu, desc)?;
+    let targets = GeometryTargets::new(gpu, &pass)?;
+    let (ow, oh) = geometry.output_size;
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    // Neither warp writes its mask (write_mask is off): they share one.
+    let mask = Image::new_2d(
+        gpu,
+        "warp_path.data.mask",
+        vk::Format::R8_UNORM,
+        ow,
+        oh,
+        usage,
+    )?;
+    let mut warps = Vec::new();
+    for (wanted, source, format, fill) in [
+        (ids, targets.ids(), PixelFormat::R32Uint, [0.0; 4]),
+        (
+            depth,
+            targets.depth(),
+            PixelFormat::R32Float,
+            [f32::INFINITY; 4],
+        ),
+    ] {
+        if !wanted {
+            continue;
+        }
+        let source = source.ok_or_else(|| Error::internal("the data render has no target"))?;
+        let mut warp = WarpPass::new(
+            gpu,
+            WarpDesc {
+                geometry: geometry.clone(),
+                coordinates: Coordinates::Analytic,
+                sampling: Sampling::Nearest,
+                format,
+                fill,
+                write_mask: false,
+            },
+        )?;
+        let output = Image::new_2d(gpu, "warp_path.data", format.vk(), ow, oh, usage)?;
+        let download = Buffer::new(
+            gpu,
+            "warp_path.data.download",
+            ow as u64 * oh as u64 * 4,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        // SAFETY: the warp is new: nothing recorded with it exists yet.
+        unsafe { warp.bind(source.view, output.view, mask.view) };
+        warps.push((warp, output, download));
+    }
+    // SAFETY: the pass is new: nothing recorded with it exists yet.
+    unsafe {
+        pass.bind_mesh(mesh);
+        pass.set_frame(pose, pose)?;
+    }
+    let (pass, targets) = (&pass, &targets);
+    ctx.submit(|cmd| {
+        let none = (
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+            vk::AccessFlags::empty(),
+        );
+        let write = (
+            vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::SHADER_WRITE,
+        );
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
+        // on the context's graphics+compute queue; every object lives until `submit` has
+        // waited. The render pass leaves its targets in GENERAL with their writes visible to
+        // compute, which the warps read; the warps' outputs go to GENERAL first.
+        unsafe {
+            mesh.record_upload(cmd);
+            for img in std::iter::once(&mask).chain(warps.iter().map(|w| &w.1)) {
+                image_barrier(
+                    gpu,
+                    cmd,
+                    img.raw,
+                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                    none,
+                    write,
+                );
+            }
+            for (warp, _, _) in &warps {
+                warp.record_prepare(cmd);
+            }
+            pass.record(cmd, targets, mesh);
+            for (warp, output, download) in &warps {
+                warp.record(cmd);
+                crate::gpu::record_compute_download(gpu, cmd, output, download);
+            }
+            crate::gpu::host_read_barrier(gpu, cmd);
+        }
+        Ok(())
+    })?;
+    let n = ow as usize * oh as usize;
+    let mut warped = warps.iter().map(|w| &w.2);
+    let ids = match ids {
+        true => warped.next().map(|b| b.read_pod::<u32>(n)).transpose()?,
+        false => None,
+    };
+    let depth = match depth {
+        true => warped.next().map(|b| b.read_pod::<f32>(n)).transpose()?,
+        false => None,
+    };
+    Ok((ids, depth))
 }
 
 #[cfg(test)]

@@ -473,3 +473,102 @@ fn vertex_and_warp_paths_agree_on_a_finely_tessellated_scene() {
     );
     assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() {
+    // `render --path warp --ids --depth`: a pinhole render of IDs and depth warped nearest on
+    // the GPU in one submission equals rendering them, reading them back and warping them
+    // from the host, bit for bit.
+    use vklens::internal::headless::warp::run_warp;
+    use vklens::internal::imaging::cpu_warp::Sampling;
+    use vklens::internal::model::warp::WarpGeometry;
+    use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc};
+    let ctx = validated_context();
+    let camera = reference_camera("seed_fig1_barrel");
+    let scene = builtin::boxes();
+    let pose = scene.default_pose(&camera);
+    let data = Outputs {
+        color: None,
+        ids: true,
+        flow: false,
+        depth: true,
+    };
+    let request = RenderRequest {
+        camera: camera.clone(),
+        pose,
+        previous_pose: pose,
+        path: RenderPath::Warp {
+            method: InverseMethod::Newton,
+            density: 1.0,
+        },
+        outputs: data,
+        supersample: 1,
+        jitter: 1,
+        tessellate: None,
+        background: [0.0; 4],
+        chromatic: None,
+    };
+    let got = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
+    // The host round trip: the overscanned pinhole render read back, then warped.
+    let ov = vklens::overscan(&camera, 1.0).unwrap();
+    let pinhole = render_scene(
+        &ctx,
+        &scene,
+        &RenderRequest {
+            camera: ov.clone(),
+            path: RenderPath::Pinhole,
+            ..request.clone()
+        },
+        &mut |_| {},
+    )
+    .unwrap();
+    let geometry = WarpGeometry::distort(camera.clone(), InverseMethod::Newton)
+        .with_ideal(ov.intrinsics, (ov.width, ov.height))
+        .unwrap();
+    let warp = |pixels: Pixels, format: PixelFormat, fill: [f32; 4]| {
+        let raster = Raster {
+            width: ov.width,
+            height: ov.height,
+            pixels,
+            bit_depth: BitDepth::F32,
+        };
+        let desc = WarpDesc {
+            geometry: geometry.clone(),
+            coordinates: Coordinates::Analytic,
+            sampling: Sampling::Nearest,
+            format,
+            fill,
+            write_mask: false,
+        };
+        run_warp(&ctx, desc, &raster).unwrap().0
+    };
+    let ids = warp(
+        Pixels::R32Uint(pinhole.ids.unwrap()),
+        PixelFormat::R32Uint,
+        [0.0; 4],
+    );
+    let Pixels::R32Uint(expected_ids) = ids.pixels else {
+        panic!("IDs come back as IDs")
+    };
+    let depth = warp(
+        Pixels::Rgba32F(
+            pinhole
+                .depth
+                .unwrap()
+                .iter()
+                .map(|&z| [z, z, z, 1.0])
+                .collect(),
+        ),
+        PixelFormat::R32Float,
+        [f32::INFINITY; 4],
+    );
+    let expected_depth: Vec<u32> = (0..depth.len())
+        .map(|i| depth.rgba_f32(i)[0].to_bits())
+        .collect();
+    let got_ids = got.ids.unwrap();
+    assert!(got_ids == expected_ids, "IDs differ");
+    assert!(got_ids.iter().any(|&i| i != 0), "the boxes are in view");
+    let got_depth: Vec<u32> = got.depth.unwrap().iter().map(|z| z.to_bits()).collect();
+    assert!(got_depth == expected_depth, "depth differs");
+    assert_no_validation_messages(&ctx);
+}

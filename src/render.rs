@@ -902,6 +902,9 @@ fn render_warp_path(
     Ok(out)
 }
 
+/// Warped object IDs and camera depth, each when asked for.
+type WarpedData = (Option<Vec<u32>>, Option<Vec<f32>>);
+
 /// The warp path's IDs and depth, without a round trip through the host: a pinhole render of
 /// them (left in `GENERAL`), each warped by a nearest warp of its own in the same submission
 /// (IDs filled with 0, depth with +inf where there is no source); only the warped images come
@@ -915,7 +918,7 @@ fn warp_data(
     geometry: &WarpGeometry,
     ids: bool,
     depth: bool,
-) -> Result<(Option<Vec<u32>>, Option<Vec<f32>>)> {
+) -> Result<WarpedData> {
     let gpu = ctx.gpu();
     let mut desc = GeometryDesc::new(
         pinhole,

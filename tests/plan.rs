@@ -1,4 +1,4 @@
-//! The planner (issue 7): what it chooses, and proof on what is *recorded* (pipelines and
+//! The planner: what it chooses, and proof on what is *recorded* (pipelines and
 //! their specialization constants), not on timings, that unasked effects cost nothing.
 
 mod common;
@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use ash::vk;
 use common::{assert_no_validation_messages, validated_context};
 use vklens::internal::pass::spec;
-use vklens::internal::plan::{execute, load_geometry, plan, PassKind, Route, SceneFile};
+use vklens::internal::plan::{execute, load_geometry, plan, PassKind, Route, SceneFile, Stage};
 
 fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes")
@@ -451,11 +451,11 @@ fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
     };
     let (p1, one) = frame(&plain);
     let (p4, four) = frame(&smooth);
-    assert!(!p1.steps.iter().any(|s| s.pass == "anti-aliasing"));
+    assert!(!p1.steps.iter().any(|s| s.stage == Stage::Antialias));
     let step = p4
         .steps
         .iter()
-        .find(|s| s.pass == "anti-aliasing")
+        .find(|s| s.stage == Stage::Antialias)
         .expect("an AA step");
     assert!(
         step.why.contains("2× supersampling and 2 jittered"),
@@ -535,7 +535,7 @@ fn a_scene_of_many_frames_warps_through_a_map_built_once() {
     let why = &p
         .steps
         .iter()
-        .find(|s| s.pass.starts_with("warp"))
+        .find(|s| matches!(s.stage, Stage::Warp { chromatic: true }))
         .unwrap()
         .why;
     assert!(

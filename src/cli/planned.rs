@@ -81,7 +81,7 @@ pub fn explain(p: &Plan, measured_ms: Option<f64>, passes: &[(&str, f64)]) -> St
         }
     );
     for (i, s) in p.steps.iter().enumerate() {
-        out.push_str(&format!("  {}. {}: {}\n", i + 1, s.pass, s.why));
+        out.push_str(&format!("  {}. {}: {}\n", i + 1, s.stage.name(), s.why));
     }
     out.push_str(&format!(
         "  geometric error: {:.2e} px (budget {} px)\n",
@@ -111,7 +111,7 @@ pub fn explain(p: &Plan, measured_ms: Option<f64>, passes: &[(&str, f64)]) -> St
 fn plan_json(p: &Plan, frames: &[(usize, f64)]) -> serde_json::Value {
     json!({
         "route": format!("{:?}", p.route),
-        "steps": p.steps.iter().map(|s| json!({"pass": s.pass, "why": s.why})).collect::<Vec<_>>(),
+        "steps": p.steps.iter().map(|s| json!({"pass": s.stage.name(), "why": s.why})).collect::<Vec<_>>(),
         "expected_error_px": p.expected_error_px,
         "budget_px": p.budget_px,
         "antialias": {"supersample": p.antialias.supersample, "jitter": p.antialias.jitter},

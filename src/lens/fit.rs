@@ -1,4 +1,4 @@
-//! The bridge from a real lens to the fast paths (issue 6 item 7): the OpenCV standard model
+//! The bridge from a real lens to the fast paths: the OpenCV standard model
 //! fitted to the traced lens, so that Alg. 1, the warp and everything else can render it.
 //!
 //! A centred, rotationally symmetric lens focused at infinity maps the object direction θ to

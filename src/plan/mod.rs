@@ -1,4 +1,4 @@
-//! The planner (issue 7): from a scene file — optics, the effects and outputs it wants and
+//! The planner: from a scene file — optics, the effects and outputs it wants and
 //! its accuracy budget — the cheapest pipeline that delivers exactly that, and why.
 //!
 //! - **Route.** A calibrated camera goes by a pinhole render (no distortion wanted), Alg. 1
@@ -82,10 +82,61 @@ pub struct LensSetting {
     pub models: Vec<(crate::lens::image_model::ImageModel, [f32; 4])>,
 }
 
-/// One step of a plan, and why it is there.
+/// A stage of a plan's frame: what [`PlanRecorder`] records (anti-aliasing: what the headless
+/// path repeats and averages), as `--explain` and `plan.json` name it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// The camera's pinhole projection, every output.
+    PinholeRender,
+    /// The warp's pinhole source, overscanned to cover every valid output pixel.
+    OverscannedRender,
+    /// The warp; `chromatic`: three fetches, one per channel's lens.
+    Warp { chromatic: bool },
+    /// The mesh's edges split before Alg. 1.
+    Tessellation,
+    /// Alg. 1 for every output.
+    VertexRender,
+    /// Alg. 1 for the data outputs beside a warp's colour.
+    VertexRenderData,
+    /// Supersampled, jittered colour, averaged.
+    Antialias,
+    /// Heidrich et al.'s image-based model.
+    LensModel,
+    /// The film the cells accumulate on.
+    FilmAccumulation,
+    /// Vignetting kept, or divided out.
+    Vignetting { kept: bool },
+    /// The perspective projections of one frame.
+    CellRenders,
+}
+
+impl Stage {
+    /// How `--explain` and `plan.json` name the stage.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::PinholeRender => "pinhole render",
+            Stage::OverscannedRender => "pinhole render (overscanned)",
+            Stage::Warp { chromatic: false } => "warp, single fetch",
+            Stage::Warp { chromatic: true } => "warp, 3 fetches (chromatic)",
+            Stage::Tessellation => "tessellation",
+            Stage::VertexRender => "Alg. 1 (vertex + discard)",
+            Stage::VertexRenderData => "Alg. 1 (vertex + discard) for IDs/flow/depth",
+            Stage::Antialias => "anti-aliasing",
+            Stage::LensModel => "image-based lens model (Heidrich et al.)",
+            Stage::FilmAccumulation => "film accumulation",
+            Stage::Vignetting { kept: true } => "vignetting kept",
+            Stage::Vignetting { kept: false } => "vignetting divided out",
+            Stage::CellRenders => "cell renders",
+        }
+    }
+}
+
+/// One stage of a plan, and why it is there.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Step {
-    pub pass: String,
+    /// The stage.
+    pub stage: Stage,
+    /// The reason: what the scene asked for, what was measured.
     pub why: String,
 }
 
@@ -276,7 +327,7 @@ pub fn load_geometry(file: &SceneFile) -> Result<Scene> {
 fn push_antialias_step(steps: &mut Vec<Step>, aa: scene_file::Antialias, color: bool) {
     if aa.is_on() && color {
         steps.push(Step {
-            pass: "anti-aliasing".into(),
+            stage: Stage::Antialias,
             why: format!(
                 "[render] asks for {}× supersampling and {} jittered pass(es) of the colour, averaged; IDs, flow and depth stay one sample per pixel",
                 aa.supersample, aa.jitter
@@ -291,10 +342,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
     let e = &file.effects;
     let o = &file.outputs;
     let mut steps = Vec::new();
-    let step = |pass: &str, why: String| Step {
-        pass: pass.to_string(),
-        why,
-    };
+    let step = |stage: Stage, why: String| Step { stage, why };
     match &file.optics {
         scene_file::OpticsSpec::Lens {
             path,
@@ -342,7 +390,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             let max_angle_deg = file.max_error_px * px_deg;
             let samples = if e.depth_of_field { e.lens_samples } else { 1 };
             steps.push(step(
-                "image-based lens model (Heidrich et al.)",
+                Stage::LensModel,
                 format!(
                     "optics is a lens prescription; {} lens sample{} ({}), quad-tree until {:.2e}° = {} px",
                     samples,
@@ -353,7 +401,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 ),
             ));
             steps.push(step(
-                "film accumulation",
+                Stage::FilmAccumulation,
                 if e.chromatic_aberration {
                     "chromatic aberration asked: R, G, B traced at the C, e and F lines, each channel its own projections".into()
                 } else {
@@ -361,11 +409,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 },
             ));
             steps.push(step(
-                if e.vignetting {
-                    "vignetting kept"
-                } else {
-                    "vignetting divided out"
-                },
+                Stage::Vignetting { kept: e.vignetting },
                 if e.vignetting {
                     "vignetting asked: border bisection per sample, radiometric weights kept".into()
                 } else {
@@ -387,7 +431,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 .fold(0.0, f64::max);
             let projections: usize = models.iter().map(|(m, _)| m.projection_count()).sum();
             steps.push(step(
-                "cell renders",
+                Stage::CellRenders,
                 format!("{projections} perspective projections per frame, largest angle error {model_angle:.2e}°"),
             ));
             let frame_pose = first
@@ -472,7 +516,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             let lensless = terms == Default::default();
             if lensless && chromatic.is_none() {
                 steps.push(step(
-                    "pinhole render",
+                    Stage::PinholeRender,
                     if e.distortion {
                         "the camera has no distortion: no lens work at all".into()
                     } else {
@@ -638,15 +682,13 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera")));
                 };
                 steps.push(step(
-                    "pinhole render (overscanned)",
+                    Stage::OverscannedRender,
                     "the warp's source, covering every valid output pixel (Lambers et al. Sec. 3.3)"
                         .into(),
                 ));
                 steps.push(step(
-                    if chromatic.is_some() {
-                        "warp, 3 fetches (chromatic)"
-                    } else {
-                        "warp, single fetch"
+                    Stage::Warp {
+                        chromatic: chromatic.is_some(),
                     },
                     format!(
                         "{}; {}; {}",
@@ -664,7 +706,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                         return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: tessellation cannot meet it for the ID/flow outputs")));
                     };
                     steps.push(step(
-                        "Alg. 1 (vertex + discard) for IDs/flow/depth",
+                        Stage::VertexRenderData,
                         format!(
                             "IDs and flow cannot be warped (Lambers et al. Table 1); {}; {terms_note}",
                             describe_tess(l, verr, tris)
@@ -714,10 +756,10 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     )
                 };
                 if l.is_some() {
-                    steps.push(step("tessellation", describe_tess(l, verr, tris)));
+                    steps.push(step(Stage::Tessellation, describe_tess(l, verr, tris)));
                 }
                 steps.push(step(
-                    "Alg. 1 (vertex + discard)",
+                    Stage::VertexRender,
                     format!(
                         "{why}; {}; {terms_note}",
                         if l.is_none() {

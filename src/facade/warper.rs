@@ -324,6 +324,8 @@ impl Warper {
     /// device this warper was built on. Record it once, before the first [`Warper::record`],
     /// and not again while that work is pending.
     pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds this function's contract, which is the pass's own
+        // `record_prepare` contract; `own_mask` is this warper's and nothing else uses it.
         unsafe {
             self.pass.record_prepare(cmd);
             // The fallback mask is written by the warp as a storage image.
@@ -392,6 +394,9 @@ impl Warper {
         // SAFETY: the caller guarantees that no recorded warp of this warper is pending when
         // the views change (see `# Safety`).
         unsafe { self.bind(views) };
+        // SAFETY: the caller upholds `record`'s contract (recording outside a render pass,
+        // after `record_prepare`, the images alive and in GENERAL), and the views just bound
+        // were checked non-null and of the sizes the pass was built for.
         unsafe { self.pass.record(cmd) };
         Ok(())
     }

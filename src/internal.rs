@@ -19,7 +19,7 @@ pub mod model;
 pub mod pass;
 #[path = "plan/mod.rs"]
 pub mod plan;
-#[path = "render.rs"]
+#[path = "render/mod.rs"]
 pub mod render;
 #[path = "scene/mod.rs"]
 pub mod scene;

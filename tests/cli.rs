@@ -313,3 +313,32 @@ fn exit_codes_follow_the_error_kind() {
     assert!(!dir.join("o.png").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A closed stdout (the reader of a pipe quit) is an I/O error, exit 1, one line: never a
+/// panic. Checked on commands that print more than the pipe's reader takes.
+#[test]
+fn a_closed_stdout_is_an_error_not_a_panic() {
+    let cam = camera_file("seed_fig2.opencv.yml");
+    let lens = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("lenses/dgauss.50mm.dat");
+    for args in [
+        vec!["overscan", "--camera", cam.as_str()],
+        vec!["lens", "info", "--lens", lens.to_str().unwrap()],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_vklens"))
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Close the read end before the command writes.
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("<stdout>") && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    }
+}

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use vklens::internal::imaging::{io as image_io, Pixels};
+use vklens::internal::imaging::{file as image_io, Pixels};
 use vklens::internal::io::reference::shared_dir;
 
 fn vklens(args: &[&str]) -> Output {

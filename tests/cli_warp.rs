@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use vklens::internal::imaging::{io as image_io, BitDepth, Pixels, Raster};
+use vklens::internal::imaging::{file as image_io, BitDepth, Pixels, Raster};
 use vklens::internal::io::reference::shared_dir;
 
 fn vklens(args: &[&str]) -> Output {

@@ -23,10 +23,6 @@ use crate::plan::{
 };
 use crate::scene::Scene;
 
-fn invalid(e: impl ToString) -> Error {
-    Error::Input(e.to_string())
-}
-
 /// Median frame time of three renders of the plan's first pose (ms), by one recorder.
 fn time_plan(ctx: &Context, p: &Plan, scene: &Scene) -> Result<f64> {
     let mut times = Vec::new();
@@ -112,7 +108,7 @@ fn everything_on(file: &SceneFile) -> SceneFile {
 /// Runs every row; `examples` is the folder of scene files.
 pub fn run(ctx: &Context, examples: &Path, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
     let mut files: Vec<_> = std::fs::read_dir(examples)
-        .map_err(|e| invalid(format!("{}: {e}", examples.display())))?
+        .map_err(|e| Error::input(format!("{}: {e}", examples.display())))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "toml"))
         .collect();
@@ -124,14 +120,14 @@ pub fn run(ctx: &Context, examples: &Path, progress: &mut dyn FnMut(&str)) -> Re
             .map(|n| n.to_string_lossy().to_string())
             .unwrap_or_default();
         progress(&format!("{name}: planning"));
-        let file = SceneFile::load(path).map_err(invalid)?;
-        let scene = load_geometry(&file).map_err(invalid)?;
-        let chosen = plan(&file, &scene).map_err(invalid)?;
+        let file = SceneFile::load(path)?;
+        let scene = load_geometry(&file)?;
+        let chosen = plan(&file, &scene)?;
         progress(&format!("{name}: {}", route_name(&chosen.route)));
         let chosen_ms = time_plan(ctx, &chosen, &scene)?;
         let all = everything_on(&file);
         // Everything on: Newton, 3 fetches, every output by Alg. 1 with 2 px edges.
-        let mut full = plan(&all, &scene).map_err(invalid)?;
+        let mut full = plan(&all, &scene)?;
         if let Route::WarpAndVertex {
             tessellate,
             method,
@@ -164,10 +160,13 @@ pub fn run(ctx: &Context, examples: &Path, progress: &mut dyn FnMut(&str)) -> Re
     // The trade-off the planner walks: prism_tilt on the 16² grid, colour only.
     let text =
         "[geometry]\nscene = \"grid:16\"\n[optics]\ncamera = \"../cameras/prism_tilt.json\"\n";
-    let file = SceneFile::parse(text, &examples.join("tradeoff.toml")).map_err(invalid)?;
-    let scene = load_geometry(&file).map_err(invalid)?;
-    let base = plan(&file, &scene).map_err(invalid)?;
-    let camera = base.camera.clone().ok_or_else(|| invalid("no camera"))?;
+    let file = SceneFile::parse(text, &examples.join("tradeoff.toml"))?;
+    let scene = load_geometry(&file)?;
+    let base = plan(&file, &scene)?;
+    let camera = base
+        .camera
+        .clone()
+        .ok_or_else(|| Error::internal("a camera plan without a camera"))?;
     for (method, _) in inverse_candidates() {
         let Some(error) = inverse_error_px(&camera, method) else {
             continue;
@@ -197,8 +196,7 @@ pub fn run(ctx: &Context, examples: &Path, progress: &mut dyn FnMut(&str)) -> Re
     ] {
         let mesh = match l {
             None => scene.mesh.clone(),
-            Some(l) => crate::scene::tessellate::tessellate(&scene.mesh, &pose, &camera, l)
-                .map_err(invalid)?,
+            Some(l) => crate::scene::tessellate::tessellate(&scene.mesh, &pose, &camera, l)?,
         };
         let error = super::vertex::straight_line_error(&camera, &pose, &mesh);
         progress(&format!("trade-off: Alg. 1, edges {l:?}"));

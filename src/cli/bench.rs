@@ -46,13 +46,13 @@ pub fn inverse(args: InverseArgs) -> Result<(), CliError> {
     }
     if args.json {
         for r in &rows {
-            println!(
+            outln!(
                 "{}",
                 serde_json::to_string(r).map_err(|e| CliError::internal(e.to_string()))?
-            );
+            )?;
         }
     } else {
-        println!("{}", inverse::table(&rows));
+        outln!("{}", inverse::table(&rows))?;
     }
     Ok(())
 }
@@ -95,7 +95,7 @@ pub fn warp(args: WarpArgs) -> Result<(), CliError> {
     let rows = crate::bench::warp::run(&ctx, &sizes, super::progress_line)?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     finish(&ctx)?;
-    print_rows(&rows, args.json, crate::bench::warp::table);
+    print_rows(&rows, args.json, crate::bench::warp::table)?;
     Ok(())
 }
 
@@ -119,7 +119,7 @@ pub fn vertex(args: VertexArgs) -> Result<(), CliError> {
     let rows = crate::bench::vertex::run(&ctx, &sizes, &mut |s| super::progress_line(s))?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     finish(&ctx)?;
-    print_rows(&rows, args.json, crate::bench::vertex::table);
+    print_rows(&rows, args.json, crate::bench::vertex::table)?;
     Ok(())
 }
 
@@ -162,14 +162,19 @@ fn data_folder(
 }
 
 /// Prints rows as JSON lines or as the bench's tables.
-fn print_rows(rows: &[serde_json::Value], json: bool, table: fn(&[serde_json::Value]) -> String) {
+fn print_rows(
+    rows: &[serde_json::Value],
+    json: bool,
+    table: fn(&[serde_json::Value]) -> String,
+) -> Result<(), CliError> {
     if json {
         for r in rows {
-            println!("{r}");
+            outln!("{r}")?;
         }
     } else {
-        println!("{}", table(rows));
+        outln!("{}", table(rows))?;
     }
+    Ok(())
 }
 
 fn bench_error(e: crate::Error) -> CliError {
@@ -192,10 +197,10 @@ pub fn lens(args: LensArgs) -> Result<(), CliError> {
     finish(&ctx)?;
     if args.json {
         for r in &rows {
-            println!("{r}");
+            outln!("{r}")?;
         }
     } else {
-        println!("{}", crate::bench::lens::table(&rows));
+        outln!("{}", crate::bench::lens::table(&rows))?;
     }
     Ok(())
 }
@@ -218,7 +223,7 @@ pub fn plan(args: PlanArgs) -> Result<(), CliError> {
         .map_err(bench_error)?;
     super::progress_done(&format!("measured {} rows", rows.len()));
     finish(&ctx)?;
-    print_rows(&rows, args.json, crate::bench::plan::table);
+    print_rows(&rows, args.json, crate::bench::plan::table)?;
     Ok(())
 }
 
@@ -362,7 +367,7 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
         }
         _ => format!("{}\n\n{section}\n", old.trim_end()),
     };
-    crate::imaging::io::write_atomically(&args.out, |tmp| std::fs::write(tmp, &new))?;
+    crate::imaging::file::write_atomically(&args.out, |tmp| std::fs::write(tmp, &new))?;
     eprintln!("wrote the {device} section of {}", args.out.display());
     Ok(())
 }

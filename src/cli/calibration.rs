@@ -7,7 +7,7 @@ use clap::Args;
 
 use super::render::PathArg;
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
-use crate::imaging::io as image_io;
+use crate::imaging::file as image_io;
 use crate::pass::geometry::{Outputs, DEFAULT_DELTA};
 use crate::render::{RenderPath, RenderRequest, SceneRenderer};
 use crate::scene::builtin::{self, parse_board_size, Board};

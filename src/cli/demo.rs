@@ -54,7 +54,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     finish(&ctx)?;
     let image = image::RgbaImage::from_raw(camera.width, camera.height, pixels)
         .ok_or_else(|| CliError::internal("pixel count does not match the image size"))?;
-    crate::imaging::io::write_atomically(&args.output, |tmp| {
+    crate::imaging::file::write_atomically(&args.output, |tmp| {
         image
             .save_with_format(tmp, image::ImageFormat::Png)
             .map_err(std::io::Error::other)

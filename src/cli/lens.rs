@@ -174,7 +174,7 @@ fn info(args: InfoArgs) -> Result<(), CliError> {
                 })
             })
             .collect();
-        println!(
+        outln!(
             "{}",
             json!({
                 "name": lens.name,
@@ -192,56 +192,61 @@ fn info(args: InfoArgs) -> Result<(), CliError> {
                 "z_origin": "front vertex, positive towards the image",
                 "distortion": points,
             })
-        );
+        )?;
         return Ok(());
     }
     let mm = |v: Option<f64>| {
         v.map(|x| format!("{x:.3} mm"))
             .unwrap_or_else(|| "∞ (afocal)".into())
     };
-    println!(
+    outln!(
         "{} ({} surfaces; d line, {} µm)",
         lens.name,
         lens.surfaces.len(),
         LAMBDA_D
-    );
-    println!("  effective focal length   {}", mm(p.efl));
-    println!("  back focal length        {}", mm(p.bfl));
-    println!("  front focal length       {}", mm(p.ffl));
-    println!(
+    )?;
+    outln!("  effective focal length   {}", mm(p.efl))?;
+    outln!("  back focal length        {}", mm(p.bfl))?;
+    outln!("  front focal length       {}", mm(p.ffl))?;
+    outln!(
         "  f-number                 {}",
         p.f_number
             .map(|f| format!("f/{f:.2}"))
             .unwrap_or_else(|| "—".into())
-    );
-    println!("  (z from the front vertex, towards the image)");
-    println!(
+    )?;
+    outln!("  (z from the front vertex, towards the image)")?;
+    outln!(
         "  principal planes         H {}  H' {}",
         mm(p.front_principal_z),
         mm(p.rear_principal_z)
-    );
-    println!(
+    )?;
+    outln!(
         "  entrance pupil           z {:.3} mm, ⌀ {:.3} mm",
-        p.entrance_pupil_z, p.entrance_pupil_diameter
-    );
-    println!(
+        p.entrance_pupil_z,
+        p.entrance_pupil_diameter
+    )?;
+    outln!(
         "  exit pupil               z {:.3} mm, ⌀ {:.3} mm",
-        p.exit_pupil_z, p.exit_pupil_diameter
-    );
-    println!("  rear vertex              z {:.3} mm", p.rear_vertex_z);
-    println!("  distortion (chief rays on the paraxial focal plane, focus at infinity):");
-    println!("    field°   height mm   ideal mm   distortion %");
+        p.exit_pupil_z,
+        p.exit_pupil_diameter
+    )?;
+    outln!("  rear vertex              z {:.3} mm", p.rear_vertex_z)?;
+    outln!("  distortion (chief rays on the paraxial focal plane, focus at infinity):")?;
+    outln!("    field°   height mm   ideal mm   distortion %")?;
     for d in &curve {
-        println!(
+        outln!(
             "    {:6.2}  {:9.4}  {:9.4}  {:+8.3}",
-            d.field_deg, d.image_height_mm, d.paraxial_height_mm, d.distortion_percent
-        );
+            d.field_deg,
+            d.image_height_mm,
+            d.paraxial_height_mm,
+            d.distortion_percent
+        )?;
     }
     if curve.len() < 12 {
-        println!(
+        outln!(
             "    (beyond {:.1}° the chief ray is vignetted)",
             curve.last().map(|d| d.field_deg).unwrap_or(0.0)
-        );
+        )?;
     }
     Ok(())
 }
@@ -278,8 +283,10 @@ fn fit(args: FitArgs) -> Result<(), CliError> {
     );
     let text = format!("{camera:#}\n");
     match &args.out {
-        Some(path) => crate::imaging::io::write_atomically(path, |tmp| std::fs::write(tmp, &text))?,
-        None => print!("{text}"),
+        Some(path) => {
+            crate::imaging::file::write_atomically(path, |tmp| std::fs::write(tmp, &text))?
+        }
+        None => out!("{text}")?,
     }
     Ok(())
 }
@@ -437,7 +444,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             bit_depth: BitDepth::U8,
         }
     };
-    crate::imaging::io::save(&raster, &args.output)?;
+    crate::imaging::file::save(&raster, &args.output)?;
     eprintln!("wrote {}", args.output.display());
     Ok(())
 }

@@ -4,6 +4,24 @@
 //! one clear line on stderr), 1 a failure of the machine (no Vulkan device, GPU error,
 //! validation messages when `VKLENS_VALIDATION=1`).
 
+/// `print!` to stdout that returns an error (exit 1, one line) instead of panicking when
+/// stdout is closed, e.g. a pipe whose reader has quit.
+macro_rules! out {
+    ($($t:tt)*) => {
+        $crate::internal::cli::write_stdout(format_args!($($t)*))
+    };
+}
+
+/// `println!` as [`out!`].
+macro_rules! outln {
+    () => {
+        $crate::internal::cli::write_stdout(format_args!("\n"))
+    };
+    ($($t:tt)*) => {
+        $crate::internal::cli::write_stdout(format_args!("{}\n", format_args!($($t)*)))
+    };
+}
+
 mod bench;
 mod calibration;
 mod demo;
@@ -182,6 +200,15 @@ fn parse_method(s: &str) -> Result<InverseMethod, String> {
 
 fn parse_precision(s: &str) -> Result<Precision, String> {
     s.parse().map_err(|e: crate::Error| e.to_string())
+}
+
+/// Writes to stdout; a failure (a closed pipe) is an I/O error on `<stdout>`.
+pub(crate) fn write_stdout(args: std::fmt::Arguments) -> Result<(), CliError> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_fmt(args)
+        .and_then(|_| out.flush())
+        .map_err(|e| CliError::io(std::path::Path::new("<stdout>"), "cannot write", &e))
 }
 
 /// Loads a camera file, as a one-line input error.

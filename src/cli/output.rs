@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use super::CliError;
-use crate::imaging::{io as image_io, BitDepth, Pixels, Raster};
+use crate::imaging::{file as image_io, BitDepth, Pixels, Raster};
 use crate::pass::geometry::Rendered;
 
 pub(crate) fn extension(path: &Path) -> Option<String> {

@@ -178,7 +178,7 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
         done.borrow_mut().push((f.index, f.ms));
         if args.explain && done.borrow().len() == 1 {
             // On stdout, as soon as the first frame has measured the plan's passes.
-            print!("{}", explain(&plan, Some(f.ms), &f.pass_ms));
+            out!("{}", explain(&plan, Some(f.ms), &f.pass_ms))?;
         }
         progress_line(&format!(
             "frame {}/{total} ({:.1} ms)",
@@ -192,7 +192,9 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     finish(&ctx)?;
     let done = done.into_inner();
     let json = format!("{:#}\n", plan_json(&plan, &done));
-    crate::imaging::io::write_atomically(&out.join("plan.json"), |tmp| std::fs::write(tmp, &json))?;
+    crate::imaging::file::write_atomically(&out.join("plan.json"), |tmp| {
+        std::fs::write(tmp, &json)
+    })?;
     progress_done(&format!("{} frame(s) in {}", done.len(), out.display()));
     Ok(())
 }

@@ -5,9 +5,10 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use glam::DVec2;
 
+use super::output::check_output;
 use super::{context, CliError};
 use crate::imaging::cpu_warp::{self, Sampling};
-use crate::imaging::{io as image_io, BitDepth, Pixels, Raster};
+use crate::imaging::{file as image_io, BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;
 use crate::model::{Camera, CameraModel, InverseMethod};
 use crate::pass::warp::PixelFormat;
@@ -107,37 +108,9 @@ fn pinhole(path: &Path) -> Result<Camera, CliError> {
     Ok(cam)
 }
 
-/// Checks an output path before any work is done (so that nothing is left half-done).
-fn check_output(path: &Path, what: &str, allowed: &[&str]) -> Result<(), CliError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
-    if !allowed.contains(&ext.as_str()) {
-        return Err(CliError::input(format!(
-            "{}: the {what} must be a .{} file",
-            path.display(),
-            allowed.join(" or .")
-        )));
-    }
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !dir.is_dir() {
-        return Err(CliError::input(format!(
-            "{}: folder {} does not exist",
-            path.display(),
-            dir.display()
-        )));
-    }
-    Ok(())
-}
-
 /// Runs one of the three warp directions.
 pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
-    check_output(&args.output, "output", &["png", "exr"])?;
+    check_output(&args.output, "image", &["png", "exr"])?;
     if let Some(m) = &args.mask {
         check_output(m, "mask", &["png"])?;
     }
@@ -191,7 +164,7 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         )));
     }
     let (out, mask) = match args.backend {
-        // imaging::io::save writes float data read from an 8-bit file back as 8-bit.
+        // imaging::file::save writes float data read from an 8-bit file back as 8-bit.
         super::Backend::Cpu => {
             let (out, mask) = cpu_warp::warp(&geometry, &source, args.sampling, options.fill);
             (out, mask.iter().map(|&m| m > 127).collect::<Vec<_>>())
@@ -284,6 +257,6 @@ pub fn overscan_command(args: OverscanArgs) -> Result<(), CliError> {
         "dist_coeffs": [0.0, 0.0, 0.0, 0.0, 0.0],
         "density": args.density,
     });
-    println!("{json}");
+    outln!("{json}")?;
     Ok(())
 }

@@ -133,6 +133,6 @@ impl Camera {
     /// Writes the camera as vklens JSON (atomically: a failure leaves no partial file).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let text = format!("{:#}\n", self.to_json());
-        crate::imaging::io::write_atomically(path.as_ref(), |tmp| std::fs::write(tmp, &text))
+        crate::imaging::file::write_atomically(path.as_ref(), |tmp| std::fs::write(tmp, &text))
     }
 }

@@ -5,7 +5,7 @@
 //! linear alike), as `cv2.remap` does; vklens converts nothing behind the user's back.
 
 pub mod cpu_warp;
-pub mod io;
+pub mod file;
 
 /// Pixels of a host image, row-major.
 #[derive(Debug, Clone, PartialEq)]

@@ -56,6 +56,27 @@ impl WarpGeometry {
         }
     }
 
+    /// Distort through `camera` from the pinhole source that covers every valid output pixel,
+    /// `density` source pixels per output pixel at the principal point (the overscan that
+    /// gives a barrel lens its borders, Lambers et al. Sec. 3.3): that source camera and the
+    /// warp's geometry.
+    pub fn overscanned(
+        camera: &Camera,
+        method: InverseMethod,
+        density: f64,
+    ) -> Result<(Camera, Self), ModelError> {
+        let ov = super::overscan::overscan(camera, density)?;
+        let source = Camera::new(
+            ov.width,
+            ov.height,
+            ov.intrinsics,
+            super::OpenCvDistortion::default(),
+        )?;
+        let geometry = Self::distort(camera.clone(), method)
+            .with_ideal(ov.intrinsics, (ov.width, ov.height))?;
+        Ok((source, geometry))
+    }
+
     /// Undistort a lens image of `camera` into a pinhole image of the same intrinsics and size.
     pub fn undistort(camera: Camera) -> Self {
         WarpGeometry {

@@ -13,6 +13,7 @@ pub mod points;
 pub mod spec;
 pub mod warp;
 pub mod warp_raster;
+pub mod warp_stage;
 
 pub use camera_params::{CameraParams, CameraParams64};
 pub use points::{PointsMode, PointsPass, Precision};

@@ -298,10 +298,8 @@ fn estimate_ms(pixels: f64, triangles: f64, cost: Cost) -> f64 {
 /// interpolation, at least the f32 floor. `None` where a fold is in view (a map there needs a
 /// per-pixel check, which the planner does not weigh).
 fn map_error_px(camera: &Camera, chromatic: Option<[f64; 3]>) -> Option<f64> {
-    let ov = crate::model::overscan::overscan(camera, 1.0).ok()?;
-    let mut g = crate::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton)
-        .with_ideal(ov.intrinsics, (ov.width, ov.height))
-        .ok()?;
+    let (_, mut g) =
+        crate::model::warp::WarpGeometry::overscanned(camera, InverseMethod::Newton, 1.0).ok()?;
     if let Some(scales) = chromatic {
         g = g.with_chromatic(scales).ok()?;
     }

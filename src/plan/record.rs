@@ -12,7 +12,6 @@ use glam::DVec2;
 use super::{Plan, Route};
 use crate::gpu::{Error, Gpu, QueryPool, Result};
 use crate::imaging::{BitDepth, Pixels, Raster};
-use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, OpenCvDistortion};
 use crate::pass::geometry::Rendered;
@@ -25,10 +24,6 @@ use crate::pass::warp::Coordinates;
 use crate::render::WarpStage;
 use crate::render::{geometry_kind, PassKind, RecordedPipeline};
 use crate::scene::{Mesh, Pose, Scene};
-
-fn invalid(e: impl ToString) -> Error {
-    Error::Input(e.to_string())
-}
 
 /// A bug: a plan the planner cannot have made.
 fn internal(e: impl ToString) -> Error {
@@ -84,7 +79,7 @@ impl PlanRecorder {
     /// says so, at the first pose).
     pub fn new(gpu: &Gpu, plan: &Plan, scene: &Scene) -> Result<Self> {
         if plan.antialias.is_on() {
-            return Err(invalid(
+            return Err(Error::input(
                 "the recorder draws one sample per pixel: the scene's [render] supersample / jitter are averaged on the host by execute(); an engine anti-aliases its own way (MSAA, TAA)",
             ));
         }
@@ -123,19 +118,9 @@ impl PlanRecorder {
                           map: bool,
                           depth: bool|
          -> Result<(WarpStage, Camera, WarpGeometry)> {
-            let ov = overscan(camera, 1.0).map_err(invalid)?;
-            let source = Camera::new(
-                ov.width,
-                ov.height,
-                ov.intrinsics,
-                OpenCvDistortion::default(),
-            )
-            .map_err(invalid)?;
-            let mut g = WarpGeometry::distort(camera.clone(), method)
-                .with_ideal(ov.intrinsics, (ov.width, ov.height))
-                .map_err(invalid)?;
+            let (source, mut g) = WarpGeometry::overscanned(camera, method, 1.0)?;
             if let Some(s) = chromatic {
-                g = g.with_chromatic(s).map_err(invalid)?;
+                g = g.with_chromatic(s)?;
             }
             // The warp reads RGBA8 or RGBA32F sources.
             let f = if format == ColorFormat::Rgba8 {
@@ -338,7 +323,7 @@ impl PlanRecorder {
         let pose = *self
             .poses
             .get(index)
-            .ok_or_else(|| invalid(format!("no frame {index}")))?;
+            .ok_or_else(|| Error::input(format!("no frame {index}")))?;
         let previous = if index > 0 {
             self.poses[index - 1]
         } else {

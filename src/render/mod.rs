@@ -17,17 +17,23 @@
 //! translates the lens image by −δ exactly (Alg. 1 normalizes with the same cx, cy), so
 //! every pass is the same image sampled elsewhere.
 
+mod antialias;
+
+pub use crate::pass::warp_stage::{DepthWarp, WarpStage};
 use crate::{Error, Result};
+pub(crate) use antialias::{antialiased, average, shifted};
+pub use antialias::{
+    downsample, jitter_offsets, scaled_camera, DEFAULT_BACKGROUND, MAX_JITTER, MAX_SUPERSAMPLE,
+};
 use ash::vk;
-use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{image_barrier, Buffer, Context, Image};
 use crate::imaging::cpu_warp::Sampling;
-use crate::imaging::{BitDepth, Pixels, Raster};
+use crate::imaging::Raster;
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
-use crate::model::{Camera, Intrinsics, InverseMethod, OpenCvDistortion};
+use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     Rendered,
@@ -35,16 +41,6 @@ use crate::pass::geometry::{
 use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
 use crate::scene::tessellate::tessellate;
 use crate::scene::{Mesh, Pose, Scene};
-
-/// Largest colour supersampling factor per axis (`--supersample`, `[render] supersample`):
-/// at 8× an 800×600 frame is already rendered at 6400×4800.
-pub const MAX_SUPERSAMPLE: u32 = 8;
-/// Most jittered passes averaged (`--jitter`, `[render] jitter`).
-pub const MAX_JITTER: u32 = 64;
-/// The background a render clears to unless told otherwise: transparent black, so that what
-/// the scene does not cover can be told apart (the same on the command line and in scene
-/// files).
-pub const DEFAULT_BACKGROUND: [f32; 4] = [0.0; 4];
 
 /// Which path renders the lens.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,435 +75,6 @@ pub struct RenderRequest {
     pub background: [f32; 4],
     /// Lateral chromatic aberration (warp path): per-channel radial scales R, G, B.
     pub chromatic: Option<[f64; 3]>,
-}
-
-/// The camera rendering `camera`'s image at `s×` its resolution.
-pub fn scaled_camera(camera: &Camera, s: u32) -> Result<Camera> {
-    let k = camera.intrinsics;
-    let f = s as f64;
-    Camera::new(
-        camera.width * s,
-        camera.height * s,
-        Intrinsics {
-            fx: k.fx * f,
-            fy: k.fy * f,
-            // Pixel edges scale, not centres: pixel i spans [i − 0.5, i + 0.5].
-            cx: (k.cx + 0.5) * f - 0.5,
-            cy: (k.cy + 0.5) * f - 0.5,
-        },
-        camera.distortion,
-    )
-    .map_err(Error::from)
-}
-
-/// The camera whose image is `camera`'s translated by `-shift` px (principal point moved).
-pub(crate) fn shifted(camera: &Camera, shift: DVec2) -> Result<Camera> {
-    let mut k = camera.intrinsics;
-    k.cx -= shift.x;
-    k.cy -= shift.y;
-    Camera::new(camera.width, camera.height, k, camera.distortion).map_err(Error::from)
-}
-
-/// Radical inverse of `i` in `base` (Halton sequence), in [0, 1).
-fn radical_inverse(mut i: u32, base: u32) -> f64 {
-    let (mut f, mut r) = (1.0, 0.0);
-    while i > 0 {
-        f /= base as f64;
-        r += f * (i % base) as f64;
-        i /= base;
-    }
-    r
-}
-
-/// Sub-sample offsets of `passes` jittered passes, in units of one sample (centred on 0).
-pub fn jitter_offsets(passes: u32) -> Vec<DVec2> {
-    if passes <= 1 {
-        return vec![DVec2::ZERO];
-    }
-    let raw: Vec<DVec2> = (0..passes)
-        .map(|i| DVec2::new(radical_inverse(i, 2), radical_inverse(i, 3)))
-        .collect();
-    // Centre exactly (the mean offset would shift the whole image).
-    let mean = raw.iter().sum::<DVec2>() / passes as f64;
-    raw.into_iter().map(|o| o - mean).collect()
-}
-
-/// The mean of equally sized images (8-bit results rounded).
-pub(crate) fn average(images: &[Raster]) -> Raster {
-    let n = images.len().max(1) as f32;
-    let first = &images[0];
-    let mut sums = vec![[0f32; 4]; first.len()];
-    for img in images {
-        for (i, o) in sums.iter_mut().enumerate() {
-            let v = img.rgba_f32(i);
-            for c in 0..4 {
-                o[c] += v[c] / n;
-            }
-        }
-    }
-    let pixels = match first.pixels {
-        Pixels::Rgba8(_) => Pixels::Rgba8(
-            sums.iter()
-                .map(|p| p.map(|c| (c * 255.0).round().clamp(0.0, 255.0) as u8))
-                .collect(),
-        ),
-        _ => Pixels::Rgba32F(sums),
-    };
-    Raster {
-        pixels,
-        ..first.clone()
-    }
-}
-
-/// Anti-aliased colour: for each jitter offset, `pass(big camera, shift)` renders `camera`
-/// scaled by `s` with its image translated by `-shift` (1× px); the results are box-filtered
-/// and averaged.
-fn antialiased(
-    camera: &Camera,
-    s: u32,
-    passes: u32,
-    pass: &mut dyn FnMut(Camera, DVec2) -> Result<Raster>,
-) -> Result<Raster> {
-    let mut images = Vec::new();
-    for offset in jitter_offsets(passes) {
-        let shift = offset / s as f64;
-        let big = scaled_camera(&shifted(camera, shift).map_err(invalid)?, s).map_err(invalid)?;
-        images.push(downsample(&pass(big, shift)?, s));
-    }
-    Ok(average(&images))
-}
-
-/// Box-filters an image by `s` per axis (its size must be a multiple of `s`).
-pub fn downsample(image: &Raster, s: u32) -> Raster {
-    if s == 1 {
-        return image.clone();
-    }
-    let (w, h) = (image.width / s, image.height / s);
-    let (s, iw) = (s as usize, image.width as usize);
-    let pixels = match &image.pixels {
-        // Integer sums, row by row: this runs on every supersampled pass.
-        Pixels::Rgba8(p) => {
-            let n = (s * s) as u32;
-            let mut out = Vec::with_capacity(w as usize * h as usize);
-            let mut sums = vec![[0u32; 4]; w as usize];
-            for y in 0..h as usize {
-                sums.iter_mut().for_each(|v| *v = [0; 4]);
-                for row in p[y * s * iw..(y + 1) * s * iw].chunks_exact(iw) {
-                    for (x, block) in row.chunks_exact(s).enumerate() {
-                        for px in block {
-                            for c in 0..4 {
-                                sums[x][c] += px[c] as u32;
-                            }
-                        }
-                    }
-                }
-                out.extend(sums.iter().map(|v| v.map(|c| ((c + n / 2) / n) as u8)));
-            }
-            Pixels::Rgba8(out)
-        }
-        _ => {
-            let n = (s * s) as f32;
-            let mut out = vec![[0f32; 4]; w as usize * h as usize];
-            for y in 0..image.height as usize {
-                for x in 0..iw {
-                    let v = image.rgba_f32(y * iw + x);
-                    let o = &mut out[(y / s) * w as usize + x / s];
-                    for c in 0..4 {
-                        o[c] += v[c] / n;
-                    }
-                }
-            }
-            Pixels::Rgba32F(out)
-        }
-    };
-    Raster {
-        width: w,
-        height: h,
-        pixels,
-        bit_depth: image.bit_depth,
-    }
-}
-
-/// The warp path on the GPU in one submission: pinhole render (colour left in `GENERAL`) →
-/// compute warp reading it in place → optional readback. Nothing makes a round trip through
-/// the host. `render` and `bench vertex` both drive it.
-pub struct WarpStage {
-    gpu: crate::gpu::Gpu,
-    pub pass: GeometryPass,
-    pub targets: GeometryTargets,
-    pub warp: WarpPass,
-    pub output: Image,
-    pub mask: Image,
-    download: Buffer,
-    format: PixelFormat,
-    /// The depth through the same warp (nearest, +inf fill), when asked for.
-    pub depth: Option<DepthWarp>,
-}
-
-/// The second, nearest warp of a [`WarpStage`] that carries the pinhole render's depth.
-pub struct DepthWarp {
-    pub warp: WarpPass,
-    /// R32F, the warp's output size, `GENERAL` after the warp.
-    pub output: Image,
-    /// Host copy of `output` for headless readback.
-    download: Buffer,
-}
-
-impl DepthWarp {
-    /// Records the copy of the warped depth to the host (after the warp).
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass, after the depth warp was recorded.
-    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds the contract above; `download` was sized for `output`
-        // (R32F, the warp's output size) and `output` has TRANSFER_SRC usage.
-        unsafe {
-            crate::gpu::record_compute_readback(self.warp.gpu(), cmd, &self.output, &self.download)
-        };
-    }
-
-    /// The warped depth (after the submission completed): metres, +inf without a source.
-    pub fn read(&self) -> Result<Vec<f32>> {
-        let e = self.output.extent;
-        self.download
-            .read_pod::<f32>(e.width as usize * e.height as usize)
-    }
-}
-
-impl WarpStage {
-    /// A pinhole render with the `source` camera (colour in `format`, cleared to
-    /// `background`), warped by `geometry` into its output size.
-    pub fn new(
-        gpu: &crate::gpu::Gpu,
-        source: Camera,
-        geometry: WarpGeometry,
-        coordinates: Coordinates,
-        format: ColorFormat,
-        background: [f32; 4],
-    ) -> Result<Self> {
-        Self::with_depth(
-            gpu,
-            source,
-            geometry,
-            coordinates,
-            format,
-            background,
-            false,
-        )
-    }
-
-    /// As [`Self::new`]; with `depth`, the pinhole render also writes camera depth and a
-    /// second warp (nearest, +inf where there is no source) carries it to the output.
-    pub fn with_depth(
-        gpu: &crate::gpu::Gpu,
-        source: Camera,
-        geometry: WarpGeometry,
-        coordinates: Coordinates,
-        format: ColorFormat,
-        background: [f32; 4],
-        depth: bool,
-    ) -> Result<Self> {
-        let pixel_format = match format {
-            ColorFormat::Rgba8 => PixelFormat::Rgba8,
-            ColorFormat::Rgba32F => PixelFormat::Rgba32F,
-            ColorFormat::Rgba16F => {
-                return Err(invalid("the warp reads RGBA8 or RGBA32F sources"));
-            }
-        };
-        let mut desc = GeometryDesc::new(
-            source,
-            Projection::Pinhole,
-            Outputs {
-                depth,
-                ..Outputs::color_only(Some(format))
-            },
-        );
-        desc.background = background;
-        desc.final_layout = vk::ImageLayout::GENERAL;
-        let pass = GeometryPass::new(gpu, desc)?;
-        let targets = GeometryTargets::new(gpu, &pass)?;
-        let (ow, oh) = geometry.output_size;
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-        let output = Image::new_2d(gpu, "warp_path.output", pixel_format.vk(), ow, oh, usage)?;
-        let mask = Image::new_2d(gpu, "warp_path.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
-        let download = Buffer::new(
-            gpu,
-            "warp_path.download",
-            ow as u64 * oh as u64 * pixel_format.bytes() as u64,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let mut warp = WarpPass::new(
-            gpu,
-            WarpDesc {
-                geometry,
-                coordinates,
-                sampling: Sampling::Bilinear,
-                format: pixel_format,
-                fill: background,
-                write_mask: false,
-            },
-        )?;
-        let color = targets.color().ok_or_else(|| invalid("no colour target"))?;
-        // SAFETY: no submission using it is pending (`submit` waits on its fence).
-        unsafe { warp.bind(color.view, output.view, mask.view) };
-        let depth = match targets.depth() {
-            Some(source) => {
-                // Depth follows the lens itself (the green channel's reference geometry,
-                // unit scale), as the headless warp path does: one coordinate, nearest.
-                let mut plain = warp.desc().geometry.clone();
-                plain.chromatic = None;
-                if let Some(cams) = plain.channel_cameras.take() {
-                    let [_, green, _] = *cams;
-                    plain.camera = green;
-                }
-                let mut depth_warp = WarpPass::new(
-                    gpu,
-                    WarpDesc {
-                        geometry: plain,
-                        sampling: Sampling::Nearest,
-                        format: PixelFormat::R32Float,
-                        fill: [f32::INFINITY; 4],
-                        ..warp.desc().clone()
-                    },
-                )?;
-                let r32f = PixelFormat::R32Float.vk();
-                let output = Image::new_2d(gpu, "warp_path.depth", r32f, ow, oh, usage)?;
-                // Neither warp writes its mask (write_mask is off): they can share one.
-                // SAFETY: no submission using it is pending (`submit` waits on its fence).
-                unsafe { depth_warp.bind(source.view, output.view, mask.view) };
-                let download = Buffer::new(
-                    gpu,
-                    "warp_path.depth.download",
-                    ow as u64 * oh as u64 * 4,
-                    vk::BufferUsageFlags::TRANSFER_DST,
-                    MemoryLocation::GpuToCpu,
-                )?;
-                Some(DepthWarp {
-                    warp: depth_warp,
-                    output,
-                    download,
-                })
-            }
-            None => None,
-        };
-        Ok(WarpStage {
-            gpu: gpu.clone(),
-            pass,
-            targets,
-            warp,
-            output,
-            mask,
-            download,
-            format: pixel_format,
-            depth,
-        })
-    }
-
-    /// Records the one-off work: output and mask to `GENERAL`, the warp's map builds.
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass; not while earlier work is pending.
-    pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
-        let none = (
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::AccessFlags::empty(),
-        );
-        let write = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_WRITE,
-        );
-        // SAFETY: the caller upholds `record_prepare`'s contract: `cmd` is recording outside a
-        // render pass and no earlier work using these images is pending, so UNDEFINED is a
-        // valid old layout for this stage's own output, mask and depth images. The warps'
-        // `record_prepare` also need a compute queue, which this contract leaves implicit:
-        // every caller records on a queue with graphics and compute.
-        unsafe {
-            let depth = self.depth.iter().map(|d| &d.output);
-            for img in [&self.output, &self.mask].into_iter().chain(depth) {
-                image_barrier(
-                    &self.gpu,
-                    cmd,
-                    img.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    none,
-                    write,
-                );
-            }
-            self.warp.record_prepare(cmd);
-            if let Some(d) = &self.depth {
-                d.warp.record_prepare(cmd);
-            }
-        }
-    }
-
-    /// Records one frame: the pinhole render of `mesh` (bound with `pass.bind_mesh`), then
-    /// the warp (and the depth warp). The render pass leaves the colour in `GENERAL`, its writes visible to compute.
-    ///
-    /// # Safety
-    /// After [`Self::record_prepare`]; `mesh` uploaded and alive until the work completes.
-    pub unsafe fn record(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
-        // SAFETY: the caller upholds `record`'s contract: `cmd` is recording (outside a render
-        // pass, as for `record_prepare`) after `record_prepare`, `mesh` bound to `pass`,
-        // uploaded and alive. `targets` were made for `pass`, whose final layout GENERAL and
-        // end-of-pass dependency leave the colour (and depth) readable by the warps' compute.
-        unsafe {
-            self.pass.record(cmd, &self.targets, mesh);
-            self.record_warps(cmd);
-        }
-    }
-
-    /// Records the warps alone (colour, then depth when asked for), after the caller recorded
-    /// the pinhole render.
-    ///
-    /// # Safety
-    /// As [`Self::record`], with `self.pass` recorded first.
-    pub unsafe fn record_warps(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds `record_warps`'s contract: `self.pass` was recorded first,
-        // so the warps' sources are in GENERAL with their writes visible to compute, and
-        // `record_prepare` put their outputs and mask in GENERAL; both warps were bound in
-        // `with_depth`.
-        unsafe {
-            self.warp.record(cmd);
-            if let Some(d) = &self.depth {
-                d.warp.record(cmd);
-            }
-        }
-    }
-
-    /// Records the readback of the warped image (after [`Self::record`]).
-    ///
-    /// # Safety
-    /// As [`Self::record`].
-    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds `record_download`'s contract (after `record`): the warp
-        // left `output` in GENERAL, and `download` was sized for it whole in `with_depth`.
-        unsafe {
-            crate::gpu::record_compute_readback(&self.gpu, cmd, &self.output, &self.download)
-        };
-    }
-
-    /// The warped image (after the submission completed).
-    pub fn read(&self) -> Result<Raster> {
-        let e = self.output.extent;
-        let n = e.width as usize * e.height as usize;
-        let (pixels, depth) = match self.format {
-            PixelFormat::Rgba8 => (
-                Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
-                BitDepth::U8,
-            ),
-            _ => (
-                Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
-                BitDepth::F32,
-            ),
-        };
-        Ok(Raster {
-            width: e.width,
-            height: e.height,
-            pixels,
-            bit_depth: depth,
-        })
-    }
 }
 
 /// Renders scenes through a headless context, keeping geometry passes (their compiled
@@ -718,10 +285,6 @@ impl<'a> SceneRenderer<'a> {
     }
 }
 
-fn invalid(e: impl ToString) -> Error {
-    Error::Input(e.to_string())
-}
-
 pub(crate) fn geometry_kind(pass: &GeometryPass) -> PassKind {
     match pass.desc().projection {
         Projection::Lens { .. } => PassKind::VertexRender,
@@ -748,7 +311,7 @@ fn render_with(
 ) -> Result<Rendered> {
     let s = request.supersample;
     if !(1..=MAX_SUPERSAMPLE).contains(&s) || !(1..=MAX_JITTER).contains(&request.jitter) {
-        return Err(invalid(format!(
+        return Err(Error::input(format!(
             "supersample {s} and jitter {} must be in 1..={MAX_SUPERSAMPLE} and 1..={MAX_JITTER}",
             request.jitter
         )));
@@ -756,15 +319,14 @@ fn render_with(
     match request.path {
         RenderPath::Vertex { .. } | RenderPath::Pinhole => {
             if request.chromatic.is_some() {
-                return Err(invalid(
+                return Err(Error::input(
                     "chromatic aberration needs the warp path (one fused pass samples each channel through its own lens)",
                 ));
             }
             let mesh = match request.tessellate {
                 Some(l) => {
                     progress(&format!("tessellating to {l} px edges"));
-                    let m = tessellate(&scene.mesh, &request.pose, &request.camera, l)
-                        .map_err(invalid)?;
+                    let m = tessellate(&scene.mesh, &request.pose, &request.camera, l)?;
                     progress(&format!("{} triangles", m.triangle_count()));
                     m
                 }
@@ -793,7 +355,7 @@ fn render_with(
             let color = antialiased(&request.camera, s, request.jitter, &mut |big, _| {
                 run(big, Outputs::color_only(o.color))?
                     .color
-                    .ok_or_else(|| invalid("the render produced no colour"))
+                    .ok_or_else(|| Error::internal("the render produced no colour"))
             })?;
             let mut out = if data.ids || data.flow || data.depth {
                 progress("rendering data outputs at 1×");
@@ -825,22 +387,12 @@ fn render_warp_path(
 ) -> Result<Rendered> {
     let o = request.outputs;
     if o.flow {
-        return Err(invalid(
+        return Err(Error::input(
             "flow needs the vertex path: its vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1); use --path vertex",
         ));
     }
     let cam = &request.camera;
-    let ov = overscan(cam, density).map_err(invalid)?;
-    let pinhole = Camera::new(
-        ov.width,
-        ov.height,
-        ov.intrinsics,
-        OpenCvDistortion::default(),
-    )
-    .map_err(invalid)?;
-    let geometry = WarpGeometry::distort(cam.clone(), method)
-        .with_ideal(ov.intrinsics, (ov.width, ov.height))
-        .map_err(invalid)?;
+    let (pinhole, geometry) = WarpGeometry::overscanned(cam, method, density)?;
     let buffers = renderer.upload(&scene.mesh, scene.texture.as_ref())?;
     let mut out = Rendered {
         width: cam.width,
@@ -860,20 +412,17 @@ fn render_warp_path(
         // The warp runs at s× too (output and overscanned source), so its bilinear
         // resampling errors shrink with s like the rasterization's. The overscan is computed
         // once; each jittered pass translates source and lens image together.
-        let big_ov =
-            overscan(&scaled_camera(cam, s).map_err(invalid)?, density).map_err(invalid)?;
+        let big_ov = overscan(&scaled_camera(cam, s)?, density)?;
         let background = request.background;
         out.color = Some(antialiased(cam, s, request.jitter, &mut |big, shift| {
             let mut k = big_ov.intrinsics;
             k.cx -= shift.x * s as f64;
             k.cy -= shift.y * s as f64;
-            let source = Camera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())
-                .map_err(invalid)?;
-            let mut geometry = WarpGeometry::distort(big, method)
-                .with_ideal(k, (big_ov.width, big_ov.height))
-                .map_err(invalid)?;
+            let source = Camera::new(big_ov.width, big_ov.height, k, OpenCvDistortion::default())?;
+            let mut geometry =
+                WarpGeometry::distort(big, method).with_ideal(k, (big_ov.width, big_ov.height))?;
             if let Some(scales) = request.chromatic {
-                geometry = geometry.with_chromatic(scales).map_err(invalid)?;
+                geometry = geometry.with_chromatic(scales)?;
             }
             renderer.draw_warped(
                 &buffers,
@@ -1035,40 +584,4 @@ fn warp_data(
         false => None,
     };
     Ok((ids, depth))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn scaled_camera_keeps_pixel_edges() {
-        let cam = Camera::from_coeffs(
-            800,
-            600,
-            Intrinsics {
-                fx: 400.0,
-                fy: 400.0,
-                cx: 399.5,
-                cy: 299.5,
-            },
-            &[-0.05, 0.01, 0.03, -0.01],
-        )
-        .unwrap();
-        let big = scaled_camera(&cam, 4).unwrap();
-        // The image's left edge (pixel −0.5) is at the same normalized x in both.
-        let edge = |c: &Camera| (-0.5 - c.intrinsics.cx) / c.intrinsics.fx;
-        assert!((edge(&cam) - edge(&big)).abs() < 1e-15);
-        assert_eq!((big.width, big.height), (3200, 2400));
-        let img = Raster {
-            width: 4,
-            height: 2,
-            pixels: Pixels::Rgba8(vec![
-                [0; 4], [255; 4], [10; 4], [10; 4], [255; 4], [0; 4], [10; 4], [10; 4],
-            ]),
-            bit_depth: BitDepth::U8,
-        };
-        let small = downsample(&img, 2);
-        assert_eq!(small.pixels, Pixels::Rgba8(vec![[128; 4], [10; 4]]));
-    }
 }

@@ -168,19 +168,3 @@ impl<T> VkCall<T> for std::result::Result<T, vk::Result> {
         self.map_err(|result| Error::Vulkan { call, result })
     }
 }
-
-/// Domain errors that name their own file, line or key are bad input.
-macro_rules! input_error_from {
-    ($($t:ty),*) => {$(
-        impl From<$t> for Error {
-            fn from(e: $t) -> Self {
-                Error::Input(e.to_string())
-            }
-        }
-    )*};
-}
-input_error_from!(
-    crate::lens::prescription::PrescriptionError,
-    crate::scene::SceneError,
-    crate::plan::scene_file::SceneFileError
-);

@@ -281,3 +281,10 @@ mod tests {
         assert!((v - 64.17).abs() < 1e-9);
     }
 }
+
+/// A PrescriptionError names its own file (and line or key): bad input.
+impl From<PrescriptionError> for crate::Error {
+    fn from(e: PrescriptionError) -> Self {
+        crate::Error::Input(e.to_string())
+    }
+}

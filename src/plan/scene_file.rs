@@ -583,3 +583,10 @@ pub fn interpolate(from: &Pose, to: &Pose, frames: usize) -> Vec<Pose> {
         })
         .collect()
 }
+
+/// A SceneFileError names its own file (and line or key): bad input.
+impl From<SceneFileError> for crate::Error {
+    fn from(e: SceneFileError) -> Self {
+        crate::Error::Input(e.to_string())
+    }
+}

@@ -220,3 +220,10 @@ impl Scene {
         Pose::look_at(centre - forward * distance, centre, down)
     }
 }
+
+/// A SceneError names its own file (and line or key): bad input.
+impl From<SceneError> for crate::Error {
+    fn from(e: SceneError) -> Self {
+        crate::Error::Input(e.to_string())
+    }
+}

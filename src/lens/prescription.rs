@@ -250,6 +250,13 @@ impl Prescription {
     }
 }
 
+/// A PrescriptionError names its own file (and line or key): bad input.
+impl From<PrescriptionError> for crate::Error {
+    fn from(e: PrescriptionError) -> Self {
+        crate::Error::Input(e.to_string())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -279,12 +286,5 @@ mod tests {
         assert!((s.ior_at(LAMBDA_D) - 1.5168).abs() < 1e-12);
         let v = (s.ior_at(LAMBDA_D) - 1.0) / (s.ior_at(LAMBDA_F) - s.ior_at(LAMBDA_C));
         assert!((v - 64.17).abs() < 1e-9);
-    }
-}
-
-/// A PrescriptionError names its own file (and line or key): bad input.
-impl From<PrescriptionError> for crate::Error {
-    fn from(e: PrescriptionError) -> Self {
-        crate::Error::Input(e.to_string())
     }
 }

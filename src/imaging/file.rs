@@ -142,13 +142,43 @@ fn size_mismatch() -> Error {
     Error::internal("the pixel count does not match the image size")
 }
 
-/// Runs `write` on a temporary path beside `path`, then renames it into place.
+/// Writes an output the way every command and `save` function does: `write` fills a temporary
+/// file beside the target, which is flushed to disk and renamed over it, so a failure (or a
+/// concurrent writer) never leaves a half-written or mixed file. The temporary name is unique
+/// per process and call. A symlink at `path` is followed (its target is replaced, the link
+/// kept); a device or FIFO there is written through, never replaced; a folder is refused.
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::io::Result<()>,
 ) -> Result<()> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static CALLS: AtomicU64 = AtomicU64::new(0);
     let shown = path.display();
-    let dir = path
+    // Follow a symlink to what it names (relative links are relative to their folder).
+    let mut target = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&target) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let link = std::fs::read_link(&target)
+                    .map_err(|e| Error::io(path, "cannot follow the symlink", &e))?;
+                target = match target.parent() {
+                    Some(dir) if link.is_relative() => dir.join(link),
+                    _ => link,
+                };
+            }
+            _ => break,
+        }
+    }
+    if let Ok(m) = std::fs::metadata(&target) {
+        if m.is_dir() {
+            return Err(Error::input(format!("{shown}: is a folder, not a file")));
+        }
+        if !m.is_file() {
+            // A device or FIFO: write through it; renaming over it would replace it.
+            return write(&target).map_err(|e| Error::io(path, "cannot write", &e));
+        }
+    }
+    let dir = target
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
@@ -158,13 +188,18 @@ pub fn write_atomically(
             dir.display()
         )));
     }
-    let name = path
+    let name = target
         .file_name()
         .and_then(|n| n.to_str())
         .unwrap_or("output");
-    let tmp = dir.join(format!(".{name}.vklens-tmp"));
+    let tmp = dir.join(format!(
+        ".{name}.{}.{}.vklens-tmp",
+        std::process::id(),
+        CALLS.fetch_add(1, Ordering::Relaxed)
+    ));
     let result = write(&tmp)
-        .and_then(|_| std::fs::rename(&tmp, path))
+        .and_then(|_| std::fs::File::open(&tmp)?.sync_all())
+        .and_then(|_| std::fs::rename(&tmp, &target))
         .map_err(|e| Error::io(path, "cannot write", &e));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);

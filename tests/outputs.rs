@@ -27,7 +27,11 @@ fn concurrent_writers_never_mix_their_bytes() {
     let dir = temp_dir("concurrent");
     let target = dir.join("out.bin");
     let contents: Vec<Vec<u8>> = (0..4u8)
-        .map(|k| (0..200_000u32).map(|i| (i as u8).wrapping_mul(k + 1)).collect())
+        .map(|k| {
+            (0..200_000u32)
+                .map(|i| (i as u8).wrapping_mul(k + 1))
+                .collect()
+        })
         .collect();
     std::thread::scope(|s| {
         for c in &contents {
@@ -77,7 +81,10 @@ fn a_symlink_is_followed_a_device_written_through_a_folder_refused() {
     if made {
         let o = demo(&null);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        assert!(std::fs::metadata(&null).unwrap().file_type().is_char_device());
+        assert!(std::fs::metadata(&null)
+            .unwrap()
+            .file_type()
+            .is_char_device());
     } else {
         eprintln!("mknod is not allowed here: the device case is not checked");
     }
@@ -89,5 +96,51 @@ fn a_symlink_is_followed_a_device_written_through_a_folder_refused() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("is a folder"));
     assert!(folder.is_dir());
     assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn two_outputs_naming_one_file_are_refused_before_any_work() {
+    let dir = temp_dir("same");
+    let cam = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cameras/barrel_k1k2.json");
+    let c = dir.join("c.png");
+    let vklens = env!("CARGO_BIN_EXE_vklens");
+    let o = Command::new(vklens)
+        .args([
+            "render",
+            "--camera",
+            cam.to_str().unwrap(),
+            "--scene",
+            "boxes",
+        ])
+        .args([
+            "--output",
+            c.to_str().unwrap(),
+            "--ids",
+            c.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--output and --ids"), "{err}");
+    assert!(!c.exists());
+    let input = dir.join("in.png");
+    image::RgbaImage::new(800, 600).save(&input).unwrap();
+    let o = Command::new(vklens)
+        .args(["distort", "--camera", cam.to_str().unwrap()])
+        .args([
+            "--input",
+            input.to_str().unwrap(),
+            "--output",
+            c.to_str().unwrap(),
+        ])
+        .args(["--mask", dir.join(".").join("c.png").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--output and --mask"), "{err}");
+    assert!(!c.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

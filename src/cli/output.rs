@@ -39,6 +39,27 @@ pub(crate) fn check_output(path: &Path, what: &str, allowed: &[&str]) -> Result<
     Ok(ext)
 }
 
+/// Refuses two outputs naming the same file (one would silently overwrite the other), before
+/// any work is done. Paths are compared made absolute, with symlinks resolved where they exist.
+pub(crate) fn distinct_outputs(outputs: &[(&str, &Path)]) -> Result<(), CliError> {
+    let key = |p: &Path| {
+        std::fs::canonicalize(p)
+            .or_else(|_| std::path::absolute(p))
+            .unwrap_or_else(|_| p.to_path_buf())
+    };
+    for (i, (flag_a, a)) in outputs.iter().enumerate() {
+        for (flag_b, b) in &outputs[i + 1..] {
+            if key(a) == key(b) {
+                return Err(CliError::input(format!(
+                    "{flag_a} and {flag_b} both name {}: give each output its own file",
+                    a.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Where each output of a frame goes.
 pub(crate) struct Targets<'a> {
     pub color: Option<&'a Path>,

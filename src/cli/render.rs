@@ -166,6 +166,16 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         ));
     };
     let camera = load_camera(camera_path)?;
+    let named: Vec<(&str, &std::path::Path)> = [
+        ("--output", Some(output)),
+        ("--ids", args.ids.as_ref()),
+        ("--flow", args.flow.as_ref()),
+        ("--depth", args.depth.as_ref()),
+    ]
+    .into_iter()
+    .filter_map(|(flag, p)| p.map(|p| (flag, p.as_path())))
+    .collect();
+    super::output::distinct_outputs(&named)?;
     let color_ext = check_output(output, "colour", &["png", "exr"])?;
     let ids_ext = match &args.ids {
         Some(p) => Some(check_output(p, "ID", &["png", "exr"])?),

@@ -113,6 +113,7 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     check_output(&args.output, "image", &["png", "exr"])?;
     if let Some(m) = &args.mask {
         check_output(m, "mask", &["png"])?;
+        super::output::distinct_outputs(&[("--output", &args.output), ("--mask", m)])?;
     }
     let cam = super::load_camera(&args.camera)?;
     let mut options = match direction {

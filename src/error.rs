@@ -126,6 +126,8 @@ impl Error {
                     | K::ReadOnlyFilesystem
                     | K::InvalidFilename
                     | K::InvalidInput
+                    | K::FileTooLarge
+                    | K::InvalidData
             )
         )
     }

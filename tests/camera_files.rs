@@ -134,3 +134,35 @@ fn missing_distortion_means_a_pinhole() {
     .unwrap();
     assert_eq!(cam.distortion.to_coeffs(), [0.0; 14]);
 }
+
+/// Hostile camera files are refused quickly, naming the limit: a YAML "billion laughs" (730
+/// bytes that expand to a billion nodes) and an endless file.
+#[test]
+fn alias_bombs_and_endless_files_are_refused_with_the_limit() {
+    let dir = std::env::temp_dir().join(format!("vklens-hostile-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut bomb =
+        String::from("a: &a [\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\"]\n");
+    for (prev, name) in "abcdefgh".chars().zip("bcdefghi".chars()) {
+        let refs = vec![format!("*{prev}"); 10].join(",");
+        bomb.push_str(&format!("{name}: &{name} [{refs}]\n"));
+    }
+    let path = dir.join("bomb.yaml");
+    std::fs::write(&path, &bomb).unwrap();
+    let start = std::time::Instant::now();
+    let e = vklens::Camera::load(&path).unwrap_err();
+    assert!(
+        start.elapsed().as_secs_f64() < 5.0,
+        "took {:?}",
+        start.elapsed()
+    );
+    assert_eq!(e.kind(), vklens::ErrorKind::Input);
+    assert!(
+        e.to_string().contains("bomb.yaml") && e.to_string().contains("100000"),
+        "{e}"
+    );
+    let e = vklens::Camera::load("/dev/zero").unwrap_err();
+    assert!(e.to_string().contains("VKLENS_MAX_FILE_MB"), "{e}");
+    assert_eq!(vklens::internal::cli::exit_code(&e), 2);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -23,8 +23,8 @@ use crate::{Error, Result};
 /// Reads a camera file (format detected from its content). A Brown lens file gives a camera
 /// that remembers it ([`Camera::brown`]).
 pub fn load_camera(path: &Path) -> Result<Camera> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::io(path, "cannot read camera file", &e))?;
+    let text =
+        super::read_text(path).map_err(|e| Error::io(path, "cannot read camera file", &e))?;
     parse_camera(&text, &path.display().to_string())
 }
 
@@ -235,6 +235,69 @@ fn matrix_data<'a>(
 
 /// YAML (OpenCV FileStorage or ROS) → JSON tree. OpenCV's `%YAML:1.0` directive is not valid
 /// YAML 1.1/1.2 syntax, so directive lines are dropped; `!!opencv-matrix` tags are ignored.
+/// Most YAML nodes a camera file may expand to, an alias counted as the nodes it repeats. A
+/// calibration file has a few hundred; nested aliases (a "billion laughs") would otherwise
+/// expand a file of a few hundred bytes to billions of nodes.
+pub const MAX_YAML_NODES: u64 = 100_000;
+
+/// The number of nodes `text` expands to, counted from the parser's events without expanding
+/// anything (an alias adds the size its anchor was recorded with).
+fn yaml_expanded_nodes(text: &str) -> Result<u64> {
+    use yaml_rust2::parser::{Event, EventReceiver, Parser};
+    #[derive(Default)]
+    struct Count {
+        /// Open collections: nodes so far, anchor id.
+        open: Vec<(u64, usize)>,
+        /// Expanded size of each anchor.
+        anchors: std::collections::HashMap<usize, u64>,
+        total: u64,
+    }
+    impl Count {
+        fn add(&mut self, n: u64) {
+            self.total = self.total.saturating_add(n);
+            if let Some(top) = self.open.last_mut() {
+                top.0 = top.0.saturating_add(n);
+            }
+        }
+    }
+    impl EventReceiver for Count {
+        fn on_event(&mut self, ev: Event) {
+            match ev {
+                Event::Scalar(_, _, anchor, _) => {
+                    self.add(1);
+                    if anchor > 0 {
+                        self.anchors.insert(anchor, 1);
+                    }
+                }
+                Event::SequenceStart(anchor, _) | Event::MappingStart(anchor, _) => {
+                    self.total = self.total.saturating_add(1);
+                    self.open.push((1, anchor));
+                }
+                Event::SequenceEnd | Event::MappingEnd => {
+                    if let Some((n, anchor)) = self.open.pop() {
+                        if anchor > 0 {
+                            self.anchors.insert(anchor, n);
+                        }
+                        if let Some(top) = self.open.last_mut() {
+                            top.0 = top.0.saturating_add(n);
+                        }
+                    }
+                }
+                Event::Alias(id) => {
+                    let n = self.anchors.get(&id).copied().unwrap_or(1);
+                    self.add(n);
+                }
+                _ => {}
+            }
+        }
+    }
+    let mut count = Count::default();
+    Parser::new_from_str(text)
+        .load(&mut count, true)
+        .map_err(|e| Error::input(format!("invalid YAML: {e}")))?;
+    Ok(count.total)
+}
+
 fn yaml_to_tree(text: &str) -> Result<Value> {
     use yaml_rust2::{Yaml, YamlLoader};
     let cleaned: String = text
@@ -242,6 +305,12 @@ fn yaml_to_tree(text: &str) -> Result<Value> {
         .filter(|l| !l.starts_with('%'))
         .collect::<Vec<_>>()
         .join("\n");
+    let nodes = yaml_expanded_nodes(&cleaned)?;
+    if nodes > MAX_YAML_NODES {
+        return Err(Error::input(format!(
+            "the YAML expands to {nodes} nodes (its aliases repeat anchors), more than a camera file's limit of {MAX_YAML_NODES}"
+        )));
+    }
     let docs = YamlLoader::load_from_str(&cleaned)
         .map_err(|e| Error::input(format!("invalid YAML: {e}")))?;
     let doc = docs

@@ -184,7 +184,7 @@ impl Prescription {
     /// Reads a lens file.
     pub fn load(path: &Path) -> Result<Self, PrescriptionError> {
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| PrescriptionError {
+        let text = crate::io::read_text(path).map_err(|e| PrescriptionError {
             source: source.clone(),
             line: 0,
             problem: format!("cannot read: {e}"),

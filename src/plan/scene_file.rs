@@ -275,7 +275,7 @@ impl SceneFile {
     /// Reads and checks a scene file.
     pub fn load(path: &Path) -> Result<Self, SceneFileError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneFileError {
+        let text = crate::io::read_text(path).map_err(|e| SceneFileError {
             file: file.clone(),
             key: String::new(),
             problem: format!("cannot read: {e}"),

@@ -170,3 +170,29 @@ impl<T> VkCall<T> for std::result::Result<T, vk::Result> {
         self.map_err(|result| Error::Vulkan { call, result })
     }
 }
+
+thread_local! {
+    /// Whether a panic on this thread is expected and caught (see [`catch_quietly`]).
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f`, returning a panic inside it as `Err` without printing it: for third-party code
+/// that panics on malformed input (the error is reported as the input's instead). Panics
+/// anywhere else still reach the process's panic hook as before.
+pub(crate) fn catch_quietly<T>(
+    f: impl FnOnce() -> T + std::panic::UnwindSafe,
+) -> std::thread::Result<T> {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(|q| q.get()) {
+                previous(info)
+            }
+        }));
+    });
+    let outer = QUIET.with(|q| q.replace(true));
+    let result = std::panic::catch_unwind(f);
+    QUIET.with(|q| q.set(outer));
+    result
+}

@@ -166,3 +166,19 @@ fn alias_bombs_and_endless_files_are_refused_with_the_limit() {
     assert_eq!(vklens::internal::cli::exit_code(&e), 2);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// 50,000 nested elements are refused with the limit, not a stack overflow.
+#[test]
+fn deeply_nested_xml_is_refused_not_a_crash() {
+    let text = format!(
+        "<opencv_storage>{}{}</opencv_storage>",
+        "<a>".repeat(50_000),
+        "</a>".repeat(50_000)
+    );
+    let e = vklens::Camera::parse(&text, "deep.xml").unwrap_err();
+    assert_eq!(e.kind(), vklens::ErrorKind::Input);
+    assert!(
+        e.to_string().contains("deep.xml") && e.to_string().contains("64"),
+        "{e}"
+    );
+}

@@ -144,3 +144,27 @@ fn two_outputs_naming_one_file_are_refused_before_any_work() {
     assert!(!c.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A glTF file whose accessor index points nowhere (the glTF crate panics on it) is one line,
+/// exit 2, naming the file: the panic is caught and not printed.
+#[test]
+fn a_malformed_gltf_is_one_line_exit_2() {
+    let dir = temp_dir("gltf");
+    let bad = dir.join("bad.gltf");
+    std::fs::write(&bad, r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]}"#).unwrap();
+    let cam = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cameras/barrel_k1k2.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args(["render", "--camera", cam.to_str().unwrap()])
+        .args(["--scene", bad.to_str().unwrap()])
+        .args(["--output", dir.join("c.png").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("bad.gltf") && !err.contains("panicked"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

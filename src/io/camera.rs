@@ -337,10 +337,59 @@ fn yaml_to_tree(text: &str) -> Result<Value> {
 
 /// OpenCV FileStorage XML → JSON tree: `<opencv_storage>`'s children become keys; an element
 /// with children becomes an object; `data` text becomes a list of numbers.
+/// Deepest element nesting a camera file's XML may have: OpenCV's FileStorage nests three deep.
+/// The tree is converted recursively, so a limit keeps a hostile file from overflowing the
+/// stack (JSON, YAML and TOML readers stop at their own recursion limits).
+pub const MAX_XML_DEPTH: usize = 64;
+
+/// The deepest element nesting of an XML text, from its tags alone (a pre-filter: roxmltree
+/// parses recursively, and a hostile file would overflow the stack before it could object).
+fn xml_depth(text: &str) -> usize {
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    while let Some(k) = bytes[i..].iter().position(|&b| b == b'<') {
+        let start = i + k;
+        let end = bytes[start..]
+            .iter()
+            .position(|&b| b == b'>')
+            .map_or(bytes.len(), |e| start + e);
+        match bytes.get(start + 1) {
+            Some(b'/') => depth = depth.saturating_sub(1),
+            Some(b'!') | Some(b'?') => {}
+            _ if end > 0 && bytes.get(end - 1) == Some(&b'/') => {}
+            _ => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+        }
+        i = end.min(bytes.len().saturating_sub(1)) + 1;
+        if i >= bytes.len() {
+            break;
+        }
+    }
+    deepest
+}
+
 fn xml_to_tree(text: &str) -> Result<Value> {
+    let depth = xml_depth(text);
+    if depth > MAX_XML_DEPTH {
+        return Err(Error::input(format!(
+            "invalid XML: elements nest {depth} deep, more than a camera file's limit of {MAX_XML_DEPTH}"
+        )));
+    }
     let doc =
         roxmltree::Document::parse(text).map_err(|e| Error::input(format!("invalid XML: {e}")))?;
     let root = doc.root_element();
+    if let Some(deep) = doc
+        .descendants()
+        .find(|n| n.is_element() && n.ancestors().nth(MAX_XML_DEPTH).is_some())
+    {
+        return Err(Error::input(format!(
+            "invalid XML: <{}> is nested deeper than {MAX_XML_DEPTH} elements",
+            deep.tag_name().name()
+        )));
+    }
     fn convert(node: roxmltree::Node) -> Value {
         let children: Vec<_> = node.children().filter(|c| c.is_element()).collect();
         if children.is_empty() {

@@ -103,7 +103,17 @@ fn load_obj(path: &Path) -> Result<Mesh> {
     Ok(mesh)
 }
 
+/// Reads a glTF file. The glTF crate indexes accessors it has not validated and panics on a
+/// malformed file; that panic is caught here and reported as the file's error.
 fn load_gltf(path: &Path) -> Result<Mesh> {
+    crate::error::catch_quietly(|| read_gltf(path)).unwrap_or_else(|_| {
+        Err(Error::input(
+            "malformed glTF: an index points past its array (the glTF reader gave up)",
+        ))
+    })
+}
+
+fn read_gltf(path: &Path) -> Result<Mesh> {
     let gltf =
         gltf::Gltf::open(path).map_err(|e| Error::input(format!("cannot read the glTF: {e}")))?;
     let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())

@@ -182,3 +182,21 @@ fn deeply_nested_xml_is_refused_not_a_crash() {
         "{e}"
     );
 }
+
+/// A focal length no lens can mean (1e-308 px) is refused by every command alike, naming it.
+#[test]
+fn a_vanishing_focal_length_is_refused() {
+    let k = [[1e-308, 0.0, 32.0], [0.0, 40.0, 24.0], [0.0, 0.0, 1.0]];
+    let e = vklens::Camera::from_opencv(k, &[0.1, 0.0, 0.0, 0.0], (64, 48)).unwrap_err();
+    assert_eq!(e.kind(), vklens::ErrorKind::Input);
+    assert!(e.to_string().contains("`fx` = 1e-308"), "{e}");
+    let e = vklens::Camera::parse(
+        r#"{"width": 64, "height": 48, "fx": 40, "fy": 1e-308, "cx": 32, "cy": 24}"#,
+        "tiny.json",
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("tiny.json") && e.to_string().contains("`fy`"),
+        "{e}"
+    );
+}

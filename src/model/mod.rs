@@ -39,6 +39,10 @@ pub use projection::{vulkan_projection, Frustum};
 /// Largest magnitude accepted for any parameter; beyond it a model is certainly a unit or
 /// parsing mistake (and f32 on the GPU would lose all precision).
 pub const ABSURD_MAGNITUDE: f64 = 1e7;
+/// Smallest focal length accepted (pixels): below it one pixel spans more than a thousand
+/// radians' worth of normalized coordinates, which no lens means (and f32 on the GPU cannot
+/// hold the normalized coordinates).
+pub const MIN_FOCAL_PX: f64 = 1e-3;
 /// Largest image side accepted (pixels).
 pub const MAX_IMAGE_SIDE: u32 = 1 << 16;
 
@@ -50,6 +54,12 @@ pub enum ModelError {
     NotFinite { name: &'static str, value: f64 },
     #[error("parameter `{name}` must be > 0, got {value}")]
     NotPositive { name: &'static str, value: f64 },
+    #[error("parameter `{name}` = {value:e} is too small to be meant (it must be at least {min})")]
+    TooSmall {
+        name: &'static str,
+        value: f64,
+        min: f64,
+    },
     #[error("parameter `{name}` = {value} is absurdly large (|value| must be ≤ {limit})")]
     Absurd {
         name: &'static str,

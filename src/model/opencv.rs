@@ -290,6 +290,13 @@ impl Camera {
             if v <= 0.0 {
                 return Err(ModelError::NotPositive { name, value: v });
             }
+            if v < super::MIN_FOCAL_PX {
+                return Err(ModelError::TooSmall {
+                    name,
+                    value: v,
+                    min: super::MIN_FOCAL_PX,
+                });
+            }
         }
         // Re-validate the coefficients (the struct has public fields).
         let distortion = OpenCvDistortion::from_coeffs(&distortion.to_coeffs())?;

@@ -314,8 +314,9 @@ fn exit_codes_follow_the_error_kind() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A closed stdout (the reader of a pipe quit) is an I/O error, exit 1, one line: never a
-/// panic. Checked on commands that print more than the pipe's reader takes.
+/// A stdout that cannot be written (a pipe whose reader quit, a full disk) is an I/O error,
+/// exit 1, one line: never a panic. /dev/full fails every write, without the race of closing
+/// a pipe before the command writes.
 #[test]
 fn a_closed_stdout_is_an_error_not_a_panic() {
     let cam = camera_file("seed_fig2.opencv.yml");
@@ -324,15 +325,16 @@ fn a_closed_stdout_is_an_error_not_a_panic() {
         vec!["overscan", "--camera", cam.as_str()],
         vec!["lens", "info", "--lens", lens.to_str().unwrap()],
     ] {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_vklens"))
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .expect("/dev/full");
+        let out = Command::new(env!("CARGO_BIN_EXE_vklens"))
             .args(&args)
-            .stdout(Stdio::piped())
+            .stdout(Stdio::from(full))
             .stderr(Stdio::piped())
-            .spawn()
+            .output()
             .unwrap();
-        // Close the read end before the command writes.
-        drop(child.stdout.take());
-        let out = child.wait_with_output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
         assert!(

@@ -200,3 +200,19 @@ fn a_vanishing_focal_length_is_refused() {
         "{e}"
     );
 }
+
+/// A JSON camera that gives one key twice is refused, naming the key (a parser that keeps the
+/// last would let a file say two things about one parameter).
+#[test]
+fn duplicate_json_keys_are_refused() {
+    let e = vklens::Camera::parse(
+        r#"{"width": 64, "height": 48, "fx": 40, "fx": 4000, "fy": 40, "cx": 32, "cy": 24}"#,
+        "dup.json",
+    )
+    .unwrap_err();
+    assert_eq!(e.kind(), vklens::ErrorKind::Input);
+    assert!(
+        e.to_string().contains("dup.json") && e.to_string().contains("`fx` appears twice"),
+        "{e}"
+    );
+}

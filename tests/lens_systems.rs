@@ -371,6 +371,7 @@ fn lens_render_cli_writes_the_film_and_refuses_bad_input() {
     std::fs::write(&bad_file, "30 5 1.5 20\n-30 x 1 20\n").unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
         (vec!["--fstop".into(), "1.2".into()], "faster than the lens"),
+        (vec!["--fstop".into(), "1e9".into()], "--fstop"),
         (vec!["--focus=-1".into()], "--focus"),
         (vec!["--max-angle".into(), "0".into()], "--max-angle"),
         (vec!["--sensor".into(), "36x36".into()], "non-square"),

@@ -29,6 +29,10 @@ use super::prescription::{Prescription, LAMBDA_D};
 use super::trace::{trace, Ray};
 use crate::model::{Camera, Intrinsics, OpenCvDistortion};
 
+/// Slowest f-number accepted: at f/1024 a 50 mm lens's pupil is 0.05 mm, and further down the
+/// cells' perspective projections lose all precision.
+pub const MAX_F_NUMBER: f64 = 1024.0;
+
 /// The film: its pixel grid and where it sits.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Film {
@@ -116,6 +120,11 @@ impl Optics {
             Some(n) if !(n.is_finite() && n > 0.0) => {
                 return Err(Error::input(format!(
                     "f-stop {n} must be a positive number"
+                )))
+            }
+            Some(n) if n > MAX_F_NUMBER => {
+                return Err(Error::input(format!(
+                    "f/{n}: the f-number (--fstop, or f_number in a scene's [optics]) must be at most f/{MAX_F_NUMBER}; past it the pupil is too small for the cells' projections (a pinhole needs no lens: use a camera file)"
                 )))
             }
             Some(n) if n < own_n * 0.999 => {

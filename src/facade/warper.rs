@@ -7,7 +7,7 @@ use std::str::FromStr;
 
 use ash::vk;
 
-use crate::gpu::{host_read_barrier, image_barrier, Gpu, Image};
+use crate::gpu::{host_read_barrier, Gpu, Image};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Pixels, Raster};
 use crate::model::warp::WarpGeometry;
@@ -329,20 +329,7 @@ impl Warper {
         unsafe {
             self.pass.record_prepare(cmd);
             // The fallback mask is written by the warp as a storage image.
-            image_barrier(
-                &self.gpu,
-                cmd,
-                self.own_mask.raw,
-                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                (
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::AccessFlags::empty(),
-                ),
-                (
-                    vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::AccessFlags::SHADER_WRITE,
-                ),
-            );
+            crate::gpu::record_discard_for_compute_write(&self.gpu, cmd, [&self.own_mask]);
         }
     }
 

@@ -192,3 +192,36 @@ pub unsafe fn record_compute_readback(
         );
     }
 }
+
+/// Moves `images` to `GENERAL` for a compute shader to write, discarding what they held (the
+/// shader writes every pixel, so their old contents are irrelevant).
+///
+/// # Safety
+/// `cmd` must be recording outside a render pass, and no earlier work using the images may be
+/// pending.
+pub unsafe fn record_discard_for_compute_write<'a>(
+    gpu: &Gpu,
+    cmd: vk::CommandBuffer,
+    images: impl IntoIterator<Item = &'a super::Image>,
+) {
+    for image in images {
+        // SAFETY: the caller upholds this function's contract; UNDEFINED is a valid old
+        // layout for any image, and discards its contents.
+        unsafe {
+            image_barrier(
+                gpu,
+                cmd,
+                image.raw,
+                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+                (
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::AccessFlags::empty(),
+                ),
+                (
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::AccessFlags::SHADER_WRITE,
+                ),
+            )
+        };
+    }
+}

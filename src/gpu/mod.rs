@@ -24,7 +24,7 @@ use gpu_allocator::vulkan::Allocator;
 
 pub use barriers::{
     host_read_barrier, image_barrier, memory_barrier, record_compute_download,
-    record_compute_readback, record_download,
+    record_compute_readback, record_discard_for_compute_write, record_download,
 };
 pub use context::{Context, ContextOptions};
 pub use graphics::{

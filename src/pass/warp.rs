@@ -501,10 +501,6 @@ impl WarpPass {
     /// `cmd` must be recording outside a render pass on a compute queue; record this once,
     /// before the first [`WarpPass::record`], and not again while that work is pending.
     pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
-        let none = (
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::AccessFlags::empty(),
-        );
         let write = (
             vk::PipelineStageFlags::COMPUTE_SHADER,
             vk::AccessFlags::SHADER_WRITE,
@@ -518,17 +514,12 @@ impl WarpPass {
         // pass's own images, so UNDEFINED is a valid old layout; each map-build set was written
         // in `new` and pushes a `WarpPush`, the size the map pipelines were built with.
         unsafe {
-            for map in self.maps.iter().chain(&self._coarse) {
-                // Maps are written (map builds) then read (warp) as storage images.
-                image_barrier(
-                    &self.gpu,
-                    cmd,
-                    map.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    none,
-                    write,
-                );
-            }
+            // Maps are written (map builds) then read (warp) as storage images.
+            crate::gpu::record_discard_for_compute_write(
+                &self.gpu,
+                cmd,
+                self.maps.iter().chain(&self._coarse),
+            );
             for step in &self.map_steps {
                 self.map_pipelines[step.pipeline].record_dispatch(
                     cmd,

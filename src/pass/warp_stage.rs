@@ -5,7 +5,7 @@
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{image_barrier, Buffer, Image};
+use crate::gpu::{Buffer, Image};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
@@ -199,14 +199,6 @@ impl WarpStage {
     /// # Safety
     /// `cmd` must be recording outside a render pass; not while earlier work is pending.
     pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
-        let none = (
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::AccessFlags::empty(),
-        );
-        let write = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_WRITE,
-        );
         // SAFETY: the caller upholds `record_prepare`'s contract: `cmd` is recording outside a
         // render pass and no earlier work using these images is pending, so UNDEFINED is a
         // valid old layout for this stage's own output, mask and depth images. The warps'
@@ -214,16 +206,11 @@ impl WarpStage {
         // every caller records on a queue with graphics and compute.
         unsafe {
             let depth = self.depth.iter().map(|d| &d.output);
-            for img in [&self.output, &self.mask].into_iter().chain(depth) {
-                image_barrier(
-                    &self.gpu,
-                    cmd,
-                    img.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    none,
-                    write,
-                );
-            }
+            crate::gpu::record_discard_for_compute_write(
+                &self.gpu,
+                cmd,
+                [&self.output, &self.mask].into_iter().chain(depth),
+            );
             self.warp.record_prepare(cmd);
             if let Some(d) = &self.depth {
                 d.warp.record_prepare(cmd);

@@ -28,7 +28,7 @@ pub use antialias::{
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{image_barrier, Buffer, Context, Image};
+use crate::gpu::{Buffer, Context, Image};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::Raster;
 use crate::model::overscan::overscan;
@@ -84,9 +84,6 @@ pub struct SceneRenderer<'a> {
     ctx: &'a Context,
     passes: Vec<(GeometryPass, GeometryTargets)>,
     warp_stages: Vec<WarpStage>,
-    /// Every pipeline recorded so far, in order, with the specialization constants it was
-    /// built with: what a plan can be checked against (not timings).
-    pub recorded: Vec<RecordedPipeline>,
 }
 
 /// What a pipeline does, as recorded.
@@ -132,7 +129,6 @@ impl<'a> SceneRenderer<'a> {
             ctx,
             passes: Vec::new(),
             warp_stages: Vec::new(),
-            recorded: Vec::new(),
         }
     }
 
@@ -168,10 +164,6 @@ impl<'a> SceneRenderer<'a> {
             }
         };
         let (pass, targets) = &mut self.passes[index];
-        self.recorded.push(RecordedPipeline {
-            kind: geometry_kind(pass),
-            constants: pass.pipeline().constants.clone(),
-        });
         // SAFETY: no submission using it is pending (`submit` waits on its fence).
         unsafe { pass.bind_mesh(mesh) };
         // SAFETY: no submission using it is pending (`submit` waits on its fence).
@@ -241,17 +233,6 @@ impl<'a> SceneRenderer<'a> {
             }
         };
         let st = &mut self.warp_stages[index];
-        self.recorded.push(RecordedPipeline {
-            kind: geometry_kind(&st.pass),
-            constants: st.pass.pipeline().constants.clone(),
-        });
-        self.recorded.push(RecordedPipeline {
-            kind: PassKind::Warp,
-            constants: vec![(
-                vk::ShaderStageFlags::COMPUTE,
-                st.warp.pipeline().constants.clone(),
-            )],
-        });
         // SAFETY: no submission using it is pending (`submit` waits on its fence).
         unsafe { st.pass.bind_mesh(mesh) };
         // SAFETY: no submission using it is pending (`submit` waits on its fence).
@@ -537,30 +518,17 @@ fn warp_data(
     }
     let (pass, targets) = (&pass, &targets);
     ctx.submit(|cmd| {
-        let none = (
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::AccessFlags::empty(),
-        );
-        let write = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_WRITE,
-        );
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
         // on the context's graphics+compute queue; every object lives until `submit` has
         // waited. The render pass leaves its targets in GENERAL with their writes visible to
         // compute, which the warps read; the warps' outputs go to GENERAL first.
         unsafe {
             mesh.record_upload(cmd);
-            for img in std::iter::once(&mask).chain(warps.iter().map(|w| &w.1)) {
-                image_barrier(
-                    gpu,
-                    cmd,
-                    img.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    none,
-                    write,
-                );
-            }
+            crate::gpu::record_discard_for_compute_write(
+                gpu,
+                cmd,
+                std::iter::once(&mask).chain(warps.iter().map(|w| &w.1)),
+            );
             for (warp, _, _) in &warps {
                 warp.record_prepare(cmd);
             }

@@ -38,8 +38,8 @@ mod facade;
 
 pub use error::{Error, ErrorKind, Result};
 pub use facade::{
-    overscan, warp_geometry, Device, Frame, ImageRef, Rendered, SceneRenderer, WarpDirection,
-    WarpMethod, WarpOptions, Warped, Warper,
+    overscan, warp_geometry, Device, Frame, HostImage, HostImageMut, HostPixels, HostPixelsMut,
+    ImageRef, Rendered, SceneRenderer, WarpDirection, WarpMethod, WarpOptions, Warped, Warper,
 };
 pub use gpu::{EnabledFeatures, Gpu};
 pub use imaging::cpu_warp::Sampling;

@@ -8,6 +8,7 @@ mod scene;
 mod warper;
 
 pub use device::Device;
+pub use image::{HostImage, HostImageMut, HostPixels, HostPixelsMut};
 pub use scene::{Frame, Rendered, SceneRenderer};
 pub use warper::{
     overscan, warp_geometry, ImageRef, WarpDirection, WarpMethod, WarpOptions, Warped, Warper,

@@ -7,13 +7,14 @@ use std::str::FromStr;
 
 use ash::vk;
 
+use super::image::{check_host_shape, host_to_texels, texels_to_host};
 use crate::gpu::{host_read_barrier, Gpu, Image};
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, InverseMethod};
 use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
-use crate::{Device, Error, Result};
+use crate::{Device, Error, HostImage, HostImageMut, HostPixels, Result};
 
 /// Which way an image goes through the lens.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -425,13 +426,103 @@ impl Warper {
                 self.pass.desc().format
             )));
         }
-        match &self.headless {
-            Some(images) => images.stage(image)?,
-            None => self.headless = Some(WarpImages::new(&self.gpu, self.pass.desc(), image)?),
+        self.headless_images()?.stage(image)?;
+        self.submit_headless(device)?;
+        let (raster, mask) = self.headless_images()?.read(image.bit_depth)?;
+        Ok(Warped {
+            image: raster,
+            mask: mask.iter().map(|&m| m > 127).collect(),
+        })
+    }
+
+    /// Warps a borrowed host image into a borrowed output on a headless device, converting
+    /// straight into the upload buffer and straight out of the download buffer (no other host
+    /// copy). `input` is `input_size()`, `output` is `output_size()` with as many channels and
+    /// the same sample type; 8-bit images need a warper of format `Rgba8`, 16-bit and float
+    /// ones `Rgba32F`. `mask`, when given, gets one `bool` per output pixel: `true` where it
+    /// has a source in the valid domain.
+    pub fn run_host(
+        &mut self,
+        device: &Device,
+        input: &HostImage<'_>,
+        output: &mut HostImageMut<'_>,
+        mask: Option<&mut [bool]>,
+    ) -> Result<()> {
+        check_host_shape(
+            "input",
+            (input.width, input.height, input.channels),
+            input.pixels.len(),
+            self.input_size(),
+        )?;
+        check_host_shape(
+            "output",
+            (output.width, output.height, output.channels),
+            output.pixels.len(),
+            self.output_size(),
+        )?;
+        if output.channels != input.channels || output.pixels.kind() != input.pixels.kind() {
+            return Err(Error::input(format!(
+                "output: {} channel(s) of {}, but the input has {} of {}",
+                output.channels,
+                output.pixels.kind(),
+                input.channels,
+                input.pixels.kind()
+            )));
         }
-        let views = match &self.headless {
-            Some(i) => [i.source.view, i.output.view, i.mask.view],
-            None => return Err(Error::internal("headless warp images missing")),
+        let format = self.pass.desc().format;
+        let fits = matches!(
+            (&input.pixels, format),
+            (HostPixels::U8(_), PixelFormat::Rgba8)
+                | (
+                    HostPixels::U16(_) | HostPixels::F32(_),
+                    PixelFormat::Rgba32F
+                )
+        );
+        if !fits {
+            return Err(Error::input(format!(
+                "input: {} samples do not fit a warper of format {format:?} (8-bit needs Rgba8, 16-bit and float need Rgba32F)",
+                input.pixels.kind()
+            )));
+        }
+        let (ow, oh) = self.output_size();
+        if let Some(m) = &mask {
+            if m.len() != ow as usize * oh as usize {
+                return Err(Error::input(format!(
+                    "mask: {} entries, but the output has {ow}×{oh} pixels",
+                    m.len()
+                )));
+            }
+        }
+        self.headless_images()?
+            .stage_with(|texels| host_to_texels(input, texels))??;
+        self.submit_headless(device)?;
+        self.headless_images()?.read_with(|texels, valid| {
+            texels_to_host(texels, output)?;
+            if let Some(mask) = mask {
+                for (m, &v) in mask.iter_mut().zip(valid) {
+                    *m = v > 127;
+                }
+            }
+            Ok::<(), Error>(())
+        })?
+    }
+
+    /// The images [`Warper::run`] and [`Warper::run_host`] warp through, made on first use.
+    fn headless_images(&mut self) -> Result<&mut WarpImages> {
+        if self.headless.is_none() {
+            self.headless = Some(WarpImages::allocate(&self.gpu, self.pass.desc())?);
+        }
+        self.headless
+            .as_mut()
+            .ok_or_else(|| Error::internal("headless warp images missing"))
+    }
+
+    /// Uploads what is staged, warps (building the maps on the first run) and downloads, then
+    /// waits.
+    fn submit_headless(&mut self, device: &Device) -> Result<()> {
+        let views = {
+            let i = self.headless_images()?;
+            [i.source.view, i.output.view, i.mask.view]
         };
         // SAFETY: the previous run has completed (`submit` waits on its fence), and a caller's
         // recorded warp is theirs to have waited for (`record`'s contract).
@@ -457,11 +548,7 @@ impl Warper {
             Ok(())
         })?;
         self.prepared_headless = true;
-        let (raster, mask) = images.read(image.bit_depth)?;
-        Ok(Warped {
-            image: raster,
-            mask: mask.iter().map(|&m| m > 127).collect(),
-        })
+        Ok(())
     }
 
     /// The warp's coordinate map: per output pixel, the source position `[x, y]` its light

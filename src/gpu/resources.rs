@@ -100,6 +100,24 @@ impl Buffer {
         Ok(())
     }
 
+    /// Hands the whole mapped buffer to `fill` for writing in place (host-visible buffers
+    /// only; memory is host-coherent).
+    pub fn write_with<R>(&mut self, fill: impl FnOnce(&mut [u8]) -> R) -> Result<R> {
+        let bytes = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .ok_or_else(|| Error::internal("buffer is not host-visible"))?;
+        Ok(fill(bytes))
+    }
+
+    /// The first `len` mapped bytes (host-visible buffers only).
+    pub fn bytes(&self, len: usize) -> Result<&[u8]> {
+        self.mapped()?
+            .get(..len)
+            .ok_or_else(|| Error::internal("read past the end of a buffer"))
+    }
+
     /// Reads the first `count` elements back (host-visible buffers only).
     pub fn read_pod<T: bytemuck::Pod>(&self, count: usize) -> Result<Vec<T>> {
         let bytes = self.mapped()?;

@@ -591,35 +591,37 @@ pub struct WarpImages {
 impl WarpImages {
     /// Allocates images for `desc` and stages `source` for upload.
     pub fn new(gpu: &Gpu, desc: &WarpDesc, source: &Raster) -> Result<Self> {
+        let mut images = Self::allocate(gpu, desc)?;
+        images.stage(source)?;
+        Ok(images)
+    }
+
+    /// Allocates images and staging buffers for `desc`; nothing is staged yet.
+    pub fn allocate(gpu: &Gpu, desc: &WarpDesc) -> Result<Self> {
         let g = &desc.geometry;
         check_sizes(gpu, g)?;
-        if (source.width, source.height) != g.source_size {
-            return Err(Error::Input(format!(
-                "the source is {}×{} but the warp expects {}×{}",
-                source.width, source.height, g.source_size.0, g.source_size.1
-            )));
-        }
-        let bytes = source_bytes(source, desc.format)?;
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::TRANSFER_SRC
             | vk::ImageUsageFlags::TRANSFER_DST;
+        let (sw, sh) = g.source_size;
         let (ow, oh) = g.output_size;
         let fmt = desc.format.vk();
-        let out_bytes = ow as u64 * oh as u64 * desc.format.bytes() as u64;
+        let texel = desc.format.bytes() as u64;
         Ok(WarpImages {
-            source: Image::new_2d(gpu, "warp.source", fmt, source.width, source.height, usage)?,
+            source: Image::new_2d(gpu, "warp.source", fmt, sw, sh, usage)?,
             output: Image::new_2d(gpu, "warp.output", fmt, ow, oh, usage)?,
             mask: Image::new_2d(gpu, "warp.mask", vk::Format::R8_UNORM, ow, oh, usage)?,
-            upload: Buffer::from_pod(
+            upload: Buffer::new(
                 gpu,
                 "warp.upload",
-                &bytes,
+                sw as u64 * sh as u64 * texel,
                 vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
             )?,
             download: Buffer::new(
                 gpu,
                 "warp.download",
-                out_bytes,
+                ow as u64 * oh as u64 * texel,
                 vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuToCpu,
             )?,
@@ -638,7 +640,7 @@ impl WarpImages {
 
     /// Stages a new source image (same size and format) for the next [`WarpImages::record_upload`].
     /// Host write: not while recorded work using these images is pending.
-    pub fn stage(&self, source: &Raster) -> Result<()> {
+    pub fn stage(&mut self, source: &Raster) -> Result<()> {
         let (w, h) = (self.source.extent.width, self.source.extent.height);
         if (source.width, source.height) != (w, h) {
             return Err(Error::Input(format!(
@@ -647,6 +649,31 @@ impl WarpImages {
             )));
         }
         self.upload.write(0, &source_bytes(source, self.format)?)
+    }
+
+    /// Stages the source by writing the upload buffer in place: `fill` gets the whole buffer,
+    /// tightly packed texels in the pass's format (so a host image is converted once, straight
+    /// into the memory the GPU copies from). Host write: not while recorded work using these
+    /// images is pending.
+    pub fn stage_with<R>(&mut self, fill: impl FnOnce(&mut [u8]) -> R) -> Result<R> {
+        let (w, h) = (self.source.extent.width, self.source.extent.height);
+        let n = w as usize * h as usize * self.format.bytes();
+        self.upload.write_with(|bytes| fill(&mut bytes[..n]))
+    }
+
+    /// The pass's format.
+    pub fn format(&self) -> PixelFormat {
+        self.format
+    }
+
+    /// Hands the downloaded output (tightly packed texels in the pass's format) and mask (one
+    /// byte per pixel) to `read`, in place (after the submission completed).
+    pub fn read_with<R>(&self, read: impl FnOnce(&[u8], &[u8]) -> R) -> Result<R> {
+        let (w, h) = self.output_size;
+        let n = w as usize * h as usize;
+        let output = self.download.bytes(n * self.format.bytes())?;
+        let mask = self.download_mask.bytes(n)?;
+        Ok(read(output, mask))
     }
 
     /// Records the upload of the source and the layout transitions the warp expects.

@@ -1,0 +1,1038 @@
+//! The compiled half of the `vklens` Python package: a thin layer over the crate's public
+//! surface (`vklens::Camera`, `Device`, `Warper`, `overscan`, `SceneRenderer`) that turns
+//! numpy arrays into borrowed host images and back, releases the GIL while the device works,
+//! and maps every `vklens::Error` onto the Python exception of its kind (`vklens/_errors.py`).
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use numpy::ndarray::IxDyn;
+use numpy::{
+    Element, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple, PyType};
+use serde::Deserialize;
+
+use vklens::{
+    Camera, Device, ErrorKind, HostImage, HostImageMut, HostPixels, HostPixelsMut, InverseMethod,
+    PixelFormat, Pixels, SceneRenderer, WarpDirection, WarpMethod, WarpOptions, Warper,
+};
+
+// ---------------------------------------------------------------------------------------------
+// Errors
+
+/// The Python exception class for `kind`, from the pure-Python `vklens._errors`.
+fn raise(py: Python<'_>, kind: ErrorKind, message: String) -> PyErr {
+    let name = match kind {
+        ErrorKind::Input => "InputError",
+        ErrorKind::Unsupported => "UnsupportedError",
+        ErrorKind::Vulkan => "GpuError",
+        ErrorKind::Io => "IoError",
+        _ => "InternalError",
+    };
+    let class = py
+        .import("vklens._errors")
+        .and_then(|m| m.getattr(name))
+        .and_then(|c| c.cast_into::<PyType>().map_err(PyErr::from));
+    match class {
+        Ok(class) => PyErr::from_type(class, message),
+        Err(e) => e,
+    }
+}
+
+/// A `vklens::Error` as the Python exception of its kind.
+fn to_py(py: Python<'_>, e: vklens::Error) -> PyErr {
+    raise(py, e.kind(), e.to_string())
+}
+
+/// `InputError(message)`.
+fn input(py: Python<'_>, message: impl Into<String>) -> PyErr {
+    raise(py, ErrorKind::Input, message.into())
+}
+
+trait OrPy<T> {
+    /// The error as its Python exception.
+    fn py(self, py: Python<'_>) -> PyResult<T>;
+    /// The error as its Python exception, its message led by the argument it is about.
+    fn arg(self, py: Python<'_>, name: &str) -> PyResult<T>;
+}
+
+impl<T> OrPy<T> for vklens::Result<T> {
+    fn py(self, py: Python<'_>) -> PyResult<T> {
+        self.map_err(|e| to_py(py, e))
+    }
+    fn arg(self, py: Python<'_>, name: &str) -> PyResult<T> {
+        self.map_err(|e| {
+            let text = e.to_string();
+            let text = if text.starts_with(name) {
+                text
+            } else {
+                format!("{name}: {text}")
+            };
+            raise(py, e.kind(), text)
+        })
+    }
+}
+
+/// A lock whose poisoning (a panic on another thread, already reported there) is ignored: the
+/// warper behind it stays consistent, every run stages all it reads.
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Arrays of numbers (points, K, D, rvec, tvec)
+
+/// `value` as float64 numbers with their shape. Ints and lists convert (they are exact);
+/// anything that is not numbers raises `InputError` naming `name`.
+fn numbers(
+    py: Python<'_>,
+    value: &Bound<'_, PyAny>,
+    name: &str,
+) -> PyResult<(Vec<f64>, Vec<usize>)> {
+    let np = py.import("numpy")?;
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("dtype", "float64")?;
+    let array = np
+        .call_method("asarray", (value,), Some(&kwargs))
+        .map_err(|e| input(py, format!("{name}: expected an array of numbers ({e})")))?;
+    let array = array
+        .cast_into::<PyArrayDyn<f64>>()
+        .map_err(|_| input(py, format!("{name}: expected an array of numbers")))?;
+    let shape = array.shape().to_vec();
+    let data = array.readonly().as_array().iter().copied().collect();
+    Ok((data, shape))
+}
+
+/// A shape as Python writes it: `(3,)`, `(480, 640, 3)`.
+fn tuple(shape: &[usize]) -> String {
+    match shape {
+        [one] => format!("({one},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// `(N, D)` rows (also `(N, 1, D)` as OpenCV hands out points, and a single `(D,)` row).
+fn rows<const D: usize>(
+    py: Python<'_>,
+    value: &Bound<'_, PyAny>,
+    name: &str,
+) -> PyResult<Vec<[f64; D]>> {
+    let (data, shape) = numbers(py, value, name)?;
+    let ok = match shape.as_slice() {
+        [n] => *n == D,
+        [_, d] => *d == D,
+        [_, 1, d] => *d == D,
+        _ => false,
+    };
+    if !ok {
+        return Err(input(
+            py,
+            format!(
+                "{name}: shape {}; expected (N, {D}) (or (N, 1, {D}) as OpenCV hands them out)",
+                tuple(&shape)
+            ),
+        ));
+    }
+    Ok(data
+        .chunks_exact(D)
+        .map(|c| std::array::from_fn(|i| c[i]))
+        .collect())
+}
+
+/// A vector of `n` numbers given as `(n,)`, `(1, n)` or `(n, 1)` (any `n` when `n` is None).
+fn vector(
+    py: Python<'_>,
+    value: &Bound<'_, PyAny>,
+    name: &str,
+    n: Option<usize>,
+) -> PyResult<Vec<f64>> {
+    let (data, shape) = numbers(py, value, name)?;
+    let flat = matches!(shape.as_slice(), [_] | [1, _] | [_, 1]);
+    if !flat || n.is_some_and(|n| data.len() != n) {
+        let want = n.map_or("n".to_string(), |n| n.to_string());
+        return Err(input(
+            py,
+            format!(
+                "{name}: shape {}; expected ({want},), (1, {want}) or ({want}, 1)",
+                tuple(&shape)
+            ),
+        ));
+    }
+    Ok(data)
+}
+
+/// `(N, 2)` float64 rows, NaN where the model gave no answer.
+fn nan_rows<'py>(py: Python<'py>, v: Vec<Option<[f64; 2]>>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let n = v.len();
+    let flat: Vec<f64> = v
+        .into_iter()
+        .flat_map(|p| p.unwrap_or([f64::NAN; 2]))
+        .collect();
+    PyArray1::from_vec(py, flat).reshape([n, 2])
+}
+
+fn method(py: Python<'_>, name: &str) -> PyResult<InverseMethod> {
+    name.parse::<InverseMethod>()
+        .map_err(|e| input(py, format!("method: {e}")))
+}
+
+/// A whole, non-negative pixel count.
+fn side(py: Python<'_>, v: i64, name: &str) -> PyResult<u32> {
+    u32::try_from(v).map_err(|_| {
+        input(
+            py,
+            format!("{name}: {v} is not a pixel count (1..=4294967295)"),
+        )
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Camera
+
+/// A calibrated camera: OpenCV's standard model (4, 5, 8, 12 or 14 coefficients, exactly as
+/// ``cv2.projectPoints``) or a Brown radial lens.
+#[pyclass(name = "Camera", module = "vklens", frozen)]
+#[derive(Clone)]
+struct PyCamera {
+    inner: Camera,
+}
+
+#[pymethods]
+impl PyCamera {
+    #[new]
+    #[pyo3(signature = (width, height, fx, fy, cx, cy, dist_coeffs = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        width: i64,
+        height: i64,
+        fx: f64,
+        fy: f64,
+        cx: f64,
+        cy: f64,
+        dist_coeffs: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let d = match dist_coeffs {
+            Some(d) => vector(py, d, "dist_coeffs", None)?,
+            None => vec![0.0; 5],
+        };
+        let k = [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]];
+        let size = (side(py, width, "width")?, side(py, height, "height")?);
+        let inner = Camera::from_opencv(k, &d, size)
+            .map_err(|e| named(py, e, "dist_coeffs", "width, height"))?;
+        Ok(PyCamera { inner })
+    }
+
+    /// Reads any camera file the command line reads (vklens JSON, OpenCV YAML/XML/JSON, ROS
+    /// ``camera_info``, a Brown lens).
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        Ok(PyCamera {
+            inner: Camera::load(&path).py(py)?,
+        })
+    }
+
+    /// From OpenCV's ``K`` (3×3, row-major) and ``D`` (any OpenCV length, shaped ``(n,)``,
+    /// ``(1, n)`` or ``(n, 1)``) and the image size ``(width, height)``.
+    #[staticmethod]
+    #[pyo3(name = "from_opencv")]
+    fn from_opencv_(
+        py: Python<'_>,
+        k: &Bound<'_, PyAny>,
+        d: &Bound<'_, PyAny>,
+        size: (i64, i64),
+    ) -> PyResult<Self> {
+        let (kv, shape) = numbers(py, k, "K")?;
+        if shape != [3, 3] {
+            return Err(input(
+                py,
+                format!("K: shape {}; expected (3, 3)", tuple(&shape)),
+            ));
+        }
+        let km = [
+            [kv[0], kv[1], kv[2]],
+            [kv[3], kv[4], kv[5]],
+            [kv[6], kv[7], kv[8]],
+        ];
+        let dv = vector(py, d, "D", None)?;
+        let size = (side(py, size.0, "size")?, side(py, size.1, "size")?);
+        let inner = Camera::from_opencv(km, &dv, size).map_err(|e| named(py, e, "D", "size"))?;
+        Ok(PyCamera { inner })
+    }
+
+    /// From a vklens JSON camera object (what ``to_dict`` returns).
+    #[staticmethod]
+    fn from_dict(py: Python<'_>, d: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let text: String = py
+            .import("json")?
+            .call_method1("dumps", (d,))
+            .map_err(|e| input(py, format!("camera dict: {e}")))?
+            .extract()?;
+        Ok(PyCamera {
+            inner: Camera::parse(&text, "camera dict").py(py)?,
+        })
+    }
+
+    #[getter]
+    fn width(&self) -> u32 {
+        self.inner.width
+    }
+    #[getter]
+    fn height(&self) -> u32 {
+        self.inner.height
+    }
+    #[getter]
+    fn fx(&self) -> f64 {
+        self.inner.intrinsics.fx
+    }
+    #[getter]
+    fn fy(&self) -> f64 {
+        self.inner.intrinsics.fy
+    }
+    #[getter]
+    fn cx(&self) -> f64 {
+        self.inner.intrinsics.cx
+    }
+    #[getter]
+    fn cy(&self) -> f64 {
+        self.inner.intrinsics.cy
+    }
+    /// ``(width, height)``.
+    #[getter]
+    fn size(&self) -> (u32, u32) {
+        (self.inner.width, self.inner.height)
+    }
+    /// ``"opencv"`` or ``"brown"``.
+    #[getter]
+    fn model(&self) -> &'static str {
+        self.inner.model_name()
+    }
+    /// OpenCV's camera matrix, ``(3, 3)`` float64.
+    #[getter(K)]
+    fn k<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let k = self.inner.k_matrix();
+        PyArray1::from_vec(py, k.iter().flatten().copied().collect()).reshape([3, 3])
+    }
+    /// The distortion coefficients, as many as given, ``(n,)`` float64.
+    #[getter]
+    fn dist_coeffs<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.inner.dist_coeffs())
+    }
+
+    /// The vklens JSON camera object, as a dict.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("json")?
+            .call_method1("loads", (self.inner.to_json().to_string(),))
+    }
+
+    /// Writes the camera as vklens JSON (atomically).
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        self.inner.save(&path).py(py)
+    }
+
+    /// Normalized undistorted ``(x, y)`` → distorted pixels, ``(N, 2)`` float64, exact (f64 on
+    /// the CPU); NaN rows where the model is undefined.
+    fn distort_points<'py>(
+        &self,
+        py: Python<'py>,
+        xy: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let xy = rows::<2>(py, xy, "xy")?;
+        let uv = py.detach(|| self.inner.distort_points(&xy));
+        nan_rows(py, uv)
+    }
+
+    /// Distorted pixels → normalized undistorted ``(x, y)``; NaN rows outside the valid domain
+    /// (where the lens folds over, or no preimage exists). ``method``: ``"newton"``,
+    /// ``"heikkila"`` or ``"fixed-point:N"``.
+    #[pyo3(signature = (uv, method = "newton"))]
+    fn undistort_points<'py>(
+        &self,
+        py: Python<'py>,
+        uv: &Bound<'py, PyAny>,
+        method: &str,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let m = self::method(py, method)?;
+        let uv = rows::<2>(py, uv, "uv")?;
+        let xy = py.detach(|| self.inner.undistort_points(&uv, m));
+        nan_rows(py, xy)
+    }
+
+    /// World points ``(N, 3)`` → distorted pixels ``(N, 2)``, as ``cv2.projectPoints`` with
+    /// ``rvec`` (Rodrigues) and ``tvec``; NaN rows for points at or behind the camera.
+    #[pyo3(signature = (points_3d, rvec = None, tvec = None))]
+    fn project_points<'py>(
+        &self,
+        py: Python<'py>,
+        points_3d: &Bound<'py, PyAny>,
+        rvec: Option<&Bound<'py, PyAny>>,
+        tvec: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let points = rows::<3>(py, points_3d, "points_3d")?;
+        let r = match rvec {
+            Some(r) => vector(py, r, "rvec", Some(3))?,
+            None => vec![0.0; 3],
+        };
+        let t = match tvec {
+            Some(t) => vector(py, t, "tvec", Some(3))?,
+            None => vec![0.0; 3],
+        };
+        if r.iter().chain(&t).any(|v| !v.is_finite()) {
+            return Err(input(py, "rvec, tvec: every entry must be a finite number"));
+        }
+        let rot = rodrigues([r[0], r[1], r[2]]);
+        let cam: Vec<[f64; 3]> = points
+            .iter()
+            .map(|p| {
+                std::array::from_fn(|i| {
+                    rot[i][0] * p[0] + rot[i][1] * p[1] + rot[i][2] * p[2] + t[i]
+                })
+            })
+            .collect();
+        let uv = py.detach(|| self.inner.project_points(&cam));
+        nan_rows(py, uv)
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.inner;
+        let k = c.intrinsics;
+        match c.brown() {
+            Some(b) => format!(
+                "Camera(model='brown', {}×{}, c1={}, c2={})",
+                c.width, c.height, b.c1, b.c2
+            ),
+            None => format!(
+                "Camera({}×{}, fx={}, fy={}, cx={}, cy={}, dist_coeffs={:?})",
+                c.width,
+                c.height,
+                k.fx,
+                k.fy,
+                k.cx,
+                k.cy,
+                c.dist_coeffs()
+            ),
+        }
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<PyCamera>()
+            .is_ok_and(|o| o.get().inner.to_json() == self.inner.to_json())
+    }
+
+    /// Pickles as its JSON object (Ray, multiprocessing).
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let from_dict = py.get_type::<PyCamera>().getattr("from_dict")?;
+        let dict = slf.get().to_dict(py)?;
+        Ok((from_dict, PyTuple::new(py, [dict])?))
+    }
+}
+
+/// A model error from `Camera::from_opencv`, led by the argument it is about: `coeffs` (the
+/// distortion vector's name) for a coefficient or their count, `size` for the image size.
+fn named(py: Python<'_>, e: vklens::Error, coeffs: &str, size: &str) -> PyErr {
+    const COEFFS: [&str; 14] = [
+        "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "tau_x", "tau_y",
+    ];
+    let text = e.to_string();
+    let lead = if text.contains("distortion vectors")
+        || COEFFS.iter().any(|c| text.contains(&format!("`{c}`")))
+    {
+        coeffs
+    } else if text.contains("image size") {
+        size
+    } else {
+        return to_py(py, e);
+    };
+    raise(py, e.kind(), format!("{lead}: {text}"))
+}
+
+/// OpenCV's Rodrigues rotation: the axis `r / |r|` turned by `|r|` radians.
+fn rodrigues(r: [f64; 3]) -> [[f64; 3]; 3] {
+    let theta = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+    if theta < f64::EPSILON {
+        return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    }
+    let k = r.map(|v| v / theta);
+    let (s, c) = theta.sin_cos();
+    let cross = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            let id = if i == j { 1.0 } else { 0.0 };
+            c * id + (1.0 - c) * k[i] * k[j] + s * cross[i][j]
+        })
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Device
+
+/// One shared default device, opened on first use (device start-up is the slow part).
+static DEFAULT_DEVICE: Mutex<Option<Arc<Device>>> = Mutex::new(None);
+
+fn default_device(py: Python<'_>) -> PyResult<Arc<Device>> {
+    py.detach(|| {
+        let mut d = lock(&DEFAULT_DEVICE);
+        if let Some(d) = d.as_ref() {
+            return Ok(d.clone());
+        }
+        let device = Arc::new(Device::new()?);
+        *d = Some(device.clone());
+        Ok(device)
+    })
+    .py(py)
+}
+
+/// A headless Vulkan device. ``VKLENS_DEVICE`` picks it as for the command line (``cpu``,
+/// ``gpu``, an index or part of the name); ``VKLENS_VALIDATION=1`` turns the Khronos
+/// validation layer on.
+#[pyclass(name = "Device", module = "vklens", frozen)]
+struct PyDevice {
+    inner: Arc<Device>,
+}
+
+#[pymethods]
+impl PyDevice {
+    #[new]
+    fn new(py: Python<'_>) -> PyResult<Self> {
+        let inner = py.detach(Device::new).py(py)?;
+        Ok(PyDevice {
+            inner: Arc::new(inner),
+        })
+    }
+
+    /// The default device every ``Warper`` and ``render_scene`` use when given none.
+    #[staticmethod]
+    fn default(py: Python<'_>) -> PyResult<Self> {
+        Ok(PyDevice {
+            inner: default_device(py)?,
+        })
+    }
+
+    /// The device's name, as the driver reports it.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name().to_string()
+    }
+
+    /// Raises ``GpuError`` if the validation layer (when on) has reported anything.
+    fn check_validation(&self, py: Python<'_>) -> PyResult<()> {
+        self.inner.check_validation().py(py)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Device({:?})", self.inner.name())
+    }
+}
+
+fn device_or_default(py: Python<'_>, device: Option<PyRef<'_, PyDevice>>) -> PyResult<Arc<Device>> {
+    match device {
+        Some(d) => Ok(d.inner.clone()),
+        None => default_device(py),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Warper
+
+/// The sample types a Warper takes, each with the host view of its slices.
+trait Sample: Element + Copy + Send + Sync {
+    /// Warped on the float pipeline (16-bit and float images) rather than the 8-bit one.
+    const FLOAT: bool;
+    fn host(s: &[Self]) -> HostPixels<'_>;
+    fn host_mut(s: &mut [Self]) -> HostPixelsMut<'_>;
+}
+
+impl Sample for u8 {
+    const FLOAT: bool = false;
+    fn host(s: &[u8]) -> HostPixels<'_> {
+        HostPixels::U8(s)
+    }
+    fn host_mut(s: &mut [u8]) -> HostPixelsMut<'_> {
+        HostPixelsMut::U8(s)
+    }
+}
+
+impl Sample for u16 {
+    const FLOAT: bool = true;
+    fn host(s: &[u16]) -> HostPixels<'_> {
+        HostPixels::U16(s)
+    }
+    fn host_mut(s: &mut [u16]) -> HostPixelsMut<'_> {
+        HostPixelsMut::U16(s)
+    }
+}
+
+impl Sample for f32 {
+    const FLOAT: bool = true;
+    fn host(s: &[f32]) -> HostPixels<'_> {
+        HostPixels::F32(s)
+    }
+    fn host_mut(s: &mut [f32]) -> HostPixelsMut<'_> {
+        HostPixelsMut::F32(s)
+    }
+}
+
+/// One coordinate map, `(H, W)` float32.
+type Map<'py> = Bound<'py, PyArray2<f32>>;
+
+/// The post-processing warp, built once (device, pipelines, maps) and run on every frame.
+#[pyclass(name = "Warper", module = "vklens", frozen)]
+struct PyWarper {
+    device: Arc<Device>,
+    camera: Camera,
+    options: WarpOptions,
+    direction: &'static str,
+    method: String,
+    /// The 8-bit pipeline, built with the warper.
+    rgba8: Mutex<Warper>,
+    /// The float pipeline (16-bit and float32 images), built on the first such frame.
+    rgba32f: Mutex<Option<Warper>>,
+    source_camera: Camera,
+    input_size: (u32, u32),
+    output_size: (u32, u32),
+}
+
+#[pymethods]
+impl PyWarper {
+    #[new]
+    #[pyo3(signature = (camera, direction = "distort", method = "lut", chromatic = None,
+                        source_camera = None, fill = None, device = None),
+           text_signature = "(camera, direction='distort', method='lut', chromatic=None, source_camera=None, fill=(0, 0, 0, 0), device=None)")]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        camera: PyRef<'_, PyCamera>,
+        direction: &str,
+        method: &str,
+        chromatic: Option<&Bound<'_, PyAny>>,
+        source_camera: Option<PyRef<'_, PyCamera>>,
+        fill: Option<&Bound<'_, PyAny>>,
+        device: Option<PyRef<'_, PyDevice>>,
+    ) -> PyResult<Self> {
+        let dir: WarpDirection = direction.parse().arg(py, "direction")?;
+        let m: WarpMethod = method.parse().arg(py, "method")?;
+        let mut options = match dir {
+            WarpDirection::Distort => WarpOptions::distort(),
+            WarpDirection::Undistort => WarpOptions::undistort(),
+            WarpDirection::Precorrect => WarpOptions::precorrect(),
+        };
+        options.method = m;
+        if let Some(c) = chromatic {
+            let c = vector(py, c, "chromatic", Some(3))?;
+            options.chromatic = Some([c[0], c[1], c[2]]);
+        }
+        options.source_camera = source_camera.map(|c| c.inner.clone());
+        let f = match fill {
+            Some(f) => vector(py, f, "fill", Some(4))?,
+            None => vec![0.0; 4],
+        };
+        if f.iter().any(|v| !v.is_finite()) {
+            return Err(input(py, "fill: every value must be a finite number"));
+        }
+        options.fill = [f[0] as f32, f[1] as f32, f[2] as f32, f[3] as f32];
+        let device = device_or_default(py, device)?;
+        let camera = camera.inner.clone();
+        let warper = py
+            .detach(|| Warper::new(device.gpu(), &camera, &options))
+            .map_err(|e| {
+                let text = e.to_string();
+                let lead = if text.contains("--chromatic") {
+                    "chromatic"
+                } else if text.contains("source camera") {
+                    "source_camera"
+                } else if text.contains("--method") {
+                    "method"
+                } else {
+                    ""
+                };
+                let text = text
+                    .replace("--chromatic: ", "")
+                    .replace("--method", "method");
+                if lead.is_empty() {
+                    raise(py, e.kind(), text)
+                } else {
+                    raise(py, e.kind(), format!("{lead}: {text}"))
+                }
+            })?;
+        Ok(PyWarper {
+            source_camera: warper.source_camera().clone(),
+            input_size: warper.input_size(),
+            output_size: warper.output_size(),
+            direction: match dir {
+                WarpDirection::Distort => "distort",
+                WarpDirection::Undistort => "undistort",
+                WarpDirection::Precorrect => "precorrect",
+            },
+            method: m.to_string(),
+            rgba8: Mutex::new(warper),
+            rgba32f: Mutex::new(None),
+            device,
+            camera,
+            options,
+        })
+    }
+
+    /// The pinhole side's camera actually used (the input's for distort, the output's for
+    /// undistort and precorrect).
+    #[getter]
+    fn source_camera(&self) -> PyCamera {
+        PyCamera {
+            inner: self.source_camera.clone(),
+        }
+    }
+    /// The lens camera the warper was built for.
+    #[getter]
+    fn camera(&self) -> PyCamera {
+        PyCamera {
+            inner: self.camera.clone(),
+        }
+    }
+    /// ``(width, height)`` of the images it takes.
+    #[getter]
+    fn input_size(&self) -> (u32, u32) {
+        self.input_size
+    }
+    /// ``(width, height)`` of the images it returns.
+    #[getter]
+    fn output_size(&self) -> (u32, u32) {
+        self.output_size
+    }
+    #[getter]
+    fn direction(&self) -> &'static str {
+        self.direction
+    }
+    #[getter]
+    fn method(&self) -> &str {
+        &self.method
+    }
+    #[getter]
+    fn device(&self) -> PyDevice {
+        PyDevice {
+            inner: self.device.clone(),
+        }
+    }
+
+    /// Warps ``image`` (``(H, W)`` or ``(H, W, 1|3|4)``; uint8, uint16 or float32) and returns a
+    /// new array of the same dtype and channels, or writes ``out`` and returns it. With
+    /// ``return_mask=True`` returns ``(out, mask)``, ``mask`` ``(H, W)`` bool, False where the
+    /// pixel has no source in the valid domain.
+    #[pyo3(signature = (image, out = None, return_mask = false))]
+    fn __call__<'py>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+        out: Option<&Bound<'py, PyAny>>,
+        return_mask: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        if let Ok(a) = image.cast::<PyArrayDyn<u8>>() {
+            self.call_typed(py, a, out, return_mask)
+        } else if let Ok(a) = image.cast::<PyArrayDyn<u16>>() {
+            self.call_typed(py, a, out, return_mask)
+        } else if let Ok(a) = image.cast::<PyArrayDyn<f32>>() {
+            self.call_typed(py, a, out, return_mask)
+        } else if let Ok(a) = image.cast::<PyUntypedArray>() {
+            Err(input(
+                py,
+                format!(
+                    "image: dtype {} is not supported; expected uint8, uint16 or float32 (convert it explicitly, e.g. image.astype(numpy.float32))",
+                    a.dtype()
+                ),
+            ))
+        } else {
+            Err(input(
+                py,
+                format!(
+                    "image: expected a numpy array, got {}",
+                    image.get_type().name()?
+                ),
+            ))
+        }
+    }
+
+    /// The warp's coordinate maps ``(map_x, map_y)``, each ``(H, W)`` float32, ready for
+    /// ``cv2.remap``: per output pixel the source position its light comes from; NaN where it
+    /// has none in the valid domain.
+    fn maps<'py>(&self, py: Python<'py>) -> PyResult<(Map<'py>, Map<'py>)> {
+        let maps = py.detach(|| lock(&self.rgba8).maps(&self.device)).py(py)?;
+        let (w, h) = (self.output_size.0 as usize, self.output_size.1 as usize);
+        let x: Vec<f32> = maps.iter().map(|m| m[0]).collect();
+        let y: Vec<f32> = maps.iter().map(|m| m[1]).collect();
+        Ok((
+            PyArray1::from_vec(py, x).reshape([h, w])?,
+            PyArray1::from_vec(py, y).reshape([h, w])?,
+        ))
+    }
+
+    fn __repr__(&self) -> String {
+        let (iw, ih) = self.input_size;
+        let (ow, oh) = self.output_size;
+        format!(
+            "Warper({}, method={}, {iw}×{ih} → {ow}×{oh}, device={:?})",
+            self.direction,
+            self.method,
+            self.device.name()
+        )
+    }
+}
+
+impl PyWarper {
+    fn call_typed<'py, T: Sample>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyArrayDyn<T>>,
+        out: Option<&Bound<'py, PyAny>>,
+        return_mask: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let shape = image.shape().to_vec();
+        let channels = match shape.as_slice() {
+            [_, _] => 1,
+            [_, _, c] if [1, 3, 4].contains(c) => *c,
+            _ => {
+                return Err(input(
+                    py,
+                    format!(
+                        "image: shape {}; expected (H, W), (H, W, 1), (H, W, 3) or (H, W, 4)",
+                        tuple(&shape)
+                    ),
+                ))
+            }
+        };
+        let (iw, ih) = self.input_size;
+        if (shape[0], shape[1]) != (ih as usize, iw as usize) {
+            return Err(input(
+                py,
+                format!(
+                    "image: (H, W) = ({}, {}), but this warper takes ({ih}, {iw}) (input_size {iw}×{ih})",
+                    shape[0], shape[1]
+                ),
+            ));
+        }
+        let (ow, oh) = self.output_size;
+        let mut dims = vec![oh as usize, ow as usize];
+        if shape.len() == 3 {
+            dims.push(channels);
+        }
+        let output = match out {
+            Some(o) => {
+                let o = o.cast::<PyArrayDyn<T>>().map_err(|_| {
+                    input(
+                        py,
+                        format!(
+                            "out: expected a numpy array of the image's dtype {}",
+                            image.dtype()
+                        ),
+                    )
+                })?;
+                if o.shape() != dims.as_slice() {
+                    return Err(input(
+                        py,
+                        format!("out: shape {}; expected {}", tuple(o.shape()), tuple(&dims)),
+                    ));
+                }
+                if !o.is_c_contiguous() {
+                    return Err(input(py, "out: must be C-contiguous"));
+                }
+                o.clone()
+            }
+            None => PyArrayDyn::<T>::zeros(py, IxDyn(&dims), false),
+        };
+        let mask =
+            return_mask.then(|| PyArray2::<bool>::zeros(py, [oh as usize, ow as usize], false));
+
+        let source = image.readonly();
+        // C-contiguous input is read in place; any other layout is copied once.
+        // (`as_slice` also takes Fortran order, which is not the layout the warp reads.)
+        let copied: Vec<T>;
+        let samples: &[T] = match source.as_slice() {
+            Ok(s) if image.is_c_contiguous() => s,
+            _ => {
+                copied = source.as_array().iter().copied().collect();
+                &copied
+            }
+        };
+        let mut target = output
+            .try_readwrite()
+            .map_err(|e| input(py, format!("out: {e}")))?;
+        let target = target
+            .as_slice_mut()
+            .map_err(|e| input(py, format!("out: {e}")))?;
+        let mut mask_rw = mask.as_ref().map(|m| m.readwrite());
+        let mask_slice = match mask_rw.as_mut() {
+            Some(m) => Some(
+                m.as_slice_mut()
+                    .map_err(|e| input(py, format!("mask: {e}")))?,
+            ),
+            None => None,
+        };
+        let input_image = HostImage {
+            width: iw,
+            height: ih,
+            channels: channels as u32,
+            pixels: T::host(samples),
+        };
+        py.detach(|| {
+            let mut output_image = HostImageMut {
+                width: ow,
+                height: oh,
+                channels: channels as u32,
+                pixels: T::host_mut(target),
+            };
+            if T::FLOAT {
+                let mut guard = lock(&self.rgba32f);
+                if guard.is_none() {
+                    let mut options = self.options.clone();
+                    options.format = PixelFormat::Rgba32F;
+                    *guard = Some(Warper::new(self.device.gpu(), &self.camera, &options)?);
+                }
+                match guard.as_mut() {
+                    Some(w) => {
+                        w.run_host(&self.device, &input_image, &mut output_image, mask_slice)
+                    }
+                    None => Err(vklens::Error::internal("float warper missing")),
+                }
+            } else {
+                lock(&self.rgba8).run_host(
+                    &self.device,
+                    &input_image,
+                    &mut output_image,
+                    mask_slice,
+                )
+            }
+        })
+        .py(py)?;
+        drop(mask_rw);
+        let output = output.into_any();
+        match mask {
+            Some(m) => Ok(PyTuple::new(py, [output, m.into_any()])?.into_any()),
+            None => Ok(output),
+        }
+    }
+}
+
+/// The pinhole camera whose image covers every valid pixel of ``camera`` with ``density``
+/// source pixels per output pixel at the principal point: the source camera a distort warp
+/// needs so that a barrel lens gets its borders.
+#[pyfunction]
+#[pyo3(signature = (camera, density = 1.0))]
+fn overscan(py: Python<'_>, camera: PyRef<'_, PyCamera>, density: f64) -> PyResult<PyCamera> {
+    if density.is_nan() || density <= 0.0 || density.is_infinite() {
+        return Err(input(
+            py,
+            format!("density: {density} must be a positive number"),
+        ));
+    }
+    Ok(PyCamera {
+        inner: vklens::overscan(&camera.inner, density).py(py)?,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scenes
+
+/// A dict of the scene file's tables as TOML text (the scene parser reads TOML).
+fn scene_toml(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<String> {
+    let json: String = py
+        .import("json")?
+        .call_method1("dumps", (scene,))
+        .map_err(|e| input(py, format!("scene: the dict must hold only tables, lists, strings, numbers and booleans ({e})")))?
+        .extract()?;
+    let value: serde_json::Value =
+        serde_json::from_str(&json).map_err(|e| input(py, format!("scene: {e}")))?;
+    let table = toml::Value::deserialize(value).map_err(|e| {
+        input(
+            py,
+            format!("scene: {e} (TOML has no null: leave the key out)"),
+        )
+    })?;
+    toml::to_string(&table).map_err(|e| input(py, format!("scene: {e}")))
+}
+
+/// Renders a scene file (a path) or the same tables as a dict: one dict per pose with the
+/// outputs the scene asks for.
+#[pyfunction]
+#[pyo3(signature = (scene, device = None, base = None))]
+fn render_scene<'py>(
+    py: Python<'py>,
+    scene: &Bound<'py, PyAny>,
+    device: Option<PyRef<'py, PyDevice>>,
+    base: Option<PathBuf>,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let renderer = if scene.cast::<PyDict>().is_ok() {
+        let text = scene_toml(py, scene)?;
+        // Relative paths in the dict resolve against `base` (default: the working folder).
+        let base = match base {
+            Some(b) => b.join("scene.toml"),
+            None => PathBuf::from("scene.toml"),
+        };
+        py.detach(|| SceneRenderer::parse(&text, &base)).py(py)?
+    } else {
+        let path: PathBuf = scene.extract().map_err(|_| {
+            input(
+                py,
+                "scene: expected a path or a dict of the scene file's tables",
+            )
+        })?;
+        py.detach(|| SceneRenderer::load(&path)).py(py)?
+    };
+    let device = device_or_default(py, device)?;
+    let frames = py.detach(|| renderer.render_all(&device)).py(py)?;
+    let mut out = Vec::with_capacity(frames.len());
+    for f in frames {
+        let r = f.rendered;
+        let (w, h) = (r.width as usize, r.height as usize);
+        let d = PyDict::new(py);
+        d.set_item("index", f.index)?;
+        d.set_item("ms", f.ms)?;
+        if let Some(c) = r.color {
+            match c.pixels {
+                Pixels::Rgba8(p) => d.set_item(
+                    "color",
+                    PyArray1::from_vec(py, p.into_iter().flatten().collect()).reshape([h, w, 4])?,
+                )?,
+                Pixels::Rgba32F(p) => d.set_item(
+                    "color",
+                    PyArray1::from_vec(py, p.into_iter().flatten().collect()).reshape([h, w, 4])?,
+                )?,
+                Pixels::R32Uint(p) => {
+                    d.set_item("color", PyArray1::from_vec(py, p).reshape([h, w])?)?
+                }
+            }
+        }
+        if let Some(ids) = r.ids {
+            d.set_item("ids", PyArray1::from_vec(py, ids).reshape([h, w])?)?;
+        }
+        if let Some(flow) = r.flow {
+            let flat: Vec<f32> = flow.into_iter().flatten().collect();
+            d.set_item("flow", PyArray1::from_vec(py, flat).reshape([h, w, 2])?)?;
+        }
+        if let Some(depth) = r.depth {
+            d.set_item("depth", PyArray1::from_vec(py, depth).reshape([h, w])?)?;
+        }
+        out.push(d);
+    }
+    Ok(out)
+}
+
+#[pymodule]
+fn _vklens(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyCamera>()?;
+    m.add_class::<PyDevice>()?;
+    m.add_class::<PyWarper>()?;
+    m.add_function(wrap_pyfunction!(overscan, m)?)?;
+    m.add_function(wrap_pyfunction!(render_scene, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,149 @@
+"""Type stubs of the compiled module; the classes are re-exported by ``vklens``."""
+
+import os
+from typing import Any, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+PathLike = Union[str, "os.PathLike[str]"]
+ArrayLike = npt.ArrayLike
+Image = Union[npt.NDArray[np.uint8], npt.NDArray[np.uint16], npt.NDArray[np.float32]]
+
+__version__: str
+
+class Camera:
+    """A calibrated camera: OpenCV's standard model (4, 5, 8, 12 or 14 coefficients, applied
+    exactly as ``cv2.projectPoints``) or a Brown radial lens. Immutable; pickles as its JSON
+    object."""
+
+    def __init__(self, width: int, height: int, fx: float, fy: float, cx: float, cy: float,
+                 dist_coeffs: Optional[ArrayLike] = None) -> None:
+        """``dist_coeffs`` in OpenCV's order (k1 k2 p1 p2 [k3 [k4 k5 k6 [s1 s2 s3 s4 [τx τy]]]]),
+        4, 5, 8, 12 or 14 of them; None is 5 zeros. Raises ``InputError`` naming the argument
+        for a NaN, a non-positive focal length or another count."""
+    @staticmethod
+    def load(path: PathLike) -> "Camera":
+        """Any camera file the command line reads: vklens JSON, OpenCV FileStorage (YAML, XML,
+        JSON), ROS ``camera_info`` YAML, ``{"model": "brown", ...}``."""
+    @staticmethod
+    def from_opencv(K: ArrayLike, D: ArrayLike, size: Tuple[int, int]) -> "Camera":
+        """From OpenCV's ``K`` (3×3, row-major, no skew), ``D`` shaped ``(n,)``, ``(1, n)`` or
+        ``(n, 1)``, and ``size = (width, height)``."""
+    @staticmethod
+    def from_dict(d: dict) -> "Camera":
+        """From a vklens JSON camera object (what ``to_dict`` returns)."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def size(self) -> Tuple[int, int]:
+        """``(width, height)``."""
+    @property
+    def fx(self) -> float: ...
+    @property
+    def fy(self) -> float: ...
+    @property
+    def cx(self) -> float: ...
+    @property
+    def cy(self) -> float: ...
+    @property
+    def model(self) -> str:
+        """``"opencv"`` or ``"brown"``."""
+    @property
+    def K(self) -> npt.NDArray[np.float64]:
+        """OpenCV's camera matrix, ``(3, 3)`` float64."""
+    @property
+    def dist_coeffs(self) -> npt.NDArray[np.float64]:
+        """The coefficients as given, ``(n,)`` float64."""
+    def to_dict(self) -> dict:
+        """The vklens JSON camera object."""
+    def save(self, path: PathLike) -> None:
+        """Writes the camera as vklens JSON, atomically."""
+    def distort_points(self, xy: ArrayLike) -> npt.NDArray[np.float64]:
+        """Normalized undistorted ``(N, 2)`` (x = X/Z, y = Y/Z; also ``(N, 1, 2)``) → distorted
+        pixels ``(N, 2)``, float64, exact; NaN rows where the model is undefined."""
+    def undistort_points(self, uv: ArrayLike, method: str = "newton") -> npt.NDArray[np.float64]:
+        """Distorted pixels ``(N, 2)`` → normalized undistorted ``(N, 2)``; NaN rows outside the
+        valid domain (the lens folds over there, or no preimage exists). ``method``:
+        ``"newton"``, ``"heikkila"`` or ``"fixed-point:N"`` (OpenCV's own iteration)."""
+    def project_points(self, points_3d: ArrayLike, rvec: Optional[ArrayLike] = None,
+                       tvec: Optional[ArrayLike] = None) -> npt.NDArray[np.float64]:
+        """``(N, 3)`` points → ``(N, 2)`` pixels, as ``cv2.projectPoints`` (``rvec`` a Rodrigues
+        vector, ``rvec``/``tvec`` shaped ``(3,)``, ``(3, 1)`` or ``(1, 3)``); NaN rows for
+        points at or behind the camera."""
+
+class Device:
+    """A headless Vulkan device. ``VKLENS_DEVICE`` picks it as for the command line (``cpu``,
+    ``gpu``, an index or part of the name; default: the fastest); ``VKLENS_VALIDATION=1`` turns
+    the Khronos validation layer on."""
+
+    def __init__(self) -> None: ...
+    @staticmethod
+    def default() -> "Device":
+        """The one shared device used wherever ``device=None``."""
+    @property
+    def name(self) -> str: ...
+    def check_validation(self) -> None:
+        """Raises ``GpuError`` if the validation layer has reported anything so far."""
+
+class Warper:
+    """The post-processing warp, built once (pipelines, coordinate maps) and run on every
+    frame. Thread-safe: calls on one Warper run one at a time, two Warpers run concurrently;
+    the GIL is released while the device works."""
+
+    def __init__(self, camera: Camera, direction: str = "distort", method: str = "lut",
+                 chromatic: Optional[Sequence[float]] = None, source_camera: Optional[Camera] = None,
+                 fill: Sequence[float] = (0, 0, 0, 0), device: Optional[Device] = None) -> None:
+        """``direction``: ``"distort"`` (a pinhole image in, the lens image out),
+        ``"undistort"`` (a lens image in, a pinhole image out) or ``"precorrect"`` (a headset
+        pre-correction). ``method``: ``"lut"`` (a map built once), ``"newton"``, ``"heikkila"``
+        or ``"fixed-point:N"`` (solved per pixel). ``chromatic``: R, G, B magnifications about
+        the principal point (lateral chromatic aberration; channels are R, G, B in that
+        order). ``source_camera``: the pinhole side's camera (for distort the input's, e.g.
+        ``vklens.overscan(camera)``; otherwise the output's); None is the camera's own
+        intrinsics. ``fill``: R, G, B, A in 0..1 for pixels without a source."""
+    @property
+    def camera(self) -> Camera: ...
+    @property
+    def source_camera(self) -> Camera:
+        """The pinhole side's camera actually used."""
+    @property
+    def input_size(self) -> Tuple[int, int]:
+        """``(width, height)`` of the images it takes."""
+    @property
+    def output_size(self) -> Tuple[int, int]:
+        """``(width, height)`` of the images it returns."""
+    @property
+    def direction(self) -> str: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def device(self) -> Device: ...
+    @overload
+    def __call__(self, image: Image, out: Optional[Image] = None) -> Image: ...
+    @overload
+    def __call__(self, image: Image, out: Optional[Image] = None, *,
+                 return_mask: bool) -> Any: ...
+    def __call__(self, image: Image, out: Optional[Image] = None, return_mask: bool = False) -> Any:
+        """Warps ``image`` (``(H, W)`` or ``(H, W, 1|3|4)``; uint8, uint16 or float32; any
+        strides) and returns a new array of the same dtype and shape layout, or writes ``out``
+        (C-contiguous, right shape and dtype) and returns it. With ``return_mask=True`` returns
+        ``(out, mask)``, ``mask`` ``(H, W)`` bool, False where the pixel has no source in the
+        valid domain."""
+    def maps(self) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """``(map_x, map_y)``, each ``(H, W)`` float32, ready for ``cv2.remap``: per output
+        pixel the source position its light comes from; NaN where it has none in the valid
+        domain."""
+
+def overscan(camera: Camera, density: float = 1.0) -> Camera:
+    """The pinhole camera whose image covers every valid pixel of ``camera`` with ``density``
+    source pixels per output pixel at the principal point (the distort warp's source)."""
+
+def render_scene(scene: Union[PathLike, dict], device: Optional[Device] = None,
+                 base: Optional[PathLike] = None) -> list:
+    """Renders a scene file, or the same tables as a dict (relative paths resolved against
+    ``base``, default the working folder): one dict per pose with ``"index"``, ``"ms"`` and the
+    outputs the scene asks for: ``"color"`` (H, W, 4) uint8 or float32, ``"ids"`` (H, W)
+    uint32, ``"flow"`` (H, W, 2) float32, ``"depth"`` (H, W) float32."""

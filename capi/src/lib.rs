@@ -1,0 +1,841 @@
+//! The C API of vklens: opaque handles over the crate's public surface (`Camera`, `Gpu` from
+//! the caller's Vulkan, `Warper` recording into the caller's command buffer), errors as
+//! handles, every entry point behind `catch_unwind`. `include/vklens.h` is generated from this
+//! file by cbindgen; the conventions (ownership, threads, layouts) are in its preamble
+//! (`cbindgen.toml`) and in the comments below, which become the header's.
+//!
+//! The shape follows librashader's C API: `*_create(..., out)` / `*_free(&handle)`, an error
+//! handle that is NULL on success, and the caller's `vkGetInstanceProcAddr` to reach its
+//! instance and device.
+
+#![allow(non_camel_case_types)]
+// Every pointer argument is checked for NULL before use; the remaining contract (pointers
+// to as many elements as the count says, live handles) is the C caller's, stated per function.
+#![allow(clippy::missing_safety_doc)]
+
+use std::ffi::{c_char, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::ptr;
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use vklens_core::{
+    Camera, EnabledFeatures, Error, ErrorKind, Gpu, ImageRef, PixelFormat, WarpMethod, WarpOptions,
+    Warper,
+};
+
+/// The version of this header's structs: set every `version` field to it.
+pub const VKL_API_VERSION: u32 = 1;
+
+pub type VkInstance = vk::Instance;
+pub type VkPhysicalDevice = vk::PhysicalDevice;
+pub type VkDevice = vk::Device;
+pub type VkQueue = vk::Queue;
+pub type VkCommandBuffer = vk::CommandBuffer;
+pub type VkImage = vk::Image;
+pub type VkImageView = vk::ImageView;
+pub type VkFormat = vk::Format;
+pub type PFN_vkGetInstanceProcAddr = Option<vk::PFN_vkGetInstanceProcAddr>;
+
+// ---------------------------------------------------------------------------------------------
+// Errors
+
+/// What kind of failure an error is, so that the caller can act on it.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum vkl_error_kind {
+    /// Not an error (what `vkl_error_kind_of(NULL)` returns).
+    VKL_ERROR_NONE = 0,
+    /// Bad input: an argument, file, key or value; the message names it. Fix the input.
+    VKL_ERROR_INPUT = 1,
+    /// The device lacks a feature or limit the work needs. Pick another device or a smaller job.
+    VKL_ERROR_UNSUPPORTED,
+    /// A Vulkan call failed (the message names it and its VkResult).
+    VKL_ERROR_VULKAN,
+    /// Reading or writing a file failed; the message names the path.
+    VKL_ERROR_IO,
+    /// A bug in vklens (a caught panic among them): please report the message.
+    VKL_ERROR_INTERNAL,
+}
+
+/// An error: its kind and message.
+pub struct vkl_error_s {
+    kind: vkl_error_kind,
+    message: CString,
+}
+
+/// An error handle; NULL means success.
+pub type vkl_error = *mut vkl_error_s;
+
+fn error(kind: vkl_error_kind, message: String) -> vkl_error {
+    let message = CString::new(message.replace('\0', " ")).unwrap_or_default();
+    Box::into_raw(Box::new(vkl_error_s { kind, message }))
+}
+
+fn from_error(e: Error) -> vkl_error {
+    let kind = match e.kind() {
+        ErrorKind::Input => vkl_error_kind::VKL_ERROR_INPUT,
+        ErrorKind::Unsupported => vkl_error_kind::VKL_ERROR_UNSUPPORTED,
+        ErrorKind::Vulkan => vkl_error_kind::VKL_ERROR_VULKAN,
+        ErrorKind::Io => vkl_error_kind::VKL_ERROR_IO,
+        _ => vkl_error_kind::VKL_ERROR_INTERNAL,
+    };
+    error(kind, e.to_string())
+}
+
+fn input(message: impl Into<String>) -> Error {
+    Error::input(message.into())
+}
+
+/// Runs an entry point's body: its error, or a panic inside it, becomes an error handle.
+fn guard(body: impl FnOnce() -> Result<(), Error>) -> vkl_error {
+    match catch_unwind(AssertUnwindSafe(body)) {
+        Ok(Ok(())) => ptr::null_mut(),
+        Ok(Err(e)) => from_error(e),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            error(
+                vkl_error_kind::VKL_ERROR_INTERNAL,
+                format!("internal error (please report): {what}"),
+            )
+        }
+    }
+}
+
+/// `p` as a reference, or an input error naming `what`.
+///
+/// # Safety
+/// A non-null `p` must point to a live `T`.
+unsafe fn arg<'a, T>(p: *const T, what: &str) -> Result<&'a T, Error> {
+    // SAFETY: the caller guarantees a non-null `p` points to a live `T`.
+    unsafe { p.as_ref() }.ok_or_else(|| input(format!("{what}: NULL pointer")))
+}
+
+/// Writes `value` to `*out`, which must not be NULL.
+///
+/// # Safety
+/// A non-null `out` must point to writable memory for one `T`.
+unsafe fn put<T>(out: *mut T, what: &str, value: T) -> Result<(), Error> {
+    if out.is_null() {
+        return Err(input(format!("{what}: NULL pointer")));
+    }
+    // SAFETY: non-null (checked) and writable (the caller's contract).
+    unsafe { out.write(value) };
+    Ok(())
+}
+
+/// `n` elements at `p` (which may be NULL only when `n` is 0).
+///
+/// # Safety
+/// A non-null `p` must point to `n` readable `T`s.
+unsafe fn slice<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T], Error> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if p.is_null() {
+        return Err(input(format!("{what}: NULL pointer for {n} element(s)")));
+    }
+    // SAFETY: non-null and `n` readable elements (the caller's contract).
+    Ok(unsafe { std::slice::from_raw_parts(p, n) })
+}
+
+/// Frees a boxed handle and nulls it; NULL or an already nulled handle is harmless.
+///
+/// # Safety
+/// A non-null `handle` must point to a handle that is NULL or came from this library's
+/// `Box::into_raw` and was not freed through another copy.
+unsafe fn free<T>(handle: *mut *mut T) {
+    if handle.is_null() {
+        return;
+    }
+    // SAFETY: the caller's contract (see above); the handle is nulled so that a second free
+    // through the same variable sees NULL.
+    unsafe {
+        let inner = handle.replace(ptr::null_mut());
+        if !inner.is_null() {
+            drop(Box::from_raw(inner));
+        }
+    }
+}
+
+/// Runs a `*_free` body; a panic while dropping (a bug) must not unwind into C either.
+fn release(body: impl FnOnce()) {
+    let _ = catch_unwind(AssertUnwindSafe(body));
+}
+
+/// The kind of `e`; `VKL_ERROR_NONE` for NULL.
+///
+/// # Safety
+/// `e` is NULL or an error this library returned and that was not freed.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_error_kind_of(e: vkl_error) -> vkl_error_kind {
+    // SAFETY: the caller's contract: NULL or a live error.
+    unsafe { e.as_ref() }.map_or(vkl_error_kind::VKL_ERROR_NONE, |e| e.kind)
+}
+
+/// The message of `e` (UTF-8, NUL-terminated), valid until `vkl_error_free`; `""` for NULL.
+///
+/// # Safety
+/// `e` is NULL or an error this library returned and that was not freed.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_error_message(e: vkl_error) -> *const c_char {
+    // SAFETY: the caller's contract: NULL or a live error.
+    match unsafe { e.as_ref() } {
+        Some(e) => e.message.as_ptr(),
+        None => c"".as_ptr(),
+    }
+}
+
+/// Frees an error and sets `*e` to NULL. `e == NULL` and `*e == NULL` are harmless.
+///
+/// # Safety
+/// `e` is NULL or points to NULL or to an error this library returned.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_error_free(e: *mut vkl_error) {
+    // SAFETY: the caller's contract, as `free` needs it.
+    release(|| unsafe { free(e) })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cameras
+
+/// A calibrated camera (OpenCV's standard model, or a Brown lens held as its exact twin).
+pub struct vkl_camera_s {
+    camera: Camera,
+}
+
+/// A camera handle. Immutable: safe to use from any thread.
+pub type vkl_camera = *mut vkl_camera_s;
+
+fn new_camera(out: *mut vkl_camera, camera: Camera) -> Result<(), Error> {
+    let handle = Box::into_raw(Box::new(vkl_camera_s { camera }));
+    // SAFETY: `out` was checked non-null by the caller of `new_camera`, and is writable (the
+    // C caller's contract).
+    unsafe { out.write(handle) };
+    Ok(())
+}
+
+/// Reads any camera file the command line reads (vklens JSON, OpenCV FileStorage YAML / XML /
+/// JSON, ROS camera_info YAML, a Brown lens). A missing or unreadable file is VKL_ERROR_IO, a
+/// malformed one VKL_ERROR_INPUT; both name the file. No Vulkan needed.
+///
+/// # Safety
+/// `path` is NULL or a NUL-terminated string; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_load(path: *const c_char, out: *mut vkl_camera) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        if path.is_null() {
+            return Err(input("path: NULL pointer"));
+        }
+        // SAFETY: non-null and NUL-terminated (the caller's contract).
+        let path = unsafe { CStr::from_ptr(path) }
+            .to_str()
+            .map_err(|_| input("path: not UTF-8"))?;
+        new_camera(out, Camera::load(path)?)
+    })
+}
+
+/// Builds a camera from OpenCV's camera matrix `K` (9 doubles, row-major as OpenCV stores
+/// it: fx 0 cx / 0 fy cy / 0 0 1), its distortion vector (`count` = 4, 5, 8, 12 or 14
+/// coefficients in OpenCV's order; `dist_coeffs` may be NULL with `count` 0 for none) and the
+/// image size. No Vulkan needed.
+///
+/// # Safety
+/// `K` is NULL or points to 9 doubles; `dist_coeffs` is NULL or points to `count` doubles;
+/// `out` is NULL or writable.
+#[no_mangle]
+#[allow(non_snake_case)] // `K`, as OpenCV and the header name it
+pub unsafe extern "C" fn vkl_camera_from_opencv(
+    width: u32,
+    height: u32,
+    K: *const f64,
+    dist_coeffs: *const f64,
+    count: usize,
+    out: *mut vkl_camera,
+) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        if K.is_null() {
+            return Err(input("K: NULL pointer"));
+        }
+        // SAFETY: 9 readable doubles (the caller's contract).
+        let k = unsafe { slice(K, 9, "K")? };
+        // SAFETY: `count` readable doubles (the caller's contract).
+        let d = unsafe { slice(dist_coeffs, count, "dist_coeffs")? };
+        let d: &[f64] = if d.is_empty() { &[0.0; 5] } else { d };
+        let km = [[k[0], k[1], k[2]], [k[3], k[4], k[5]], [k[6], k[7], k[8]]];
+        let camera = Camera::from_opencv(km, d, (width, height)).map_err(|e| {
+            let text = e.to_string();
+            if text.starts_with("K:") {
+                e
+            } else if text.contains("coefficients")
+                || text.contains("parameter `k")
+                || text.contains("parameter `p")
+                || text.contains("parameter `s")
+                || text.contains("parameter `tau")
+            {
+                input(format!("dist_coeffs: {text}"))
+            } else if text.contains("image size") {
+                input(format!("width, height: {text}"))
+            } else {
+                input(format!("K: {text}"))
+            }
+        })?;
+        new_camera(out, camera)
+    })
+}
+
+/// `(width, height)` of the camera's images.
+///
+/// # Safety
+/// `c` is NULL or a live camera; `width` and `height` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_size(
+    c: vkl_camera,
+    width: *mut u32,
+    height: *mut u32,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live camera (the caller's contract).
+        let c = unsafe { arg(c, "camera")? };
+        // SAFETY: NULL (refused) or writable (the caller's contract).
+        unsafe {
+            put(width, "width", c.camera.width)?;
+            put(height, "height", c.camera.height)
+        }
+    })
+}
+
+/// The forward model, exact in f64 as cv2.projectPoints: `n` normalized undistorted points
+/// `xy` (x = X/Z, y = Y/Z; 2n doubles) to `n` distorted pixels `uv_out` (2n doubles). A pair
+/// of NaN where the model is undefined (a rational denominator vanishes, a non-finite input).
+///
+/// # Safety
+/// `c` is NULL or a live camera; `xy` and `uv_out` are NULL or point to 2n doubles (they may
+/// be the same array).
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_distort_points(
+    c: vkl_camera,
+    xy: *const f64,
+    n: usize,
+    uv_out: *mut f64,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live camera (the caller's contract).
+        let c = unsafe { arg(c, "camera")? };
+        // SAFETY: 2n readable and writable doubles (the caller's contract).
+        let points = unsafe { pairs(xy, n, "xy", uv_out, "uv_out")? };
+        let result = c.camera.distort_points(&points);
+        // SAFETY: as above.
+        unsafe { write_pairs(uv_out, &result) };
+        Ok(())
+    })
+}
+
+/// The inverse model: `n` distorted pixels `uv` (2n doubles) to normalized undistorted points
+/// `xy_out` (2n doubles) with Newton's method; a pair of NaN outside the valid domain (the lens
+/// folds over there, or the pixel has no preimage).
+///
+/// # Safety
+/// `c` is NULL or a live camera; `uv` and `xy_out` are NULL or point to 2n doubles (they may
+/// be the same array).
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_undistort_points(
+    c: vkl_camera,
+    uv: *const f64,
+    n: usize,
+    xy_out: *mut f64,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live camera (the caller's contract).
+        let c = unsafe { arg(c, "camera")? };
+        // SAFETY: 2n readable and writable doubles (the caller's contract).
+        let points = unsafe { pairs(uv, n, "uv", xy_out, "xy_out")? };
+        let result = c
+            .camera
+            .undistort_points(&points, vklens_core::InverseMethod::Newton);
+        // SAFETY: as above.
+        unsafe { write_pairs(xy_out, &result) };
+        Ok(())
+    })
+}
+
+/// Copies `n` pairs in (so that in and out may alias), checking both pointers.
+///
+/// # Safety
+/// Non-null pointers point to 2n doubles.
+unsafe fn pairs(
+    input_ptr: *const f64,
+    n: usize,
+    in_name: &str,
+    out: *mut f64,
+    out_name: &str,
+) -> Result<Vec<[f64; 2]>, Error> {
+    let count = n
+        .checked_mul(2)
+        .ok_or_else(|| input(format!("n: {n} points is too many")))?;
+    if n > 0 && out.is_null() {
+        return Err(input(format!("{out_name}: NULL pointer for {n} point(s)")));
+    }
+    // SAFETY: 2n readable doubles (the caller's contract).
+    let flat = unsafe { slice(input_ptr, count, in_name)? };
+    Ok(flat.chunks_exact(2).map(|p| [p[0], p[1]]).collect())
+}
+
+/// # Safety
+/// `out` points to `2 * values.len()` writable doubles (non-null when `values` is not empty).
+unsafe fn write_pairs(out: *mut f64, values: &[Option<[f64; 2]>]) {
+    for (i, v) in values.iter().enumerate() {
+        let [a, b] = v.unwrap_or([f64::NAN; 2]);
+        // SAFETY: in bounds of the 2n doubles the caller provides.
+        unsafe {
+            out.add(2 * i).write(a);
+            out.add(2 * i + 1).write(b);
+        }
+    }
+}
+
+/// Frees a camera and sets `*c` to NULL; warpers built from it keep their own copy.
+///
+/// # Safety
+/// `c` is NULL or points to NULL or to a camera this library returned.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_free(c: *mut vkl_camera) {
+    // SAFETY: the caller's contract, as `free` needs it.
+    release(|| unsafe { free(c) })
+}
+
+// ---------------------------------------------------------------------------------------------
+// The caller's Vulkan
+
+/// The caller's Vulkan objects. vklens creates no instance and no device here and never
+/// destroys these; they must outlive the vkl_gpu and every warper made from it.
+///
+/// The device must support compute on `queue_family_index` and have been created with the
+/// `shaderStorageImageExtendedFormats` feature (the mask is an R8 storage image). `queue` is
+/// only used to identify the family: vklens never submits to it.
+#[repr(C)]
+pub struct vkl_vulkan {
+    /// VKL_API_VERSION.
+    pub version: u32,
+    pub instance: VkInstance,
+    pub physical_device: VkPhysicalDevice,
+    pub device: VkDevice,
+    pub queue: VkQueue,
+    pub queue_family_index: u32,
+    /// The loader's (or the caller's) vkGetInstanceProcAddr: every Vulkan function vklens
+    /// calls is looked up through it, for this instance and device.
+    pub get_instance_proc_addr: PFN_vkGetInstanceProcAddr,
+}
+
+/// vklens's view of the caller's device: its function tables and its own memory allocator.
+pub struct vkl_gpu_s {
+    gpu: Gpu,
+}
+
+/// A GPU handle, made from the caller's Vulkan by vkl_gpu_create.
+pub type vkl_gpu = *mut vkl_gpu_s;
+
+/// Wraps the caller's Vulkan. Fails with VKL_ERROR_INPUT for a NULL or wrong-version `vk`, a
+/// NULL handle or `get_instance_proc_addr`, or a queue family that does not exist.
+///
+/// # Safety
+/// `vk` is NULL or points to a `vkl_vulkan` whose handles are live and belong together
+/// (device of the physical device of the instance, queue of the family of the device);
+/// `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_gpu_create(vk: *const vkl_vulkan, out: *mut vkl_gpu) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        // SAFETY: NULL or a live `vkl_vulkan` (the caller's contract).
+        let v = unsafe { arg(vk, "vk")? };
+        if v.version != VKL_API_VERSION {
+            return Err(input(format!(
+                "vk.version: {} (expected VKL_API_VERSION = {VKL_API_VERSION})",
+                v.version
+            )));
+        }
+        let gipa = v
+            .get_instance_proc_addr
+            .ok_or_else(|| input("vk.get_instance_proc_addr: NULL"))?;
+        for (name, null) in [
+            ("vk.instance", v.instance == vk::Instance::null()),
+            (
+                "vk.physical_device",
+                v.physical_device == vk::PhysicalDevice::null(),
+            ),
+            ("vk.device", v.device == vk::Device::null()),
+            ("vk.queue", v.queue == vk::Queue::null()),
+        ] {
+            if null {
+                return Err(input(format!("{name}: VK_NULL_HANDLE")));
+            }
+        }
+        // SAFETY: `gipa` is a vkGetInstanceProcAddr (the caller's contract), `instance` is
+        // live and `gipa` resolves its functions; `device` was created from it, so the
+        // instance's vkGetDeviceProcAddr resolves the device's.
+        let (instance, device) = unsafe {
+            let entry = ash::Entry::from_static_fn(ash::StaticFn {
+                get_instance_proc_addr: gipa,
+            });
+            let instance = ash::Instance::load(entry.static_fn(), v.instance);
+            let device = ash::Device::load(instance.fp_v1_0(), v.device);
+            (instance, device)
+        };
+        let allocator =
+            gpu_allocator::vulkan::Allocator::new(&gpu_allocator::vulkan::AllocatorCreateDesc {
+                instance: instance.clone(),
+                device: device.clone(),
+                physical_device: v.physical_device,
+                debug_settings: Default::default(),
+                buffer_device_address: false,
+                allocation_sizes: Default::default(),
+            })
+            .map_err(|e| Error::internal(format!("the memory allocator: {e}")))?;
+        // SAFETY: the handles belong together (the caller's contract), the allocator was just
+        // made for this device, and no optional feature is claimed.
+        let gpu = unsafe {
+            Gpu::from_caller(
+                &instance,
+                v.physical_device,
+                device,
+                v.queue,
+                v.queue_family_index,
+                Arc::new(Mutex::new(allocator)),
+                EnabledFeatures::default(),
+            )?
+        };
+        let handle = Box::into_raw(Box::new(vkl_gpu_s { gpu }));
+        // SAFETY: non-null (checked) and writable (the caller's contract).
+        unsafe { out.write(handle) };
+        Ok(())
+    })
+}
+
+/// Frees vklens's view of the device (its allocator's memory goes back to the device) and
+/// sets `*g` to NULL. The caller's objects are untouched. Warpers made from it stay usable
+/// (they hold their own reference); the device must outlive all of them.
+///
+/// # Safety
+/// `g` is NULL or points to NULL or to a gpu this library returned.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_gpu_free(g: *mut vkl_gpu) {
+    // SAFETY: the caller's contract, as `free` needs it.
+    release(|| unsafe { free(g) })
+}
+
+// ---------------------------------------------------------------------------------------------
+// The warp
+
+/// Which way an image goes through the lens.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum vkl_direction {
+    /// A pinhole image in, the lens image out (the inverse model per output pixel).
+    VKL_DISTORT = 0,
+    /// A lens image in, a pinhole image out (as cv2.initUndistortRectifyMap + cv2.remap).
+    VKL_UNDISTORT,
+    /// A headset pre-correction: the screen shows what the lens will undo.
+    VKL_PRECORRECT,
+}
+
+/// What a warper is built for. NULL options are the defaults: distort, "lut", no chromatic
+/// aberration, the camera's own intrinsics, R8G8B8A8_UNORM, transparent black fill.
+#[repr(C)]
+pub struct vkl_warp_options {
+    /// VKL_API_VERSION.
+    pub version: u32,
+    pub direction: vkl_direction,
+    /// NULL = "lut" (a map built once by vkl_warper_record_prepare); else as the command
+    /// line's --method: "lut", "newton", "heikkila" or "fixed-point:N".
+    pub method: *const c_char,
+    /// NULL, or 3 magnifications R, G, B about the principal point (lateral chromatic
+    /// aberration).
+    pub chromatic: *const f64,
+    /// NULL = the camera's own intrinsics and size; else the pinhole side's camera (for
+    /// distort the source's, for undistort and precorrect the output's), without distortion.
+    pub source_camera: vkl_camera,
+    /// VK_FORMAT_R8G8B8A8_UNORM (also for 0, VK_FORMAT_UNDEFINED) or
+    /// VK_FORMAT_R32G32B32A32_SFLOAT: the format of the source and output images.
+    pub format: VkFormat,
+    /// R, G, B, A in 0..1 for output pixels with no source.
+    pub fill: [f32; 4],
+}
+
+/// One of the caller's images: a 2D image with one mip level and layer, a view of it, and its
+/// size.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct vkl_image {
+    pub image: VkImage,
+    pub view: VkImageView,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// A warp built once (pipelines, map images) and recorded every frame.
+pub struct vkl_warper_s {
+    warper: Warper,
+}
+
+/// A warper handle: one thread at a time.
+pub type vkl_warper = *mut vkl_warper_s;
+
+/// Reads the options through raw field reads: `direction` is a C enum whose value is not
+/// trusted, so no reference to the struct (with a possibly invalid enum inside) is formed.
+///
+/// # Safety
+/// `o` points to a readable `vkl_warp_options` whose pointers are NULL or valid.
+unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error> {
+    // SAFETY: `o` is readable (the caller's contract); every read is of a plain field through
+    // a raw pointer, and `direction` is read as the u32 it is stored as.
+    let (version, direction, method, chromatic, source, format, fill) = unsafe {
+        (
+            ptr::addr_of!((*o).version).read(),
+            ptr::addr_of!((*o).direction).cast::<u32>().read(),
+            ptr::addr_of!((*o).method).read(),
+            ptr::addr_of!((*o).chromatic).read(),
+            ptr::addr_of!((*o).source_camera).read(),
+            ptr::addr_of!((*o).format).read(),
+            ptr::addr_of!((*o).fill).read(),
+        )
+    };
+    if version != VKL_API_VERSION {
+        return Err(input(format!(
+            "options.version: {version} (expected VKL_API_VERSION = {VKL_API_VERSION})"
+        )));
+    }
+    let mut options = match direction {
+        0 => WarpOptions::distort(),
+        1 => WarpOptions::undistort(),
+        2 => WarpOptions::precorrect(),
+        d => {
+            return Err(input(format!(
+                "options.direction: {d} (expected VKL_DISTORT, VKL_UNDISTORT or VKL_PRECORRECT)"
+            )))
+        }
+    };
+    if !method.is_null() {
+        // SAFETY: non-null and NUL-terminated (the caller's contract).
+        let m = unsafe { CStr::from_ptr(method) }
+            .to_str()
+            .map_err(|_| input("options.method: not UTF-8"))?;
+        options.method = m
+            .parse::<WarpMethod>()
+            .map_err(|e| input(format!("options.method: {e}")))?;
+    }
+    if !chromatic.is_null() {
+        // SAFETY: 3 readable doubles (the caller's contract).
+        let c = unsafe { slice(chromatic, 3, "options.chromatic")? };
+        options.chromatic = Some([c[0], c[1], c[2]]);
+    }
+    // SAFETY: NULL or a live camera (the caller's contract).
+    if let Some(s) = unsafe { source.as_ref() } {
+        options.source_camera = Some(s.camera.clone());
+    }
+    options.format = match format {
+        vk::Format::UNDEFINED | vk::Format::R8G8B8A8_UNORM => PixelFormat::Rgba8,
+        vk::Format::R32G32B32A32_SFLOAT => PixelFormat::Rgba32F,
+        f => {
+            return Err(input(format!(
+                "options.format: {f:?} (expected VK_FORMAT_R8G8B8A8_UNORM or VK_FORMAT_R32G32B32A32_SFLOAT)"
+            )))
+        }
+    };
+    if fill.iter().any(|v| !v.is_finite()) {
+        return Err(input("options.fill: every value must be a finite number"));
+    }
+    options.fill = fill;
+    Ok(options)
+}
+
+/// Builds a warper: its pipelines, and for "lut" its map images (filled on the GPU by
+/// vkl_warper_record_prepare). Records nothing.
+///
+/// # Safety
+/// `g` and `c` are NULL or live handles; `o` is NULL or a readable `vkl_warp_options`; `out`
+/// is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_warper_create(
+    g: vkl_gpu,
+    c: vkl_camera,
+    o: *const vkl_warp_options,
+    out: *mut vkl_warper,
+) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        // SAFETY: NULL or live handles (the caller's contract).
+        let (g, c) = unsafe { (arg(g, "gpu")?, arg(c, "camera")?) };
+        let options = if o.is_null() {
+            WarpOptions::distort()
+        } else {
+            // SAFETY: a readable options struct (the caller's contract).
+            unsafe { read_options(o)? }
+        };
+        let warper = Warper::new(&g.gpu, &c.camera, &options)?;
+        let handle = Box::into_raw(Box::new(vkl_warper_s { warper }));
+        // SAFETY: non-null (checked) and writable (the caller's contract).
+        unsafe { out.write(handle) };
+        Ok(())
+    })
+}
+
+/// `(width, height)` of the source image vkl_warper_record takes.
+///
+/// # Safety
+/// `w` is NULL or a live warper; `width` and `height` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_warper_source_size(
+    w: vkl_warper,
+    width: *mut u32,
+    height: *mut u32,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live warper (the caller's contract).
+        let w = unsafe { arg(w, "warper")? };
+        let (sw, sh) = w.warper.input_size();
+        // SAFETY: NULL (refused) or writable (the caller's contract).
+        unsafe {
+            put(width, "width", sw)?;
+            put(height, "height", sh)
+        }
+    })
+}
+
+/// `(width, height)` of the output (and mask) image vkl_warper_record writes.
+///
+/// # Safety
+/// `w` is NULL or a live warper; `width` and `height` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_warper_output_size(
+    w: vkl_warper,
+    width: *mut u32,
+    height: *mut u32,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live warper (the caller's contract).
+        let w = unsafe { arg(w, "warper")? };
+        let (ow, oh) = w.warper.output_size();
+        // SAFETY: NULL (refused) or writable (the caller's contract).
+        unsafe {
+            put(width, "width", ow)?;
+            put(height, "height", oh)
+        }
+    })
+}
+
+/// Records the one-off work, once, before the first vkl_warper_record: for "lut" the map
+/// build (compute dispatches writing the warper's own map images), and the layout
+/// transitions of its own images, followed by a COMPUTE_SHADER → COMPUTE_SHADER barrier
+/// (SHADER_WRITE → SHADER_READ) so that the warp reads finished maps. None of the caller's
+/// images is touched.
+///
+/// Never submits, never waits. `cmd` must be a primary or secondary command buffer in the
+/// recording state, outside a render pass, on a queue family with compute; it changes the
+/// bound compute pipeline and descriptor sets. Not again while that work is pending.
+///
+/// # Safety
+/// `w` is NULL or a live warper; `cmd` is recording as stated.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_warper_record_prepare(
+    w: vkl_warper,
+    cmd: VkCommandBuffer,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live warper (the caller's contract).
+        let w = unsafe { arg(w, "warper")? };
+        if cmd == vk::CommandBuffer::null() {
+            return Err(input("cmd: VK_NULL_HANDLE"));
+        }
+        // SAFETY: `cmd` is recording outside a render pass on a compute queue of the device
+        // the warper was built on, once (the caller's contract, stated above).
+        unsafe { w.warper.record_prepare(cmd) };
+        Ok(())
+    })
+}
+
+/// Records the warp of `source` into `output` and, when given, `mask`.
+///
+/// Images: 2D, one mip level and layer, each with a view of that level and layer. `source`
+/// is vkl_warper_source_size, `output` and `mask` are vkl_warper_output_size. `source` and
+/// `output` are of the options' format; `mask` is VK_FORMAT_R8_UNORM, written 255 where the
+/// pixel has a source and 0 where it has none (NULL: the warper writes its own).
+///
+/// Usage: VK_IMAGE_USAGE_STORAGE_BIT on all three.
+///
+/// Layouts: all three are in VK_IMAGE_LAYOUT_GENERAL on entry and are left in it.
+///
+/// Synchronization: one compute dispatch, in VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, reading
+/// `source` (VK_ACCESS_SHADER_READ_BIT, storage-image loads) and writing `output` and
+/// `mask` (VK_ACCESS_SHADER_WRITE_BIT). The caller's barriers make its writes of `source`
+/// visible to that stage and access before, and the warp's writes visible to whatever reads
+/// `output` and `mask` after. It changes the bound compute pipeline and descriptor sets.
+///
+/// Never submits, never waits, not inside a render pass. The sizes and views are checked
+/// first: a call that returns an error records nothing. When the views differ from the last
+/// call's, the warper's descriptor set is rewritten: no earlier recorded warp of this warper
+/// may still be pending then.
+///
+/// # Safety
+/// `w` is NULL or a live warper on which vkl_warper_record_prepare was recorded first (in
+/// this or an earlier submission); `source`, `output` and `mask` are NULL or readable
+/// `vkl_image`s whose images stay alive until the work completes; `cmd` is recording outside
+/// a render pass on a compute queue of the warper's device.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_warper_record(
+    w: vkl_warper,
+    cmd: VkCommandBuffer,
+    source: *const vkl_image,
+    output: *const vkl_image,
+    mask: *const vkl_image,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live warper, used by one thread at a time (the caller's contract).
+        let w = unsafe { w.as_mut() }.ok_or_else(|| input("warper: NULL pointer"))?;
+        if cmd == vk::CommandBuffer::null() {
+            return Err(input("cmd: VK_NULL_HANDLE"));
+        }
+        let image = |i: &vkl_image| ImageRef {
+            image: i.image,
+            view: i.view,
+            width: i.width,
+            height: i.height,
+        };
+        // SAFETY: NULL or readable images (the caller's contract).
+        let (source, output, mask) = unsafe {
+            (
+                image(arg(source, "source")?),
+                image(arg(output, "output")?),
+                mask.as_ref().map(image),
+            )
+        };
+        // SAFETY: the caller's contract above is `Warper::record`'s: recording outside a
+        // render pass after record_prepare, images alive and in GENERAL, no pending warp of
+        // this warper when the views change.
+        unsafe { w.warper.record(cmd, &source, &output, mask.as_ref()) }
+    })
+}
+
+/// Frees a warper and sets `*w` to NULL. The caller ensures the GPU no longer uses it (the
+/// submissions that recorded it have completed).
+///
+/// # Safety
+/// `w` is NULL or points to NULL or to a warper this library returned.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_warper_free(w: *mut vkl_warper) {
+    // SAFETY: the caller's contract, as `free` needs it.
+    release(|| unsafe { free(w) })
+}

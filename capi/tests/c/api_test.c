@@ -1,0 +1,205 @@
+/*
+ * The C API under bad input: each call returns an error of the right kind whose message names
+ * the argument, and the process goes on; frees of NULL and double frees through the nulled
+ * handle are harmless. `api_test --no-gpu` runs only the calls that need no Vulkan (for
+ * valgrind). Ends with the line "N passed, M failed".
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <vklens.h>
+
+#include "../../../examples/c/vk_host.h"
+
+static int passed, failed;
+
+/* Expects `e` to be an error of `kind` whose message contains `name`; frees it. */
+static void expect_error(const char *what, vkl_error e, vkl_error_kind kind, const char *name) {
+    const char *msg = vkl_error_message(e);
+    if (e && vkl_error_kind_of(e) == kind && strstr(msg, name)) {
+        passed++;
+    } else {
+        failed++;
+        fprintf(stderr, "FAIL %s: kind %d (want %d), message \"%s\" (want it to name \"%s\")\n", what,
+                (int)vkl_error_kind_of(e), (int)kind, msg, name);
+    }
+    vkl_error_free(&e);
+    if (e != NULL) {
+        failed++;
+        fprintf(stderr, "FAIL %s: vkl_error_free did not null the handle\n", what);
+    }
+}
+
+static void expect_ok(const char *what, vkl_error e) {
+    if (e == NULL) {
+        passed++;
+    } else {
+        failed++;
+        fprintf(stderr, "FAIL %s: %s\n", what, vkl_error_message(e));
+        vkl_error_free(&e);
+    }
+}
+
+static void expect(const char *what, int ok) {
+    if (ok) {
+        passed++;
+    } else {
+        failed++;
+        fprintf(stderr, "FAIL %s\n", what);
+    }
+}
+
+static const double K[9] = {400, 0, 399.5, 0, 400, 299.5, 0, 0, 1};
+
+static void cameras(void) {
+    vkl_camera c = NULL;
+    double d[7] = {-0.05, 0.01, 0.03, -0.01, 0, 0, 0};
+    expect_error("load(NULL)", vkl_camera_load(NULL, &c), VKL_ERROR_INPUT, "path");
+    expect_error("load(missing)", vkl_camera_load("/no/such/camera.yml", &c), VKL_ERROR_IO, "/no/such/camera.yml");
+    expect_error("load(out NULL)", vkl_camera_load("x.yml", NULL), VKL_ERROR_INPUT, "out");
+    expect_error("7 coefficients", vkl_camera_from_opencv(800, 600, K, d, 7, &c), VKL_ERROR_INPUT, "dist_coeffs");
+    double nan_k[9] = {400, 0, 399.5, 0, NAN, 299.5, 0, 0, 1};
+    expect_error("NaN in K", vkl_camera_from_opencv(800, 600, nan_k, d, 4, &c), VKL_ERROR_INPUT, "K");
+    expect_error("K NULL", vkl_camera_from_opencv(800, 600, NULL, d, 4, &c), VKL_ERROR_INPUT, "K");
+    expect_error("coefficients NULL", vkl_camera_from_opencv(800, 600, K, NULL, 4, &c), VKL_ERROR_INPUT,
+                 "dist_coeffs");
+    double nan_d[4] = {NAN, 0, 0, 0};
+    expect_error("NaN coefficient", vkl_camera_from_opencv(800, 600, K, nan_d, 4, &c), VKL_ERROR_INPUT, "k1");
+    double neg_k[9] = {-400, 0, 399.5, 0, 400, 299.5, 0, 0, 1};
+    expect_error("negative fx", vkl_camera_from_opencv(800, 600, neg_k, d, 4, &c), VKL_ERROR_INPUT, "fx");
+    expect_error("zero width", vkl_camera_from_opencv(0, 600, K, d, 4, &c), VKL_ERROR_INPUT, "width");
+    expect("no camera made by the failures", c == NULL);
+
+    expect_ok("from_opencv", vkl_camera_from_opencv(800, 600, K, d, 4, &c));
+    uint32_t w = 0, h = 0;
+    expect_ok("size", vkl_camera_size(c, &w, &h));
+    expect("size is 800x600", w == 800 && h == 600);
+    expect_error("size(NULL camera)", vkl_camera_size(NULL, &w, &h), VKL_ERROR_INPUT, "camera");
+    expect_error("size(NULL width)", vkl_camera_size(c, NULL, &h), VKL_ERROR_INPUT, "width");
+    double xy[4] = {0.0, 0.0, 0.1, -0.2}, uv[4], back[4];
+    expect_ok("distort", vkl_camera_distort_points(c, xy, 2, uv));
+    expect("principal point maps to itself", uv[0] == 399.5 && uv[1] == 299.5);
+    expect_ok("undistort", vkl_camera_undistort_points(c, uv, 2, back));
+    expect("round trip", fabs(back[2] - 0.1) < 1e-12 && fabs(back[3] + 0.2) < 1e-12);
+    expect_ok("in place", vkl_camera_undistort_points(c, uv, 2, uv));
+    expect("in place round trip", fabs(uv[2] - 0.1) < 1e-12);
+    expect_error("distort(NULL xy)", vkl_camera_distort_points(c, NULL, 2, uv), VKL_ERROR_INPUT, "xy");
+    expect_error("distort(NULL out)", vkl_camera_distort_points(c, xy, 2, NULL), VKL_ERROR_INPUT, "uv_out");
+    expect_error("distort(NULL camera)", vkl_camera_distort_points(NULL, xy, 2, uv), VKL_ERROR_INPUT, "camera");
+    expect_ok("zero points, NULL arrays", vkl_camera_distort_points(c, NULL, 0, NULL));
+
+    /* A strong barrel folds over where r(1 + k1 r^2) stops growing: pixels beyond have no
+     * preimage and come back as NaN. */
+    vkl_camera pin = NULL;
+    double strong[4] = {-0.5, 0, 0, 0};
+    expect_ok("strong barrel", vkl_camera_from_opencv(800, 600, K, strong, 4, &pin));
+    double far[2] = {5000.0, 5000.0}, out[2];
+    expect_ok("undistort outside the domain", vkl_camera_undistort_points(pin, far, 1, out));
+    expect("NaN pair outside the valid domain", isnan(out[0]) && isnan(out[1]));
+    vkl_camera_free(&pin);
+
+    /* Frees: NULL, and twice through the nulled handle. */
+    vkl_camera_free(&c);
+    expect("free nulls the handle", c == NULL);
+    vkl_camera_free(&c);
+    vkl_camera_free(NULL);
+    vkl_error_free(NULL);
+    vkl_error none = NULL;
+    vkl_error_free(&none);
+    expect("kind of NULL", vkl_error_kind_of(NULL) == VKL_ERROR_NONE);
+    expect("message of NULL", strcmp(vkl_error_message(NULL), "") == 0);
+    vkl_gpu_free(NULL);
+    vkl_warper_free(NULL);
+}
+
+static void gpu_and_warper(void) {
+    host h;
+    host_init(&h);
+    vkl_gpu g = NULL;
+    vkl_vulkan vk = {VKL_API_VERSION, h.instance, h.physical, h.device, h.queue, h.family, vkGetInstanceProcAddr};
+    expect_error("gpu_create(NULL)", vkl_gpu_create(NULL, &g), VKL_ERROR_INPUT, "vk");
+    vkl_vulkan wrong = vk;
+    wrong.version = 99;
+    expect_error("wrong version", vkl_gpu_create(&wrong, &g), VKL_ERROR_INPUT, "version");
+    wrong = vk;
+    wrong.get_instance_proc_addr = NULL;
+    expect_error("NULL vkGetInstanceProcAddr", vkl_gpu_create(&wrong, &g), VKL_ERROR_INPUT, "get_instance_proc_addr");
+    wrong = vk;
+    wrong.device = VK_NULL_HANDLE;
+    expect_error("NULL device", vkl_gpu_create(&wrong, &g), VKL_ERROR_INPUT, "device");
+    wrong = vk;
+    wrong.queue_family_index = 1000;
+    expect_error("no such queue family", vkl_gpu_create(&wrong, &g), VKL_ERROR_INPUT, "queue family");
+    expect_ok("gpu_create", vkl_gpu_create(&vk, &g));
+
+    vkl_camera c = NULL;
+    double d[4] = {-0.05, 0.01, 0.03, -0.01};
+    expect_ok("camera", vkl_camera_from_opencv(800, 600, K, d, 4, &c));
+    vkl_warper w = NULL;
+    vkl_warp_options o = {VKL_API_VERSION, VKL_DISTORT, NULL, NULL, NULL, VK_FORMAT_R8G8B8A8_UNORM, {0, 0, 0, 0}};
+    vkl_warp_options bad = o;
+    bad.direction = (vkl_direction)7;
+    expect_error("direction 7", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "direction");
+    bad = o;
+    bad.method = "bisection";
+    expect_error("unknown method", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "method");
+    bad = o;
+    bad.format = VK_FORMAT_B8G8R8A8_SRGB;
+    expect_error("unsupported format", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "format");
+    bad = o;
+    bad.version = 0;
+    expect_error("options version", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "version");
+    double chromatic[3] = {1.0, NAN, 1.0};
+    bad = o;
+    bad.chromatic = chromatic;
+    expect_error("NaN chromatic", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "chromatic");
+    bad = o;
+    bad.source_camera = c; /* distorted: not a pinhole */
+    expect_error("distorted source camera", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "source camera");
+    expect_error("NULL gpu", vkl_warper_create(NULL, c, &o, &w), VKL_ERROR_INPUT, "gpu");
+    expect("no warper made by the failures", w == NULL);
+    expect_ok("warper_create with NULL options", vkl_warper_create(g, c, NULL, &w));
+    vkl_warper_free(&w);
+    expect_ok("warper_create", vkl_warper_create(g, c, &o, &w));
+
+    /* A source of the wrong size: an error, and nothing recorded (the command buffer submits
+     * empty under the validation layer). */
+    VkImageUsageFlags usage = VK_IMAGE_USAGE_STORAGE_BIT;
+    host_image small = host_image_create(&h, 64, 48, VK_FORMAT_R8G8B8A8_UNORM, usage);
+    host_image out = host_image_create(&h, 800, 600, VK_FORMAT_R8G8B8A8_UNORM, usage);
+    vkl_image small_ref = {small.image, small.view, small.width, small.height};
+    vkl_image out_ref = {out.image, out.view, out.width, out.height};
+    host_begin(&h);
+    expect_error("source of the wrong size", vkl_warper_record(w, h.cmd, &small_ref, &out_ref, NULL), VKL_ERROR_INPUT,
+                 "source");
+    expect_error("output of the wrong size", vkl_warper_record(w, h.cmd, &out_ref, &small_ref, NULL), VKL_ERROR_INPUT,
+                 "output");
+    expect_error("NULL source", vkl_warper_record(w, h.cmd, NULL, &out_ref, NULL), VKL_ERROR_INPUT, "source");
+    expect_error("NULL command buffer", vkl_warper_record(w, VK_NULL_HANDLE, &out_ref, &out_ref, NULL),
+                 VKL_ERROR_INPUT, "cmd");
+    expect_error("record_prepare(NULL)", vkl_warper_record_prepare(NULL, h.cmd), VKL_ERROR_INPUT, "warper");
+    host_submit_and_wait(&h);
+    uint32_t sw = 0, sh = 0;
+    expect_error("source_size(NULL)", vkl_warper_source_size(NULL, &sw, &sh), VKL_ERROR_INPUT, "warper");
+    expect_ok("source_size", vkl_warper_source_size(w, &sw, &sh));
+    expect("source size", sw == 800 && sh == 600);
+
+    vkl_warper_free(&w);
+    vkl_warper_free(&w);
+    vkl_gpu_free(&g);
+    vkl_gpu_free(&g);
+    vkl_camera_free(&c);
+    host_image_destroy(&h, &small);
+    host_image_destroy(&h, &out);
+    int messages = h.validation_messages;
+    host_destroy(&h);
+    expect("no validation message", messages == 0);
+}
+
+int main(int argc, char **argv) {
+    cameras();
+    if (!(argc > 1 && strcmp(argv[1], "--no-gpu") == 0)) gpu_and_warper();
+    printf("%d passed, %d failed\n", passed, failed);
+    return failed != 0;
+}

@@ -13,12 +13,17 @@
 #extension GL_GOOGLE_include_directive : require
 // The pinhole render (no geometry shader) is this shader without the discard data.
 // vklens:variant pinhole VKL_PINHOLE
+// With the compute discard, Alg. 1 has already run once per vertex and pose
+// (glsl/discard.comp): this shader only reads its results.
+// vklens:variant pulled VKL_PULLED
 
 #include "camera_model.glsl"
 #include "geometry_frame.glsl"
 
 // false: a plain pinhole render (the warp path's first pass); no model, no discard data.
 layout(constant_id = 8) const bool DISTORT = true;
+// Flow is the only output that needs the previous pose.
+layout(constant_id = 22) const bool WRITE_FLOW = true;
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec2 in_uv;
@@ -30,50 +35,45 @@ layout(location = 1) out vec2 v_uv;
 layout(location = 2) flat out uint v_id;
 layout(location = 3) out vec3 v_flow;       // xy: pixel motion since the previous pose; z: valid
 layout(location = 4) out float v_depth;     // camera-frame z (metres)
-#ifndef VKL_PINHOLE
+#if !defined(VKL_PINHOLE) && !defined(VKL_PULLED)
 layout(location = 5) out vec3 v_undistorted; // xy: undistorted NDC; z: 1 if the model applies
 #endif
+#ifdef VKL_PULLED
+// Per vertex, from the discard pass: the distorted clip position, and the flow (xy) with
+// whether both poses see the vertex (z).
+layout(set = 0, binding = 3, std430) readonly buffer Positions { vec4 positions[]; };
+layout(set = 0, binding = 4, std430) readonly buffer Motion { vec4 motion[]; };
+#endif
 
-// Alg. 1 on one clip-space position: the distorted clip position, its OpenCV pixel, and
-// whether the model is defined there.
-bool alg1(vec4 clip, out vec4 distorted, out vec2 pixel, out vec2 ndc) {
-    distorted = clip;
-    ndc = vec2(0.0);
-    pixel = vec2(0.0);
-    if (!(clip.w > 0.0)) return false;  // at or behind the camera: no image point
-    ndc = clip.xy / clip.w;
-    vec2 size = frame.viewport.xy;
-    pixel = (ndc * 0.5 + 0.5) * size - 0.5;
-    if (!DISTORT) return true;
-    vec2 x = vkl_to_normalized(pixel);
-    vec2 d;
-    bool ok = vkl_contains_ideal(x) && vkl_distort(x, d);
-    pixel = vkl_to_pixel(d);
-    ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
-    vec2 distorted_ndc = (pixel + 0.5) / size * 2.0 - 1.0;
-    distorted = vec4(distorted_ndc * clip.w, clip.zw);
-    return ok;
-}
+#include "alg1.glsl"
 
 void main() {
     vec4 world = vec4(in_position, 1.0);
+    v_color = in_color;
+    v_uv = in_uv;
+    v_id = in_id;
+    v_depth = (frame.view * world).z;
+#ifdef VKL_PULLED
+    gl_Position = positions[gl_VertexIndex];
+    v_flow = WRITE_FLOW ? motion[gl_VertexIndex].xyz : vec3(0.0);
+#else
     vec4 clip = frame.view_projection * world;
     vec4 distorted;
     vec2 pixel, ndc;
     bool ok = alg1(clip, distorted, pixel, ndc);
     gl_Position = distorted;
 
-    vec4 previous_clip = frame.previous_view_projection * world;
-    vec4 previous_distorted;
-    vec2 previous_pixel, previous_ndc;
-    bool previous_ok = alg1(previous_clip, previous_distorted, previous_pixel, previous_ndc);
-
-    v_color = in_color;
-    v_uv = in_uv;
-    v_id = in_id;
+    vec2 previous_pixel = pixel;
+    bool previous_ok = ok;
+    if (WRITE_FLOW) {
+        vec4 previous_clip = frame.previous_view_projection * world;
+        vec4 previous_distorted;
+        vec2 previous_ndc;
+        previous_ok = alg1(previous_clip, previous_distorted, previous_pixel, previous_ndc);
+    }
     v_flow = vec3(pixel - previous_pixel, (ok && previous_ok) ? 1.0 : 0.0);
-    v_depth = (frame.view * world).z;
 #ifndef VKL_PINHOLE
     v_undistorted = vec3(ndc, ok ? 1.0 : 0.0);
+#endif
 #endif
 }

@@ -572,3 +572,180 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
     assert!(got_depth == expected_depth, "depth differs");
     assert_no_validation_messages(&ctx);
 }
+
+/// Renders `desc` with the geometry-shader discard and with the compute discard: the same
+/// triangles reach the rasterizer. lavapipe takes a pipeline with a geometry stage through
+/// another path of its draw module (the same vertex shader either way shows the same
+/// differences), whose window coordinates can differ in the last bits: interpolated values
+/// differ by a few ulps (depth within 32, about 4e-6 relative, measured 16 on the grazing
+/// view; flow within 1e-5 px, measured 7.6e-6 px;
+/// colour within a level), and a pixel centre on an edge two triangles share can go to the
+/// other one (measured: 2 of 480,000 pixels, in the barrel scene). Returns the IDs.
+fn same_with_both_discards(
+    ctx: &vklens::internal::gpu::Context,
+    desc: GeometryDesc,
+    mesh: &Mesh,
+    pose: &Pose,
+    previous: &Pose,
+    what: &str,
+) -> Vec<u32> {
+    use vklens::internal::pass::geometry::Discard;
+    let with = |discard| {
+        let mut d = desc.clone();
+        d.discard = discard;
+        render(ctx, d, mesh, None, pose, previous).unwrap()
+    };
+    let (gs, cs) = (with(Discard::GeometryShader), with(Discard::Compute));
+    // The same triangles survive (a dropped one would leave background against an ID over
+    // its whole area); a pixel centre on an edge two triangles share may go to either.
+    let (a, b) = (
+        gs.ids.clone().unwrap_or_default(),
+        cs.ids.clone().unwrap_or_default(),
+    );
+    assert_eq!(a.len(), b.len());
+    let differ: Vec<(u32, u32)> = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| x != y)
+        .map(|(x, y)| (*x, *y))
+        .collect();
+    eprintln!(
+        "{what}: {} of {} IDs differ (edge ties)",
+        differ.len(),
+        a.len()
+    );
+    assert!(
+        differ.len() * 10_000 <= a.len(),
+        "{what}: {} IDs differ",
+        differ.len()
+    );
+    assert!(
+        differ.iter().all(|&(x, y)| x != 0 && y != 0),
+        "{what}: background against an ID: {differ:?}"
+    );
+    let ulps = |a: f32, b: f32| (a.to_bits() as i64 - b.to_bits() as i64).unsigned_abs();
+    if let (Some(a), Some(b)) = (&gs.depth, &cs.depth) {
+        // +inf where nothing was drawn in both, since the IDs agree.
+        let worst = a
+            .iter()
+            .zip(b)
+            .map(|(&x, &y)| ulps(x, y))
+            .max()
+            .unwrap_or(0);
+        eprintln!("{what}: depth up to {worst} ulps apart");
+        assert!(worst <= 32, "{what}: depth {worst} ulps apart");
+    }
+    if let (Some(a), Some(b)) = (&gs.flow, &cs.flow) {
+        for (x, y) in a.iter().zip(b) {
+            for c in 0..2 {
+                assert_eq!(
+                    x[c].is_nan(),
+                    y[c].is_nan(),
+                    "{what}: flow validity differs"
+                );
+                if !x[c].is_nan() {
+                    assert!((x[c] - y[c]).abs() <= 1e-5, "{what}: flow {x:?} vs {y:?}");
+                }
+            }
+        }
+    }
+    if let (Some(a), Some(b)) = (&gs.color, &cs.color) {
+        for i in 0..a.len() {
+            let (p, q) = (a.rgba_f32(i), b.rgba_f32(i));
+            assert!(
+                (0..4).all(|c| (p[c] - q[c]).abs() <= 1.0 / 255.0 + 1e-6),
+                "{what}: colour at {i}"
+            );
+        }
+    }
+    assert_no_validation_messages(ctx);
+    gs.ids.unwrap_or_default()
+}
+
+#[test]
+fn the_compute_discard_renders_what_the_geometry_shader_does() {
+    let ctx = validated_context();
+    let all = Outputs {
+        color: Some(ColorFormat::Rgba8),
+        ids: true,
+        flow: true,
+        depth: true,
+    };
+    // Flow between two poses through all 14 coefficients.
+    let camera = reference_camera("prism_tilt");
+    let scene = builtin::grid(16);
+    let pose = Pose::look_at(DVec3::new(0.1, -0.05, -1.0), DVec3::ZERO, DVec3::Y);
+    let previous = Pose::look_at(DVec3::new(0.13, -0.04, -1.02), DVec3::ZERO, DVec3::Y);
+    let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
+    let desc = GeometryDesc::new(
+        camera.clone(),
+        Projection::Lens {
+            delta: DEFAULT_DELTA,
+        },
+        all,
+    );
+    same_with_both_discards(&ctx, desc, &mesh, &pose, &previous, "flow scene");
+
+    // The barrel discard scene (most of the grid outside the frustum), with δ as the seed
+    // sets it and with δ huge (only the valid domain drops triangles).
+    let camera = reference_camera("seed_fig1_barrel");
+    let scene = builtin::grid(64);
+    let pose = Pose::look_at(DVec3::new(0.0, 0.0, -0.25), DVec3::ZERO, DVec3::Y);
+    let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
+    for delta in [DEFAULT_DELTA, 1e6] {
+        let ids =
+            same_with_both_discards(&ctx, lens(&camera, delta), &mesh, &pose, &pose, "barrel");
+        assert!(
+            ids.iter().filter(|&&i| i == 0).count() > 1000,
+            "the discard dropped nothing"
+        );
+    }
+
+    // The grazing view with geometry behind the camera.
+    let camera = reference_camera("seed_fig2");
+    let eye = DVec3::new(0.0, 0.0, -0.03);
+    let pose = Pose::look_at(eye, eye + DVec3::new(0.0, 1.0, 0.6), DVec3::Z);
+    let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
+    same_with_both_discards(
+        &ctx,
+        lens(&camera, DEFAULT_DELTA),
+        &mesh,
+        &pose,
+        &pose,
+        "grazing",
+    );
+}
+
+#[test]
+fn a_device_without_geometry_shaders_renders_the_vertex_path_through_the_compute_discard() {
+    use vklens::internal::gpu::{Context, ContextOptions};
+    use vklens::internal::pass::geometry::Discard;
+    let ctx = Context::new(ContextOptions {
+        validation: true,
+        device: std::env::var("VKLENS_DEVICE")
+            .ok()
+            .filter(|s| !s.is_empty()),
+        geometry_shader: false,
+    })
+    .unwrap();
+    assert!(!ctx.gpu().supports_geometry_shader());
+    // The barrel scene: every ID on the f64 oracle, nothing stretched.
+    let camera = reference_camera("seed_fig1_barrel");
+    let n = 64;
+    let scene = builtin::grid(n);
+    let pose = Pose::look_at(DVec3::new(0.0, 0.0, -0.25), DVec3::ZERO, DVec3::Y);
+    let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
+    let mut desc = lens(&camera, DEFAULT_DELTA);
+    desc.discard = Discard::Auto;
+    let r = render(&ctx, desc.clone(), &mesh, None, &pose, &pose).unwrap();
+    let c = compare_ids(&camera, &pose, n, &r);
+    assert!(c.checked > 100_000);
+    assert_eq!((c.wrong, c.holes), (0, 0));
+    // The geometry shader, asked for on such a device, is refused up front.
+    desc.discard = Discard::GeometryShader;
+    let Err(e) = render(&ctx, desc, &mesh, None, &pose, &pose) else {
+        panic!("the geometry shader was not refused");
+    };
+    assert!(e.to_string().contains("geometryShader"), "{e}");
+    assert_no_validation_messages(&ctx);
+}

@@ -100,7 +100,17 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
         (
             "geometry.vert",
             shaders::GEOMETRY_VERT,
-            with(&[spec::DISTORT]),
+            with(&[spec::DISTORT, spec::WRITE_FLOW]),
+        ),
+        (
+            "geometry.vert (pinhole)",
+            shaders::GEOMETRY_VERT_PINHOLE,
+            with(&[spec::DISTORT, spec::WRITE_FLOW]),
+        ),
+        (
+            "discard.comp",
+            shaders::DISCARD_COMP,
+            with(&[spec::DISTORT, spec::DISCARD_STAGE, spec::WRITE_FLOW]),
         ),
         (
             "geometry.frag",
@@ -152,6 +162,7 @@ fn geometry_frame_matches_the_glsl_block() {
         ("viewport", offset_of!(GeometryFrame, viewport)),
     ];
     check(shaders::GEOMETRY_VERT, "GeometryFrame", host.clone());
+    check(shaders::DISCARD_COMP, "GeometryFrame", host.clone());
     check(shaders::GEOMETRY_GEOM, "GeometryFrame", host);
     // The vertex shader also reads the camera, with the same layout as everywhere.
     check(
@@ -159,6 +170,17 @@ fn geometry_frame_matches_the_glsl_block() {
         "CameraParams",
         host_offsets!(CameraParams),
     );
+}
+
+#[test]
+fn discard_push_matches_the_glsl_block() {
+    use vklens::internal::pass::geometry::DiscardPush;
+    check(
+        shaders::DISCARD_COMP,
+        "DiscardPush",
+        vec![("count", offset_of!(DiscardPush, count))],
+    );
+    assert_eq!(std::mem::size_of::<DiscardPush>(), 4);
 }
 
 #[test]
@@ -191,6 +213,7 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
     let ctx = vklens::internal::gpu::Context::new(vklens::internal::gpu::ContextOptions {
         validation: true,
         device: None,
+        geometry_shader: true,
     })
     .unwrap();
     let camera = vklens::internal::model::Camera::from_coeffs(
@@ -227,8 +250,47 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
     for id in [spec::WRITE_IDS, spec::WRITE_FLOW, spec::WRITE_DEPTH] {
         assert_eq!(get(f, id), Some(0), "{} compiled out", id.name);
     }
-    assert!(stages
+    // The default discard runs by compute: no geometry stage, and its per-vertex pass is
+    // specialized like the vertex shader (flow off: the previous pose is never evaluated).
+    assert!(!stages
         .iter()
         .any(|(s, _)| *s == vk::ShaderStageFlags::GEOMETRY));
+    let [per_vertex, per_triangle] = pass.discard_constants().expect("the compute discard");
+    assert_eq!(per_vertex.get(spec::RADIAL), Some(1));
+    for id in [
+        spec::RATIONAL,
+        spec::TANGENTIAL,
+        spec::PRISM,
+        spec::TILT,
+        spec::WRITE_FLOW,
+    ] {
+        assert_eq!(per_vertex.get(id), Some(0), "{} compiled out", id.name);
+    }
+    assert_eq!(
+        get(v, spec::WRITE_FLOW),
+        Some(0),
+        "no previous pose in the vertex shader"
+    );
+    assert_eq!(
+        (
+            per_vertex.get(spec::DISCARD_STAGE),
+            per_triangle.get(spec::DISCARD_STAGE)
+        ),
+        (Some(0), Some(1))
+    );
+    // The geometry shader, when asked for, replaces it.
+    let mut desc = GeometryDesc::new(
+        pass.desc().camera.clone(),
+        Projection::Lens { delta: 0.1 },
+        Outputs::COLOR,
+    );
+    desc.discard = vklens::internal::pass::geometry::Discard::GeometryShader;
+    let gs = GeometryPass::new(ctx.gpu(), desc).unwrap();
+    assert!(gs
+        .pipeline()
+        .constants
+        .iter()
+        .any(|(s, _)| *s == vk::ShaderStageFlags::GEOMETRY));
+    assert!(gs.discard_constants().is_none());
     ctx.check_validation().unwrap();
 }

@@ -2,8 +2,8 @@
 //! "computational complexity" and first limitation; a seed-002 Table I analogue):
 //!
 //! * **paths** — textured grids of 8², 128² and 512² quads at 800×600 and 1920×1080: Alg. 1
-//!   (vertex shader + discard) beside a plain pinhole render of the same scene (the peer, ×
-//!   column) and beside pinhole render + compute warp (analytic Newton, and a precomputed
+//!   (vertex shader + Sec. 3.2's discard, by compute dispatches and by a geometry shader)
+//!   beside a plain pinhole render of the same scene (the peer, × columns) and beside pinhole render + compute warp (analytic Newton, and a precomputed
 //!   map): vertex cost grows with geometry, warp cost with pixels — where they cross;
 //! * **tessellation** — what splitting edges to L px costs in triangles and time, and the
 //!   straight-line error it leaves (the largest distance between a rendered edge, straight
@@ -26,8 +26,8 @@ use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::geometry::{
-    ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
-    Texture, DEFAULT_DELTA,
+    ColorFormat, Discard, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs,
+    Projection, Texture, DEFAULT_DELTA,
 };
 use crate::pass::mesh_warp::{MeshWarpOutput, MeshWarpPass, MeshWarpTarget};
 use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
@@ -59,7 +59,7 @@ fn prepare(
     scene: &Scene,
     mesh: &Mesh,
     pose: &Pose,
-    final_layout: vk::ImageLayout,
+    discard: Discard,
 ) -> Result<Drawn> {
     let gpu = ctx.gpu();
     let mut desc = GeometryDesc::new(
@@ -67,7 +67,7 @@ fn prepare(
         projection,
         Outputs::color_only(Some(ColorFormat::Rgba8)),
     );
-    desc.final_layout = final_layout;
+    desc.discard = discard;
     let mut pass = GeometryPass::new(gpu, desc)?;
     let targets = GeometryTargets::new(gpu, &pass)?;
     let buffers = MeshBuffers::new(gpu, mesh, scene.texture.as_ref())?;
@@ -98,7 +98,8 @@ fn time_render(ctx: &Context, d: &Drawn) -> Result<f64> {
     Ok(gpu.unwrap_or(wall))
 }
 
-/// GPU ms per frame of drawing `mesh` with `projection` (colour only).
+/// GPU ms per frame of drawing `mesh` with `projection` (colour only) and the default
+/// discard.
 fn time_scene(
     ctx: &Context,
     camera: &Camera,
@@ -107,15 +108,20 @@ fn time_scene(
     mesh: &Mesh,
     pose: &Pose,
 ) -> Result<f64> {
-    let drawn = prepare(
-        ctx,
-        camera,
-        projection,
-        scene,
-        mesh,
-        pose,
-        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-    )?;
+    time_scene_with(ctx, camera, projection, scene, mesh, pose, Discard::Auto)
+}
+
+/// [`time_scene`] with the discard in `discard`.
+fn time_scene_with(
+    ctx: &Context,
+    camera: &Camera,
+    projection: Projection,
+    scene: &Scene,
+    mesh: &Mesh,
+    pose: &Pose,
+    discard: Discard,
+) -> Result<f64> {
+    let drawn = prepare(ctx, camera, projection, scene, mesh, pose, discard)?;
     time_render(ctx, &drawn)
 }
 
@@ -196,7 +202,15 @@ pub fn run(
                 &scene.mesh,
                 &pose,
             )?;
-            let vertex_ms = time_scene(ctx, &camera, LENS, &scene, &scene.mesh, &pose)?;
+            let vertex =
+                |discard| time_scene_with(ctx, &camera, LENS, &scene, &scene.mesh, &pose, discard);
+            let vertex_ms = vertex(Discard::Compute)?;
+            // Where the device has geometry shaders, the seed's discard beside it.
+            let gs_ms = if ctx.gpu().supports_geometry_shader() {
+                Some(vertex(Discard::GeometryShader)?)
+            } else {
+                None
+            };
             let warp_ms =
                 time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Analytic)?;
             let map_ms = time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Map)?;
@@ -204,6 +218,8 @@ pub fn run(
                 "bench": "vertex", "kind": "paths", "width": w, "height": h,
                 "grid": n, "triangles": scene.mesh.triangle_count(),
                 "pinhole_ms": pinhole_ms, "vertex_ms": vertex_ms,
+                "vertex_discard": Discard::Compute.name(),
+                "vertex_gs_ms": gs_ms, "vertex_gs_x_pinhole": gs_ms.map(|g| g / pinhole_ms),
                 "pinhole_warp_analytic_ms": warp_ms, "pinhole_warp_map_ms": map_ms,
                 "vertex_x_pinhole": vertex_ms / pinhole_ms,
                 "warp_map_x_pinhole": map_ms / pinhole_ms,
@@ -354,13 +370,14 @@ pub fn run(
 pub fn table(rows: &[Value]) -> String {
     let kind = |k: &'static str| rows.iter().filter(move |r| r["kind"] == k);
     let mut out = String::from(
-        "Paths (GPU ms per frame; × = over the plain pinhole render of the same scene)\n\n\
-         | size | grid | triangles | pinhole | vertex (Alg. 1) | × | pinhole + warp, analytic | pinhole + warp, map | × | straight-line error px |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "Paths (GPU ms per frame; × = over the plain pinhole render of the same scene; vertex = \
+         Alg. 1 with Sec. 3.2's discard by compute dispatches, and by a geometry shader)\n\n\
+         | size | grid | triangles | pinhole | vertex, compute discard | × | vertex, geometry shader | × | pinhole + warp, analytic | pinhole + warp, map | × | straight-line error px |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in kind("paths") {
         out.push_str(&format!(
-            "| {}×{} | {}² | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {}×{} | {}² | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r["width"],
             r["height"],
             r["grid"],
@@ -368,6 +385,8 @@ pub fn table(rows: &[Value]) -> String {
             f(r, "pinhole_ms", 2),
             f(r, "vertex_ms", 2),
             f(r, "vertex_x_pinhole", 2),
+            f(r, "vertex_gs_ms", 2),
+            f(r, "vertex_gs_x_pinhole", 2),
             f(r, "pinhole_warp_analytic_ms", 2),
             f(r, "pinhole_warp_map_ms", 2),
             f(r, "warp_map_x_pinhole", 2),

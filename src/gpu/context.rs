@@ -21,11 +21,14 @@ pub struct ContextOptions {
     /// Which device: `cpu` (lavapipe), `gpu`, an index, or part of the device name.
     /// `None` prefers a discrete GPU, then an integrated one, then anything.
     pub device: Option<String>,
+    /// Enable `geometryShader` where the device has it. `false` makes a device report as
+    /// one without (MoltenVK, many mobile GPUs) would, for testing the paths that need none.
+    pub geometry_shader: bool,
 }
 
 impl ContextOptions {
     /// From the environment: `VKLENS_VALIDATION=1` turns validation on, `VKLENS_DEVICE`
-    /// picks the device.
+    /// picks the device, `VKLENS_GEOMETRY_SHADER=0` leaves the geometry-shader feature off.
     pub fn from_env() -> Self {
         ContextOptions {
             validation: matches!(
@@ -35,8 +38,17 @@ impl ContextOptions {
             device: std::env::var("VKLENS_DEVICE")
                 .ok()
                 .filter(|s| !s.is_empty()),
+            geometry_shader: geometry_shader_from_env(),
         }
     }
+}
+
+/// `VKLENS_GEOMETRY_SHADER=0` (or `false`, `no`) turns the geometry-shader feature off.
+pub fn geometry_shader_from_env() -> bool {
+    !matches!(
+        std::env::var("VKLENS_GEOMETRY_SHADER").as_deref(),
+        Ok("0") | Ok("false") | Ok("no")
+    )
 }
 
 /// What the headless context created and must destroy after the device's last user.
@@ -233,8 +245,9 @@ impl Context {
                 ),
             ));
         }
-        // The geometry path drops triangles in a geometry shader (lavapipe has them).
-        let geometry_shader = supported.geometry_shader == vk::TRUE;
+        // The geometry path can drop triangles in a geometry shader (lavapipe has them); it
+        // has a compute discard for devices without.
+        let geometry_shader = options.geometry_shader && supported.geometry_shader == vk::TRUE;
         let features = vk::PhysicalDeviceFeatures::default()
             .shader_float64(float64)
             .geometry_shader(geometry_shader)

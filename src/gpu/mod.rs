@@ -26,7 +26,7 @@ pub use barriers::{
     host_read_barrier, image_barrier, memory_barrier, record_compute_download,
     record_compute_readback, record_discard_for_compute_write, record_download,
 };
-pub use context::{Context, ContextOptions};
+pub use context::{geometry_shader_from_env, Context, ContextOptions};
 pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,
 };

@@ -27,8 +27,13 @@ pub const GEOMETRY_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geome
 /// `glsl/geometry.vert` without the discard data: the pinhole render (no geometry shader).
 pub const GEOMETRY_VERT_PINHOLE: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pinhole.spv"));
+/// `glsl/geometry.vert` reading the positions and flow the compute discard computed.
+pub const GEOMETRY_VERT_PULLED: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pulled.spv"));
 /// `glsl/geometry.geom`: Lambers et al. Sec. 3.2's triangle discard.
 pub const GEOMETRY_GEOM: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.geom.spv"));
+/// `glsl/discard.comp`: Lambers et al. Sec. 3.2's triangle discard without a geometry shader.
+pub const DISCARD_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/discard.comp.spv"));
 /// `glsl/geometry.frag`: colour, object ID, flow and depth outputs.
 pub const GEOMETRY_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.frag.spv"));
 /// `glsl/mesh_warp.vert`: the Durham radial-correction paper's mesh-based warp (grid vertices with source coordinates).

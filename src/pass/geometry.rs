@@ -1,14 +1,16 @@
-//! The geometry path (Lambers et al. Sec. 3.2): meshes drawn with Alg. 1 in the vertex shader and
-//! triangles outside `[-(1+δ+D), 1+δ+D]²` (undistorted NDC) dropped in a geometry shader —
-//! or, for the warp path's first pass, a plain pinhole render with the Sec. 3.1 frustum.
+//! The geometry path (Lambers et al. Sec. 3.2): meshes drawn with Alg. 1 and triangles outside
+//! `[-(1+δ+D), 1+δ+D]²` (undistorted NDC) dropped — by two compute dispatches before the draw
+//! ([`Discard::Compute`], the default: Alg. 1 once per vertex and pose, and no geometry stage)
+//! or by a geometry shader ([`Discard::GeometryShader`]) — or, for the warp path's first pass,
+//! a plain pinhole render with the Sec. 3.1 frustum.
 //!
 //! Outputs (Lambers et al. Table 1), each only when asked for: colour (RGBA8 or RGBA16F), object ID
 //! (R32_UINT, flat, never blended), 2D flow (RG32F: pixel motion since a previous pose, NaN
 //! where unknown) and camera depth (R32F, metres; +inf where nothing was drawn).
 //!
-//! Embedding: [`GeometryPass::record`] records one render pass into the caller's command
-//! buffer on [`GeometryTargets`] (images the pass made) — the colour attachments end in the
-//! desc's `final_layout`.
+//! Embedding: [`GeometryPass::record`] records the discard's dispatches (when it has them) and
+//! one render pass into the caller's command buffer on [`GeometryTargets`] (images the pass
+//! made) — the colour attachments end in the desc's `final_layout`.
 
 use crate::pass::spec;
 use ash::vk;
@@ -18,8 +20,9 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
 use crate::gpu::{
-    image_barrier, record_download, shaders, Attribute, Buffer, DescriptorPool, Error, Framebuffer,
-    Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
+    image_barrier, record_download, shaders, Attribute, Buffer, ComputePipeline, DescriptorPool,
+    Error, Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
+    SpecConstants, Stage,
 };
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
@@ -90,6 +93,46 @@ impl Outputs {
 /// Lambers et al. Sec. 3.2's default tolerance δ.
 pub const DEFAULT_DELTA: f64 = 0.1;
 
+/// Where Lambers et al. Sec. 3.2's triangle discard runs (the rule is the same in both).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Discard {
+    /// The compute discard: it is the faster on lavapipe (`vklens bench vertex`,
+    /// docs/benchmarks.md) and needs no geometry stage, so any device runs it.
+    Auto,
+    /// Two compute dispatches before the draw: a flag per vertex, then the index buffer
+    /// rewritten with a degenerate triangle for each dropped one (`glsl/discard.comp`).
+    Compute,
+    /// A geometry shader drops triangles (`glsl/geometry.geom`); needs `geometryShader`.
+    GeometryShader,
+}
+
+impl Discard {
+    /// `VKLENS_DISCARD=compute` or `geometry-shader` (for comparisons); otherwise `Auto`.
+    pub fn from_env() -> Self {
+        match std::env::var("VKLENS_DISCARD").as_deref() {
+            Ok("compute") => Discard::Compute,
+            Ok("geometry-shader") => Discard::GeometryShader,
+            _ => Discard::Auto,
+        }
+    }
+
+    /// The stage `Auto` stands for.
+    pub fn resolve(self) -> Discard {
+        match self {
+            Discard::Auto => Discard::Compute,
+            d => d,
+        }
+    }
+
+    /// Its name in reports (`compute`, `geometry-shader`).
+    pub fn name(self) -> &'static str {
+        match self.resolve() {
+            Discard::GeometryShader => "geometry-shader",
+            _ => "compute",
+        }
+    }
+}
+
 /// What a [`GeometryPass`] renders.
 #[derive(Debug, Clone)]
 pub struct GeometryDesc {
@@ -105,6 +148,8 @@ pub struct GeometryDesc {
     pub background: [f32; 4],
     /// Layout the output images are left in.
     pub final_layout: vk::ImageLayout,
+    /// Where the triangle discard runs ([`Projection::Lens`] only).
+    pub discard: Discard,
 }
 
 impl GeometryDesc {
@@ -117,6 +162,7 @@ impl GeometryDesc {
             far: 1000.0,
             background: [0.0; 4],
             final_layout: vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            discard: Discard::from_env(),
         }
     }
 }
@@ -269,12 +315,21 @@ impl Texture {
     }
 }
 
-/// A mesh on the GPU: vertex and index buffers and its texture (white if it has none).
+/// A mesh on the GPU: vertex and index buffers and its texture (white if it has none), and
+/// the compute discard's scratch: a flag per vertex and the rewritten index buffer.
 pub struct MeshBuffers {
     pub vertices: Buffer,
     pub indices: Buffer,
     pub index_count: u32,
+    pub vertex_count: u32,
     pub texture: Texture,
+    /// World positions as vec4 (w = 1), for the discard pass's aligned reads.
+    points: Buffer,
+    flags: Buffer,
+    kept: Buffer,
+    /// Per vertex: the distorted clip position, and the flow with its validity.
+    positions: Buffer,
+    motion: Buffer,
 }
 
 impl MeshBuffers {
@@ -288,6 +343,13 @@ impl MeshBuffers {
             pixels: Pixels::Rgba8(vec![[255; 4]]),
             bit_depth: BitDepth::U8,
         };
+        // The discard pass reads positions and indices as storage buffers.
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let points: Vec<[f32; 4]> = mesh
+            .vertices
+            .iter()
+            .map(|v| [v.position[0], v.position[1], v.position[2], 1.0])
+            .collect();
         Ok(MeshBuffers {
             vertices: Buffer::from_pod(
                 gpu,
@@ -299,10 +361,40 @@ impl MeshBuffers {
                 gpu,
                 "mesh.indices",
                 &mesh.indices,
-                vk::BufferUsageFlags::INDEX_BUFFER,
+                vk::BufferUsageFlags::INDEX_BUFFER | storage,
             )?,
             index_count: mesh.indices.len() as u32,
+            vertex_count: mesh.vertices.len() as u32,
             texture: Texture::new(gpu, texture.unwrap_or(&white))?,
+            points: Buffer::from_pod(gpu, "mesh.discard.points", &points, storage)?,
+            flags: Buffer::new(
+                gpu,
+                "mesh.discard.flags",
+                mesh.vertices.len() as u64 * 4,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
+            kept: Buffer::new(
+                gpu,
+                "mesh.discard.indices",
+                mesh.indices.len() as u64 * 4,
+                vk::BufferUsageFlags::INDEX_BUFFER | storage,
+                MemoryLocation::GpuOnly,
+            )?,
+            positions: Buffer::new(
+                gpu,
+                "mesh.discard.positions",
+                mesh.vertices.len() as u64 * 16,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
+            motion: Buffer::new(
+                gpu,
+                "mesh.discard.motion",
+                mesh.vertices.len() as u64 * 16,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?,
         })
     }
 
@@ -329,6 +421,23 @@ pub struct GeometryPass {
     frame: Buffer,
     sampler: Sampler,
     discard_bound: f64,
+    /// The compute discard (a lens projection with [`Discard::Compute`]).
+    discard: Option<DiscardPass>,
+}
+
+/// The compute discard's two pipelines (`glsl/discard.comp`, STAGE 0 and 1) and their set.
+struct DiscardPass {
+    flags: ComputePipeline,
+    triangles: ComputePipeline,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+}
+
+/// `DiscardPush` of `glsl/discard.comp`: how many vertices (stage 0) or triangles (stage 1).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct DiscardPush {
+    pub count: u32,
 }
 
 impl GeometryPass {
@@ -360,24 +469,34 @@ impl GeometryPass {
             Some(vk::Format::D32_SFLOAT),
             desc.final_layout,
         )?;
-        let vertex_constants =
-            CameraParams::spec_constants(cam.distortion.terms()).bool(spec::DISTORT, lens);
+        let vertex_constants = CameraParams::spec_constants(cam.distortion.terms())
+            .bool(spec::DISTORT, lens)
+            .bool(spec::WRITE_FLOW, desc.outputs.flow);
         let o = desc.outputs;
         let fragment_constants = SpecConstants::new()
             .bool(spec::WRITE_COLOR, o.color.is_some())
             .bool(spec::WRITE_IDS, o.ids)
             .bool(spec::WRITE_FLOW, o.flow)
             .bool(spec::WRITE_DEPTH, o.depth);
+        let geometry_stage = lens && desc.discard.resolve() == Discard::GeometryShader;
+        let compute_discard = lens && !geometry_stage;
+        // With the compute discard, Alg. 1 runs there once per vertex and pose, and the draw
+        // reads its positions and flow.
+        let pulled = compute_discard;
         let mut stages = vec![Stage {
             stage: vk::ShaderStageFlags::VERTEX,
-            spirv: if lens {
+            // With the compute discard, Alg. 1 ran in the discard pass: the vertex shader reads
+            // its positions and flow.
+            spirv: if geometry_stage {
                 shaders::GEOMETRY_VERT
+            } else if pulled {
+                shaders::GEOMETRY_VERT_PULLED
             } else {
                 shaders::GEOMETRY_VERT_PINHOLE
             },
-            constants: vertex_constants,
+            constants: vertex_constants.clone(),
         }];
-        if lens {
+        if geometry_stage {
             stages.push(Stage {
                 stage: vk::ShaderStageFlags::GEOMETRY,
                 spirv: shaders::GEOMETRY_GEOM,
@@ -389,16 +508,20 @@ impl GeometryPass {
             spirv: shaders::GEOMETRY_FRAG,
             constants: fragment_constants,
         });
-        let bindings = [
+        let all_bindings = [
             vk::DescriptorType::UNIFORM_BUFFER,
             vk::DescriptorType::UNIFORM_BUFFER,
             vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            // The discard pass's positions and flow (VKL_PULLED).
+            vk::DescriptorType::STORAGE_BUFFER,
+            vk::DescriptorType::STORAGE_BUFFER,
         ];
+        let bindings = &all_bindings[..if pulled { 5 } else { 3 }];
         let pipeline = GraphicsPipeline::new(
             gpu,
             GraphicsDesc {
                 stages,
-                bindings: &bindings,
+                bindings,
                 vertex: Some((std::mem::size_of::<Vertex>() as u32, &VERTEX_ATTRIBUTES)),
                 render_pass: &render_pass,
                 depth_test: true,
@@ -428,9 +551,15 @@ impl GeometryPass {
                 (1, vk::DescriptorType::UNIFORM_BUFFER, &frame),
             ],
         );
+        let discard = if compute_discard {
+            Some(DiscardPass::new(gpu, vertex_constants, &camera, &frame)?)
+        } else {
+            None
+        };
         let pass = GeometryPass {
             gpu: gpu.clone(),
             sampler: Sampler::new(gpu, vk::Filter::LINEAR, vk::SamplerAddressMode::REPEAT)?,
+            discard,
             desc,
             _pool: pool,
             set,
@@ -452,6 +581,15 @@ impl GeometryPass {
     /// The pipeline (its specialization constants show what was compiled in).
     pub fn pipeline(&self) -> &GraphicsPipeline {
         &self.pipeline
+    }
+
+    /// The compute discard's two pipelines' specialization constants (per vertex, per
+    /// triangle), when the pass drops triangles by compute; `None` with a geometry shader or a
+    /// pinhole projection.
+    pub fn discard_constants(&self) -> Option<[&SpecConstants; 2]> {
+        self.discard
+            .as_ref()
+            .map(|d| [&d.flags.constants, &d.triangles.constants])
     }
 
     /// 1 + δ + D: the bound on undistorted NDC beyond which a vertex drops its triangles
@@ -542,6 +680,13 @@ impl GeometryPass {
     /// poses) record into one command buffer: each slot has its own uniforms and descriptor
     /// set, filled with [`Self::set_slot`] and drawn with [`Self::record_slot`].
     pub fn slots(&self, count: u32) -> Result<GeometrySlots> {
+        if self.discard.is_some() {
+            // The discard's index buffer is the mesh's, one rewrite per draw: slots would
+            // need one each. Their one user renders pinhole cells.
+            return Err(Error::Unsupported(
+                "slots of a lens projection need Discard::GeometryShader".into(),
+            ));
+        }
         let pool = DescriptorPool::for_pipeline(&self.gpu, &self.pipeline, count.max(1))?;
         let mut slots = Vec::with_capacity(count as usize);
         for _ in 0..count {
@@ -643,6 +788,26 @@ impl GeometryPass {
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn bind_mesh(&mut self, mesh: &MeshBuffers) {
         self.write_texture(self.set, mesh);
+        if let Some(d) = &self.discard {
+            let storage = vk::DescriptorType::STORAGE_BUFFER;
+            crate::gpu::write_buffer_descriptors(
+                &self.gpu,
+                d.set,
+                &[
+                    (2, storage, &mesh.points),
+                    (3, storage, &mesh.indices),
+                    (4, storage, &mesh.flags),
+                    (5, storage, &mesh.kept),
+                    (6, storage, &mesh.positions),
+                    (7, storage, &mesh.motion),
+                ],
+            );
+            crate::gpu::write_buffer_descriptors(
+                &self.gpu,
+                self.set,
+                &[(3, storage, &mesh.positions), (4, storage, &mesh.motion)],
+            );
+        }
     }
 
     fn write_texture(&self, set: vk::DescriptorSet, mesh: &MeshBuffers) {
@@ -665,12 +830,16 @@ impl GeometryPass {
 
     /// Records the render pass: clears every output, draws `mesh`, leaves the outputs in
     /// the desc's `final_layout` with the writes visible to transfers, compute and fragment
-    /// shaders.
+    /// shaders. With the compute discard, two dispatches come first (they bind a compute
+    /// pipeline and descriptor set), each behind a global barrier: after earlier vertex-input,
+    /// vertex-shader and compute work, and before this draw's index and vertex-shader reads.
     ///
     /// # Safety
-    /// `cmd` must be recording outside a render pass on a graphics queue; `targets` must have
-    /// been made for this pass; `mesh` must be bound ([`Self::bind_mesh`]) and uploaded; all
-    /// must stay alive until the work completes.
+    /// `cmd` must be recording outside a render pass on a queue with graphics (and compute,
+    /// for the compute discard); `targets` must have been made for this pass; `mesh` must be
+    /// bound ([`Self::bind_mesh`]) and uploaded; all must stay alive until the work completes.
+    /// The mesh's discard buffers are rewritten: no other pass's recorded draw of the same
+    /// mesh may run concurrently with this one.
     pub unsafe fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -729,6 +898,16 @@ impl GeometryPass {
         // alive until the work completes. `clears` has one value per attachment in attachment
         // order; there are no push constants; `mesh`'s indices address its vertices (checked by
         // `Mesh::validate` in `MeshBuffers::new`); the render pass is ended here.
+        let indices = match &self.discard {
+            // SAFETY: as above, and the discard's set was written for `mesh` by `bind_mesh`
+            // (the contract's "mesh must be bound"); `record_slot` never reaches here with a
+            // discard (`slots` refuses).
+            Some(discard) => unsafe {
+                discard.record(&self.gpu, cmd, mesh);
+                mesh.kept.raw
+            },
+            None => mesh.indices.raw,
+        };
         unsafe {
             self.pipeline.begin(
                 cmd,
@@ -739,9 +918,104 @@ impl GeometryPass {
                 &[],
             );
             d.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertices.raw], &[0]);
-            d.cmd_bind_index_buffer(cmd, mesh.indices.raw, 0, vk::IndexType::UINT32);
+            d.cmd_bind_index_buffer(cmd, indices, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
             d.cmd_end_render_pass(cmd);
+        }
+    }
+}
+
+impl DiscardPass {
+    /// Both stages' pipelines, specialized like the vertex shader, and a set whose uniforms
+    /// are the pass's own (the mesh's buffers are written by [`GeometryPass::bind_mesh`]).
+    fn new(gpu: &Gpu, vertex: SpecConstants, camera: &Buffer, frame: &Buffer) -> Result<Self> {
+        let uniform = vk::DescriptorType::UNIFORM_BUFFER;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let bindings = [
+            uniform, uniform, storage, storage, storage, storage, storage, storage,
+        ];
+        let pipeline = |stage: u32| {
+            ComputePipeline::new(
+                gpu,
+                shaders::DISCARD_COMP,
+                &bindings,
+                std::mem::size_of::<DiscardPush>() as u32,
+                vertex.clone().u32(spec::DISCARD_STAGE, stage),
+            )
+        };
+        let flags = pipeline(0)?;
+        let triangles = pipeline(1)?;
+        let pool = DescriptorPool::for_pipeline(gpu, &flags, 1)?;
+        // One set for both: their set layouts are identically defined, hence compatible.
+        let set = pool.allocate(&flags)?;
+        crate::gpu::write_buffer_descriptors(
+            gpu,
+            set,
+            &[(0, uniform, camera), (1, uniform, frame)],
+        );
+        Ok(DiscardPass {
+            flags,
+            triangles,
+            _pool: pool,
+            set,
+        })
+    }
+
+    /// Records the per-vertex pass (flags, positions, flow), then the rewritten indices, with
+    /// the barriers around them: after an earlier draw's reads and dispatch (the buffers are
+    /// reused every frame), and before this draw's index and vertex-shader reads.
+    ///
+    /// # Safety
+    /// `cmd` is recording outside a render pass on a queue with graphics and compute; the set
+    /// was written for `mesh`, which stays alive until the work completes.
+    unsafe fn record(&self, gpu: &Gpu, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+        use vk::{AccessFlags as A, PipelineStageFlags as S};
+        let groups = |n: u32| (n.div_ceil(64).max(1), 1);
+        let triangles = mesh.index_count / 3;
+        // SAFETY: the caller upholds this function's contract; the push constants are the
+        // `DiscardPush` both pipelines were built with, and the dispatch sizes cover exactly
+        // the vertex and triangle counts the buffers were sized for in `MeshBuffers::new`.
+        unsafe {
+            crate::gpu::memory_barrier(
+                gpu,
+                cmd,
+                (
+                    S::VERTEX_INPUT | S::VERTEX_SHADER | S::COMPUTE_SHADER,
+                    A::empty(),
+                ),
+                (S::COMPUTE_SHADER, A::SHADER_WRITE),
+            );
+            let push = DiscardPush {
+                count: mesh.vertex_count,
+            };
+            self.flags.record_dispatch(
+                cmd,
+                self.set,
+                bytemuck::bytes_of(&push),
+                groups(push.count),
+            );
+            crate::gpu::memory_barrier(
+                gpu,
+                cmd,
+                (S::COMPUTE_SHADER, A::SHADER_WRITE),
+                (S::COMPUTE_SHADER, A::SHADER_READ),
+            );
+            let push = DiscardPush { count: triangles };
+            self.triangles.record_dispatch(
+                cmd,
+                self.set,
+                bytemuck::bytes_of(&push),
+                groups(triangles),
+            );
+            crate::gpu::memory_barrier(
+                gpu,
+                cmd,
+                (S::COMPUTE_SHADER, A::SHADER_WRITE),
+                (
+                    S::VERTEX_INPUT | S::VERTEX_SHADER,
+                    A::INDEX_READ | A::SHADER_READ,
+                ),
+            );
         }
     }
 }

@@ -75,6 +75,10 @@ pub const WRITE_FLOW: SpecId = SpecId::new("WRITE_FLOW", 22);
 /// Camera depth.
 pub const WRITE_DEPTH: SpecId = SpecId::new("WRITE_DEPTH", 23);
 
+// glsl/discard.comp (also DISTORT).
+/// 0: one flag per vertex; 1: one index triple per triangle.
+pub const DISCARD_STAGE: SpecId = SpecId::new("STAGE", 9);
+
 // glsl/grid_demo.comp.
 /// Grid cells across the image.
 pub const GRID: SpecId = SpecId::new("GRID", 8);

@@ -230,8 +230,11 @@ pub fn inverse_error_px(camera: &Camera, method: InverseMethod) -> Option<f64> {
 const RENDER_NS_PER_PIXEL: f64 = 12.0;
 /// A pinhole render, per triangle (ns) (`bench vertex`, plain render at 128² and 512² quads).
 const RENDER_NS_PER_TRIANGLE: f64 = 230.0;
-/// Alg. 1 with its geometry-shader discard, per triangle (ns) (`bench vertex`, Alg. 1 column).
-const VERTEX_NS_PER_TRIANGLE: f64 = 600.0;
+/// Alg. 1 with its compute discard (the default), per triangle (ns): 1.3× the plain render's
+/// per-triangle cost (`bench vertex`, 2026-12-02, medians of 3 runs: 169 against 130 ns at 512²
+/// quads, 519 against 378 ns at 128², 800×600). The geometry-shader discard it replaced cost
+/// 1.9× (253 and 677 ns), and 600 ns here before.
+const VERTEX_NS_PER_TRIANGLE: f64 = 300.0;
 /// The overscanned source a warp renders, in source pixels per output pixel (density 1 on
 /// the shipped barrel and prism cameras).
 const OVERSCAN_AREA: f64 = 1.3;

@@ -10,6 +10,7 @@ pub fn validated_context() -> Context {
         device: std::env::var("VKLENS_DEVICE")
             .ok()
             .filter(|s| !s.is_empty()),
+        geometry_shader: vklens::internal::gpu::geometry_shader_from_env(),
     })
     .expect("a Vulkan device with the validation layer (README: the test command installs both)")
 }

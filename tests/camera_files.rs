@@ -216,3 +216,24 @@ fn duplicate_json_keys_are_refused() {
         "{e}"
     );
 }
+
+#[test]
+fn an_unknown_camera_model_is_refused_naming_it() {
+    // A fisheye calibration read as the standard model would put its pixels far off.
+    let e = err(
+        r#"{"model": "opencv_fisheye", "width": 640, "height": 480, "fx": 300, "fy": 300,
+            "cx": 319.5, "cy": 239.5, "dist_coeffs": [0.1, 0.01, 0.0, 0.0]}"#,
+    );
+    assert!(e.contains("`model`") && e.contains("opencv_fisheye"), "{e}");
+    let e =
+        err(r#"{"model": 3, "width": 640, "height": 480, "fx": 300, "fy": 300, "cx": 1, "cy": 1}"#);
+    assert!(e.contains("`model` must be a string"), "{e}");
+    // The standard model may say so.
+    let cam = vklens::Camera::parse(
+        r#"{"model": "opencv", "width": 640, "height": 480, "fx": 300, "fy": 300,
+            "cx": 319.5, "cy": 239.5, "dist_coeffs": [0.1, 0.01, 0.0, 0.0]}"#,
+        "camera.json",
+    )
+    .unwrap();
+    assert_eq!(cam.dist_coeffs(), vec![0.1, 0.01, 0.0, 0.0]);
+}

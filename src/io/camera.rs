@@ -41,9 +41,24 @@ pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
     } else {
         yaml_to_tree(trimmed).map_err(err)?
     };
-    if tree.get("model").and_then(Value::as_str) == Some("brown") {
-        let brown = brown_from_tree(&tree).map_err(err)?;
-        return Camera::from_brown(&brown).map_err(|e| err(Error::from(e)));
+    match tree.get("model") {
+        Some(Value::String(m)) if m == "brown" => {
+            let brown = brown_from_tree(&tree).map_err(err)?;
+            return Camera::from_brown(&brown).map_err(|e| err(Error::from(e)));
+        }
+        // A model vklens does not implement must not load as the standard model: a fisheye's
+        // k1..k4 read as k1 k2 p1 p2 put pixels hundreds of thousands of pixels off.
+        Some(Value::String(m)) if m != "opencv" => {
+            return Err(err(Error::input(format!(
+                "`model` is `{m}`; vklens reads `opencv` (OpenCV's standard model, the default) and `brown`"
+            ))));
+        }
+        Some(Value::String(_)) | None => {}
+        Some(other) => {
+            return Err(err(Error::input(format!(
+                "`model` must be a string (`opencv` or `brown`), got {other}"
+            ))));
+        }
     }
     camera_from_tree(&tree).map_err(err)
 }

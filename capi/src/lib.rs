@@ -128,6 +128,22 @@ unsafe fn put<T>(out: *mut T, what: &str, value: T) -> Result<(), Error> {
     Ok(())
 }
 
+/// Writes a `(width, height)` pair to `*width` and `*height`, neither of which may be NULL.
+///
+/// # Safety
+/// Non-null pointers point to writable `u32`s.
+unsafe fn put_size(width: *mut u32, height: *mut u32, size: (u32, u32)) -> Result<(), Error> {
+    if height.is_null() {
+        return Err(input("height: NULL pointer"));
+    }
+    // SAFETY: the caller's contract; `height` is checked non-null before `width` is written,
+    // so an error leaves both untouched.
+    unsafe {
+        put(width, "width", size.0)?;
+        put(height, "height", size.1)
+    }
+}
+
 /// `n` elements at `p` (which may be NULL only when `n` is 0).
 ///
 /// # Safety
@@ -308,10 +324,7 @@ pub unsafe extern "C" fn vkl_camera_size(
         // SAFETY: NULL or a live camera (the caller's contract).
         let c = unsafe { arg(c, "camera")? };
         // SAFETY: NULL (refused) or writable (the caller's contract).
-        unsafe {
-            put(width, "width", c.camera.width)?;
-            put(height, "height", c.camera.height)
-        }
+        unsafe { put_size(width, height, (c.camera.width, c.camera.height)) }
     })
 }
 
@@ -706,12 +719,8 @@ pub unsafe extern "C" fn vkl_warper_source_size(
     guard(|| {
         // SAFETY: NULL or a live warper (the caller's contract).
         let w = unsafe { arg(w, "warper")? };
-        let (sw, sh) = w.warper.input_size();
         // SAFETY: NULL (refused) or writable (the caller's contract).
-        unsafe {
-            put(width, "width", sw)?;
-            put(height, "height", sh)
-        }
+        unsafe { put_size(width, height, w.warper.input_size()) }
     })
 }
 
@@ -728,12 +737,8 @@ pub unsafe extern "C" fn vkl_warper_output_size(
     guard(|| {
         // SAFETY: NULL or a live warper (the caller's contract).
         let w = unsafe { arg(w, "warper")? };
-        let (ow, oh) = w.warper.output_size();
         // SAFETY: NULL (refused) or writable (the caller's contract).
-        unsafe {
-            put(width, "width", ow)?;
-            put(height, "height", oh)
-        }
+        unsafe { put_size(width, height, w.warper.output_size()) }
     })
 }
 

@@ -28,7 +28,7 @@ fn lib_dir() -> PathBuf {
         .to_path_buf();
     assert!(
         dir.join("libvklens.so").exists(),
-        "{}: libvklens.so missing; build it first: cargo build --release -p vklens-capi",
+        "{}: libvklens.so missing; build it first: cargo build --release -p vklens-capi (scripts/test does)",
         dir.display()
     );
     dir

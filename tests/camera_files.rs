@@ -237,3 +237,12 @@ fn an_unknown_camera_model_is_refused_naming_it() {
     .unwrap();
     assert_eq!(cam.dist_coeffs(), vec![0.1, 0.01, 0.0, 0.0]);
 }
+
+#[test]
+fn a_broken_json_file_is_reported_as_json() {
+    // Missing its opening brace: YAML would accept the first line and then complain in YAML.
+    let e = parse_camera(r#""width": 640, "height": 480, "fx": 300}"#, "camera.json")
+        .expect_err("must be refused")
+        .to_string();
+    assert!(e.starts_with("camera.json: invalid JSON"), "{e}");
+}

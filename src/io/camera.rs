@@ -32,7 +32,9 @@ pub fn load_camera(path: &Path) -> Result<Camera> {
 pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
     let err = |e: Error| e.context(origin);
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
-    let tree = if trimmed.starts_with('{') {
+    // A `.json` file is JSON even when broken: its error must say JSON, not YAML.
+    let json = trimmed.starts_with('{') || origin.to_ascii_lowercase().ends_with(".json");
+    let tree = if json {
         serde_json::from_str::<StrictJson>(trimmed)
             .map(|v| v.0)
             .map_err(|e| err(Error::input(format!("invalid JSON: {e}"))))?

@@ -142,6 +142,24 @@ impl Error {
             other => other,
         }
     }
+
+    /// The error of a file that another one names (`by`, e.g. `scene.toml: [optics] camera`):
+    /// led by `by`, or for an I/O error (whose message leads with its own path) followed by
+    /// it; the kind is unchanged.
+    pub fn named_by(self, by: impl std::fmt::Display) -> Self {
+        match self {
+            Error::Io {
+                path,
+                message,
+                source_kind,
+            } => Error::Io {
+                path,
+                message: format!("{message} (named by {by})"),
+                source_kind,
+            },
+            other => other.context(by),
+        }
+    }
 }
 
 impl From<vk::Result> for Error {

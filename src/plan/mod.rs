@@ -369,7 +369,8 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     "{src}: [effects] distortion = false: a real lens always distorts; use a camera file with the distortion switched off for a pinhole"
                 )));
             }
-            let lens = Prescription::load(path).map_err(Error::from)?;
+            let lens = Prescription::load(path)
+                .map_err(|e| Error::from(e).named_by(format!("{src}: [optics] lens")))?;
             if e.chromatic_aberration && lens.surfaces.iter().all(|s| s.abbe.is_none()) {
                 return Err(Error::input(format!(
                     "{src}: [effects] chromatic_aberration: {} has no Abbe numbers (5th column)",
@@ -470,7 +471,8 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             })
         }
         scene_file::OpticsSpec::Camera(path) => {
-            let mut camera = crate::io::load_camera(path)?;
+            let mut camera = crate::io::load_camera(path)
+                .map_err(|e| e.named_by(format!("{src}: [optics] camera")))?;
             if e.vignetting || e.depth_of_field {
                 let key = if e.vignetting {
                     "vignetting"

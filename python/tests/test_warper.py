@@ -51,13 +51,11 @@ def test_distort_maps_equal_the_cpu_inverse(reference, device, name):
     cpu_y = (xy[:, 1] * src.fy + src.cy).reshape(cam.height, cam.width)
     both = np.isfinite(map_x) & np.isfinite(cpu_x)
     err = np.hypot(map_x - cpu_x, map_y - cpu_y)[both]
+    # The GPU's f32 solve is refined in f64 on the host: 1e-3 px everywhere, next to the
+    # folds of rational_wide too (where f32 alone loses up to 0.14 px)
+    assert err.max() <= 1e-3, err.max()
     if name == "rational_wide":
-        # f32 Newton near the fold: the inverse is ill-conditioned there (sigma_min(J) -> 0), so
-        # f32 rounding is amplified (docs/accuracy.md); 1e-3 px holds on the rest of the frame
         assert np.isnan(cpu_x).sum() > 1000  # it folds over near the corners
-        assert (err <= 1e-3).mean() >= 0.995 and err.max() <= 0.2
-    else:
-        assert err.max() <= 1e-3
     # NaN where the CPU inverse says invalid; the two may differ only on the fold's edge
     disagree = np.isnan(map_x) != np.isnan(cpu_x)
     assert disagree.sum() <= max(10, 1e-4 * disagree.size), disagree.sum()

@@ -553,13 +553,27 @@ impl Warper {
 
     /// The warp's coordinate map: per output pixel, the source position `[x, y]` its light
     /// comes from (NaN where it has none in the valid domain), row-major, ready for
-    /// `cv2.remap`. Solved per pixel with Newton on the GPU (≤ 1e-3 px in f32).
+    /// `cv2.remap`. Solved per pixel with Newton on the GPU, then refined on the host in f64
+    /// (the f32 solve alone loses up to a tenth of a pixel next to a fold), so every entry is
+    /// the f64 coordinate rounded to f32.
     pub fn maps(&self, device: &Device) -> Result<Vec<[f32; 2]>> {
         let mut maps =
             crate::headless::warp::read_maps(device.context(), &self.geometry, Coordinates::Map)?;
         // G is the geometric map (the only one without chromatic aberration).
         let index = if maps.len() == 3 { 1 } else { 0 };
-        Ok(maps.swap_remove(index))
+        let mut map = maps.swap_remove(index);
+        let width = self.geometry.output_size.0.max(1) as usize;
+        for (i, m) in map.iter_mut().enumerate() {
+            if !(m[0].is_finite() && m[1].is_finite()) {
+                continue;
+            }
+            let p = glam::DVec2::new((i % width) as f64, (i / width) as f64);
+            let gpu = glam::DVec2::new(m[0] as f64, m[1] as f64);
+            if let Some(r) = self.geometry.refine_coordinate(p, gpu, 1) {
+                *m = [r.x as f32, r.y as f32];
+            }
+        }
+        Ok(map)
     }
 }
 

@@ -163,6 +163,42 @@ impl WarpGeometry {
         }
     }
 
+    /// Refines `m`, a coordinate-map entry of output pixel `p` computed in f32, to f64
+    /// accuracy: Newton steps in f64 from it (distort), or the forward model itself
+    /// (undistort). Near a fold the inverse is ill-conditioned and f32's residual is amplified
+    /// there (docs/accuracy.md); from an f32 start a few steps reach f64's. `None` where no
+    /// better answer is found (the entry is then kept as it is).
+    pub fn refine_coordinate(&self, p: DVec2, m: DVec2, c: usize) -> Option<DVec2> {
+        let cam = self.channel_camera(c);
+        match self.direction {
+            Direction::Distort => {
+                let d = cam.intrinsics.to_normalized(p) / self.channel_scale(c);
+                let start = self.ideal.to_normalized(m);
+                let residual = |x: DVec2| cam.distort_normalized(x).map(|y| y - d);
+                let mut x = start;
+                // Quadratic convergence from an f32 start: two steps away from folds, a few
+                // more where the Jacobian nearly vanishes.
+                for _ in 0..8 {
+                    let r = residual(x)?;
+                    let j = cam.jacobian_normalized(x)?;
+                    let det = j.determinant();
+                    if !(det.abs() > 1e-300) {
+                        return None;
+                    }
+                    let step = j.inverse() * r;
+                    x -= step;
+                    if step.length() <= 1e-15 * (1.0 + x.length()) {
+                        break;
+                    }
+                }
+                let better = residual(x)?.length() <= residual(start)?.length();
+                (better && x.is_finite() && cam.domain().contains_ideal(x))
+                    .then(|| self.ideal.to_pixel(x))
+            }
+            Direction::Undistort => self.model_coordinate(p, c),
+        }
+    }
+
     /// The worst error of interpolating this warp's coordinates between samples every `stride`
     /// pixels, as `glsl/upsample_map.comp` does, estimated in f64 at every cell's centre (where
     /// the leading-order error of both interpolations peaks), over all channels. `None` if a

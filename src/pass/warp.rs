@@ -661,11 +661,6 @@ impl WarpImages {
         self.upload.write_with(|bytes| fill(&mut bytes[..n]))
     }
 
-    /// The pass's format.
-    pub fn format(&self) -> PixelFormat {
-        self.format
-    }
-
     /// Hands the downloaded output (tightly packed texels in the pass's format) and mask (one
     /// byte per pixel) to `read`, in place (after the submission completed).
     pub fn read_with<R>(&self, read: impl FnOnce(&[u8], &[u8]) -> R) -> Result<R> {

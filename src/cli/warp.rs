@@ -99,7 +99,7 @@ pub struct WarpArgs {
 
 fn pinhole(path: &Path) -> Result<Camera, CliError> {
     let cam = super::load_camera(path)?;
-    if cam.distortion.to_coeffs().iter().any(|&c| c != 0.0) {
+    if !cam.is_pinhole() {
         return Err(CliError::input(format!(
             "{}: the source camera is the pinhole side of the warp and must have no distortion",
             path.display()

@@ -10,7 +10,8 @@ use crate::{Error, Result};
 
 impl Camera {
     /// Reads any camera file the command line reads: vklens JSON, OpenCV `FileStorage`
-    /// (YAML, XML, JSON), ROS `camera_info` YAML, or a Brown lens `{"model": "brown", ...}`.
+    /// (YAML, XML, JSON), ROS `camera_info` YAML, a Kalibr camchain, a COLMAP `cameras.txt`,
+    /// or a Brown lens `{"model": "brown", ...}`.
     ///
     /// ```no_run
     /// let camera = vklens::Camera::load("camera.yml")?;
@@ -19,6 +20,12 @@ impl Camera {
     /// ```
     pub fn load(path: impl AsRef<Path>) -> Result<Camera> {
         crate::io::load_camera(path.as_ref())
+    }
+
+    /// Reads camera `index` (0-based) of a file that holds several: a Kalibr camchain
+    /// (`cam0`, `cam1`, …) or a COLMAP `cameras.txt` (its lines, in order).
+    pub fn load_index(path: impl AsRef<Path>, index: usize) -> Result<Camera> {
+        crate::io::camera::load_camera_at(path.as_ref(), Some(index))
     }
 
     /// Parses the text of a camera file; `origin` names it in error messages.
@@ -114,9 +121,21 @@ impl Camera {
             .collect()
     }
 
-    /// The camera as a vklens JSON camera object (a Brown lens as `{"model": "brown", ...}`).
+    /// The camera as a vklens JSON camera object (a Brown lens as `{"model": "brown", ...}`, a
+    /// fisheye as `{"model": "opencv_fisheye", ...}`).
     pub fn to_json(&self) -> serde_json::Value {
         let k = self.intrinsics;
+        if let Some(f) = self.fisheye_lens() {
+            let mut v = serde_json::json!({
+                "model": "opencv_fisheye", "width": self.width, "height": self.height,
+                "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy,
+                "dist_coeffs": f.k, "alpha": f.alpha,
+            });
+            if let Some(fov) = f.max_fov_deg() {
+                v["max_fov_deg"] = fov.into();
+            }
+            return v;
+        }
         match self.brown() {
             Some(b) => serde_json::json!({
                 "model": "brown", "width": self.width, "height": self.height,

@@ -156,7 +156,7 @@ pub fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeome
         }
     };
     if let Some(p) = &options.source_camera {
-        if p.distortion.to_coeffs().iter().any(|&c| c != 0.0) {
+        if !p.is_pinhole() {
             return Err(Error::input(
                 "the source camera is the pinhole side of the warp and must have no distortion",
             ));

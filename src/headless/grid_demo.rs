@@ -14,8 +14,7 @@ use gpu_allocator::MemoryLocation;
 /// ideal pixels.
 pub fn render_grid(ctx: &Context, camera: &Camera, grid: u32) -> Result<Vec<u8>> {
     let gpu = ctx.gpu();
-    let constants =
-        CameraParams::spec_constants(camera.distortion.terms()).u32(spec::GRID, grid.max(2));
+    let constants = CameraParams::spec_constants(camera.terms()).u32(spec::GRID, grid.max(2));
     let pipeline = ComputePipeline::new(
         gpu,
         shaders::GRID_DEMO_COMP,

@@ -2,36 +2,59 @@
 //!
 //! * vklens JSON: `{"width", "height", "fx", "fy", "cx", "cy", "dist_coeffs": [...]}`;
 //!   unknown keys are ignored (the cases of the shared reference file load as they stand).
+//!   `"model": "opencv_fisheye"` makes it OpenCV's fisheye model: `dist_coeffs` are k1..k4,
+//!   and `alpha` (skew) and `max_fov_deg` (field of view, full angle) are optional.
 //! * OpenCV `FileStorage` as `calibrateCamera` samples write it — YAML (with the `%YAML:1.0`
 //!   header of OpenCV 3/4 that strict YAML parsers reject, or `%YAML 1.2`), XML and JSON:
 //!   `camera_matrix` and `distortion_coefficients` as `opencv-matrix`, `image_width`,
 //!   `image_height`.
-//! * ROS `camera_info` YAML (`plumb_bob`, `rational_polynomial`).
+//! * ROS `camera_info` YAML (`plumb_bob`, `rational_polynomial`; `equidistant` and `fisheye`
+//!   for the fisheye model, with the skew as `K[0][1] = α fx`).
+//! * A Kalibr camchain (`cam0:`, `cam1:` … with `camera_model: pinhole`,
+//!   `distortion_model: equidistant` or `radtan`, `intrinsics: [fu, fv, pu, pv]`,
+//!   `resolution: [w, h]`): the first camera, or the one `index` names.
+//! * COLMAP `cameras.txt` (`SIMPLE_PINHOLE`, `PINHOLE`, `SIMPLE_RADIAL`, `RADIAL`, `OPENCV`,
+//!   `FULL_OPENCV`, `OPENCV_FISHEYE`, `SIMPLE_RADIAL_FISHEYE`, `RADIAL_FISHEYE`): COLMAP puts
+//!   pixel centres at 0.5, OpenCV (and vklens) at 0, so `cx` and `cy` lose 0.5 on the way in.
 //!
 //! * A Brown radial lens (the Durham radial-correction paper): `{"model": "brown", "width", "height", "c1", "c2"}`.
 //!
-//! Every format is first turned into a JSON tree, then read by one function, so every format
-//! gets the same checks and the same error messages (file, field, value).
+//! Every format but COLMAP's text is first turned into a JSON tree, then read by one function,
+//! so every format gets the same checks and the same error messages (file, field, value).
 
 use std::path::Path;
 
 use serde_json::{Map, Value};
 
-use crate::model::{BrownRadial, Camera, Intrinsics, ModelError};
+use crate::model::{BrownRadial, Camera, Fisheye, Intrinsics, ModelError};
 use crate::{Error, Result};
 
 /// Reads a camera file (format detected from its content). A Brown lens file gives a camera
 /// that remembers it ([`Camera::brown`]).
 pub fn load_camera(path: &Path) -> Result<Camera> {
+    load_camera_at(path, None)
+}
+
+/// Reads camera `index` (0-based) of a file that holds several (a Kalibr camchain, a COLMAP
+/// `cameras.txt`); `None` is the first. A file of one camera accepts only `None` or 0.
+pub fn load_camera_at(path: &Path, index: Option<usize>) -> Result<Camera> {
     let text =
         super::read_text(path).map_err(|e| Error::io(path, "cannot read camera file", &e))?;
-    parse_camera(&text, &path.display().to_string())
+    parse_camera_at(&text, &path.display().to_string(), index)
 }
 
 /// Parses the text of a camera file; `origin` names it in errors.
 pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
+    parse_camera_at(text, origin, None)
+}
+
+/// [`parse_camera`] for camera `index` of a file that holds several.
+pub fn parse_camera_at(text: &str, origin: &str, index: Option<usize>) -> Result<Camera> {
     let err = |e: Error| e.context(origin);
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
+    if looks_like_colmap(trimmed) {
+        return colmap_camera(trimmed, index).map_err(err);
+    }
     // A `.json` file is JSON even when broken: its error must say JSON, not YAML.
     let json = trimmed.starts_with('{') || origin.to_ascii_lowercase().ends_with(".json");
     let tree = if json {
@@ -43,23 +66,39 @@ pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
     } else {
         yaml_to_tree(trimmed).map_err(err)?
     };
+    if let Some(cams) = kalibr_cameras(&tree) {
+        return kalibr_camera(&cams, index).map_err(err);
+    }
+    if let Some(i) = index.filter(|&i| i > 0) {
+        return Err(err(Error::input(format!(
+            "camera index {i} asked, but this file holds one camera (index 0)"
+        ))));
+    }
     match tree.get("model") {
         Some(Value::String(m)) if m == "brown" => {
             let brown = brown_from_tree(&tree).map_err(err)?;
             return Camera::from_brown(&brown).map_err(|e| err(Error::from(e)));
         }
+        Some(Value::String(m)) if m == "opencv_fisheye" => {
+            return fisheye_from_tree(&tree).map_err(err);
+        }
         // A model vklens does not implement must not load as the standard model: a fisheye's
         // k1..k4 read as k1 k2 p1 p2 put pixels hundreds of thousands of pixels off.
         Some(Value::String(m)) if m != "opencv" => {
             return Err(err(Error::input(format!(
-                "`model` is `{m}`; vklens reads `opencv` (OpenCV's standard model, the default) and `brown`"
+                "`model` is `{m}`; vklens reads `opencv` (OpenCV's standard model, the default), `opencv_fisheye` and `brown`"
             ))));
         }
         Some(Value::String(_)) | None => {}
         Some(other) => {
             return Err(err(Error::input(format!(
-                "`model` must be a string (`opencv` or `brown`), got {other}"
+                "`model` must be a string (`opencv`, `opencv_fisheye` or `brown`), got {other}"
             ))));
+        }
+    }
+    if let Some(m) = tree.get("distortion_model").and_then(Value::as_str) {
+        if ["equidistant", "fisheye"].contains(&m) {
+            return fisheye_from_tree(&tree).map_err(err);
         }
     }
     camera_from_tree(&tree).map_err(err)
@@ -92,44 +131,7 @@ fn camera_from_tree(tree: &Value) -> Result<Camera> {
     let width = dimension(obj, &["width", "image_width"])?;
     let height = dimension(obj, &["height", "image_height"])?;
 
-    let intrinsics = if obj.contains_key("fx") {
-        Intrinsics {
-            fx: number_field(obj, "fx")?,
-            fy: number_field(obj, "fy")?,
-            cx: number_field(obj, "cx")?,
-            cy: number_field(obj, "cy")?,
-        }
-    } else {
-        let (key, k) = matrix_data(obj, &["camera_matrix", "K", "k"])?
-            .ok_or_else(|| Error::input("missing `fx` (or `camera_matrix`)"))?;
-        if k.len() != 9 {
-            return Err(Error::input(format!(
-                "`{key}` must have 9 entries (3×3), got {}",
-                k.len()
-            )));
-        }
-        let expected_zero = [(1, "skew"), (3, "[1][0]"), (6, "[2][0]"), (7, "[2][1]")];
-        for (i, what) in expected_zero {
-            if k[i] != 0.0 {
-                return Err(Error::input(format!(
-                    "`{key}` entry {what} is {}; vklens supports camera matrices without skew only ([[fx,0,cx],[0,fy,cy],[0,0,1]])",
-                    k[i]
-                )));
-            }
-        }
-        if k[8] != 1.0 {
-            return Err(Error::input(format!(
-                "`{key}` entry [2][2] must be 1, got {}",
-                k[8]
-            )));
-        }
-        Intrinsics {
-            fx: k[0],
-            fy: k[4],
-            cx: k[2],
-            cy: k[5],
-        }
-    };
+    let (intrinsics, _) = intrinsics_from(obj, false)?;
 
     if let Some(model) = obj.get("distortion_model").and_then(Value::as_str) {
         if !["plumb_bob", "rational_polynomial", "opencv"].contains(&model) {
@@ -157,6 +159,334 @@ fn camera_from_tree(tree: &Value) -> Result<Camera> {
         )),
         other => Error::from(other),
     })
+}
+
+/// `fx fy cx cy` from the keys or from a camera matrix `K`; with `allow_skew`, `K[0][1]` is
+/// returned beside them (the fisheye model's `α fx`), else it must be 0.
+fn intrinsics_from(obj: &Map<String, Value>, allow_skew: bool) -> Result<(Intrinsics, f64)> {
+    if obj.contains_key("fx") {
+        return Ok((
+            Intrinsics {
+                fx: number_field(obj, "fx")?,
+                fy: number_field(obj, "fy")?,
+                cx: number_field(obj, "cx")?,
+                cy: number_field(obj, "cy")?,
+            },
+            0.0,
+        ));
+    }
+    let (key, k) = matrix_data(obj, &["camera_matrix", "K", "k"])?
+        .ok_or_else(|| Error::input("missing `fx` (or `camera_matrix`)"))?;
+    if k.len() != 9 {
+        return Err(Error::input(format!(
+            "`{key}` must have 9 entries (3×3), got {}",
+            k.len()
+        )));
+    }
+    let expected_zero = [
+        (1, "[0][1] (skew)"),
+        (3, "[1][0]"),
+        (6, "[2][0]"),
+        (7, "[2][1]"),
+    ];
+    // The fisheye model has a skew; the standard model does not.
+    for &(i, what) in &expected_zero[usize::from(allow_skew)..] {
+        if k[i] != 0.0 {
+            return Err(Error::input(format!(
+                "`{key}` entry {what} is {}; vklens reads camera matrices [[fx,{},cx],[0,fy,cy],[0,0,1]]",
+                k[i],
+                if allow_skew { "s" } else { "0" }
+            )));
+        }
+    }
+    if k[8] != 1.0 {
+        return Err(Error::input(format!(
+            "`{key}` entry [2][2] must be 1, got {}",
+            k[8]
+        )));
+    }
+    let skew = if allow_skew { k[1] } else { 0.0 };
+    Ok((
+        Intrinsics {
+            fx: k[0],
+            fy: k[4],
+            cx: k[2],
+            cy: k[5],
+        },
+        skew,
+    ))
+}
+
+/// A fisheye camera from vklens JSON (`"model": "opencv_fisheye"`) or a ROS `camera_info`
+/// (`distortion_model: equidistant` or `fisheye`).
+fn fisheye_from_tree(tree: &Value) -> Result<Camera> {
+    let obj = tree
+        .as_object()
+        .ok_or_else(|| Error::input("expected an object/mapping at the top level"))?;
+    let width = dimension(obj, &["width", "image_width"])?;
+    let height = dimension(obj, &["height", "image_height"])?;
+    let (intrinsics, skew) = intrinsics_from(obj, true)?;
+    let (key, coeffs) = if let Some(v) = obj.get("dist_coeffs") {
+        ("dist_coeffs", number_list(v, "dist_coeffs")?)
+    } else {
+        match matrix_data(obj, &["distortion_coefficients", "D", "d"])? {
+            Some((key, d)) => (key, d),
+            None => return Err(Error::input("missing `dist_coeffs` (the fisheye's k1..k4)")),
+        }
+    };
+    let k: [f64; 4] = coeffs.as_slice().try_into().map_err(|_| {
+        Error::input(format!(
+            "`{key}`: OpenCV's fisheye model has 4 coefficients (k1..k4), this file has {}",
+            coeffs.len()
+        ))
+    })?;
+    let alpha = match obj.get("alpha") {
+        Some(_) => {
+            if skew != 0.0 {
+                return Err(Error::input(
+                    "the skew is given twice: `alpha` and the camera matrix's [0][1]",
+                ));
+            }
+            number_field(obj, "alpha")?
+        }
+        None => skew / intrinsics.fx,
+    };
+    let max_fov = match obj.get("max_fov_deg") {
+        None | Some(Value::Null) => None,
+        Some(_) => Some(number_field(obj, "max_fov_deg")?),
+    };
+    let lens = Fisheye::new(k, alpha, max_fov).map_err(Error::from)?;
+    Camera::fisheye(width, height, intrinsics, lens).map_err(Error::from)
+}
+
+/// The cameras of a Kalibr camchain (`cam0`, `cam1`, … in order), if the tree is one.
+fn kalibr_cameras(tree: &Value) -> Option<Vec<(String, Map<String, Value>)>> {
+    let obj = tree.as_object()?;
+    let mut cams = Vec::new();
+    for i in 0.. {
+        let key = format!("cam{i}");
+        match obj.get(&key).and_then(Value::as_object) {
+            Some(c) => cams.push((key, c.clone())),
+            None => break,
+        }
+    }
+    (!cams.is_empty()).then_some(cams)
+}
+
+/// Camera `index` of a Kalibr camchain.
+fn kalibr_camera(cams: &[(String, Map<String, Value>)], index: Option<usize>) -> Result<Camera> {
+    let i = index.unwrap_or(0);
+    let (name, cam) = cams.get(i).ok_or_else(|| {
+        Error::input(format!(
+            "camera index {i} asked, but this Kalibr camchain holds {} camera(s) (cam0..cam{})",
+            cams.len(),
+            cams.len() - 1
+        ))
+    })?;
+    let field = |key: &str| format!("`{name}.{key}`");
+    let text = |key: &str| -> Result<String> {
+        match cam.get(key) {
+            Some(Value::String(s)) => Ok(s.clone()),
+            Some(other) => Err(Error::input(format!(
+                "{} must be a string, got {other}",
+                field(key)
+            ))),
+            None => Err(Error::input(format!("missing {}", field(key)))),
+        }
+    };
+    let list = |key: &str, n: usize| -> Result<Vec<f64>> {
+        let v = cam
+            .get(key)
+            .ok_or_else(|| Error::input(format!("missing {}", field(key))))?;
+        let values = number_list(v, &format!("{name}.{key}"))?;
+        if values.len() != n {
+            return Err(Error::input(format!(
+                "{} must have {n} numbers, got {}",
+                field(key),
+                values.len()
+            )));
+        }
+        Ok(values)
+    };
+    let model = text("camera_model")?;
+    if model != "pinhole" {
+        return Err(Error::input(format!(
+            "{} is `{model}`; vklens reads Kalibr's `pinhole` cameras (with `equidistant` or `radtan` distortion)",
+            field("camera_model")
+        )));
+    }
+    let f = list("intrinsics", 4)?;
+    let res = list("resolution", 2)?;
+    let side = |v: f64, what: &str| -> Result<u32> {
+        if v.fract() == 0.0 && v >= 1.0 && v <= crate::model::MAX_IMAGE_SIDE as f64 {
+            Ok(v as u32)
+        } else {
+            Err(Error::input(format!(
+                "{}: the {what} must be a whole number of pixels in 1..={}, got {v}",
+                field("resolution"),
+                crate::model::MAX_IMAGE_SIDE
+            )))
+        }
+    };
+    let (width, height) = (side(res[0], "width")?, side(res[1], "height")?);
+    let intrinsics = Intrinsics {
+        fx: f[0],
+        fy: f[1],
+        cx: f[2],
+        cy: f[3],
+    };
+    let distortion = match cam.get("distortion_model") {
+        None => "none".to_string(),
+        Some(_) => text("distortion_model")?,
+    };
+    let coeffs = || match cam.get("distortion_coeffs") {
+        None => Ok(vec![0.0; 4]),
+        Some(_) => list("distortion_coeffs", 4),
+    };
+    let named = |e: ModelError| Error::input(format!("{name}: {e}"));
+    match distortion.as_str() {
+        "equidistant" => {
+            let c = coeffs()?;
+            let lens = Fisheye::new([c[0], c[1], c[2], c[3]], 0.0, None).map_err(named)?;
+            Camera::fisheye(width, height, intrinsics, lens).map_err(named)
+        }
+        // Kalibr's radtan is k1 k2 r1 r2: OpenCV's k1 k2 p1 p2.
+        "radtan" | "none" => {
+            Camera::from_coeffs(width, height, intrinsics, &coeffs()?).map_err(named)
+        }
+        other => Err(Error::input(format!(
+            "{} is `{other}`; vklens reads Kalibr's `equidistant` and `radtan`",
+            field("distortion_model")
+        ))),
+    }
+}
+
+/// COLMAP camera models vklens reads: name, parameter names (in COLMAP's order).
+const COLMAP_MODELS: [(&str, &[&str]); 9] = [
+    ("SIMPLE_PINHOLE", &["f", "cx", "cy"]),
+    ("PINHOLE", &["fx", "fy", "cx", "cy"]),
+    ("SIMPLE_RADIAL", &["f", "cx", "cy", "k"]),
+    ("RADIAL", &["f", "cx", "cy", "k1", "k2"]),
+    ("OPENCV", &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"]),
+    (
+        "FULL_OPENCV",
+        &[
+            "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6",
+        ],
+    ),
+    (
+        "OPENCV_FISHEYE",
+        &["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"],
+    ),
+    ("SIMPLE_RADIAL_FISHEYE", &["f", "cx", "cy", "k"]),
+    ("RADIAL_FISHEYE", &["f", "cx", "cy", "k1", "k2"]),
+];
+
+/// Whether the text is a COLMAP `cameras.txt`: its first line that is not a comment reads
+/// `CAMERA_ID MODEL WIDTH HEIGHT ...` with an upper-case model name.
+fn looks_like_colmap(text: &str) -> bool {
+    let Some(line) = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+    else {
+        // Only comments: COLMAP's header with no camera.
+        return text.trim_start().starts_with("# Camera list");
+    };
+    let t: Vec<&str> = line.split_whitespace().collect();
+    t.len() >= 4
+        && t[0].parse::<u64>().is_ok()
+        && !t[1].is_empty()
+        && t[1]
+            .chars()
+            .all(|c| c.is_ascii_uppercase() || c == '_' || c.is_ascii_digit())
+}
+
+/// Camera `index` (the index-th line, 0-based) of a COLMAP `cameras.txt`.
+fn colmap_camera(text: &str, index: Option<usize>) -> Result<Camera> {
+    let lines: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+        .collect();
+    let i = index.unwrap_or(0);
+    let &(line_no, line) = lines.get(i).ok_or_else(|| {
+        Error::input(format!(
+            "camera index {i} asked, but this COLMAP cameras.txt holds {} camera(s)",
+            lines.len()
+        ))
+    })?;
+    let at = |msg: String| Error::input(format!("line {line_no}: {msg}"));
+    let t: Vec<&str> = line.split_whitespace().collect();
+    let model = t.get(1).copied().unwrap_or("");
+    let (_, names) = COLMAP_MODELS
+        .iter()
+        .find(|(m, _)| *m == model)
+        .ok_or_else(|| {
+            at(format!(
+                "COLMAP model `{model}` is not one vklens reads ({})",
+                COLMAP_MODELS.map(|m| m.0).join(", ")
+            ))
+        })?;
+    if t.len() != 4 + names.len() {
+        return Err(at(format!(
+            "{model} has {} parameters ({}), this line has {}",
+            names.len(),
+            names.join(" "),
+            t.len().saturating_sub(4)
+        )));
+    }
+    let side = |s: &str, what: &str| -> Result<u32> {
+        s.parse::<u32>()
+            .ok()
+            .filter(|&v| v >= 1 && v <= crate::model::MAX_IMAGE_SIDE)
+            .ok_or_else(|| {
+                at(format!(
+                    "the {what} must be a whole number of pixels in 1..={}, got `{s}`",
+                    crate::model::MAX_IMAGE_SIDE
+                ))
+            })
+    };
+    let (width, height) = (side(t[2], "width")?, side(t[3], "height")?);
+    let mut p = Vec::with_capacity(names.len());
+    for (name, s) in names.iter().zip(&t[4..]) {
+        p.push(parse_float(s).ok_or_else(|| {
+            at(format!(
+                "{model} parameter `{name}` must be a number, got `{s}`"
+            ))
+        })?);
+    }
+    let named = |e: ModelError| at(format!("{model}: {e}"));
+    // COLMAP's pixel centres are at 0.5, OpenCV's at 0.
+    let (fx, fy, c) = if names[0] == "f" {
+        (p[0], p[0], 1)
+    } else {
+        (p[0], p[1], 2)
+    };
+    let intrinsics = Intrinsics {
+        fx,
+        fy,
+        cx: p[c] - 0.5,
+        cy: p[c + 1] - 0.5,
+    };
+    let rest = &p[c + 2..];
+    let fisheye = model.ends_with("FISHEYE");
+    let mut k = [0.0; 4];
+    let mut opencv = vec![0.0; 4];
+    match model {
+        "SIMPLE_RADIAL" | "RADIAL" => opencv[..rest.len()].copy_from_slice(rest),
+        "OPENCV" => opencv.copy_from_slice(rest),
+        "FULL_OPENCV" => opencv = rest.to_vec(),
+        _ if fisheye => k[..rest.len()].copy_from_slice(rest),
+        _ => {}
+    }
+    if fisheye {
+        let lens = Fisheye::new(k, 0.0, None).map_err(named)?;
+        Camera::fisheye(width, height, intrinsics, lens).map_err(named)
+    } else {
+        Camera::from_coeffs(width, height, intrinsics, &opencv).map_err(named)
+    }
 }
 
 fn as_number(v: &Value) -> Option<f64> {

@@ -105,6 +105,15 @@ impl ValidDomain {
         }
     }
 
+    /// The domain of a radially symmetric model: the same radii in every direction.
+    pub fn radial(ideal: f64, distorted: f64, folds: bool) -> Self {
+        Self::from_tables(
+            vec![ideal; Self::SAMPLES],
+            vec![distorted; Self::SAMPLES],
+            folds,
+        )
+    }
+
     /// A domain without any boundary but the radius cap (no distortion).
     pub fn unbounded() -> Self {
         Self::from_tables(

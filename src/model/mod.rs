@@ -11,6 +11,8 @@
 //!
 //! * [`opencv`] — the OpenCV "standard" model with all 14 coefficients (Lambers et al., Eq. 1, and
 //!   OpenCV's own `projectPoints`), its analytic Jacobian and three inverse methods.
+//! * [`fisheye`] — OpenCV's fisheye model (Kannala–Brandt k1..k4 and skew), defined past 90°
+//!   off the axis, with its Jacobian, its inverse by Newton on θ and its cone-shaped domain.
 //! * [`brown`] — the Durham radial-correction paper's Brown radial model for headset lenses (Eq. 1, Eq. 2).
 //! * [`domain`] — the valid (invertible) domain of a distortion, computed once per camera.
 //! * [`projection`] — the Sec. 3.1 frustum as a Vulkan projection matrix.
@@ -20,6 +22,7 @@
 
 pub mod brown;
 pub mod domain;
+pub mod fisheye;
 pub mod opencv;
 pub mod overscan;
 pub mod projection;
@@ -33,6 +36,7 @@ use glam::{DMat2, DVec2};
 
 pub use brown::BrownRadial;
 pub use domain::ValidDomain;
+pub use fisheye::Fisheye;
 pub use opencv::{Camera, Intrinsics, OpenCvDistortion, Terms};
 pub use projection::{vulkan_projection, Frustum};
 

@@ -20,6 +20,7 @@
 use glam::{DMat2, DMat3, DVec2, DVec3};
 
 use super::domain::ValidDomain;
+use super::fisheye::Fisheye;
 use super::solve::solve_increasing;
 use super::{check_finite, check_size, CameraModel, InverseMethod, ModelError, ABSURD_MAGNITUDE};
 
@@ -93,6 +94,8 @@ pub struct Terms {
     pub prism: bool,
     /// tau_x tau_y.
     pub tilt: bool,
+    /// OpenCV's fisheye model (`radial` then says whether any of its k1..k4 is non-zero).
+    pub fisheye: bool,
 }
 
 impl Terms {
@@ -104,6 +107,7 @@ impl Terms {
             tangential: self.tangential || other.tangential,
             prism: self.prism || other.prism,
             tilt: self.tilt || other.tilt,
+            fisheye: self.fisheye || other.fisheye,
         }
     }
 }
@@ -167,6 +171,7 @@ impl OpenCvDistortion {
             tangential: self.p1 != 0.0 || self.p2 != 0.0,
             prism: self.s1 != 0.0 || self.s2 != 0.0 || self.s3 != 0.0 || self.s4 != 0.0,
             tilt: self.tau_x != 0.0 || self.tau_y != 0.0,
+            fisheye: false,
         }
     }
 
@@ -247,10 +252,11 @@ impl OpenCvDistortion {
 /// matrices and valid domain. This is the one camera noun of vklens: every pass, the planner
 /// and the front ends take it, whatever model it holds.
 ///
-/// Today every model is evaluated through OpenCV's standard model: Brown's radial model (the
-/// Durham radial-correction paper) is exactly the standard model with `k1 = c1, k2 = c2` in
-/// per-axis normalized coordinates, and the camera remembers that it came from one
-/// ([`Camera::brown`]).
+/// Two models are evaluated: OpenCV's standard model, and OpenCV's fisheye model
+/// ([`Camera::fisheye`], [`super::Fisheye`]), whose `distortion` is then all zeros. Brown's
+/// radial model (the Durham radial-correction paper) is exactly the standard model with
+/// `k1 = c1, k2 = c2` in per-axis normalized coordinates, and the camera remembers that it
+/// came from one ([`Camera::brown`]).
 #[derive(Debug, Clone)]
 pub struct Camera {
     /// Image width in pixels.
@@ -267,6 +273,8 @@ pub struct Camera {
     coeff_count: usize,
     /// `Some((c1, c2))` for a Brown radial lens.
     brown: Option<(f64, f64)>,
+    /// The fisheye lens, for a camera of OpenCV's fisheye model.
+    fisheye: Option<Fisheye>,
 }
 
 impl Camera {
@@ -277,27 +285,7 @@ impl Camera {
         intrinsics: Intrinsics,
         distortion: OpenCvDistortion,
     ) -> Result<Self, ModelError> {
-        check_size(width, height)?;
-        for (name, v) in [
-            ("fx", intrinsics.fx),
-            ("fy", intrinsics.fy),
-            ("cx", intrinsics.cx),
-            ("cy", intrinsics.cy),
-        ] {
-            check_finite(name, v, ABSURD_MAGNITUDE)?;
-        }
-        for (name, v) in [("fx", intrinsics.fx), ("fy", intrinsics.fy)] {
-            if v <= 0.0 {
-                return Err(ModelError::NotPositive { name, value: v });
-            }
-            if v < super::MIN_FOCAL_PX {
-                return Err(ModelError::TooSmall {
-                    name,
-                    value: v,
-                    min: super::MIN_FOCAL_PX,
-                });
-            }
-        }
+        check_intrinsics(width, height, &intrinsics)?;
         // Re-validate the coefficients (the struct has public fields).
         let distortion = OpenCvDistortion::from_coeffs(&distortion.to_coeffs())?;
         let tilt = distortion.terms().tilt.then(|| {
@@ -321,6 +309,7 @@ impl Camera {
             domain: ValidDomain::unbounded(),
             coeff_count,
             brown: None,
+            fisheye: None,
         };
         if distortion.terms() != Terms::default() {
             let d = distortion;
@@ -330,6 +319,67 @@ impl Camera {
             );
         }
         Ok(camera)
+    }
+
+    /// A camera of OpenCV's fisheye model. Its pinhole-side domain (what a perspective image
+    /// can hold, [`Camera::domain`]) is the lens's cone cut at [`ValidDomain::RADIUS_CAP`]; its
+    /// ray domain ([`Camera::project`], [`Camera::unproject`]) is the whole cone, past 90° too.
+    pub fn fisheye(
+        width: u32,
+        height: u32,
+        intrinsics: Intrinsics,
+        lens: Fisheye,
+    ) -> Result<Self, ModelError> {
+        check_intrinsics(width, height, &intrinsics)?;
+        // Re-validate (the coefficients are public fields).
+        let lens = Fisheye::new(lens.k, lens.alpha, lens.max_fov_deg())?;
+        let theta = lens.theta_max().min(ValidDomain::RADIUS_CAP.atan());
+        let domain = ValidDomain::radial(theta.tan(), lens.theta_d(theta).0, lens.folds());
+        Ok(Camera {
+            width,
+            height,
+            intrinsics,
+            distortion: OpenCvDistortion::default(),
+            tilt: None,
+            domain,
+            coeff_count: 4,
+            brown: None,
+            fisheye: Some(lens),
+        })
+    }
+
+    /// The fisheye lens of a camera of OpenCV's fisheye model.
+    pub fn fisheye_lens(&self) -> Option<&Fisheye> {
+        self.fisheye.as_ref()
+    }
+
+    /// Which term groups (and which model) the camera's shaders compile in.
+    pub fn terms(&self) -> Terms {
+        match &self.fisheye {
+            Some(f) => Terms {
+                radial: f.k.iter().any(|&k| k != 0.0),
+                fisheye: true,
+                ..Terms::default()
+            },
+            None => self.distortion.terms(),
+        }
+    }
+
+    /// Whether the camera is an ideal pinhole (no distortion of any model).
+    pub fn is_pinhole(&self) -> bool {
+        self.terms() == Terms::default()
+    }
+
+    /// Refuses an inverse method the camera's model does not have: the fisheye model is
+    /// inverted by Newton on θ only (Heikkilä's and OpenCV's iterations are the standard
+    /// model's).
+    pub fn check_method(&self, method: InverseMethod) -> Result<(), ModelError> {
+        if self.fisheye.is_some() && method != InverseMethod::Newton {
+            return Err(ModelError::Other(format!(
+                "inverse method `{method}` is the standard model's; a fisheye camera is inverted by `newton` (on θ, exact)"
+            )));
+        }
+        Ok(())
     }
 
     /// From OpenCV's coefficient vector (length 4, 5, 8, 12 or 14).
@@ -367,6 +417,8 @@ impl Camera {
     pub fn model_name(&self) -> &'static str {
         if self.brown.is_some() {
             "brown"
+        } else if self.fisheye.is_some() {
+            "opencv_fisheye"
         } else {
             "opencv"
         }
@@ -375,6 +427,9 @@ impl Camera {
     /// The distortion coefficients as OpenCV orders them, as many as the camera was given
     /// (4, 5, 8, 12 or 14).
     pub fn dist_coeffs(&self) -> Vec<f64> {
+        if let Some(f) = &self.fisheye {
+            return f.k.to_vec();
+        }
         self.distortion.to_coeffs()[..self.coeff_count].to_vec()
     }
 
@@ -385,8 +440,12 @@ impl Camera {
         height: u32,
         intrinsics: Intrinsics,
     ) -> Result<Self, ModelError> {
+        if let Some(f) = self.fisheye {
+            return Self::fisheye(width, height, intrinsics, f);
+        }
         let mut camera = Self::new(width, height, intrinsics, self.distortion)?;
         camera.coeff_count = self.coeff_count;
+        camera.brown = self.brown;
         Ok(camera)
     }
 
@@ -404,20 +463,34 @@ impl Camera {
     /// (x'', y''). This is `cv2.projectPoints` before the intrinsics. `None` only where the
     /// model is undefined (zero denominator, non-finite input or result).
     pub fn distort_normalized(&self, x: DVec2) -> Option<DVec2> {
+        if let Some(f) = &self.fisheye {
+            return f.distort_normalized(x).map(|(y, _)| y);
+        }
         let (pre, _) = self.distortion.distort_pre_tilt(x)?;
         self.apply_tilt(pre).map(|(y, _)| y)
     }
 
     /// Jacobian of [`Camera::distort_normalized`].
     pub fn jacobian_normalized(&self, x: DVec2) -> Option<DMat2> {
+        if let Some(f) = &self.fisheye {
+            return f.distort_normalized(x).map(|(_, j)| j);
+        }
         let (pre, jac) = self.distortion.distort_pre_tilt(x)?;
         let (_, tilt_jac) = self.apply_tilt(pre)?;
         Some(tilt_jac * jac)
     }
 
     /// Projects a 3D point in the OpenCV camera frame to the distorted pixel, as
-    /// `cv2.projectPoints` does. `None` for points at or behind the camera plane (z ≤ 0).
+    /// `cv2.projectPoints` does. `None` for points at or behind the camera plane (z ≤ 0); a
+    /// fisheye sees there, up to its domain's edge ([`Fisheye::contains_ray`]), and gives
+    /// `None` past it.
     pub fn project(&self, p: DVec3) -> Option<DVec2> {
+        if let Some(f) = &self.fisheye {
+            if !f.contains_ray(p) {
+                return None;
+            }
+            return f.distort_ray(p).map(|y| self.intrinsics.to_pixel(y));
+        }
         if !(p.z > 0.0) || !p.is_finite() {
             return None;
         }
@@ -447,8 +520,12 @@ impl Camera {
         out.is_finite().then_some((out, jac))
     }
 
-    /// Removes the tilt: distorted normalized (x'', y'') → pre-tilt (x', y'), exactly.
+    /// Removes the tilt: distorted normalized (x'', y'') → pre-tilt (x', y'), exactly (for a
+    /// fisheye, the skew: the domain's distorted table is in these coordinates).
     pub fn remove_tilt(&self, y: DVec2) -> Option<DVec2> {
+        if let Some(f) = &self.fisheye {
+            return y.is_finite().then(|| f.unskew(y));
+        }
         let Some((_, inv)) = self.tilt else {
             return y.is_finite().then_some(y);
         };
@@ -463,6 +540,11 @@ impl Camera {
     /// Inverse model on normalized coordinates: distorted (x'', y'') → ideal (X/Z, Y/Z), or
     /// `None` when the point has no preimage in the valid domain.
     pub fn undistort_normalized(&self, y: DVec2, method: InverseMethod) -> Option<DVec2> {
+        if self.fisheye.is_some() {
+            let ray = self.unproject_normalized(y)?;
+            let x = DVec2::new(ray.x / ray.z, ray.y / ray.z);
+            return (ray.z > 0.0 && self.domain.contains_ideal(x)).then_some(x);
+        }
         let pre = self.remove_tilt(y)?;
         if !self.domain.contains_distorted(pre) {
             return None;
@@ -473,6 +555,22 @@ impl Camera {
             InverseMethod::FixedPoint(n) => fixed_point(&self.distortion, pre, n)?,
         };
         x.is_finite().then_some(x)
+    }
+
+    /// Inverse model to a unit camera-frame ray: distorted normalized point → the direction it
+    /// sees, past 90° off the axis too for a fisheye; `None` outside the valid domain.
+    pub fn unproject_normalized(&self, y: DVec2) -> Option<DVec3> {
+        match &self.fisheye {
+            Some(f) => f.undistort_ray(y),
+            None => self
+                .undistort_normalized(y, InverseMethod::Newton)
+                .map(|x| DVec3::new(x.x, x.y, 1.0).normalize()),
+        }
+    }
+
+    /// Inverse model from a distorted pixel to a unit camera-frame ray ([`Camera::unproject_normalized`]).
+    pub fn unproject(&self, pixel: DVec2) -> Option<DVec3> {
+        self.unproject_normalized(self.intrinsics.to_normalized(pixel))
     }
 
     /// Newton's method with the analytic Jacobian on the pre-tilt distortion, started from the
@@ -573,6 +671,32 @@ impl Camera {
         );
         dir * r
     }
+}
+
+/// The checks every camera's size and intrinsics pass, whatever its model.
+fn check_intrinsics(width: u32, height: u32, intrinsics: &Intrinsics) -> Result<(), ModelError> {
+    check_size(width, height)?;
+    for (name, v) in [
+        ("fx", intrinsics.fx),
+        ("fy", intrinsics.fy),
+        ("cx", intrinsics.cx),
+        ("cy", intrinsics.cy),
+    ] {
+        check_finite(name, v, ABSURD_MAGNITUDE)?;
+    }
+    for (name, v) in [("fx", intrinsics.fx), ("fy", intrinsics.fy)] {
+        if v <= 0.0 {
+            return Err(ModelError::NotPositive { name, value: v });
+        }
+        if v < super::MIN_FOCAL_PX {
+            return Err(ModelError::TooSmall {
+                name,
+                value: v,
+                min: super::MIN_FOCAL_PX,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Lambers et al. Eq. 2: Heikkilä's closed-form approximate inverse, k1 k2 p1 p2 only, applied

@@ -469,7 +469,7 @@ impl GeometryPass {
             Some(vk::Format::D32_SFLOAT),
             desc.final_layout,
         )?;
-        let vertex_constants = CameraParams::spec_constants(cam.distortion.terms())
+        let vertex_constants = CameraParams::spec_constants(cam.terms())
             .bool(spec::DISTORT, lens)
             .bool(spec::WRITE_FLOW, desc.outputs.flow);
         let o = desc.outputs;
@@ -612,8 +612,7 @@ impl GeometryPass {
     /// same distortion terms, which are compiled in).
     pub fn accepts_camera(&self, camera: &Camera) -> bool {
         let c = &self.desc.camera;
-        (c.width, c.height) == (camera.width, camera.height)
-            && c.distortion.terms() == camera.distortion.terms()
+        (c.width, c.height) == (camera.width, camera.height) && c.terms() == camera.terms()
     }
 
     /// Switches to another camera of the same size and terms without rebuilding the pipeline

@@ -86,7 +86,7 @@ impl PointsPass {
             PointsMode::Undistort(InverseMethod::Heikkila) => (1, 1, 1),
             PointsMode::Undistort(InverseMethod::FixedPoint(n)) => (1, 2, n),
         };
-        let constants = CameraParams::spec_constants(camera.distortion.terms())
+        let constants = CameraParams::spec_constants(camera.terms())
             .u32(spec::MODE, mode_id)
             .u32(spec::METHOD, method)
             .u32(spec::FIXED_POINT_ITERATIONS, iterations);

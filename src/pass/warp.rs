@@ -195,7 +195,7 @@ impl WarpPass {
             Direction::Undistort => 1,
         };
         let with_model = |cam: &Camera| {
-            CameraParams::spec_constants(cam.distortion.terms())
+            CameraParams::spec_constants(cam.terms())
                 .u32(spec::MODE, mode)
                 .u32(spec::METHOD, method)
                 .u32(spec::FIXED_POINT_ITERATIONS, iterations)
@@ -283,7 +283,7 @@ impl WarpPass {
             // One pipeline serves every channel: the union of their term groups.
             let terms = channels
                 .iter()
-                .map(|&c| g.channel_camera(c).distortion.terms())
+                .map(|&c| g.channel_camera(c).terms())
                 .fold(Terms::default(), Terms::union);
             let base = CameraParams::spec_constants(terms)
                 .u32(spec::MODE, mode)
@@ -421,7 +421,7 @@ impl WarpPass {
             && g.direction == geometry.direction
             && g.method == geometry.method
             && g.chromatic == geometry.chromatic
-            && g.camera.distortion.terms() == geometry.camera.distortion.terms();
+            && g.camera.terms() == geometry.camera.terms();
         if !same {
             return Err(Error::Input(
                 "retarget needs an analytic warp of the same sizes, direction, method, chromatic scales and terms".into(),

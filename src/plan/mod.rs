@@ -167,6 +167,10 @@ pub struct Plan {
 /// fixed-point ~22 + N × (1.2 for radial lenses, 6 with rational, prism or tilt terms, e.g.
 /// 36 → 129 ns from 5 to 20 iterations on `prism_tilt`); Newton ~70 (radial) to ~100.
 pub fn inverse_candidates_for(terms: crate::model::Terms) -> Vec<(InverseMethod, f64)> {
+    if terms.fisheye {
+        // One inverse for the fisheye: Newton on θ, a 1D solve (cheaper than the 2D one).
+        return vec![(InverseMethod::Newton, 70.0)];
+    }
     let complex = terms.rational || terms.prism || terms.tilt;
     let per_iteration = if complex { 6.0 } else { 1.2 };
     let mut v = vec![(InverseMethod::Heikkila, 25.0)];
@@ -189,6 +193,7 @@ pub fn inverse_candidates() -> Vec<(InverseMethod, f64)> {
         tangential: true,
         prism: true,
         tilt: true,
+        fisheye: false,
     })
 }
 
@@ -499,10 +504,11 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             };
             let budget = file.max_error_px;
             let pixels = camera.width as f64 * camera.height as f64;
-            let terms = camera.distortion.terms();
+            let terms = camera.terms();
             let terms_note = format!(
                 "compiled in: {}",
                 [
+                    (terms.fisheye, "fisheye"),
                     (terms.radial, "radial"),
                     (terms.rational, "rational"),
                     (terms.tangential, "tangential"),

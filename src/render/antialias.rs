@@ -24,19 +24,19 @@ pub const DEFAULT_BACKGROUND: [f32; 4] = [0.0; 4];
 pub fn scaled_camera(camera: &Camera, s: u32) -> Result<Camera> {
     let k = camera.intrinsics;
     let f = s as f64;
-    Camera::new(
-        camera.width * s,
-        camera.height * s,
-        Intrinsics {
-            fx: k.fx * f,
-            fy: k.fy * f,
-            // Pixel edges scale, not centres: pixel i spans [i − 0.5, i + 0.5].
-            cx: (k.cx + 0.5) * f - 0.5,
-            cy: (k.cy + 0.5) * f - 0.5,
-        },
-        camera.distortion,
-    )
-    .map_err(Error::from)
+    camera
+        .with_intrinsics(
+            camera.width * s,
+            camera.height * s,
+            Intrinsics {
+                fx: k.fx * f,
+                fy: k.fy * f,
+                // Pixel edges scale, not centres: pixel i spans [i − 0.5, i + 0.5].
+                cx: (k.cx + 0.5) * f - 0.5,
+                cy: (k.cy + 0.5) * f - 0.5,
+            },
+        )
+        .map_err(Error::from)
 }
 
 /// The camera whose image is `camera`'s translated by `-shift` px (principal point moved).
@@ -44,7 +44,9 @@ pub(crate) fn shifted(camera: &Camera, shift: DVec2) -> Result<Camera> {
     let mut k = camera.intrinsics;
     k.cx -= shift.x;
     k.cy -= shift.y;
-    Camera::new(camera.width, camera.height, k, camera.distortion).map_err(Error::from)
+    camera
+        .with_intrinsics(camera.width, camera.height, k)
+        .map_err(Error::from)
 }
 
 /// Radical inverse of `i` in `base` (Halton sequence), in [0, 1).

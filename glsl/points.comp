@@ -4,7 +4,10 @@
 //
 // MODE 0 (distort):   ideal normalized (X/Z, Y/Z) -> distorted pixel.
 // MODE 1 (undistort): distorted pixel -> ideal normalized, by METHOD.
-// outputs[i] = (result.xy, valid ? 1 : 0, 0). Compiled twice: f32, and f64 (VKL_F64).
+// MODE 2 (project):   camera-frame point (X, Y, Z), read as inputs[2i].xy, inputs[2i + 1].x
+//                     -> distorted pixel (a fisheye sees behind the image plane too).
+// MODE 3 (unproject): distorted pixel -> unit camera-frame ray, in outputs[i].xyw.
+// outputs[i] = (result.xy, valid ? 1 : 0, ray z or 0). Compiled twice: f32, and f64 (VKL_F64).
 #extension GL_GOOGLE_include_directive : require
 // vklens:variant f64 VKL_F64
 
@@ -24,9 +27,36 @@ layout(push_constant) uniform Push { uint count; } pc;
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.count) return;
-    VKL_VEC2 p = inputs[i];
     VKL_VEC2 result = VKL_VEC2(0.0);
     bool valid;
+    if (MODE == 2u) {
+        VKL_VEC3 q = VKL_VEC3(inputs[2u * i], inputs[2u * i + 1u].x);
+        VKL_VEC2 d = VKL_VEC2(0.0);
+        if (VKL_FISHEYE) {
+            valid = vkl_fisheye_project(q, d);
+        } else {
+            valid = q.z > 0.0 && vkl_distort(q.xy / q.z, d);
+        }
+        result = vkl_to_pixel(d);
+        valid = valid && !any(isnan(result)) && !any(isinf(result));
+        outputs[i] = VKL_VEC4(result, valid ? 1.0 : 0.0, 0.0);
+        return;
+    }
+    VKL_VEC2 p = inputs[i];
+    if (MODE == 3u) {
+        VKL_VEC3 ray = VKL_VEC3(0.0);
+        VKL_VEC2 d = vkl_to_normalized(p);
+        if (VKL_FISHEYE) {
+            valid = vkl_fisheye_unproject(d, ray);
+        } else {
+            VKL_VEC2 x;
+            valid = vkl_undistort_newton(d, x);
+            ray = normalize(VKL_VEC3(x, 1.0));
+        }
+        valid = valid && !any(isnan(ray)) && !any(isinf(ray));
+        outputs[i] = VKL_VEC4(ray.xy, valid ? 1.0 : 0.0, ray.z);
+        return;
+    }
     if (MODE == 0u) {
         VKL_VEC2 d;
         valid = vkl_distort(p, d);

@@ -1,6 +1,11 @@
 // camera_model.glsl — the OpenCV standard camera model in f32, mirroring src/model/opencv.rs
 // function for function (forward, Jacobian, tilt, valid domain, Newton / Heikkilä /
-// fixed-point inverses). Tested against the f64 model on the shared reference points.
+// fixed-point inverses), and OpenCV's fisheye model, mirroring src/model/fisheye.rs.
+// Tested against the f64 models on the shared reference points.
+//
+// The fisheye runs through the same stages: its radial map θ_d(atan r)/r is the "pre-tilt"
+// distortion and its skew α takes the tilt's place (both are exact linear maps after the
+// radial one), so every shader that works in pre-tilt space works for it unchanged.
 //
 // Pixel-centre convention: OpenCV's, pixel (0, 0) has its centre at (0, 0), so an image of
 // width w covers x in [-0.5, w - 0.5]; a pinhole maps (X, Y, Z) to u = fx·X/Z + cx,
@@ -67,12 +72,18 @@ layout(constant_id = 5) const uint VKL_NEWTON_ITERATIONS = 20;
 // model (a Brown lens runs as its standard twin). A shader specialized for a model this file
 // does not implement answers "invalid" everywhere rather than evaluate the wrong model.
 #define VKL_MODEL_OPENCV 0u
+// 1: OpenCV's fisheye model (model::Fisheye). VKL_RADIAL then says whether any k is non-zero.
+#define VKL_MODEL_FISHEYE 1u
 layout(constant_id = 6) const uint VKL_MODEL = VKL_MODEL_OPENCV;
+#define VKL_FISHEYE (VKL_MODEL == VKL_MODEL_FISHEYE)
+// Below this radius (normalized) θ_d(atan r)/r is its series 1 + (k1 − 1/3) r²: the quotient
+// would lose digits, and the error of the series, O(r⁴), is far below rounding there.
+#define VKL_FISHEYE_SMALL 1e-4
 
 layout(set = VKL_CAMERA_SET, binding = VKL_CAMERA_BINDING, std140) uniform VKL_PARAMS_BLOCK {
     VKL_VEC4 intrinsics;        // fx fy cx cy
-    VKL_VEC4 radial;            // k1 k2 k3 -
-    VKL_VEC4 rational;          // k4 k5 k6 -
+    VKL_VEC4 radial;            // k1 k2 k3 -          fisheye: k1 k2 k3 k4
+    VKL_VEC4 rational;          // k4 k5 k6 -          fisheye: α, θ_max, θ_d(θ_max), -
     VKL_VEC4 tangential_prism;  // p1 p2 s1 s2
     VKL_VEC4 prism;             // s3 s4 - -
     VKL_VEC4 tilt[3];           // rows of OpenCV's tilt matrix (xyz)
@@ -99,11 +110,138 @@ void vkl_radial(VKL_FLOAT s, out VKL_FLOAT num, out VKL_FLOAT den, out VKL_FLOAT
     }
 }
 
+// The fisheye's trigonometry. GLSL has none in double: in f64 the functions are series after
+// argument reduction, accurate to f64 rounding on the ranges the model uses.
+#ifdef VKL_F64
+#define VKL_HALF_PI 1.5707963267948966LF
+// atan for x ≥ 0: x > 1 folds to π/2 − atan(1/x); above tan(π/12), atan(x) = π/6 +
+// atan((√3 x − 1)/(x + √3)); the series then converges as 0.27^(2n).
+double vkl_atan(double x) {
+    bool inv = x > 1.0;
+    if (inv) x = 1.0 / x;
+    bool shift = x > 0.2679491924311227LF;
+    if (shift) x = (x * 1.7320508075688772LF - 1.0) / (x + 1.7320508075688772LF);
+    double x2 = x * x, term = x, sum = x;
+    for (int n = 1; n < 16; ++n) {
+        term *= -x2;
+        sum += term / double(2 * n + 1);
+    }
+    if (shift) sum += 0.5235987755982989LF;
+    return inv ? VKL_HALF_PI - sum : sum;
+}
+// atan2(y, x) for y ≥ 0 (an angle off the axis, 0..π).
+double vkl_atan2(double y, double x) {
+    if (x > 0.0) return vkl_atan(y / x);
+    if (x < 0.0) return 2.0 * VKL_HALF_PI - vkl_atan(y / -x);
+    return y > 0.0 ? VKL_HALF_PI : 0.0;
+}
+// sin and cos of θ in [0, π], from the series at θ − π/2 (|s| ≤ π/2: 12 terms reach 1e-20).
+void vkl_sin_cos(double theta, out double sn, out double cs) {
+    double s = theta - VKL_HALF_PI, s2 = s * s;
+    double ts = s, tc = 1.0, ss = s, sc = 1.0;
+    for (int n = 1; n < 13; ++n) {
+        ts *= -s2 / double((2 * n) * (2 * n + 1));
+        tc *= -s2 / double((2 * n - 1) * (2 * n));
+        ss += ts;
+        sc += tc;
+    }
+    sn = sc;
+    cs = -ss;
+}
+#else
+float vkl_atan(float x) { return atan(x); }
+float vkl_atan2(float y, float x) { return atan(y, x); }
+void vkl_sin_cos(float theta, out float sn, out float cs) { sn = sin(theta); cs = cos(theta); }
+#endif
+
+// The fisheye's θ_d(θ) = θ (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸) and its derivative.
+void vkl_fisheye_theta_d(VKL_FLOAT t, out VKL_FLOAT td, out VKL_FLOAT dtd) {
+    VKL_VEC4 k = VKL_RADIAL ? vkl_cam.radial : VKL_VEC4(0.0);
+    VKL_FLOAT t2 = t * t;
+    td = t * (1.0 + t2 * (k.x + t2 * (k.y + t2 * (k.z + t2 * k.w))));
+    dtd = 1.0 + t2 * (3.0 * k.x + t2 * (5.0 * k.y + t2 * (7.0 * k.z + t2 * 9.0 * k.w)));
+}
+
+// The fisheye's radial map on pinhole-normalized coordinates (Z > 0): x ↦ g(r) x with
+// g = θ_d(atan r) / r, and its Jacobian g I + (g'(r)/r) x xᵀ (model::Fisheye::distort_normalized).
+void vkl_fisheye_pre_skew(VKL_VEC2 p, out VKL_VEC2 d, out VKL_MAT2 J) {
+    VKL_FLOAT rho = length(p);
+    VKL_FLOAT g, dg_over_rho;
+    if (rho < VKL_FISHEYE_SMALL) {
+        VKL_FLOAT c = (VKL_RADIAL ? vkl_cam.radial.x : 0.0) - 1.0 / 3.0;
+        g = 1.0 + c * rho * rho;
+        dg_over_rho = 2.0 * c;
+    } else {
+        VKL_FLOAT td, dtd;
+        vkl_fisheye_theta_d(vkl_atan(rho), td, dtd);
+        g = td / rho;
+        dg_over_rho = (dtd / (1.0 + rho * rho) - g) / (rho * rho);
+    }
+    d = p * g;
+    J = VKL_MAT2(g) + VKL_MAT2(p * p.x, p * p.y) * dg_over_rho;
+}
+
+// The fisheye's inverse on θ: the angle off the axis whose θ_d is rho, by safeguarded Newton
+// on [0, θ_max] where θ_d increases. False past θ_d(θ_max) (outside the domain).
+bool vkl_fisheye_theta(VKL_FLOAT rho, out VKL_FLOAT theta) {
+    VKL_FLOAT lo = 0.0;
+    VKL_FLOAT hi = vkl_cam.rational.y;
+    theta = 0.0;
+    if (!(rho <= vkl_cam.rational.z)) return false;
+    theta = min(rho, hi);
+    for (int i = 0; i < 60; ++i) {
+        VKL_FLOAT td, dtd;
+        vkl_fisheye_theta_d(theta, td, dtd);
+        VKL_FLOAT v = td - rho;
+        if (v == 0.0) break;
+        if (v < 0.0) lo = theta; else hi = theta;
+        VKL_FLOAT next = theta - v / dtd;
+        if (next == theta) break;
+        theta = (dtd > 0.0 && next > lo && next < hi) ? next : 0.5 * (lo + hi);
+        if (hi - lo < 2.0 * VKL_EPSILON * hi) break;
+    }
+    return true;
+}
+
+// Inverse of the fisheye to a unit camera-frame ray, past 90° too: distorted normalized
+// (skew included) -> direction (model::Fisheye::undistort_ray). False outside the domain.
+bool vkl_fisheye_unproject(VKL_VEC2 d, out VKL_VEC3 ray) {
+    VKL_VEC2 pre = VKL_VEC2(d.x - vkl_cam.rational.x * d.y, d.y);
+    VKL_FLOAT rho = length(pre);
+    ray = VKL_VEC3(0.0, 0.0, 1.0);
+    if (rho == 0.0) return true;
+    VKL_FLOAT theta;
+    if (!vkl_fisheye_theta(rho, theta)) return false;
+    VKL_FLOAT sn, cs;
+    vkl_sin_cos(theta, sn, cs);
+    ray = VKL_VEC3(pre / rho * sn, cs);
+    return true;
+}
+
+// The fisheye's forward map on a camera-frame direction of any hemisphere: the distorted
+// normalized point, skew included. False outside the domain (θ > θ_max) and for the zero vector.
+bool vkl_fisheye_project(VKL_VEC3 p, out VKL_VEC2 d) {
+    VKL_FLOAT r = length(p.xy);
+    d = VKL_VEC2(0.0);
+    if (r == 0.0) return p.z > 0.0;
+    VKL_FLOAT theta = vkl_atan2(r, p.z);
+    if (theta > vkl_cam.rational.y) return false;
+    VKL_FLOAT td, dtd;
+    vkl_fisheye_theta_d(theta, td, dtd);
+    VKL_VEC2 pre = p.xy * (td / r);
+    d = VKL_VEC2(pre.x + vkl_cam.rational.x * pre.y, pre.y);
+    return true;
+}
+
 // Pre-tilt distortion (x', y') of an ideal normalized point, and its Jacobian J (column-major:
-// J[0] = d/dx). False where the rational denominator is zero.
+// J[0] = d/dx). False where the rational denominator is zero. The fisheye's is its radial map.
 bool vkl_distort_pre_tilt(VKL_VEC2 p, out VKL_VEC2 d, out VKL_MAT2 J) {
     d = p;
     J = VKL_MAT2(1.0);
+    if (VKL_FISHEYE) {
+        vkl_fisheye_pre_skew(p, d, J);
+        return true;
+    }
     VKL_FLOAT s = dot(p, p);
     VKL_FLOAT num, den, dnum, dden;
     vkl_radial(s, num, den, dnum, dden);
@@ -144,6 +282,13 @@ bool vkl_distort_pre_tilt(VKL_VEC2 p, out VKL_VEC2 d, out VKL_MAT2 J) {
 bool vkl_apply_tilt(VKL_VEC2 p, out VKL_VEC2 d, out VKL_MAT2 T) {
     d = p;
     T = VKL_MAT2(1.0);
+    if (VKL_FISHEYE) {
+        // The fisheye's skew: (x' + α y', y').
+        VKL_FLOAT alpha = vkl_cam.rational.x;
+        d = VKL_VEC2(p.x + alpha * p.y, p.y);
+        T = VKL_MAT2(1.0, 0.0, alpha, 1.0);
+        return true;
+    }
     if (!VKL_TILT) return true;
     VKL_VEC3 q = VKL_VEC3(p, 1.0);
     VKL_VEC3 h = VKL_VEC3(dot(vkl_cam.tilt[0].xyz, q), dot(vkl_cam.tilt[1].xyz, q), dot(vkl_cam.tilt[2].xyz, q));
@@ -160,6 +305,10 @@ bool vkl_apply_tilt(VKL_VEC2 p, out VKL_VEC2 d, out VKL_MAT2 T) {
 // Removes the tilt exactly: distorted normalized (x'', y'') -> pre-tilt (x', y').
 bool vkl_remove_tilt(VKL_VEC2 d, out VKL_VEC2 p) {
     p = d;
+    if (VKL_FISHEYE) {
+        p = VKL_VEC2(d.x - vkl_cam.rational.x * d.y, d.y);
+        return true;
+    }
     if (!VKL_TILT) return true;
     VKL_VEC3 q = VKL_VEC3(d, 1.0);
     VKL_VEC3 h = VKL_VEC3(dot(vkl_cam.untilt[0].xyz, q), dot(vkl_cam.untilt[1].xyz, q), dot(vkl_cam.untilt[2].xyz, q));
@@ -175,7 +324,7 @@ bool vkl_distort_jacobian(VKL_VEC2 x, out VKL_VEC2 d, out VKL_MAT2 J) {
     VKL_MAT2 T;
     d = x;
     J = VKL_MAT2(1.0);
-    if (VKL_MODEL != VKL_MODEL_OPENCV) return false;
+    if (VKL_MODEL != VKL_MODEL_OPENCV && !VKL_FISHEYE) return false;
     if (!vkl_distort_pre_tilt(x, pre, Jpre)) return false;
     if (!vkl_apply_tilt(pre, d, T)) return false;
     J = T * Jpre;
@@ -286,6 +435,16 @@ bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
     if (!vkl_remove_tilt(d, t)) return false;
     if (!vkl_contains_distorted(t)) return false;
     if (length(t) == 0.0) return true;
+    if (VKL_FISHEYE) {
+        // One dimension: θ from θ_d, then the pinhole point tan θ along t's direction.
+        VKL_FLOAT theta;
+        if (!vkl_fisheye_theta(length(t), theta)) return false;
+        VKL_FLOAT sn, cs;
+        vkl_sin_cos(theta, sn, cs);
+        if (!(cs > 0.0)) return false;
+        x = t / length(t) * (sn / cs);
+        return vkl_contains_ideal(x);
+    }
     x = vkl_radial_start(t);
     // One call site, so the iteration is compiled once: round 0 is the radial start; rounds
     // 1..N, reached only if it fails, walk the target out from the principal point.
@@ -302,6 +461,8 @@ bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
 // Lambers et al. Eq. 2 (Heikkilä): closed-form approximate inverse, k1 k2 p1 p2 only.
 bool vkl_undistort_heikkila(VKL_VEC2 d, out VKL_VEC2 x) {
     x = VKL_VEC2(0.0);
+    // The standard model's approximation; the host refuses it for a fisheye.
+    if (VKL_FISHEYE) return false;
     VKL_VEC2 t;
     if (!vkl_remove_tilt(d, t)) return false;
     if (!vkl_contains_distorted(t)) return false;
@@ -322,6 +483,8 @@ bool vkl_undistort_heikkila(VKL_VEC2 d, out VKL_VEC2 x) {
 // OpenCV's undistortPoints iteration with n iterations.
 bool vkl_undistort_fixed_point(VKL_VEC2 d, uint n, out VKL_VEC2 x) {
     x = VKL_VEC2(0.0);
+    // The standard model's iteration; the host refuses it for a fisheye.
+    if (VKL_FISHEYE) return false;
     VKL_VEC2 y0;
     if (!vkl_remove_tilt(d, y0)) return false;
     if (!vkl_contains_distorted(y0)) return false;

@@ -65,6 +65,10 @@ Camera files (CAM): vklens JSON {\"width\", \"height\", \"fx\", \"fy\", \"cx\", 
 OpenCV FileStorage YAML/XML/JSON as calibrateCamera writes it (camera_matrix,
 distortion_coefficients, image_width, image_height; %YAML:1.0 headers welcome), ROS camera_info,
 or a Brown headset lens {\"model\": \"brown\", \"width\", \"height\", \"c1\", \"c2\"} (the Durham radial-correction paper).
+Fisheye cameras (OpenCV's cv2.fisheye, k1..k4): vklens JSON with \"model\": \"opencv_fisheye\"
+(optional \"alpha\" skew and \"max_fov_deg\"), ROS camera_info with distortion_model equidistant,
+a Kalibr camchain (cam0, or --camera-index N), or a COLMAP cameras.txt (OPENCV_FISHEYE, and
+PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, FULL_OPENCV for the standard model).
 
 Environment: VKLENS_DEVICE picks the Vulkan device (cpu, gpu, an index, or part of its name);
 VKLENS_VALIDATION=1 turns the Khronos validation layer on (any message fails the command).
@@ -73,6 +77,8 @@ Examples:
   vklens demo --output grid.png
   echo '[[0.1, 0.2], [0.5, -0.3]]' | vklens points distort --camera cam.yml
   echo '[[400, 300]]' | vklens points undistort --camera cam.yml --method fixed-point:5
+  echo '[[1, 0, -0.1]]' | vklens points distort --camera fisheye.json
+  echo '[[10, 240]]' | vklens points undistort --camera camchain.yaml --camera-index 1 --rays
   vklens distort --camera cam.yml --input pinhole.png --output lens.png --mask valid.png
   vklens undistort --camera cam.yml --input photo.png --output rectified.png
   vklens overscan --camera cam.yml > source.json
@@ -88,7 +94,14 @@ Examples:
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Which camera of a file that holds several (a Kalibr camchain's camN, a COLMAP
+    /// cameras.txt's Nth line), counting from 0. Default: the first.
+    #[arg(long, global = true, value_name = "N")]
+    camera_index: Option<usize>,
 }
+
+/// The `--camera-index` of this run (read by every camera load).
+static CAMERA_INDEX: std::sync::OnceLock<Option<usize>> = std::sync::OnceLock::new();
 
 #[derive(Subcommand, Debug)]
 enum Command {
@@ -126,8 +139,10 @@ enum Command {
 
 #[derive(Subcommand, Debug)]
 enum PointsCommand {
-    /// Forward model: undistorted normalized points [[x, y], ...] (x = X/Z, y = Y/Z) on stdin →
-    /// distorted pixels [[u, v], ...] on stdout (null where the model is undefined).
+    /// Forward model: undistorted normalized points [[x, y], ...] (x = X/Z, y = Y/Z) or
+    /// camera-frame points [[X, Y, Z], ...] (a fisheye sees Z ≤ 0 too, up to its field of view)
+    /// on stdin → distorted pixels [[u, v], ...] on stdout (null where the model is undefined
+    /// or, for points, where the lens does not see).
     Distort {
         /// Camera file (JSON, OpenCV FileStorage YAML/XML/JSON, or ROS camera_info YAML).
         #[arg(long, value_name = "CAM")]
@@ -141,7 +156,9 @@ enum PointsCommand {
     },
     /// Inverse model: distorted pixels [[u, v], ...] on stdin → undistorted normalized points
     /// [[x, y] | null, ...] on stdout; null where the pixel has no preimage in the valid domain
-    /// (the lens folds over there, or a rational denominator vanishes).
+    /// (the lens folds over there, or a rational denominator vanishes) and where it sees at or
+    /// behind the image plane (a fisheye past 90°). With --rays: unit camera-frame rays
+    /// [[x, y, z] | null, ...], past 90° too.
     Undistort {
         /// Camera file (JSON, OpenCV FileStorage YAML/XML/JSON, or ROS camera_info YAML).
         #[arg(long, value_name = "CAM")]
@@ -158,6 +175,10 @@ enum PointsCommand {
         /// ill-conditioned there); f64 does not, where the device has shaderFloat64.
         #[arg(long, default_value = "f32", value_parser = parse_precision)]
         precision: Precision,
+        /// Write unit rays [x, y, z] instead of normalized points [x, y] (what a fisheye needs
+        /// past 90° off the axis).
+        #[arg(long)]
+        rays: bool,
     },
 }
 
@@ -213,7 +234,7 @@ pub(crate) fn write_stdout(args: std::fmt::Arguments) -> Result<(), CliError> {
 
 /// Loads a camera file, as a one-line input error.
 pub(crate) fn load_camera(path: &std::path::Path) -> Result<Camera, CliError> {
-    crate::io::load_camera(path)
+    crate::io::camera::load_camera_at(path, CAMERA_INDEX.get().copied().flatten())
 }
 
 /// A headless context from the environment; validation messages are checked by `finish`.
@@ -248,6 +269,8 @@ pub(crate) fn progress_done(what: &str) {
 
 /// Runs the command line.
 pub fn run(cli: Cli) -> Result<(), CliError> {
+    // Set once per process; a second `run` in one process keeps the first index.
+    let _ = CAMERA_INDEX.set(cli.camera_index);
     match cli.command {
         Command::Points(PointsCommand::Distort {
             camera,
@@ -259,7 +282,8 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
             method,
             backend,
             precision,
-        }) => points::undistort(&camera, method, backend, precision),
+            rays,
+        }) => points::undistort(&camera, method, backend, precision, rays),
         Command::Bench(BenchCommand::Inverse(args)) => bench::inverse(args),
         Command::Bench(BenchCommand::Warp(args)) => bench::warp(args),
         Command::Bench(BenchCommand::Vertex(args)) => bench::vertex(args),

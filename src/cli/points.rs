@@ -7,29 +7,34 @@ use glam::DVec2;
 use serde_json::Value;
 
 use super::{context, finish, load_camera, Backend, CliError};
-use crate::headless::points::run_points;
+use crate::headless::points::{run_points, run_project, run_unproject};
 use crate::model::InverseMethod;
 use crate::pass::{PointsMode, Precision};
 
 /// Most points accepted on stdin (a 16k × 16k image worth).
 const MAX_POINTS: usize = 1 << 28;
 
-/// Reads `[[a, b], ...]` from stdin; errors name the element.
-fn read_points() -> Result<Vec<[f64; 2]>, CliError> {
+/// Reads the JSON array of points on stdin; errors name the element.
+fn read_rows(three: bool) -> Result<Vec<Vec<f64>>, CliError> {
     let mut text = String::new();
     std::io::stdin()
         .read_to_string(&mut text)
         .map_err(|e| CliError::input(format!("stdin: cannot read: {e}")))?;
-    parse_points(&text)
+    parse_rows(&text, three)
 }
 
-/// Parses a JSON array of `[a, b]` pairs.
-pub fn parse_points(text: &str) -> Result<Vec<[f64; 2]>, CliError> {
+/// Parses a JSON array of rows of two numbers (or, with `three`, of two or three).
+fn parse_rows(text: &str, three: bool) -> Result<Vec<Vec<f64>>, CliError> {
+    let shape = if three {
+        "[x, y] or [X, Y, Z]"
+    } else {
+        "[x, y]"
+    };
     let value: Value = serde_json::from_str(text)
         .map_err(|e| CliError::input(format!("stdin: not valid JSON: {e}")))?;
     let items = value
         .as_array()
-        .ok_or_else(|| CliError::input("stdin: expected a JSON array of [x, y] pairs"))?;
+        .ok_or_else(|| CliError::input(format!("stdin: expected a JSON array of {shape} rows")))?;
     if items.len() > MAX_POINTS {
         return Err(CliError::input(format!(
             "stdin: at most {MAX_POINTS} points, got {}",
@@ -40,28 +45,29 @@ pub fn parse_points(text: &str) -> Result<Vec<[f64; 2]>, CliError> {
         .iter()
         .enumerate()
         .map(|(i, item)| {
-            let pair = item.as_array().filter(|a| a.len() == 2).ok_or_else(|| {
-                CliError::input(format!(
-                    "stdin: element {i} must be a pair [x, y], got {item}"
-                ))
-            })?;
-            let a = pair[0].as_f64();
-            let b = pair[1].as_f64();
-            match (a, b) {
-                (Some(a), Some(b)) => Ok([a, b]),
-                _ => Err(CliError::input(format!(
-                    "stdin: element {i} must hold two numbers, got {item}"
-                ))),
-            }
+            let row = item
+                .as_array()
+                .filter(|a| a.len() == 2 || (three && a.len() == 3))
+                .ok_or_else(|| {
+                    CliError::input(format!(
+                        "stdin: element {i} must be a row {shape}, got {item}"
+                    ))
+                })?;
+            row.iter()
+                .map(Value::as_f64)
+                .collect::<Option<Vec<f64>>>()
+                .ok_or_else(|| {
+                    CliError::input(format!("stdin: element {i} must hold numbers, got {item}"))
+                })
         })
         .collect()
 }
 
-fn write_results(results: &[Option<[f64; 2]>]) -> Result<(), CliError> {
+fn write_results<const N: usize>(results: &[Option<[f64; N]>]) -> Result<(), CliError> {
     let json: Vec<Value> = results
         .iter()
         .map(|r| match r {
-            Some([a, b]) if a.is_finite() && b.is_finite() => serde_json::json!([a, b]),
+            Some(v) if v.iter().all(|x| x.is_finite()) => serde_json::json!(v.as_slice()),
             _ => Value::Null,
         })
         .collect();
@@ -71,54 +77,85 @@ fn write_results(results: &[Option<[f64; 2]>]) -> Result<(), CliError> {
         .map_err(|e| CliError::io(std::path::Path::new("<stdout>"), "cannot write", &e.into()))
 }
 
-/// Runs the points pass on a headless context, checking validation messages when enabled.
-fn on_gpu(
-    cam: &crate::model::Camera,
-    mode: PointsMode,
-    precision: Precision,
-    points: &[[f64; 2]],
-) -> Result<Vec<Option<[f64; 2]>>, CliError> {
+/// Runs a GPU job on a headless context, checking validation messages when enabled.
+fn on_gpu<T>(
+    job: impl FnOnce(&crate::gpu::Context) -> crate::gpu::Result<T>,
+) -> Result<T, CliError> {
     let ctx = context()?;
-    let r = run_points(&ctx, cam, mode, precision, points)?;
+    let r = job(&ctx)?;
     finish(&ctx)?;
     Ok(r)
 }
 
-/// `points distort`: normalized ideal points → distorted pixels.
+/// `points distort`: normalized ideal points `[x, y]` or camera-frame points `[X, Y, Z]` →
+/// distorted pixels.
 pub fn distort(camera: &Path, backend: Backend, precision: Precision) -> Result<(), CliError> {
     let cam = load_camera(camera)?;
-    let points = read_points()?;
-    let results = match backend {
-        Backend::Cpu => points
-            .iter()
-            .map(|p| {
-                cam.distort_normalized(DVec2::from(*p))
-                    .map(|y| cam.intrinsics.to_pixel(y).to_array())
-            })
-            .collect(),
-        Backend::Gpu => on_gpu(&cam, PointsMode::Distort, precision, &points)?,
+    let rows = read_rows(true)?;
+    let pairs: Vec<[f64; 2]> = rows
+        .iter()
+        .filter(|r| r.len() == 2)
+        .map(|r| [r[0], r[1]])
+        .collect();
+    let triples: Vec<[f64; 3]> = rows
+        .iter()
+        .filter(|r| r.len() == 3)
+        .map(|r| [r[0], r[1], r[2]])
+        .collect();
+    let (from_pairs, from_triples) = match backend {
+        Backend::Cpu => (cam.distort_points(&pairs), cam.project_points(&triples)),
+        Backend::Gpu => on_gpu(|ctx| {
+            Ok((
+                run_points(ctx, &cam, PointsMode::Distort, precision, &pairs)?,
+                run_project(ctx, &cam, precision, &triples)?,
+            ))
+        })?,
     };
+    // Back into the order of the input.
+    let (mut a, mut b) = (from_pairs.into_iter(), from_triples.into_iter());
+    let results: Vec<Option<[f64; 2]>> = rows
+        .iter()
+        .map(|r| if r.len() == 2 { a.next() } else { b.next() }.flatten())
+        .collect();
     write_results(&results)
 }
 
-/// `points undistort`: distorted pixels → normalized ideal points, null outside the domain.
+/// `points undistort`: distorted pixels → normalized ideal points (null outside the domain
+/// and, for a fisheye, where the direction is at or behind the image plane) or, with `rays`,
+/// unit camera-frame rays.
 pub fn undistort(
     camera: &Path,
     method: InverseMethod,
     backend: Backend,
     precision: Precision,
+    rays: bool,
 ) -> Result<(), CliError> {
     let cam = load_camera(camera)?;
+    cam.check_method(method)
+        .map_err(|e| CliError::input(format!("--method: {e}")))?;
     let points = read_points()?;
+    if rays {
+        let results: Vec<Option<[f64; 3]>> = match backend {
+            Backend::Cpu => points
+                .iter()
+                .map(|p| cam.unproject(DVec2::from(*p)).map(|r| r.to_array()))
+                .collect(),
+            Backend::Gpu => on_gpu(|ctx| run_unproject(ctx, &cam, precision, &points))?,
+        };
+        return write_results(&results);
+    }
     let results = match backend {
-        Backend::Cpu => points
-            .iter()
-            .map(|p| {
-                cam.undistort_normalized(cam.intrinsics.to_normalized(DVec2::from(*p)), method)
-                    .map(|x| x.to_array())
-            })
-            .collect(),
-        Backend::Gpu => on_gpu(&cam, PointsMode::Undistort(method), precision, &points)?,
+        Backend::Cpu => cam.undistort_points(&points, method),
+        Backend::Gpu => {
+            on_gpu(|ctx| run_points(ctx, &cam, PointsMode::Undistort(method), precision, &points))?
+        }
     };
     write_results(&results)
+}
+
+fn read_points() -> Result<Vec<[f64; 2]>, CliError> {
+    Ok(read_rows(false)?
+        .into_iter()
+        .map(|r| [r[0], r[1]])
+        .collect())
 }

@@ -22,9 +22,9 @@ macro_rules! camera_params {
         pub struct $name {
             /// fx fy cx cy
             pub intrinsics: [$t; 4],
-            /// k1 k2 k3 -
+            /// k1 k2 k3 - (fisheye: k1 k2 k3 k4)
             pub radial: [$t; 4],
-            /// k4 k5 k6 -
+            /// k4 k5 k6 - (fisheye: α, θ_max, θ_d(θ_max), -)
             pub rational: [$t; 4],
             /// p1 p2 s1 s2
             pub tangential_prism: [$t; 4],
@@ -62,10 +62,21 @@ macro_rules! camera_params {
                 for (slot, [ideal, distorted]) in table.iter_mut().zip(domain.table()) {
                     *slot = [f(ideal), f(distorted), f(0.0), f(0.0)];
                 }
+                // The fisheye's k1..k4 fill `radial`; α, θ_max and θ_d(θ_max) `rational`.
+                let (radial, rational) = match camera.fisheye_lens() {
+                    Some(l) => (
+                        l.k.map(f),
+                        [f(l.alpha), f(l.theta_max()), f(l.theta_d_max()), f(0.0)],
+                    ),
+                    None => (
+                        [f(d.k1), f(d.k2), f(d.k3), f(0.0)],
+                        [f(d.k4), f(d.k5), f(d.k6), f(0.0)],
+                    ),
+                };
                 $name {
                     intrinsics: [f(k.fx), f(k.fy), f(k.cx), f(k.cy)],
-                    radial: [f(d.k1), f(d.k2), f(d.k3), f(0.0)],
-                    rational: [f(d.k4), f(d.k5), f(d.k6), f(0.0)],
+                    radial,
+                    rational,
                     tangential_prism: [f(d.p1), f(d.p2), f(d.s1), f(d.s2)],
                     prism: [f(d.s3), f(d.s4), f(0.0), f(0.0)],
                     tilt,
@@ -109,7 +120,13 @@ impl CameraParams {
             .bool(spec::PRISM, terms.prism)
             .bool(spec::TILT, terms.tilt)
             .u32(spec::NEWTON_ITERATIONS, GPU_NEWTON_ITERATIONS)
-            // Every camera runs through the standard model on the GPU today.
-            .u32(spec::MODEL, spec::MODEL_OPENCV)
+            .u32(
+                spec::MODEL,
+                if terms.fisheye {
+                    spec::MODEL_FISHEYE
+                } else {
+                    spec::MODEL_OPENCV
+                },
+            )
     }
 }

@@ -16,6 +16,22 @@ pub enum PointsMode {
     Distort,
     /// Distorted pixel → ideal normalized, by the given method.
     Undistort(InverseMethod),
+    /// Camera-frame point (X, Y, Z) → distorted pixel; each point is two input `vec2`s,
+    /// `(X, Y)` and `(Z, 0)`.
+    Project,
+    /// Distorted pixel → unit camera-frame ray, in the output's `x y` and `w`.
+    Unproject,
+}
+
+impl PointsMode {
+    /// Input `vec2`s per point.
+    pub fn inputs_per_point(self) -> usize {
+        if self == PointsMode::Project {
+            2
+        } else {
+            1
+        }
+    }
 }
 
 /// Arithmetic of the shader: f32 (what the warp uses) or f64 (needs `shaderFloat64`).
@@ -85,7 +101,14 @@ impl PointsPass {
             PointsMode::Undistort(InverseMethod::Newton) => (1, 0, 1),
             PointsMode::Undistort(InverseMethod::Heikkila) => (1, 1, 1),
             PointsMode::Undistort(InverseMethod::FixedPoint(n)) => (1, 2, n),
+            PointsMode::Project => (2, 0, 1),
+            PointsMode::Unproject => (3, 0, 1),
         };
+        if let PointsMode::Undistort(m) = mode {
+            camera
+                .check_method(m)
+                .map_err(|e| Error::Input(e.to_string()))?;
+        }
         let constants = CameraParams::spec_constants(camera.terms())
             .u32(spec::MODE, mode_id)
             .u32(spec::METHOD, method)
@@ -165,7 +188,8 @@ impl PointsPass {
     ///
     /// # Safety
     /// `cmd` must be in the recording state, outside a render pass, on a queue with compute.
-    /// The bound buffers must hold `count` points and stay alive until the work completes.
+    /// The bound buffers must hold `count` points (`count × inputs_per_point` input `vec2`s)
+    /// and stay alive until the work completes.
     /// The caller orders the dispatch against other work: host or transfer writes to the
     /// inputs must be visible to `COMPUTE_SHADER` reads, and reads of the outputs need a
     /// barrier from `COMPUTE_SHADER` / `SHADER_WRITE`.

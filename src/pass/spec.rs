@@ -17,10 +17,12 @@ pub const PRISM: SpecId = SpecId::new("VKL_PRISM", 3);
 pub const TILT: SpecId = SpecId::new("VKL_TILT", 4);
 /// Newton iterations of the GPU inverse.
 pub const NEWTON_ITERATIONS: SpecId = SpecId::new("VKL_NEWTON_ITERATIONS", 5);
-/// Which camera model the shader evaluates ([`MODEL_OPENCV`]).
+/// Which camera model the shader evaluates ([`MODEL_OPENCV`], [`MODEL_FISHEYE`]).
 pub const MODEL: SpecId = SpecId::new("VKL_MODEL", 6);
 /// [`MODEL`]'s value for OpenCV's standard model (and a Brown lens, its exact twin).
 pub const MODEL_OPENCV: u32 = 0;
+/// [`MODEL`]'s value for OpenCV's fisheye model.
+pub const MODEL_FISHEYE: u32 = 1;
 /// Every camera-model constant: the term groups in the order of [`crate::model::Terms`]'s
 /// fields, the Newton iterations, the model.
 pub const CAMERA: [SpecId; 7] = [

@@ -232,13 +232,23 @@ pub struct Sampler {
 
 impl Sampler {
     pub fn new(gpu: &Gpu, filter: vk::Filter, address: vk::SamplerAddressMode) -> Result<Self> {
+        Self::with_modes(gpu, filter, [address; 3])
+    }
+
+    /// A sampler with its own addressing per coordinate (u v w): an equirectangular panorama
+    /// wraps in longitude and clamps in latitude.
+    pub fn with_modes(
+        gpu: &Gpu,
+        filter: vk::Filter,
+        [u, v, w]: [vk::SamplerAddressMode; 3],
+    ) -> Result<Self> {
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)
             .min_filter(filter)
             .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-            .address_mode_u(address)
-            .address_mode_v(address)
-            .address_mode_w(address)
+            .address_mode_u(u)
+            .address_mode_v(v)
+            .address_mode_w(w)
             .max_lod(0.0);
         // SAFETY: a complete sampler create info (no anisotropy, no compare, lod 0) on a live
         // device.

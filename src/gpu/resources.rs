@@ -175,7 +175,14 @@ fn free(gpu: &Gpu, allocation: Option<Allocation>) {
     }
 }
 
-/// A 2D image with its view and allocation (device-local).
+/// How many layers an image has, and how its view shows them.
+#[derive(Clone, Copy)]
+enum Layers {
+    One,
+    Cube,
+}
+
+/// A 2D image (or a cube map) with its view and allocation (device-local).
 pub struct Image {
     gpu: Gpu,
     pub raw: vk::Image,
@@ -183,6 +190,8 @@ pub struct Image {
     allocation: Option<Allocation>,
     pub format: vk::Format,
     pub extent: vk::Extent2D,
+    /// Array layers: 1, or 6 for a cube map.
+    pub layers: u32,
 }
 
 impl Image {
@@ -196,8 +205,41 @@ impl Image {
         height: u32,
         usage: vk::ImageUsageFlags,
     ) -> Result<Self> {
+        Self::new_layers(gpu, name, format, (width, height), Layers::One, usage)
+    }
+
+    /// A cube map: six square `side × side` layers in Vulkan's face order (+X −X +Y −Y +Z −Z
+    /// of its y-up addressing) and a cube view (sampled seamlessly across faces: Vulkan
+    /// filters cube maps across face edges always).
+    pub fn new_cube(
+        gpu: &Gpu,
+        name: &str,
+        format: vk::Format,
+        side: u32,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self> {
+        Self::new_layers(gpu, name, format, (side, side), Layers::Cube, usage)
+    }
+
+    fn new_layers(
+        gpu: &Gpu,
+        name: &str,
+        format: vk::Format,
+        (width, height): (u32, u32),
+        layers: Layers,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self> {
         let device = gpu.device();
+        let (count, flags, view_type) = match layers {
+            Layers::One => (1, vk::ImageCreateFlags::empty(), vk::ImageViewType::TYPE_2D),
+            Layers::Cube => (
+                6,
+                vk::ImageCreateFlags::CUBE_COMPATIBLE,
+                vk::ImageViewType::CUBE,
+            ),
+        };
         let info = vk::ImageCreateInfo::default()
+            .flags(flags)
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
             .extent(vk::Extent3D {
@@ -206,13 +248,13 @@ impl Image {
                 depth: 1,
             })
             .mip_levels(1)
-            .array_layers(1)
+            .array_layers(count)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
-        // SAFETY: `info` fully describes a 2D image (one mip level, one layer, one sample) on a
-        // live device. Vulkan also needs a non-zero extent within maxImageDimension2D and a
+        // SAFETY: `info` fully describes a 2D image (one mip level, one layer or six square ones
+        // for a cube, one sample) on a live device. Vulkan also needs a non-zero extent within maxImageDimension2D and a
         // format that supports `usage`; this function does not check those, its callers do
         // (validated camera and film sizes, `check_sizes`, formats chosen per usage).
         let raw = unsafe { device.create_image(&info, None).call("vkCreateImage")? };
@@ -238,18 +280,19 @@ impl Image {
             allocation: Some(allocation),
             format,
             extent: vk::Extent2D { width, height },
+            layers: count,
         };
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
-            .view_type(vk::ImageViewType::TYPE_2D)
+            .view_type(view_type)
             .format(format)
             .subresource_range(vk::ImageSubresourceRange {
                 aspect_mask: Self::aspect_of(format),
                 ..Self::color_range()
             });
         // SAFETY: `raw` is a live image of this device with memory bound; the view has its
-        // format, 2D type, its one mip level and layer, and the aspect `aspect_of` gives for
-        // the format. On error `image`'s Drop destroys the image (the view stays null).
+        // format, the type of its layers (2D for one, cube for six cube-compatible ones), its
+        // one mip level and all its layers, and the aspect `aspect_of` gives for the format. On error `image`'s Drop destroys the image (the view stays null).
         image.view = unsafe {
             device
                 .create_image_view(&view_info, None)
@@ -268,7 +311,8 @@ impl Image {
         }
     }
 
-    /// A buffer ↔ image copy of the whole image (tightly packed rows).
+    /// A buffer ↔ image copy of the whole image (tightly packed rows; the layers of a cube map
+    /// one after the other).
     pub fn whole_copy(&self) -> vk::BufferImageCopy {
         vk::BufferImageCopy {
             buffer_offset: 0,
@@ -278,7 +322,7 @@ impl Image {
                 aspect_mask: Self::aspect_of(self.format),
                 mip_level: 0,
                 base_array_layer: 0,
-                layer_count: 1,
+                layer_count: self.layers,
             },
             image_offset: vk::Offset3D::default(),
             image_extent: vk::Extent3D {
@@ -289,14 +333,14 @@ impl Image {
         }
     }
 
-    /// The whole colour subresource.
+    /// The whole colour subresource (the one mip level, every layer).
     pub fn color_range() -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange {
             aspect_mask: vk::ImageAspectFlags::COLOR,
             base_mip_level: 0,
             level_count: 1,
             base_array_layer: 0,
-            layer_count: 1,
+            layer_count: vk::REMAINING_ARRAY_LAYERS,
         }
     }
 }

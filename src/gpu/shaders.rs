@@ -14,6 +14,12 @@ pub const WARP_COMP_RGBA8: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/war
 pub const WARP_COMP_R32UI: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.r32ui.spv"));
 /// `glsl/warp.comp`, r32f images (depth, nearest only).
 pub const WARP_COMP_R32F: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.r32f.spv"));
+/// `glsl/sphere_warp.comp`: the warp from a cube map of six pinhole faces.
+pub const SPHERE_WARP_COMP: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/sphere_warp.comp.spv"));
+/// `glsl/sphere_warp.comp` sampling an equirectangular panorama.
+pub const SPHERE_WARP_COMP_EQUIRECT: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/sphere_warp.comp.equirect.spv"));
 /// `glsl/inverse_map.comp`: a coordinate map per camera and channel.
 pub const INVERSE_MAP_COMP: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/inverse_map.comp.spv"));

@@ -7,5 +7,6 @@ pub mod grid_demo;
 pub mod lens_render;
 pub mod mesh_warp;
 pub mod points;
+pub mod sphere_warp;
 pub mod warp;
 pub mod warp_raster;

@@ -11,6 +11,7 @@ pub mod lens_render;
 pub mod mesh_warp;
 pub mod points;
 pub mod spec;
+pub mod sphere_warp;
 pub mod warp;
 pub mod warp_raster;
 pub mod warp_stage;

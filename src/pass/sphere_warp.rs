@@ -1,0 +1,322 @@
+//! The warp from a 360° source (`glsl/sphere_warp.comp`): a cube map of six pinhole faces or an
+//! equirectangular panorama, sampled by the ray each output pixel sees. It renders what no
+//! single pinhole source can hold: fisheyes of 180° and more, and wide standard-model lenses
+//! whose overscanned source would exceed the device's image limit.
+//!
+//! # Face convention
+//!
+//! Faces are named in the OpenCV camera frame of the output camera (x right, y down, z
+//! forward): `+z` looks ahead, `+x` right, `+y` down. Each face is a square pinhole image of
+//! side `S`, `fx = fy = S / 2`, `cx = cy = (S − 1) / 2` (90° across), seen from the centre,
+//! whose camera is the rotation [`CubeFace::rotation`] of the output camera: a point `r` of the
+//! camera frame is at `R r` in the face's camera frame. The up direction of each image:
+//!
+//! | face | looks along | image right | image down |
+//! |------|-------------|-------------|------------|
+//! | `+x` | +x | −z | +y |
+//! | `-x` | −x | +z | +y |
+//! | `+y` | +y (down) | +x | −z |
+//! | `-y` | −y (up) | +x | +z |
+//! | `+z` | +z | +x | +y |
+//! | `-z` | −z | −x | +y |
+//!
+//! A horizontal cross (4 × 3 faces) holds them as
+//! ```text
+//!         [-y]
+//!   [-x]  [+z]  [+x]  [-z]
+//!         [+y]
+//! ```
+//!
+//! # Panorama convention
+//!
+//! Longitude runs left to right from −180° to +180°, 0 straight ahead (+z), +90° to the right
+//! (+x); latitude top to bottom from −90° (straight up, −y) to +90°.
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::{DMat3, DVec3};
+
+use super::camera_params::CameraParams;
+use super::spec;
+use crate::gpu::{
+    shaders, write_storage_image_descriptors, Buffer, ComputePipeline, DescriptorPool, Error, Gpu,
+    Result, Sampler,
+};
+use crate::imaging::Raster;
+use crate::model::{Camera, Intrinsics};
+
+/// A cube face, by the direction it looks along in the camera frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CubeFace {
+    PosX,
+    NegX,
+    PosY,
+    NegY,
+    PosZ,
+    NegZ,
+}
+
+impl CubeFace {
+    /// Every face, in the order of file lists (`+x -x +y -y +z -z`).
+    pub const ALL: [CubeFace; 6] = [
+        CubeFace::PosX,
+        CubeFace::NegX,
+        CubeFace::PosY,
+        CubeFace::NegY,
+        CubeFace::PosZ,
+        CubeFace::NegZ,
+    ];
+
+    /// The face's name as files and messages spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CubeFace::PosX => "+x",
+            CubeFace::NegX => "-x",
+            CubeFace::PosY => "+y",
+            CubeFace::NegY => "-y",
+            CubeFace::PosZ => "+z",
+            CubeFace::NegZ => "-z",
+        }
+    }
+
+    /// Camera frame → the face camera's frame (rows: the face's image right, image down and
+    /// viewing direction, in camera coordinates).
+    pub fn rotation(self) -> DMat3 {
+        let (right, down, along) = match self {
+            CubeFace::PosX => (DVec3::NEG_Z, DVec3::Y, DVec3::X),
+            CubeFace::NegX => (DVec3::Z, DVec3::Y, DVec3::NEG_X),
+            CubeFace::PosY => (DVec3::X, DVec3::NEG_Z, DVec3::Y),
+            CubeFace::NegY => (DVec3::X, DVec3::Z, DVec3::NEG_Y),
+            CubeFace::PosZ => (DVec3::X, DVec3::Y, DVec3::Z),
+            CubeFace::NegZ => (DVec3::NEG_X, DVec3::Y, DVec3::NEG_Z),
+        };
+        DMat3::from_cols(right, down, along).transpose()
+    }
+
+    /// The layer of the Vulkan cube image that holds this face. Vulkan addresses cubes y-up
+    /// (the shader looks up (x, −y, z)), so the camera's +y (down) is Vulkan's −Y layer.
+    pub fn layer(self) -> u32 {
+        match self {
+            CubeFace::PosX => 0,
+            CubeFace::NegX => 1,
+            CubeFace::NegY => 2,
+            CubeFace::PosY => 3,
+            CubeFace::PosZ => 4,
+            CubeFace::NegZ => 5,
+        }
+    }
+
+    /// The face's cell (column, row) in a horizontal cross of 4 × 3 faces.
+    pub fn cross_cell(self) -> (u32, u32) {
+        match self {
+            CubeFace::NegY => (1, 0),
+            CubeFace::NegX => (0, 1),
+            CubeFace::PosZ => (1, 1),
+            CubeFace::PosX => (2, 1),
+            CubeFace::NegZ => (3, 1),
+            CubeFace::PosY => (1, 2),
+        }
+    }
+
+    /// The pinhole camera of a face of side `side` (90° across).
+    pub fn camera(side: u32) -> Result<Camera> {
+        let f = side as f64 / 2.0;
+        let c = (side as f64 - 1.0) / 2.0;
+        Camera::from_coeffs(
+            side,
+            side,
+            Intrinsics {
+                fx: f,
+                fy: f,
+                cx: c,
+                cy: c,
+            },
+            &[0.0; 5],
+        )
+        .map_err(|e| Error::Input(e.to_string()))
+    }
+}
+
+/// The unit direction an equirectangular panorama's pixel `(u, v)` (OpenCV convention) shows.
+pub fn equirect_direction(u: f64, v: f64, (w, h): (u32, u32)) -> DVec3 {
+    let lon = ((u + 0.5) / w as f64 - 0.5) * std::f64::consts::TAU;
+    let lat = ((v + 0.5) / h as f64 - 0.5) * std::f64::consts::PI;
+    DVec3::new(lat.cos() * lon.sin(), lat.sin(), lat.cos() * lon.cos())
+}
+
+/// What the warp samples.
+pub enum SphereSource<'a> {
+    /// Six square faces of one size, in [`CubeFace::ALL`] order.
+    Cube(&'a [Raster; 6]),
+    /// An equirectangular panorama.
+    Equirect(&'a Raster),
+}
+
+impl SphereSource<'_> {
+    /// The rasters, in order.
+    pub fn rasters(&self) -> Vec<&Raster> {
+        match self {
+            SphereSource::Cube(faces) => faces.iter().collect(),
+            SphereSource::Equirect(p) => vec![p],
+        }
+    }
+}
+
+/// `layout(push_constant) uniform SpherePush` of `glsl/sphere_warp.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub struct SpherePush {
+    /// Per-channel magnification R G B, -.
+    pub chromatic: [f32; 4],
+    /// Value of pixels without a source.
+    pub fill: [f32; 4],
+    /// -, -, output width, output height.
+    pub sizes: [u32; 4],
+}
+
+/// Options of one sphere warp.
+#[derive(Debug, Clone)]
+pub struct SphereWarpOptions {
+    /// Per-channel magnification (R, G, B) for lateral chromatic aberration; `None`: off.
+    pub chromatic: Option<[f64; 3]>,
+    /// Value of pixels without a source (outside the lens's domain).
+    pub fill: [f32; 4],
+    /// Whether the mask is written.
+    pub write_mask: bool,
+}
+
+/// The compute pipeline of the sphere warp for one camera and source kind.
+pub struct SphereWarpPass {
+    gpu: Gpu,
+    pipeline: ComputePipeline,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    sampler: Sampler,
+    camera: Buffer,
+    push: SpherePush,
+    output_size: (u32, u32),
+}
+
+impl SphereWarpPass {
+    /// Builds the pipeline for `camera` (the output's lens) sampling a cube (`equirect` false)
+    /// or a panorama.
+    pub fn new(
+        gpu: &Gpu,
+        camera: &Camera,
+        equirect: bool,
+        options: &SphereWarpOptions,
+    ) -> Result<Self> {
+        let constants = CameraParams::spec_constants(camera.terms())
+            .bool(spec::CHROMATIC, options.chromatic.is_some())
+            .bool(spec::WRITE_MASK, options.write_mask);
+        let spirv = if equirect {
+            shaders::SPHERE_WARP_COMP_EQUIRECT
+        } else {
+            shaders::SPHERE_WARP_COMP
+        };
+        let pipeline = ComputePipeline::new(
+            gpu,
+            spirv,
+            &[
+                vk::DescriptorType::UNIFORM_BUFFER,
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                vk::DescriptorType::STORAGE_IMAGE,
+                vk::DescriptorType::STORAGE_IMAGE,
+            ],
+            std::mem::size_of::<SpherePush>() as u32,
+            constants,
+        )?;
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
+        let set = pool.allocate(&pipeline)?;
+        // A cube is filtered across its faces whatever the address mode (CLAMP_TO_EDGE, as
+        // the spec asks); a panorama wraps in longitude and clamps at the poles.
+        let modes = if equirect {
+            [
+                vk::SamplerAddressMode::REPEAT,
+                vk::SamplerAddressMode::CLAMP_TO_EDGE,
+                vk::SamplerAddressMode::CLAMP_TO_EDGE,
+            ]
+        } else {
+            [vk::SamplerAddressMode::CLAMP_TO_EDGE; 3]
+        };
+        let sampler = Sampler::with_modes(gpu, vk::Filter::LINEAR, modes)?;
+        let camera_buf = Buffer::from_pod(
+            gpu,
+            "sphere_warp.camera",
+            &[CameraParams::from_camera(camera)],
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+        )?;
+        let [r, g, b] = options.chromatic.unwrap_or([1.0; 3]).map(|v| v as f32);
+        Ok(SphereWarpPass {
+            gpu: gpu.clone(),
+            pipeline,
+            _pool: pool,
+            set,
+            sampler,
+            camera: camera_buf,
+            push: SpherePush {
+                chromatic: [r, g, b, 0.0],
+                fill: options.fill,
+                sizes: [0, 0, camera.width, camera.height],
+            },
+            output_size: (camera.width, camera.height),
+        })
+    }
+
+    /// The pipeline (its specialization constants show what was compiled in).
+    pub fn pipeline(&self) -> &ComputePipeline {
+        &self.pipeline
+    }
+
+    /// Points the pass at its source (a cube view or a 2D view, in `SHADER_READ_ONLY_OPTIMAL`)
+    /// and its output and mask (storage images in `GENERAL`).
+    ///
+    /// # Safety
+    /// No recorded work using this pass may be pending; the views must be live views of this
+    /// device of the kinds above.
+    pub unsafe fn bind(
+        &mut self,
+        source: vk::ImageView,
+        output: vk::ImageView,
+        mask: vk::ImageView,
+    ) {
+        crate::gpu::write_buffer_descriptors(
+            &self.gpu,
+            self.set,
+            &[(0, vk::DescriptorType::UNIFORM_BUFFER, &self.camera)],
+        );
+        let info = [vk::DescriptorImageInfo {
+            sampler: self.sampler.raw,
+            image_view: source,
+            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.set)
+            .dst_binding(1)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&info);
+        // SAFETY: binding 1 of this set is a combined image sampler; `info` outlives the call;
+        // the caller vouches that no pending work uses the set and that `source` is live.
+        unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
+        write_storage_image_descriptors(&self.gpu, self.set, &[(2, output), (3, mask)]);
+    }
+
+    /// Records the warp over the whole output.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass on a compute queue; the bound images must
+    /// be in the layouts [`SphereWarpPass::bind`] names, their writes visible to compute
+    /// reads, and alive until the work completes.
+    pub unsafe fn record(&self, cmd: vk::CommandBuffer) {
+        let (w, h) = self.output_size;
+        // SAFETY: the caller upholds `record`'s contract; the push is the pipeline's block.
+        unsafe {
+            self.pipeline.record_dispatch(
+                cmd,
+                self.set,
+                bytemuck::bytes_of(&self.push),
+                (w.div_ceil(8), h.div_ceil(8)),
+            )
+        };
+    }
+}

@@ -56,8 +56,30 @@ pub struct WarpArgs {
     #[arg(long, value_name = "CAM")]
     camera: PathBuf,
     /// Input image (PNG 8/16-bit or OpenEXR).
-    #[arg(long, value_name = "IN")]
-    input: PathBuf,
+    #[arg(
+        long,
+        value_name = "IN",
+        required_unless_present_any = ["input_cubemap", "input_equirect"]
+    )]
+    input: Option<PathBuf>,
+    /// distort only, instead of --input: a 360° cube map, as six square face images in the
+    /// order +x,-x,+y,-y,+z,-z (comma-separated) or as one horizontal cross (4 × 3 faces:
+    /// -y above +z; -x +z +x -z in the middle row; +y below). Faces are named in the camera
+    /// frame (x right, y down, z forward), each a 90° pinhole view from the centre; for
+    /// fisheyes of 180° and more. docs/how-it-works.md has each face's orientation.
+    #[arg(
+        long,
+        value_name = "FACES",
+        value_delimiter = ',',
+        num_args = 1,
+        conflicts_with_all = ["input", "input_equirect"]
+    )]
+    input_cubemap: Vec<PathBuf>,
+    /// distort only, instead of --input: an equirectangular 360° × 180° panorama (width =
+    /// 2 × height; longitude −180°..180° left to right with 0 straight ahead, +90° to the
+    /// right; latitude from straight up at the top row to straight down at the bottom).
+    #[arg(long, value_name = "PANO", conflicts_with = "input")]
+    input_equirect: Option<PathBuf>,
     /// Output image (.png keeps the input's bit depth; .exr writes 32-bit float).
     #[arg(long, value_name = "OUT")]
     output: PathBuf,
@@ -116,6 +138,13 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         super::output::distinct_outputs(&[("--output", &args.output), ("--mask", m)])?;
     }
     let cam = super::load_camera(&args.camera)?;
+    if !args.input_cubemap.is_empty() || args.input_equirect.is_some() {
+        return run_sphere(&args, direction, &cam);
+    }
+    let input = args
+        .input
+        .clone()
+        .ok_or_else(|| CliError::input("--input IN is missing"))?;
     let mut options = match direction {
         WarpDirection::Distort => WarpOptions::distort(),
         WarpDirection::Undistort => WarpOptions::undistort(),
@@ -149,7 +178,7 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         options.channel_cameras = Some(Box::new(cams));
     }
     let geometry = warp_geometry(&cam, &options)?;
-    let source = image_io::load(&args.input)?;
+    let source = image_io::load(&input)?;
     if (source.width, source.height) != geometry.source_size {
         let whose = match (direction, &args.source_camera) {
             (WarpDirection::Distort, Some(src)) => src.display().to_string(),
@@ -157,7 +186,7 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         };
         return Err(CliError::input(format!(
             "{}: the input is {}×{} but {whose} expects {}×{}",
-            args.input.display(),
+            input.display(),
             source.width,
             source.height,
             geometry.source_size.0,
@@ -179,7 +208,16 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
             (warped.image, warped.mask)
         }
     };
-    image_io::save(&out, &args.output)?;
+    save_outputs(&args, &out, &mask)?;
+    if direction == WarpDirection::Precorrect {
+        report_round_trip(&cam);
+    }
+    Ok(())
+}
+
+/// Writes the image and, when asked, the mask; reports what was filled.
+fn save_outputs(args: &WarpArgs, out: &Raster, mask: &[bool]) -> Result<(), CliError> {
+    image_io::save(out, &args.output)?;
     if let Some(m) = &args.mask {
         let raster = Raster {
             width: out.width,
@@ -201,10 +239,132 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         out.height,
         if filled > 0 { ", filled" } else { "" }
     );
-    if direction == WarpDirection::Precorrect {
-        report_round_trip(&cam);
-    }
     Ok(())
+}
+
+/// `distort` from a cube map or a panorama: each output pixel's ray samples it.
+fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result<(), CliError> {
+    use crate::headless::sphere_warp::run_sphere_warp;
+    use crate::pass::sphere_warp::{SphereSource, SphereWarpOptions};
+    let flag = if args.input_equirect.is_some() {
+        "--input-equirect"
+    } else {
+        "--input-cubemap"
+    };
+    if direction != WarpDirection::Distort {
+        return Err(CliError::input(format!(
+            "{flag}: a 360° source is for `vklens distort` (it renders the lens image); undistort and precorrect take --input"
+        )));
+    }
+    if args.backend == super::Backend::Cpu {
+        return Err(CliError::input(format!(
+            "{flag}: 360° sources run on --backend gpu"
+        )));
+    }
+    if args.source_camera.is_some() || !args.channel_cameras.is_empty() {
+        return Err(CliError::input(format!(
+            "{flag}: --source-camera and --channel-cameras are for pinhole sources"
+        )));
+    }
+    if args.method != WarpMethod::PerPixel(InverseMethod::Newton) {
+        return Err(CliError::input(format!(
+            "{flag}: the 360° warp inverts the lens by Newton per pixel; --method must be newton"
+        )));
+    }
+    let options = SphereWarpOptions {
+        chromatic: args.chromatic,
+        fill: args.fill.map(|f| f.map(|c| c as f32)).unwrap_or([0.0; 4]),
+        // The report counts filled pixels from the mask: always written.
+        write_mask: true,
+    };
+    let ctx = context()?;
+    let (out, mask) = if let Some(pano) = &args.input_equirect {
+        let source = image_io::load(pano)?;
+        if source.width != 2 * source.height {
+            return Err(CliError::input(format!(
+                "{}: an equirectangular panorama is twice as wide as high (360° × 180°), this one is {}×{}",
+                pano.display(),
+                source.width,
+                source.height
+            )));
+        }
+        eprintln!(
+            "360° source: equirectangular panorama {}×{} ({:.3}° per pixel)",
+            source.width,
+            source.height,
+            360.0 / source.width as f64
+        );
+        run_sphere_warp(&ctx, cam, SphereSource::Equirect(&source), &options)?
+    } else {
+        let (faces, layout) = load_cube_faces(&args.input_cubemap)?;
+        eprintln!(
+            "360° source: cube map of six {}×{} faces ({layout})",
+            faces[0].width, faces[0].width
+        );
+        run_sphere_warp(&ctx, cam, SphereSource::Cube(&faces), &options)?
+    };
+    super::finish(&ctx)?;
+    let mask: Vec<bool> = mask.iter().map(|&m| m > 127).collect();
+    save_outputs(args, &out, &mask)
+}
+
+/// Six face files (+x -x +y -y +z -z) or one horizontal cross, with the layout's name.
+fn load_cube_faces(paths: &[PathBuf]) -> Result<([Raster; 6], &'static str), CliError> {
+    use crate::pass::sphere_warp::CubeFace;
+    match paths {
+        [cross] => {
+            let img = image_io::load(cross)?;
+            let side = img.width / 4;
+            if side == 0 || img.width != 4 * side || img.height != 3 * side {
+                return Err(CliError::input(format!(
+                    "{}: a horizontal cross is 4 × 3 square faces (width = 4/3 height), this one is {}×{}; or give six face files +x,-x,+y,-y,+z,-z",
+                    cross.display(),
+                    img.width,
+                    img.height
+                )));
+            }
+            let faces = CubeFace::ALL.map(|f| {
+                let (col, row) = f.cross_cell();
+                img.crop(col * side, row * side, side, side)
+            });
+            Ok((faces, "one horizontal cross"))
+        }
+        six if six.len() == 6 => {
+            let mut faces = Vec::with_capacity(6);
+            for (face, path) in CubeFace::ALL.iter().zip(six) {
+                let img = image_io::load(path)?;
+                if img.width != img.height {
+                    return Err(CliError::input(format!(
+                        "{}: cube face {} must be square, it is {}×{}",
+                        path.display(),
+                        face.name(),
+                        img.width,
+                        img.height
+                    )));
+                }
+                if let Some(first) = faces.first().map(|f: &Raster| f.width) {
+                    if img.width != first {
+                        return Err(CliError::input(format!(
+                            "{}: cube face {} is {}×{}, the +x face {first}×{first}; every face has one size",
+                            path.display(),
+                            face.name(),
+                            img.width,
+                            img.height
+                        )));
+                    }
+                }
+                faces.push(img);
+            }
+            let faces: [Raster; 6] = faces
+                .try_into()
+                .map_err(|_| CliError::input("--input-cubemap: six faces expected"))?;
+            Ok((faces, "six files +x -x +y -y +z -z"))
+        }
+        other => Err(CliError::input(format!(
+            "--input-cubemap: give six face files +x,-x,+y,-y,+z,-z (comma-separated) or one horizontal cross, not {} file(s)",
+            other.len()
+        ))),
+    }
 }
 
 /// The Durham radial-correction paper's remark made visible: how far the closed-form inverse's round trip f(f⁻¹(r))

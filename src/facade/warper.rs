@@ -149,6 +149,9 @@ pub fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeome
             )))
         }
     };
+    camera
+        .check_method(method)
+        .map_err(|e| Error::input(format!("--method {method}: {e}")))?;
     let mut geometry = match options.direction {
         WarpDirection::Distort => WarpGeometry::distort(camera.clone(), method),
         WarpDirection::Undistort | WarpDirection::Precorrect => {

@@ -61,6 +61,32 @@ impl Raster {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+    /// The `w × h` block whose top-left pixel is `(x, y)` (clipped to the image).
+    pub fn crop(&self, x: u32, y: u32, w: u32, h: u32) -> Raster {
+        let w = w.min(self.width.saturating_sub(x));
+        let h = h.min(self.height.saturating_sub(y));
+        fn block<T: Copy>(p: &[T], stride: u32, (x, y, w, h): (u32, u32, u32, u32)) -> Vec<T> {
+            (y..y + h)
+                .flat_map(|row| {
+                    let start = (row * stride + x) as usize;
+                    p[start..start + w as usize].iter().copied()
+                })
+                .collect()
+        }
+        let r = (x, y, w, h);
+        let pixels = match &self.pixels {
+            Pixels::Rgba8(p) => Pixels::Rgba8(block(p, self.width, r)),
+            Pixels::Rgba32F(p) => Pixels::Rgba32F(block(p, self.width, r)),
+            Pixels::R32Uint(p) => Pixels::R32Uint(block(p, self.width, r)),
+        };
+        Raster {
+            width: w,
+            height: h,
+            pixels,
+            bit_depth: self.bit_depth,
+        }
+    }
+
     /// Pixel `i` as float RGBA (8-bit scaled to 0..1; IDs as numbers in .r).
     pub fn rgba_f32(&self, i: usize) -> [f32; 4] {
         match &self.pixels {

@@ -8,7 +8,8 @@ layout(set = 0, binding = 1, std140) uniform GeometryFrame {
     mat4 previous_view_projection;  // the same for the pose the flow starts from
     mat4 view;                      // world-to-camera pose (depth output: camera z)
     vec4 viewport;                  // x, y: image width, height (px); z: the discard bound
-                                    // 1 + δ + D on |undistorted NDC|; w: unused
+                                    // 1 + δ + D on |undistorted NDC|; w: near (a
+                                    // fisheye's vertices are dropped nearer than it)
 } frame;
 
 #endif

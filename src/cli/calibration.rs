@@ -9,7 +9,7 @@ use super::render::PathArg;
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
 use crate::imaging::file as image_io;
 use crate::pass::geometry::{Outputs, DEFAULT_DELTA};
-use crate::render::{RenderPath, RenderRequest, SceneRenderer};
+use crate::render::{RenderRequest, SceneRenderer};
 use crate::scene::builtin::{self, parse_board_size, Board};
 use crate::scene::calibration::board_poses;
 
@@ -92,15 +92,12 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
             camera: camera.clone(),
             pose: *pose,
             previous_pose: *pose,
-            path: match args.path {
-                PathArg::Vertex => RenderPath::Vertex {
-                    delta: DEFAULT_DELTA,
-                },
-                PathArg::Warp => RenderPath::Warp {
-                    method: crate::model::InverseMethod::Newton,
-                    density: args.density,
-                },
-            },
+            path: args.path.render_path(
+                &camera,
+                DEFAULT_DELTA,
+                crate::model::InverseMethod::Newton,
+                args.density,
+            ),
             outputs: Outputs::COLOR,
             supersample: args.supersample,
             jitter: args.jitter,
@@ -108,7 +105,12 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
             background: [0.5, 0.5, 0.5, 1.0],
             chromatic: None,
         };
-        let rendered = renderer.render(&scene, &request, &mut |_| {})?;
+        // Path changes (a cube map where no pinhole source fits) are said once, for the first view.
+        let rendered = renderer.render(&scene, &request, &mut |m| {
+            if i == 0 && m.contains("instead") {
+                super::progress_done(m);
+            }
+        })?;
         let color = rendered
             .color
             .ok_or_else(|| CliError::internal("the render produced no colour image"))?;
@@ -126,7 +128,7 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     let json = serde_json::json!({
         "board": {"columns": columns, "rows": rows, "square_m": args.square},
         "image_size": [camera.width, camera.height],
-        "path": match args.path { PathArg::Vertex => "vertex", PathArg::Warp => "warp" },
+        "path": match args.path { PathArg::Vertex => "vertex", PathArg::Warp => "warp", PathArg::Cube => "cube" },
         "camera": {
             "width": camera.width, "height": camera.height,
             "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy,

@@ -18,8 +18,32 @@ pub enum PathArg {
     /// flow and depth, as long as the mesh is fine (see --tessellate).
     Vertex,
     /// A pinhole render of the overscanned frustum, then the compute warp (inverse model per
-    /// pixel): colour bilinear, IDs and depth nearest, no flow.
+    /// pixel): colour bilinear, IDs and depth nearest, no flow. Where no pinhole source can
+    /// hold the lens (180° and more, or beyond the device's image limit) it renders a cube map
+    /// instead, and says so.
     Warp,
+    /// Six 90° pinhole faces of a cube map, then the warp by each pixel's ray (colour only):
+    /// any lens, fisheyes past 180° included. Face size from --density.
+    Cube,
+}
+
+impl PathArg {
+    /// The render path for the camera, with the warp's density (source pixels per output pixel).
+    pub fn render_path(
+        self,
+        camera: &crate::model::Camera,
+        delta: f64,
+        method: crate::model::InverseMethod,
+        density: f64,
+    ) -> RenderPath {
+        match self {
+            PathArg::Vertex => RenderPath::Vertex { delta },
+            PathArg::Warp => RenderPath::Warp { method, density },
+            PathArg::Cube => RenderPath::Cube {
+                side: crate::model::overscan::cube_face_side(camera, density),
+            },
+        }
+    }
 }
 
 #[derive(Args, Debug)]
@@ -37,7 +61,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "CAM")]
     camera: Option<PathBuf>,
     /// checkerboard[:COLSxROWS[:SQUARE_M]] (OpenCV's board, inner corners, default 9x6 of
-    /// 0.04 m), grid[:N] (N×N textured quads, default 16), boxes, or an .obj/.gltf/.glb file.
+    /// 0.04 m), grid[:N] (N×N textured quads, default 16), boxes, room (a 4 m room seen from its centre: for fisheyes), or an .obj/.gltf/.glb file.
     /// Or a scene file (.toml, see examples/scenes/): then the planner builds the cheapest
     /// pipeline for the effects, outputs and accuracy it asks for, and --out names a folder.
     #[arg(long, value_name = "SCENE")]
@@ -224,17 +248,14 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         flow: args.flow.is_some(),
         depth: args.depth.is_some(),
     };
+    let path = args
+        .path
+        .render_path(&camera, args.delta, args.method, args.density);
     let request = RenderRequest {
         camera,
         pose,
         previous_pose,
-        path: match args.path {
-            PathArg::Vertex => RenderPath::Vertex { delta: args.delta },
-            PathArg::Warp => RenderPath::Warp {
-                method: args.method,
-                density: args.density,
-            },
-        },
+        path,
         outputs,
         supersample: args.supersample,
         jitter: args.jitter,

@@ -99,3 +99,46 @@ pub fn overscan(camera: &Camera, density: f64) -> Result<Overscan, ModelError> {
         height: height as u32,
     })
 }
+
+/// The side of the cube faces that give a sphere warp `density` source pixels per output pixel
+/// where the faces sample most coarsely (their centres, `S / 2` pixels per unit tangent) and
+/// the lens most finely (its centre, `f` pixels per radian): `S = 2 f density`.
+pub fn cube_face_side(camera: &Camera, density: f64) -> u32 {
+    let f = camera.intrinsics.fx.max(camera.intrinsics.fy);
+    (2.0 * f * density)
+        .ceil()
+        .clamp(16.0, MAX_IMAGE_SIDE as f64) as u32
+}
+
+/// Whether some valid pixel of `camera`'s frame sees a direction no pinhole source can hold
+/// (at or past the domain's radius cap, 88.9° off the axis): a fisheye of 180° and more, or
+/// one whose frame corners reach past 90°.
+pub fn beyond_a_pinhole(camera: &Camera) -> bool {
+    let cap = super::ValidDomain::RADIUS_CAP.atan();
+    let (w, h) = (camera.width as f64, camera.height as f64);
+    let border = (0..=256).flat_map(|i| {
+        let t = i as f64 / 256.0;
+        [
+            DVec2::new(t * (w - 1.0), 0.0),
+            DVec2::new(t * (w - 1.0), h - 1.0),
+            DVec2::new(0.0, t * (h - 1.0)),
+            DVec2::new(w - 1.0, t * (h - 1.0)),
+        ]
+    });
+    border
+        .filter_map(|p| camera.unproject(p))
+        .any(|ray| ray.z <= cap.cos())
+        || camera.fisheye_lens().is_some_and(|f| {
+            // The domain's edge inside the frame (an image circle).
+            f.theta_max() >= cap && {
+                let k = camera.intrinsics;
+                let r = f.theta_d(cap).0;
+                let c = DVec2::new(k.cx, k.cy);
+                (0..64).any(|i| {
+                    let a = TAU * i as f64 / 64.0;
+                    let p = c + DVec2::new(a.cos() * r * k.fx, a.sin() * r * k.fy);
+                    p.x >= -0.5 && p.y >= -0.5 && p.x <= w - 0.5 && p.y <= h - 0.5
+                })
+            }
+        })
+}

@@ -205,6 +205,12 @@ fn discard_bound(projection: &Projection, camera: &Camera) -> Result<f64> {
                     "δ = {delta}: the discard tolerance must be ≥ 0"
                 )));
             }
+            if camera.fisheye_lens().is_some() {
+                // A fisheye's vertices are tested in its own distorted image (alg1.glsl): its
+                // domain check, not a frustum, keeps the model from folding; a triangle off
+                // the image is clipped by the rasterizer like any other.
+                return Ok(f64::INFINITY);
+            }
             Ok(1.0 + delta + discard_margin(camera))
         }
         Projection::Pinhole => Ok(f64::INFINITY),
@@ -670,7 +676,7 @@ impl GeometryPass {
                 c.width as f32,
                 c.height as f32,
                 discard_bound.min(f32::MAX as f64) as f32,
-                0.0,
+                self.desc.near as f32,
             ],
         }
     }

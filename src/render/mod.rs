@@ -5,7 +5,10 @@
 //! * **warp** (Sec. 3.3): a pinhole render of the overscanned frustum (so barrel lenses get
 //!   their borders), then the compute warp — bilinear for colour, nearest for IDs and depth.
 //!   Flow cannot be warped honestly (its vectors live in the pinhole image), so the warp path
-//!   refuses it (Table 1).
+//!   refuses it (Table 1);
+//! * **cube**: where no pinhole frustum holds the lens (a fisheye of 180° and more, or an
+//!   overscanned source beyond the device's image limit), six 90° pinhole faces and the sphere
+//!   warp by ray direction; the warp path turns to it by itself and says so.
 //!
 //! Anti-aliasing (colour only; IDs, flow and depth are rendered once at 1×, they must not be
 //! averaged): `supersample` renders at `s×` the resolution with the scaled camera (the lens is
@@ -55,7 +58,21 @@ pub enum RenderPath {
     /// No lens at all: the Sec. 3.1 pinhole projection of the camera's intrinsics (its
     /// distortion is ignored), no geometry shader, no warp.
     Pinhole,
+    /// Six pinhole renders of a cube map's 90° faces of `side` pixels, then the sphere warp
+    /// samples them by the ray of each output pixel: for lenses no single pinhole frustum can
+    /// hold (fisheyes of 180° and more; wide lenses whose overscanned source would exceed the
+    /// device's image limit). Colour only.
+    Cube { side: u32 },
 }
+
+/// Largest overscanned pinhole source the warp path renders before it turns to a cube map,
+/// in bytes of RGBA32F (4 GiB: the device limit usually binds first).
+pub const MAX_WARP_SOURCE_BYTES: u64 = 4 << 30;
+
+/// Largest cube map the cube path renders, all six faces together, in bytes (512 MiB: the
+/// faces are rendered, read back and uploaded again, so the host holds them twice more). A
+/// face side beyond it is clamped, and the density it gives is reported.
+pub const MAX_CUBE_BYTES: u64 = 512 << 20;
 
 /// What to render.
 #[derive(Debug, Clone)]
@@ -354,7 +371,118 @@ fn render_with(
         RenderPath::Warp { method, density } => {
             render_warp_path(renderer, scene, request, method, density, s, progress)
         }
+        RenderPath::Cube { side } => render_cube_path(renderer, scene, request, side, s, progress),
     }
+}
+
+/// Why the warp path cannot use an overscanned pinhole source for `camera`, if it cannot.
+pub fn pinhole_source_refusal(camera: &Camera, density: f64, max_side: u32) -> Option<String> {
+    if crate::model::overscan::beyond_a_pinhole(camera) {
+        return Some(
+            "the lens sees directions 90° and more off its axis, which no pinhole source holds"
+                .into(),
+        );
+    }
+    match overscan(camera, density) {
+        Err(e) => Some(format!("the overscan fails ({e})")),
+        Ok(ov) if ov.width > max_side || ov.height > max_side => Some(format!(
+            "the overscanned pinhole source would be {}×{}, beyond the device's {max_side} px image limit",
+            ov.width, ov.height
+        )),
+        Ok(ov) if ov.width as u64 * ov.height as u64 * 16 > MAX_WARP_SOURCE_BYTES => Some(format!(
+            "the overscanned pinhole source would be {}×{} ({} MiB), beyond the {} MiB budget",
+            ov.width,
+            ov.height,
+            ov.width as u64 * ov.height as u64 * 16 >> 20,
+            MAX_WARP_SOURCE_BYTES >> 20
+        )),
+        Ok(_) => None,
+    }
+}
+
+/// The cube path: six face renders, then the sphere warp (per jittered pass, at s×).
+fn render_cube_path(
+    renderer: &mut SceneRenderer,
+    scene: &Scene,
+    request: &RenderRequest,
+    side: u32,
+    s: u32,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Rendered> {
+    use crate::headless::sphere_warp::run_sphere_warp;
+    use crate::pass::sphere_warp::{CubeFace, SphereSource, SphereWarpOptions};
+    let o = request.outputs;
+    if o.flow || o.ids || o.depth {
+        return Err(Error::input(
+            "IDs, flow and depth through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); use --path vertex for them",
+        ));
+    }
+    let cam = &request.camera;
+    let mut out = Rendered {
+        width: cam.width,
+        height: cam.height,
+        ..Default::default()
+    };
+    let Some(format) = o.color else {
+        return Ok(out);
+    };
+    let format = match format {
+        ColorFormat::Rgba8 => ColorFormat::Rgba8,
+        _ => ColorFormat::Rgba32F,
+    };
+    let texel = if format == ColorFormat::Rgba8 { 4 } else { 16 };
+    let budget_side = ((MAX_CUBE_BYTES / (6 * texel)) as f64).sqrt() as u32;
+    let wanted = side.saturating_mul(s);
+    let big_side = wanted
+        .min(renderer.ctx.gpu().max_image_side())
+        .min(budget_side);
+    if big_side < wanted {
+        progress(&format!(
+            "cube faces clamped to {big_side}×{big_side} (the device limit or the {} MiB cube budget): {:.2} face pixels per output pixel at the centre instead of {:.2}",
+            MAX_CUBE_BYTES >> 20,
+            big_side as f64 / (2.0 * cam.intrinsics.fx.max(cam.intrinsics.fy) * s as f64),
+            wanted as f64 / (2.0 * cam.intrinsics.fx.max(cam.intrinsics.fy) * s as f64),
+        ));
+    }
+    progress(&format!(
+        "cube map: six {big_side}×{big_side} pinhole faces + sphere warp at {s}× in {} pass(es) (cube path)",
+        request.jitter.max(1)
+    ));
+    let buffers = renderer.upload(&scene.mesh, scene.texture.as_ref())?;
+    let face_camera = CubeFace::camera(big_side)?;
+    let mut faces = Vec::with_capacity(6);
+    for face in CubeFace::ALL {
+        let r = face.rotation();
+        let pose = Pose {
+            rotation: r * request.pose.rotation,
+            translation: r * request.pose.translation,
+        };
+        let mut desc = GeometryDesc::new(
+            face_camera.clone(),
+            Projection::Pinhole,
+            Outputs::color_only(Some(format)),
+        );
+        desc.background = request.background;
+        let rendered = renderer.draw(desc, &buffers, &pose, &pose)?;
+        faces.push(
+            rendered
+                .color
+                .ok_or_else(|| Error::internal("a cube face rendered no colour"))?,
+        );
+    }
+    let faces: [Raster; 6] = faces
+        .try_into()
+        .map_err(|_| Error::internal("six cube faces expected"))?;
+    let options = SphereWarpOptions {
+        chromatic: request.chromatic,
+        fill: request.background,
+        write_mask: false,
+    };
+    let ctx = renderer.ctx;
+    out.color = Some(antialiased(cam, s, request.jitter, &mut |big, _| {
+        Ok(run_sphere_warp(ctx, &big, SphereSource::Cube(&faces), &options)?.0)
+    })?);
+    Ok(out)
 }
 
 fn render_warp_path(
@@ -373,6 +501,25 @@ fn render_warp_path(
         ));
     }
     let cam = &request.camera;
+    // At s× (supersampling), as the source is rendered.
+    let max_side = renderer.ctx.gpu().max_image_side();
+    if let Some(why) = pinhole_source_refusal(&scaled_camera(cam, s)?, density, max_side) {
+        if o.ids || o.depth {
+            return Err(Error::input(format!(
+                "{why}: the warp path would need a cube map, which carries colour only; use --path vertex for IDs and depth"
+            )));
+        }
+        let side = crate::model::overscan::cube_face_side(cam, density);
+        progress(&format!(
+            "{why}{}: a cube map of six {side}×{side} faces instead",
+            if s > 1 {
+                format!(" at {s}× supersampling")
+            } else {
+                String::new()
+            }
+        ));
+        return render_cube_path(renderer, scene, request, side, s, progress);
+    }
     let (pinhole, geometry) = WarpGeometry::overscanned(cam, method, density)?;
     let buffers = renderer.upload(&scene.mesh, scene.texture.as_ref())?;
     let mut out = Rendered {

@@ -161,6 +161,44 @@ pub fn grid(n: u32) -> Scene {
     }
 }
 
+/// A 4 m room around the origin, seen from inside: six walls of 32 × 32 quads, each tinted
+/// (IDs 1..6: +x, −x, +y floor, −y ceiling, +z, −z) under the repeated chart texture. What a
+/// fisheye of 180° and more sees from the centre (its default pose: the identity, at the
+/// centre, looking along +z).
+pub fn room() -> Scene {
+    let mut mesh = Mesh::default();
+    let h = 2.0;
+    let walls: [(DVec3, DVec3, DVec3, [u8; 4]); 6] = [
+        (DVec3::X, DVec3::Z, DVec3::Y, [255, 140, 140, 255]),
+        (DVec3::NEG_X, DVec3::Z, DVec3::Y, [140, 255, 140, 255]),
+        (DVec3::Y, DVec3::X, DVec3::Z, [140, 140, 255, 255]),
+        (DVec3::NEG_Y, DVec3::X, DVec3::Z, [255, 255, 140, 255]),
+        (DVec3::Z, DVec3::X, DVec3::Y, [255, 140, 255, 255]),
+        (DVec3::NEG_Z, DVec3::X, DVec3::Y, [140, 255, 255, 255]),
+    ];
+    for (id, (normal, u, v, tint)) in walls.into_iter().enumerate() {
+        let origin = normal * h - u * h - v * h;
+        patch(
+            &mut mesh,
+            origin,
+            u * (2.0 * h),
+            v * (2.0 * h),
+            32,
+            tint,
+            id as u32 + 1,
+            ([0.0, 0.0], [4.0, 0.0], [0.0, 4.0]),
+        );
+    }
+    Scene {
+        name: "room".into(),
+        mesh,
+        texture: Some(chart_texture(512)),
+        view_from: DVec3::ZERO,
+        view_down: DVec3::Y,
+        board: None,
+    }
+}
+
 /// Three boxes on a textured floor, each face subdivided 8 × 8; the floor is ID 1, the
 /// boxes 2, 3, 4.
 pub fn boxes() -> Scene {
@@ -269,6 +307,7 @@ pub fn parse(spec: &str) -> Result<Scene, SceneError> {
             Ok(grid(n))
         }
         "boxes" if rest.is_empty() => Ok(boxes()),
+        "room" if rest.is_empty() => Ok(room()),
         _ => super::load::load_file(std::path::Path::new(spec)),
     }
 }

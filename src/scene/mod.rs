@@ -176,7 +176,8 @@ pub struct Scene {
     /// RGBA8 texture sampled with the vertices' uv (white when absent).
     pub texture: Option<Raster>,
     /// Direction from the scene's centre towards the default camera, and the world direction
-    /// that appears downwards in the default view.
+    /// that appears downwards in the default view. A zero `view_from` is a scene seen from
+    /// inside: its default pose is the identity.
     pub view_from: DVec3,
     pub view_down: DVec3,
     /// For a calibration board: its inner corners (columns, rows) and square size (metres).
@@ -187,6 +188,9 @@ impl Scene {
     /// A pose that shows the whole scene, centred, filling about 80 % of the smaller field of
     /// view of `camera` (its Sec. 3.1 frustum).
     pub fn default_pose(&self, camera: &Camera) -> Pose {
+        if self.view_from == DVec3::ZERO {
+            return Pose::IDENTITY;
+        }
         let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
         let half_tangents = [-f.left, f.right, -f.top, f.bottom];
         let (lo, hi) = self.mesh.bounds();

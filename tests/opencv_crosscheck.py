@@ -8,6 +8,14 @@
 (b) `vklens distort` followed by OpenCV's undistortion returns the pinhole image (Lambers et al.'s
     Fig. 2 round trip), with a stated PSNR inside the valid region (bound 40 dB; measured
     42.8-43.9 dB: two bilinear resamplings of an 8-bit image).
+(c) On fisheye cameras: `vklens undistort` equals cv2.fisheye.initUndistortRectifyMap + cv2.remap
+    to within a grey level (bounds as (a)); `vklens points undistort` equals
+    cv2.fisheye.undistortPoints run with tight criteria (1e-6 px); `vklens points distort` of
+    camera-frame points equals cv2.fisheye.projectPoints (1e-9 px) on a fifth camera made here.
+    OpenCV's fisheye undistortPoints and initUndistortRectifyMap take no skew (projectPoints
+    takes α as an argument): for the skew camera vklens is compared with maps and points made
+    from cv2.fisheye.projectPoints with α itself, and OpenCV's own inverse is shown to miss
+    (its reprojection error is printed).
 
 Usage: opencv_crosscheck.py VKLENS_BINARY SHARED_DIR
 """
@@ -93,6 +101,90 @@ for name, bound in [("seed_fig2", 40.0), ("seed_fig1_barrel", 40.0), ("webcam_pl
     print(f"  {name}: PSNR {p:.1f} dB over {region.sum()} px (bound {bound} dB)")
     if p < bound:
         failures.append(f"(b) {name}: PSNR {p:.1f} dB < {bound} dB")
+
+print("(c) fisheye: undistort vs cv2.fisheye.initUndistortRectifyMap + remap; points vs cv2.fisheye")
+fish_dir = os.path.join(shared, "reference", "fisheye")
+
+
+def fisheye(name):
+    c = json.load(open(os.path.join(fish_dir, f"{name}.json")))
+    K = np.array([[c["fx"], 0, c["cx"]], [0, c["fy"], c["cy"]], [0, 0, 1]], dtype=np.float64)
+    D = np.array(c["dist_coeffs"], dtype=np.float64)
+    return c["width"], c["height"], K, D, c.get("alpha", 0.0), os.path.join(fish_dir, f"{name}.json")
+
+
+def points_cli(cam, mode, rows, *extra):
+    out = subprocess.run([vklens, "points", mode, "--camera", cam, *extra], input=json.dumps(rows),
+                         capture_output=True, text=True, check=True).stdout
+    return json.loads(out)
+
+
+for name in ["fish_wide160", "fish_equidistant185", "fish_skew170"]:
+    w, h, K, D, alpha, cam = fisheye(name)
+    photo = smooth_image(w, h)
+    src, out, mask = (os.path.join(tmp, f"{name}_{s}.png") for s in ("photo", "vk", "mask"))
+    cv2.imwrite(src, photo)
+    run("undistort", "--camera", cam, "--input", src, "--output", out, "--mask", mask)
+    ours = cv2.imread(out)[..., :3]
+    valid = cv2.imread(mask, cv2.IMREAD_GRAYSCALE) > 127
+    # cv2.fisheye.projectPoints takes α as an argument; its undistortPoints and
+    # initUndistortRectifyMap have none (they drop the skew).
+    skew = alpha != 0
+    if skew:
+        # The map initUndistortRectifyMap would be if it applied α: projectPoints of the rays
+        # of the pinhole output (vklens's: the camera's fx fy cx cy, no skew).
+        v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+        rays = np.dstack([(u - K[0, 2]) / K[0, 0], (v - K[1, 2]) / K[1, 1], np.ones_like(u)])
+        m, _ = cv2.fisheye.projectPoints(rays.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), K, D, alpha=alpha)
+        mx, my = (m.reshape(h, w, 2)[..., i].astype(np.float32) for i in (0, 1))
+    else:
+        mx, my = cv2.fisheye.initUndistortRectifyMap(K, D, np.eye(3), K, (w, h), cv2.CV_32FC1)
+    theirs = cv2.remap(photo, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+    inner = valid & (mx >= 0.5) & (my >= 0.5) & (mx <= w - 1.5) & (my <= h - 1.5)
+    d = np.abs(ours.astype(int) - theirs.astype(int))[inner]
+    mean, worst = d.mean(), d.max()
+    print(f"  {name} undistort: {inner.sum()} px compared, mean {mean:.5f}, max {worst} grey levels")
+    if inner.sum() < 1000 or mean > 0.05 or worst > 1:
+        failures.append(f"(c) {name}: mean {mean:.5f} / max {worst} levels exceed 0.05 / 1")
+    pts = json.load(open(os.path.join(fish_dir, f"{name}.points.json")))["inside"]
+    pixels = np.array(pts["pixel"], dtype=np.float64)
+    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-15)
+    cv = cv2.fisheye.undistortPoints(pixels.reshape(-1, 1, 2), K, D, criteria=crit).reshape(-1, 2)
+    vk = np.array(points_cli(cam, "undistort", pixels.tolist()), dtype=np.float64)
+
+    def reprojection(x):
+        rays = np.hstack([x, np.ones((len(x), 1))]).reshape(-1, 1, 3)
+        back, _ = cv2.fisheye.projectPoints(rays, np.zeros(3), np.zeros(3), K, D, alpha=alpha)
+        return np.linalg.norm(back.reshape(-1, 2) - pixels, axis=1).max()
+
+    if skew:
+        err = reprojection(vk)
+        print(f"  {name} undistortPoints: {len(vk)} points, vklens reprojects through cv2.fisheye.projectPoints to {err:.2e} px; OpenCV's own inverse (α dropped) to {reprojection(cv):.2e} px")
+    else:
+        # In pixels of angle (θ moves a pixel by about f per radian): the normalized
+        # difference over 1 + r² (d atan r / dr), times f.
+        err = (np.linalg.norm(vk - cv, axis=1) / (1 + np.sum(vk**2, axis=1)) * K[0, 0]).max()
+        print(f"  {name} undistortPoints: {len(vk)} points, worst {err:.2e} px from cv2.fisheye")
+    if not err <= 1e-6:
+        failures.append(f"(c) {name}: undistortPoints differs by {err:.2e} px")
+
+# A fifth fisheye, made here: cv2.fisheye.projectPoints on points below 85°.
+rng = np.random.default_rng(5)
+K5 = np.array([[612.3, 0, 640.2], [0, 611.8, 479.6], [0, 0, 1]])
+D5 = np.array([0.041, -0.013, 0.0021, -0.00033])
+five = os.path.join(tmp, "fish_fifth.json")
+json.dump({"model": "opencv_fisheye", "width": 1280, "height": 960, "fx": K5[0, 0], "fy": K5[1, 1],
+           "cx": K5[0, 2], "cy": K5[1, 2], "dist_coeffs": D5.tolist()}, open(five, "w"))
+theta = np.radians(rng.uniform(0, 85, 400))
+phi = rng.uniform(0, 2 * np.pi, 400)
+dist = rng.uniform(0.5, 30, 400)
+xyz = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], 1) * dist[:, None]
+cv, _ = cv2.fisheye.projectPoints(xyz.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), K5, D5)
+vk = np.array(points_cli(five, "distort", xyz.tolist()), dtype=np.float64)
+err = np.linalg.norm(vk - cv.reshape(-1, 2), axis=1).max()
+print(f"  fish_fifth projectPoints: {len(vk)} points, worst {err:.2e} px from cv2.fisheye")
+if not err <= 1e-9:
+    failures.append(f"(c) fifth camera: projectPoints differs by {err:.2e} px")
 
 if failures:
     print("FAILED:\n  " + "\n  ".join(failures))

@@ -225,8 +225,14 @@ fn an_unknown_camera_model_is_refused_naming_it() {
         r#"{"model": "omnidirectional", "width": 640, "height": 480, "fx": 300, "fy": 300,
             "cx": 319.5, "cy": 239.5, "dist_coeffs": [0.1, 0.01, 0.0, 0.0]}"#,
     );
-    assert!(e.contains("`model`") && e.contains("omnidirectional"), "{e}");
-    assert!(e.contains("opencv_fisheye"), "the models it reads are listed: {e}");
+    assert!(
+        e.contains("`model`") && e.contains("omnidirectional"),
+        "{e}"
+    );
+    assert!(
+        e.contains("opencv_fisheye"),
+        "the models it reads are listed: {e}"
+    );
     let e =
         err(r#"{"model": 3, "width": 640, "height": 480, "fx": 300, "fy": 300, "cx": 1, "cy": 1}"#);
     assert!(e.contains("`model` must be a string"), "{e}");

@@ -384,3 +384,42 @@ fn malformed_fisheye_files_name_the_file_and_the_key() {
         assert_eq!(e.lines().count(), 1, "{e}");
     }
 }
+
+#[test]
+fn ros_camera_info_carries_every_camera_ros_can_describe() {
+    let mut cameras: Vec<Camera> = index()["cameras"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(json_camera)
+        .collect();
+    let standard = |coeffs: &[f64]| {
+        parse_camera(
+            &serde_json::json!({"width": 800, "height": 600, "fx": 500.5, "fy": 501.25,
+                "cx": 399.5, "cy": 300.25, "dist_coeffs": coeffs})
+            .to_string(),
+            "std.json",
+        )
+        .unwrap()
+    };
+    cameras.push(standard(&[-0.1, 0.02, 0.001, -0.002, 0.003]));
+    cameras.push(standard(&[
+        -0.1, 0.02, 0.001, -0.002, 0.003, 0.01, 0.002, 0.0001,
+    ]));
+    for camera in &cameras {
+        let text = camera.to_ros_camera_info().unwrap();
+        let back =
+            parse_camera(&text, "camera_info.yaml").unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert_eq!(back.model_name(), camera.model_name());
+        for p in [DVec3::new(0.2, -0.1, 1.0), DVec3::new(-0.7, 0.4, 0.5)] {
+            let (a, b) = (camera.project(p).unwrap(), back.project(p).unwrap());
+            assert!((a - b).length() < 1e-9, "{text}: {a} vs {b}");
+        }
+    }
+    // Thin prism and tilt terms have no place in camera_info: said, not dropped.
+    let prism = standard(&[
+        -0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.001, 0.0, 0.0, 0.0,
+    ]);
+    let e = prism.to_ros_camera_info().unwrap_err().to_string();
+    assert!(e.contains("thin prism"), "{e}");
+}

@@ -124,16 +124,13 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
         }));
     }
     finish(&ctx)?;
-    let k = camera.intrinsics;
     let json = serde_json::json!({
         "board": {"columns": columns, "rows": rows, "square_m": args.square},
         "image_size": [camera.width, camera.height],
         "path": match args.path { PathArg::Vertex => "vertex", PathArg::Warp => "warp", PathArg::Cube => "cube" },
-        "camera": {
-            "width": camera.width, "height": camera.height,
-            "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy,
-            "dist_coeffs": camera.distortion.to_coeffs(),
-        },
+        // The camera as a camera file reads it (its model included: tests/calibrate.py picks
+        // cv2.fisheye for a fisheye).
+        "camera": camera.to_json(),
         "pose_convention": "OpenCV: p_camera = R(rvec) p_board + tvec; board corner (i, j) at (i·square, j·square, 0)",
         "views": views,
     });

@@ -195,6 +195,18 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     crate::imaging::file::write_atomically(&out.join("plan.json"), |tmp| {
         std::fs::write(tmp, &json)
     })?;
+    // The camera the frames were rendered through, for the user's own pipeline.
+    if let Some(camera) = &plan.camera {
+        camera.save(out.join("camera.json"))?;
+        match camera.to_ros_camera_info() {
+            Ok(text) => {
+                crate::imaging::file::write_atomically(&out.join("camera_info.yaml"), |tmp| {
+                    std::fs::write(tmp, &text)
+                })?
+            }
+            Err(e) => progress_done(&format!("camera_info.yaml not written: {e}")),
+        }
+    }
     progress_done(&format!("{} frame(s) in {}", done.len(), out.display()));
     Ok(())
 }

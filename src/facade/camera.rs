@@ -149,6 +149,51 @@ impl Camera {
         }
     }
 
+    /// The camera as a ROS `camera_info` YAML (what `camera_calibration` writes and
+    /// `image_proc` reads): `plumb_bob` (k1 k2 p1 p2 k3), `rational_polynomial` (8
+    /// coefficients) or, for a fisheye, `equidistant` with the skew as `K[0][1] = α fx`. `P` is
+    /// `K` (the raw camera). A camera ROS cannot describe (thin prism or tilt terms) is an
+    /// `Unsupported` error that says which terms.
+    pub fn to_ros_camera_info(&self) -> Result<String> {
+        let k = self.intrinsics;
+        let (skew, model, coeffs) = if let Some(f) = self.fisheye_lens() {
+            (f.alpha * k.fx, "equidistant", f.k.to_vec())
+        } else {
+            let t = self.distortion.terms();
+            if t.prism || t.tilt {
+                return Err(Error::Unsupported(
+                    "ROS camera_info has no thin prism (s1..s4) or tilt (tau_x, tau_y) terms: only camera.json describes this camera".into(),
+                ));
+            }
+            let c = self.distortion.to_coeffs();
+            if t.rational {
+                (0.0, "rational_polynomial", c[..8].to_vec())
+            } else {
+                (0.0, "plumb_bob", c[..5].to_vec())
+            }
+        };
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x:?}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        Ok(format!(
+            "image_width: {}\nimage_height: {}\ncamera_name: vklens\n\
+             camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{}]\n\
+             distortion_model: {model}\n\
+             distortion_coefficients:\n  rows: 1\n  cols: {}\n  data: [{}]\n\
+             rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]\n\
+             projection_matrix:\n  rows: 3\n  cols: 4\n  data: [{}]\n",
+            self.width,
+            self.height,
+            list(&[k.fx, skew, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0]),
+            coeffs.len(),
+            list(&coeffs),
+            list(&[k.fx, skew, k.cx, 0.0, 0.0, k.fy, k.cy, 0.0, 0.0, 0.0, 1.0, 0.0]),
+        ))
+    }
+
     /// Writes the camera as vklens JSON (atomically: a failure leaves no partial file).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let text = format!("{:#}\n", self.to_json());

@@ -231,11 +231,9 @@ fn fisheye_from_tree(tree: &Value) -> Result<Camera> {
     } else {
         match matrix_data(obj, &["distortion_coefficients", "D", "d"])? {
             Some((key, d)) => (key, d),
-            None => {
-                return Err(Error::input(
-                    "missing `dist_coeffs` (or `distortion_coefficients`, `D`): the fisheye's k1..k4",
-                ))
-            }
+            None => return Err(Error::input(
+                "missing `dist_coeffs` (or `distortion_coefficients`, `D`): the fisheye's k1..k4",
+            )),
         }
     };
     let k: [f64; 4] = coeffs.as_slice().try_into().map_err(|_| {

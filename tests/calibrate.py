@@ -146,10 +146,16 @@ def fisheye(args, poses, cam, obj_points, img_points, missed, size):
     img = [i.reshape(1, -1, 2).astype(np.float64) for i in img_points]
     # OpenCV 4 names the flags cv2.fisheye.CALIB_*, OpenCV 5 cv2.CALIB_*.
     flag = lambda n: getattr(cv2.fisheye, n, None) or getattr(cv2, n)
-    flags = flag("CALIB_RECOMPUTE_EXTRINSIC") | flag("CALIB_FIX_SKEW")
+    # Started from the generic equidistant guess (f = max(w, h) / π at the image centre, k = 0),
+    # which uses nothing of the true camera: OpenCV 5's own start diverges on the 752×480
+    # robot fisheye (RMS 170 px), from this one it converges to 0.03 px.
+    flags = flag("CALIB_RECOMPUTE_EXTRINSIC") | flag("CALIB_FIX_SKEW") | flag("CALIB_USE_INTRINSIC_GUESS")
+    f0 = max(size) / np.pi
+    K0 = np.array([[f0, 0, (size[0] - 1) / 2], [0, f0, (size[1] - 1) / 2], [0, 0, 1]], dtype=np.float64)
     criteria = (cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-12)
     try:
-        rms, K, D, _, _ = cv2.fisheye.calibrate(obj, img, size, None, None, flags=flags, criteria=criteria)
+        rms, K, D, _, _ = cv2.fisheye.calibrate(obj, img, size, K0, np.zeros((4, 1)), flags=flags,
+                                                criteria=criteria)
     except cv2.error as e:
         fail(f"cv2.fisheye.calibrate failed: {e}")
     true_k = (list(cam["dist_coeffs"]) + [0.0] * 4)[:4]
@@ -161,8 +167,8 @@ def fisheye(args, poses, cam, obj_points, img_points, missed, size):
             err, limit, kind = 100.0 * abs(e - t) / abs(t), args.limit, "relative, %"
         else:
             err, limit, kind = abs(e - t), args.k_limit, "absolute"
-        rows.append({"name": n, "true": t, "estimate": e, "error": err, "limit": limit, "kind": kind,
-                     "pass": err < limit})
+        rows.append({"name": n, "true": float(t), "estimate": float(e), "error": float(err), "limit": limit,
+                     "kind": kind, "pass": bool(err < limit)})
     ok = all(r["pass"] for r in rows)
     result = {
         "dir": args.dir,
@@ -170,8 +176,8 @@ def fisheye(args, poses, cam, obj_points, img_points, missed, size):
         "model": "opencv_fisheye",
         "views_used": len(img_points),
         "views_missed": missed,
-        "rms_reprojection_px": rms,
-        "flags": "cv2.fisheye.calibrate, CALIB_RECOMPUTE_EXTRINSIC | CALIB_FIX_SKEW",
+        "rms_reprojection_px": float(rms),
+        "flags": "cv2.fisheye.calibrate, CALIB_RECOMPUTE_EXTRINSIC | CALIB_FIX_SKEW | CALIB_USE_INTRINSIC_GUESS (f = max(w, h)/π)",
         "parameters": rows,
         "max_intrinsics_error_percent": max(r["error"] for r in rows[:4]),
         "max_k_error": max(r["error"] for r in rows[4:]),

@@ -171,13 +171,16 @@ fn vector(
 }
 
 /// `(N, 2)` float64 rows, NaN where the model gave no answer.
-fn nan_rows<'py>(py: Python<'py>, v: Vec<Option<[f64; 2]>>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+fn nan_rows<'py, const N: usize>(
+    py: Python<'py>,
+    v: Vec<Option<[f64; N]>>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let n = v.len();
     let flat: Vec<f64> = v
         .into_iter()
-        .flat_map(|p| p.unwrap_or([f64::NAN; 2]))
+        .flat_map(|p| p.unwrap_or([f64::NAN; N]))
         .collect();
-    PyArray1::from_vec(py, flat).reshape([n, 2])
+    PyArray1::from_vec(py, flat).reshape([n, N])
 }
 
 fn method(py: Python<'_>, name: &str) -> PyResult<InverseMethod> {
@@ -232,12 +235,14 @@ impl PyCamera {
         Ok(PyCamera { inner })
     }
 
-    /// Reads any camera file the command line reads (vklens JSON, OpenCV YAML/XML/JSON, ROS
-    /// ``camera_info``, a Brown lens).
+    /// Reads any camera file the command line reads (vklens JSON of every model, OpenCV
+    /// YAML/XML/JSON, ROS ``camera_info``, a Kalibr camchain, a COLMAP ``cameras.txt``, a
+    /// Brown lens). ``camera_index`` picks a camera of a file that holds several.
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (path, camera_index = 0))]
+    fn load(py: Python<'_>, path: PathBuf, camera_index: usize) -> PyResult<Self> {
         Ok(PyCamera {
-            inner: Camera::load(&path).py(py)?,
+            inner: Camera::load_index(&path, camera_index).py(py)?,
         })
     }
 
@@ -311,7 +316,7 @@ impl PyCamera {
     fn size(&self) -> (u32, u32) {
         (self.inner.width, self.inner.height)
     }
-    /// ``"opencv"`` or ``"brown"``.
+    /// ``"opencv"``, ``"opencv_fisheye"`` or ``"brown"``.
     #[getter]
     fn model(&self) -> &'static str {
         self.inner.model_name()
@@ -362,13 +367,29 @@ impl PyCamera {
         method: &str,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let m = self::method(py, method)?;
+        self.inner
+            .check_method(m)
+            .map_err(|e| input(py, format!("method: {e}")))?;
         let uv = rows::<2>(py, uv, "uv")?;
         let xy = py.detach(|| self.inner.undistort_points(&uv, m));
         nan_rows(py, xy)
     }
 
+    /// Distorted pixels ``(N, 2)`` → unit camera-frame rays ``(N, 3)``; NaN rows outside the
+    /// valid domain. A fisheye's rays reach past 90° off the axis (``z < 0``).
+    fn unproject_points<'py>(
+        &self,
+        py: Python<'py>,
+        uv: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let uv = rows::<2>(py, uv, "uv")?;
+        let rays = py.detach(|| self.inner.unproject_points(&uv));
+        nan_rows(py, rays)
+    }
+
     /// World points ``(N, 3)`` → distorted pixels ``(N, 2)``, as ``cv2.projectPoints`` with
-    /// ``rvec`` (Rodrigues) and ``tvec``; NaN rows for points at or behind the camera.
+    /// ``rvec`` (Rodrigues) and ``tvec``; NaN rows for points the lens does not see (at or
+    /// behind the camera for the standard model; past its field of view for a fisheye).
     #[pyo3(signature = (points_3d, rvec = None, tvec = None))]
     fn project_points<'py>(
         &self,
@@ -405,6 +426,18 @@ impl PyCamera {
     fn __repr__(&self) -> String {
         let c = &self.inner;
         let k = c.intrinsics;
+        if c.fisheye_lens().is_some() {
+            return format!(
+                "Camera(model='opencv_fisheye', {}×{}, fx={}, fy={}, cx={}, cy={}, k={:?})",
+                c.width,
+                c.height,
+                k.fx,
+                k.fy,
+                k.cx,
+                k.cy,
+                c.dist_coeffs()
+            );
+        }
         match c.brown() {
             Some(b) => format!(
                 "Camera(model='brown', {}×{}, c1={}, c2={})",

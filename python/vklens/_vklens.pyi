@@ -23,9 +23,11 @@ class Camera:
         4, 5, 8, 12 or 14 of them; None is 5 zeros. Raises ``InputError`` naming the argument
         for a NaN, a non-positive focal length or another count."""
     @staticmethod
-    def load(path: PathLike) -> "Camera":
-        """Any camera file the command line reads: vklens JSON, OpenCV FileStorage (YAML, XML,
-        JSON), ROS ``camera_info`` YAML, ``{"model": "brown", ...}``."""
+    def load(path: PathLike, camera_index: int = 0) -> "Camera":
+        """Any camera file the command line reads: vklens JSON (``"model": "opencv_fisheye"``
+        too), OpenCV FileStorage (YAML, XML, JSON), ROS ``camera_info`` YAML (``equidistant``
+        too), a Kalibr camchain, a COLMAP ``cameras.txt``, ``{"model": "brown", ...}``.
+        ``camera_index`` picks a camera of a file that holds several."""
     @staticmethod
     def from_opencv(K: ArrayLike, D: ArrayLike, size: Tuple[int, int]) -> "Camera":
         """From OpenCV's ``K`` (3×3, row-major, no skew), ``D`` shaped ``(n,)``, ``(1, n)`` or
@@ -68,6 +70,9 @@ class Camera:
         """Distorted pixels ``(N, 2)`` → normalized undistorted ``(N, 2)``; NaN rows outside the
         valid domain (the lens folds over there, or no preimage exists). ``method``:
         ``"newton"``, ``"heikkila"`` or ``"fixed-point:N"`` (OpenCV's own iteration)."""
+    def unproject_points(self, uv: ArrayLike) -> NDArray[np.float64]:
+        """Distorted pixels ``(N, 2)`` → unit camera-frame rays ``(N, 3)``; NaN rows outside the
+        valid domain (a fisheye's rays reach past 90°: ``z < 0``)."""
     def project_points(self, points_3d: ArrayLike, rvec: Optional[ArrayLike] = None,
                        tvec: Optional[ArrayLike] = None) -> npt.NDArray[np.float64]:
         """``(N, 3)`` points → ``(N, 2)`` pixels, as ``cv2.projectPoints`` (``rvec`` a Rodrigues

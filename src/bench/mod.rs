@@ -6,6 +6,7 @@ pub mod lens;
 pub mod plan;
 pub mod vertex;
 pub mod warp;
+pub mod wide;
 
 /// A JSON row's number `key` with `digits` decimals, "—" when absent (table cells).
 pub(crate) fn fixed(row: &serde_json::Value, key: &str, digits: usize) -> String {

@@ -158,7 +158,7 @@ pub(crate) fn time_batch(
 /// Max distance between GPU map coordinates and the f64 model, over a grid of pixels
 /// (about 40,000), in source pixels; sampled pixels that one side calls invalid and the other
 /// not are counted separately (a coarse map's conservative validity next to a fold).
-fn coordinate_error(
+pub(crate) fn coordinate_error(
     ctx: &Context,
     g: &WarpGeometry,
     coordinates: Coordinates,

@@ -228,6 +228,24 @@ pub fn plan(args: PlanArgs) -> Result<(), CliError> {
 }
 
 #[derive(Args, Debug)]
+pub struct WideArgs {
+    /// One JSON object per line instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn wide(args: WideArgs) -> Result<(), CliError> {
+    let ctx = context()?;
+    eprintln!("device: {}", ctx.gpu().device_name());
+    let rows =
+        crate::bench::wide::run(&ctx, &mut |s| super::progress_line(s)).map_err(bench_error)?;
+    super::progress_done(&format!("measured {} rows", rows.len()));
+    finish(&ctx)?;
+    print_rows(&rows, args.json, crate::bench::wide::table)?;
+    Ok(())
+}
+
+#[derive(Args, Debug)]
 pub struct AllArgs {
     /// One JSON object per line (each row with its "bench", "device", "driver" and "date")
     /// instead of writing the tables.
@@ -324,6 +342,11 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
     timed("lens", &mut || {
         let rows = crate::bench::lens::run(&ctx, &lenses, 256, &mut |s| super::progress_line(s))?;
         let table = crate::bench::lens::table(&rows);
+        Ok((rows, table))
+    })?;
+    timed("wide", &mut || {
+        let rows = crate::bench::wide::run(&ctx, &mut |s| super::progress_line(s))?;
+        let table = crate::bench::wide::table(&rows);
         Ok((rows, table))
     })?;
     timed("plan", &mut || {

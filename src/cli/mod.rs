@@ -199,6 +199,11 @@ enum BenchCommand {
     /// The planner's choices for the example scenes beside the everything-on pipeline, and
     /// the error-versus-time trade-off it picks from (inverse methods, tessellations).
     Plan(bench::PlanArgs),
+    /// Lenses past one pinhole frustum at 1920×1080 (a 180° and a 200° fisheye, a GoPro-like
+    /// lens): the vertex path, the pinhole-overscan warp where it fits and the cube-map warp,
+    /// each with its coordinate error against the f64 model and its frame time × a plain
+    /// pinhole render, and the cube face size each needs.
+    Wide(bench::WideArgs),
     /// Every bench above on the device VKLENS_DEVICE picks, in one run: writes (or replaces)
     /// that device's section of docs/benchmarks.md, each table headed by the device, the
     /// driver and the date. Run it on a machine with a real GPU to add its rows beside
@@ -289,6 +294,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Vertex(args)) => bench::vertex(args),
         Command::Bench(BenchCommand::Lens(args)) => bench::lens(args),
         Command::Bench(BenchCommand::Plan(args)) => bench::plan(args),
+        Command::Bench(BenchCommand::Wide(args)) => bench::wide(args),
         Command::Bench(BenchCommand::All(args)) => bench::all(args),
         Command::Demo(args) => demo::run(args),
         Command::Distort(args) => warp::run(args, crate::WarpDirection::Distort),

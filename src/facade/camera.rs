@@ -71,10 +71,11 @@ impl Camera {
         Camera::from_coeffs(size.0, size.1, intrinsics, dist_coeffs).map_err(Error::from)
     }
 
-    /// OpenCV's camera matrix `K`, row-major.
+    /// OpenCV's camera matrix `K`, row-major (a fisheye's skew as `K[0][1] = α fx`).
     pub fn k_matrix(&self) -> [[f64; 3]; 3] {
         let k = self.intrinsics;
-        [[k.fx, 0.0, k.cx], [0.0, k.fy, k.cy], [0.0, 0.0, 1.0]]
+        let skew = self.fisheye_lens().map_or(0.0, |f| f.alpha * k.fx);
+        [[k.fx, skew, k.cx], [0.0, k.fy, k.cy], [0.0, 0.0, 1.0]]
     }
 
     /// Forward model on normalized undistorted coordinates `(X/Z, Y/Z)` → distorted pixels,
@@ -98,7 +99,10 @@ impl Camera {
     }
 
     /// Inverse model: distorted pixels → normalized undistorted coordinates, `None` outside
-    /// the valid domain (the lens folds over there, or no preimage exists).
+    /// the valid domain (the lens folds over there, or no preimage exists) and, for a fisheye,
+    /// where the pixel sees at or behind the image plane ([`Camera::unproject_points`] has
+    /// those). A fisheye has one inverse, Newton on θ, whatever `method` says:
+    /// [`Camera::check_method`] refuses the others first where that matters.
     pub fn undistort_points(
         &self,
         uv: &[[f64; 2]],
@@ -118,6 +122,14 @@ impl Camera {
         points
             .iter()
             .map(|&p| self.project(DVec3::from_array(p)).map(|d| d.to_array()))
+            .collect()
+    }
+
+    /// Distorted pixels → unit camera-frame rays, `None` outside the valid domain (a
+    /// fisheye's reach past 90° off the axis).
+    pub fn unproject_points(&self, uv: &[[f64; 2]]) -> Vec<Option<[f64; 3]>> {
+        uv.iter()
+            .map(|&p| self.unproject(DVec2::from_array(p)).map(|r| r.to_array()))
             .collect()
     }
 

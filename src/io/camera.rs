@@ -66,42 +66,47 @@ pub fn parse_camera_at(text: &str, origin: &str, index: Option<usize>) -> Result
     } else {
         yaml_to_tree(trimmed).map_err(err)?
     };
-    if let Some(cams) = kalibr_cameras(&tree) {
-        return kalibr_camera(&cams, index).map_err(err);
+    camera_from_any_tree(&tree, index).map_err(err)
+}
+
+/// Any camera layout's tree (Kalibr, vklens JSON of every model, FileStorage, ROS) → camera.
+fn camera_from_any_tree(tree: &Value, index: Option<usize>) -> Result<Camera> {
+    if let Some(cams) = kalibr_cameras(tree) {
+        return kalibr_camera(&cams, index);
     }
     if let Some(i) = index.filter(|&i| i > 0) {
-        return Err(err(Error::input(format!(
+        return Err(Error::input(format!(
             "camera index {i} asked, but this file holds one camera (index 0)"
-        ))));
+        )));
     }
     match tree.get("model") {
         Some(Value::String(m)) if m == "brown" => {
-            let brown = brown_from_tree(&tree).map_err(err)?;
-            return Camera::from_brown(&brown).map_err(|e| err(Error::from(e)));
+            let brown = brown_from_tree(tree)?;
+            return Camera::from_brown(&brown).map_err(Error::from);
         }
         Some(Value::String(m)) if m == "opencv_fisheye" => {
-            return fisheye_from_tree(&tree).map_err(err);
+            return fisheye_from_tree(tree);
         }
         // A model vklens does not implement must not load as the standard model: a fisheye's
         // k1..k4 read as k1 k2 p1 p2 put pixels hundreds of thousands of pixels off.
         Some(Value::String(m)) if m != "opencv" => {
-            return Err(err(Error::input(format!(
+            return Err(Error::input(format!(
                 "`model` is `{m}`; vklens reads `opencv` (OpenCV's standard model, the default), `opencv_fisheye` and `brown`"
-            ))));
+            )));
         }
         Some(Value::String(_)) | None => {}
         Some(other) => {
-            return Err(err(Error::input(format!(
+            return Err(Error::input(format!(
                 "`model` must be a string (`opencv`, `opencv_fisheye` or `brown`), got {other}"
-            ))));
+            )));
         }
     }
     if let Some(m) = tree.get("distortion_model").and_then(Value::as_str) {
         if ["equidistant", "fisheye"].contains(&m) {
-            return fisheye_from_tree(&tree).map_err(err);
+            return fisheye_from_tree(tree);
         }
     }
-    camera_from_tree(&tree).map_err(err)
+    camera_from_tree(tree)
 }
 
 fn brown_from_tree(tree: &Value) -> Result<BrownRadial> {
@@ -119,9 +124,9 @@ fn brown_from_tree(tree: &Value) -> Result<BrownRadial> {
     .map_err(Error::from)
 }
 
-/// Reads a camera from a parsed JSON object (any of the layouts above).
+/// Reads a camera from a parsed JSON object (any of the layouts above, every model).
 pub fn camera_from_value(value: &Value) -> Result<Camera> {
-    camera_from_tree(value)
+    camera_from_any_tree(value, None)
 }
 
 fn camera_from_tree(tree: &Value) -> Result<Camera> {

@@ -6,6 +6,14 @@ fn main() {
     if std::env::var_os("MESA_VK_IGNORE_CONFORMANCE_WARNING").is_none() {
         std::env::set_var("MESA_VK_IGNORE_CONFORMANCE_WARNING", "1");
     }
+    // SIGINT and SIGTERM: remove the temporary files of writes in progress, then exit 130, so
+    // an interrupted command leaves nothing half-done behind (outputs are renamed into place
+    // only when complete).
+    let _ = ctrlc::set_handler(|| {
+        vklens::internal::imaging::file::remove_pending_temps();
+        eprintln!("vklens: interrupted; no output was left half-written");
+        std::process::exit(130);
+    });
     let cli = vklens::internal::cli::Cli::parse();
     if let Err(e) = vklens::internal::cli::run(cli) {
         eprintln!("vklens: {e}");

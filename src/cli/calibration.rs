@@ -81,6 +81,14 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
             args.out.display()
         ))
     })?;
+    // A set is complete when its poses.json is there, and poses.json is written last: remove
+    // an old one first, so that an interrupted run never leaves a set that looks complete.
+    let poses_path = args.out.join("poses.json");
+    match std::fs::remove_file(&poses_path) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(CliError::io(&poses_path, "cannot replace", &e)),
+    }
     let scene = builtin::checkerboard(board, 4);
     let ctx = context()?;
     let mut renderer = SceneRenderer::new(&ctx);
@@ -134,8 +142,19 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
         "pose_convention": "OpenCV: p_camera = R(rvec) p_board + tvec; board corner (i, j) at (i·square, j·square, 0)",
         "views": views,
     });
-    let path = args.out.join("poses.json");
-    image_io::write_atomically(&path, |tmp| std::fs::write(tmp, format!("{json:#}\n")))?;
+    // Views of an earlier, larger set are not this set's: removed before poses.json says the
+    // set is complete.
+    for i in poses.len().. {
+        let stale = args.out.join(format!("view_{i:02}.png"));
+        match std::fs::remove_file(&stale) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => break,
+            Err(e) => return Err(CliError::io(&stale, "cannot remove the stale view", &e)),
+        }
+    }
+    image_io::write_atomically(&poses_path, |tmp| {
+        std::fs::write(tmp, format!("{json:#}\n"))
+    })?;
     progress_done(&format!(
         "wrote {} views and poses.json to {}",
         poses.len(),

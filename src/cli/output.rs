@@ -36,6 +36,7 @@ pub(crate) fn check_output(path: &Path, what: &str, allowed: &[&str]) -> Result<
             dir.display()
         )));
     }
+    image_io::check_writable(path)?;
     Ok(ext)
 }
 
@@ -68,12 +69,20 @@ pub(crate) struct Targets<'a> {
     pub depth: Option<&'a Path>,
 }
 
+/// Writes every output of a frame, or none: each is staged (written to its temporary file),
+/// and only when all are is each put in place.
 pub(crate) fn write_outputs(
     args: &Targets,
     r: &Rendered,
     ids_ext: Option<&str>,
 ) -> Result<(), CliError> {
-    let save = |raster: &Raster, path: &Path| image_io::save(raster, path);
+    let staged = std::cell::RefCell::new(Vec::new());
+    let save = |raster: &Raster, path: &Path| -> Result<(), crate::Error> {
+        staged
+            .borrow_mut()
+            .push(image_io::save_staged(raster, path, image_io::Channels(4))?);
+        Ok(())
+    };
     let float_image = |pixels: Vec<[f32; 4]>| Raster {
         width: r.width,
         height: r.height,
@@ -126,6 +135,9 @@ pub(crate) fn write_outputs(
             &float_image(depth.iter().map(|&z| [z, z, z, 1.0]).collect()),
             path,
         )?;
+    }
+    for s in staged.into_inner() {
+        s.commit()?;
     }
     Ok(())
 }

@@ -178,7 +178,7 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         options.channel_cameras = Some(Box::new(cams));
     }
     let geometry = warp_geometry(&cam, &options)?;
-    let source = image_io::load(&input)?;
+    let (source, channels) = image_io::load_with_channels(&input)?;
     if (source.width, source.height) != geometry.source_size {
         let whose = match (direction, &args.source_camera) {
             (WarpDirection::Distort, Some(src)) => src.display().to_string(),
@@ -196,6 +196,19 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     let (out, mask) = match args.backend {
         // imaging::file::save writes float data read from an 8-bit file back as 8-bit.
         super::Backend::Cpu => {
+            // The f64 reference warp holds both images in f64-sized pixels on the host: the
+            // image budget bounds it as it bounds decoding.
+            let (ow, oh) = geometry.output_size;
+            image_io::check_budget("--backend cpu: the output", ow, oh)?;
+            let (sw, sh) = geometry.source_size;
+            image_io::check_budget("--backend cpu: the source", sw, sh)?;
+            for (what, side) in [("output", ow.max(oh)), ("source", sw.max(sh))] {
+                if side > CPU_MAX_SIDE {
+                    return Err(CliError::input(format!(
+                        "--backend cpu: the {what} is {side} px on a side, past the {CPU_MAX_SIDE} px the GPU path takes too (a reference warp of that size runs for minutes); use --backend gpu, or a smaller --source-camera"
+                    )));
+                }
+            }
             let (out, mask) = cpu_warp::warp(&geometry, &source, args.sampling, options.fill);
             (out, mask.iter().map(|&m| m > 127).collect::<Vec<_>>())
         }
@@ -208,16 +221,37 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
             (warped.image, warped.mask)
         }
     };
-    save_outputs(&args, &out, &mask)?;
+    save_outputs(&args, &out, &mask, channels)?;
     if direction == WarpDirection::Precorrect {
         report_round_trip(&cam);
     }
     Ok(())
 }
 
-/// Writes the image and, when asked, the mask; reports what was filled.
-fn save_outputs(args: &WarpArgs, out: &Raster, mask: &[bool]) -> Result<(), CliError> {
-    image_io::save(out, &args.output)?;
+/// Largest side of an image the CPU reference warp takes: the GPU path's usual limit.
+const CPU_MAX_SIDE: u32 = 16384;
+
+/// Writes the image (with the input's channels, and alpha only where the fill needs it) and,
+/// when asked, the mask; reports what was filled.
+fn save_outputs(
+    args: &WarpArgs,
+    out: &Raster,
+    mask: &[bool],
+    input: image_io::Channels,
+) -> Result<(), CliError> {
+    let filled = mask.iter().filter(|&&m| !m).count();
+    let fill_alpha = args.fill.map_or(0.0, |f| f[3]);
+    let channels = if !input.has_alpha() && filled > 0 && fill_alpha < 1.0 {
+        eprintln!(
+            "the output has an alpha channel the input lacks: {filled} px have no source and the fill is transparent (--fill R,G,B,1 keeps {})",
+            if input.0 == 1 { "grey" } else { "RGB" }
+        );
+        image_io::Channels(input.0 + 1)
+    } else {
+        input
+    };
+    // Both outputs, or neither: staged, then put in place together.
+    let mut staged = vec![image_io::save_staged(out, &args.output, channels)?];
     if let Some(m) = &args.mask {
         let raster = Raster {
             width: out.width,
@@ -229,9 +263,11 @@ fn save_outputs(args: &WarpArgs, out: &Raster, mask: &[bool]) -> Result<(), CliE
             ),
             bit_depth: BitDepth::U8,
         };
-        image_io::save(&raster, m)?;
+        staged.push(image_io::save_staged(&raster, m, image_io::Channels(4))?);
     }
-    let filled = mask.iter().filter(|&&m| !m).count();
+    for s in staged {
+        s.commit()?;
+    }
     eprintln!(
         "wrote {} ({}×{}, {filled} px without a source{})",
         args.output.display(),
@@ -278,8 +314,8 @@ fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result
         write_mask: true,
     };
     let ctx = context()?;
-    let (out, mask) = if let Some(pano) = &args.input_equirect {
-        let source = image_io::load(pano)?;
+    let ((out, mask), channels) = if let Some(pano) = &args.input_equirect {
+        let (source, channels) = image_io::load_with_channels(pano)?;
         if source.width != 2 * source.height {
             return Err(CliError::input(format!(
                 "{}: an equirectangular panorama is twice as wide as high (360° × 180°), this one is {}×{}",
@@ -294,26 +330,34 @@ fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result
             source.height,
             360.0 / source.width as f64
         );
-        run_sphere_warp(&ctx, cam, SphereSource::Equirect(&source), &options)?
+        (
+            run_sphere_warp(&ctx, cam, SphereSource::Equirect(&source), &options)?,
+            channels,
+        )
     } else {
-        let (faces, layout) = load_cube_faces(&args.input_cubemap)?;
+        let (faces, layout, channels) = load_cube_faces(&args.input_cubemap)?;
         eprintln!(
             "360° source: cube map of six {}×{} faces ({layout})",
             faces[0].width, faces[0].width
         );
-        run_sphere_warp(&ctx, cam, SphereSource::Cube(&faces), &options)?
+        (
+            run_sphere_warp(&ctx, cam, SphereSource::Cube(&faces), &options)?,
+            channels,
+        )
     };
     super::finish(&ctx)?;
     let mask: Vec<bool> = mask.iter().map(|&m| m > 127).collect();
-    save_outputs(args, &out, &mask)
+    save_outputs(args, &out, &mask, channels)
 }
 
 /// Six face files (+x -x +y -y +z -z) or one horizontal cross, with the layout's name.
-fn load_cube_faces(paths: &[PathBuf]) -> Result<([Raster; 6], &'static str), CliError> {
+fn load_cube_faces(
+    paths: &[PathBuf],
+) -> Result<([Raster; 6], &'static str, image_io::Channels), CliError> {
     use crate::pass::sphere_warp::CubeFace;
     match paths {
         [cross] => {
-            let img = image_io::load(cross)?;
+            let (img, channels) = image_io::load_with_channels(cross)?;
             let side = img.width / 4;
             if side == 0 || img.width != 4 * side || img.height != 3 * side {
                 return Err(CliError::input(format!(
@@ -327,12 +371,14 @@ fn load_cube_faces(paths: &[PathBuf]) -> Result<([Raster; 6], &'static str), Cli
                 let (col, row) = f.cross_cell();
                 img.crop(col * side, row * side, side, side)
             });
-            Ok((faces, "one horizontal cross"))
+            Ok((faces, "one horizontal cross", channels))
         }
         six if six.len() == 6 => {
             let mut faces = Vec::with_capacity(6);
+            let mut channels = image_io::Channels(1);
             for (face, path) in CubeFace::ALL.iter().zip(six) {
-                let img = image_io::load(path)?;
+                let (img, c) = image_io::load_with_channels(path)?;
+                channels = image_io::Channels(channels.0.max(c.0));
                 if img.width != img.height {
                     return Err(CliError::input(format!(
                         "{}: cube face {} must be square, it is {}×{}",
@@ -358,7 +404,7 @@ fn load_cube_faces(paths: &[PathBuf]) -> Result<([Raster; 6], &'static str), Cli
             let faces: [Raster; 6] = faces
                 .try_into()
                 .map_err(|_| CliError::input("--input-cubemap: six faces expected"))?;
-            Ok((faces, "six files +x -x +y -y +z -z"))
+            Ok((faces, "six files +x -x +y -y +z -z", channels))
         }
         other => Err(CliError::input(format!(
             "--input-cubemap: give six face files +x,-x,+y,-y,+z,-z (comma-separated) or one horizontal cross, not {} file(s)",

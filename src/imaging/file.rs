@@ -9,8 +9,54 @@ use image::{DynamicImage, ImageBuffer, Rgba};
 use super::{BitDepth, Pixels, Raster};
 use crate::{Error, Result};
 
+/// Largest image vklens decodes, in MiB of its float RGBA form (16 bytes a pixel), unless
+/// `VKLENS_MAX_IMAGE_MB` says otherwise: checked from the header, before anything is decoded
+/// (a 20000 × 20000 PNG would take 6 GiB).
+pub const DEFAULT_MAX_IMAGE_MB: u64 = 2048;
+
+/// The image budget in force, in bytes.
+pub fn max_image_bytes() -> u64 {
+    std::env::var("VKLENS_MAX_IMAGE_MB")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .unwrap_or(DEFAULT_MAX_IMAGE_MB)
+        .saturating_mul(1 << 20)
+}
+
+/// Refuses an image of `width × height` that exceeds the image budget, naming the limit and
+/// how to raise it; `what` names the image.
+pub fn check_budget(what: &str, width: u32, height: u32) -> Result<()> {
+    let bytes = width as u64 * height as u64 * 16;
+    let limit = max_image_bytes();
+    if bytes > limit {
+        return Err(Error::input(format!(
+            "{what} is {width}×{height} ({} MiB as float RGBA), more than the {} MiB image budget (set VKLENS_MAX_IMAGE_MB to raise it)",
+            bytes >> 20,
+            limit >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// The colour channels an image file holds (1 grey, 2 grey + alpha, 3 RGB, 4 RGBA), so that an
+/// output can keep them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Channels(pub u8);
+
+impl Channels {
+    /// Whether the file has an alpha channel.
+    pub fn has_alpha(self) -> bool {
+        self.0 == 2 || self.0 == 4
+    }
+}
+
 /// Reads an image; errors are one line naming the file.
 pub fn load(path: &Path) -> Result<Raster> {
+    load_with_channels(path).map(|(r, _)| r)
+}
+
+/// Reads an image and says which channels the file held.
+pub fn load_with_channels(path: &Path) -> Result<(Raster, Channels)> {
     let shown = path.display();
     let reader = image::ImageReader::open(path)
         .map_err(|e| Error::io(path, "cannot read", &e))?
@@ -29,10 +75,18 @@ pub fn load(path: &Path) -> Result<Raster> {
             )))
         }
     }
+    // The size from the header first: nothing is decoded past the budget.
+    let (hw, hh) = image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| Error::io(path, "cannot read", &e))?
+        .into_dimensions()
+        .map_err(|e| Error::input(format!("{shown}: cannot read the image header: {e}")))?;
+    check_budget(&shown.to_string(), hw, hh)?;
     let img = reader
         .decode()
         .map_err(|e| Error::input(format!("{shown}: cannot decode: {e}")))?;
     let (width, height) = (img.width(), img.height());
+    let channels = Channels(img.color().channel_count());
     let raster = match img {
         DynamicImage::ImageLuma8(_)
         | DynamicImage::ImageLumaA8(_)
@@ -72,12 +126,66 @@ pub fn load(path: &Path) -> Result<Raster> {
             }
         }
     };
-    Ok(raster)
+    Ok((raster, channels))
 }
 
 /// Writes `raster` to `path` (`.png` or `.exr`), keeping its depth where the format allows
-/// (8-bit or 16-bit PNG; float data becomes 16-bit PNG or float EXR).
+/// (8-bit or 16-bit PNG; float data becomes 16-bit PNG or float EXR), as RGBA.
 pub fn save(raster: &Raster, path: &Path) -> Result<()> {
+    save_as(raster, path, Channels(4))
+}
+
+/// [`save`] with the colour channels of `channels` (grey, grey + alpha, RGB or RGBA): an
+/// input's layout kept through a warp. Object IDs stay 16-bit grey.
+pub fn save_as(raster: &Raster, path: &Path, channels: Channels) -> Result<()> {
+    save_staged(raster, path, channels)?.commit()
+}
+
+/// [`save_as`] without putting the file in place ([`Staged::commit`]).
+pub fn save_staged(raster: &Raster, path: &Path, channels: Channels) -> Result<Staged> {
+    let image = encode(raster, path)?;
+    let image = match (channels.0, &raster.pixels) {
+        (_, Pixels::R32Uint(_)) | (4, _) => image,
+        (1, _) => match image {
+            DynamicImage::ImageRgba8(_) => DynamicImage::ImageLuma8(image.to_luma8()),
+            DynamicImage::ImageRgba32F(_) => DynamicImage::ImageRgb32F(image.to_rgb32f()),
+            other => DynamicImage::ImageLuma16(other.to_luma16()),
+        },
+        (2, _) => match image {
+            DynamicImage::ImageRgba8(_) => DynamicImage::ImageLumaA8(image.to_luma_alpha8()),
+            DynamicImage::ImageRgba32F(_) => image,
+            other => DynamicImage::ImageLumaA16(other.to_luma_alpha16()),
+        },
+        (3, _) => match image {
+            DynamicImage::ImageRgba8(_) => DynamicImage::ImageRgb8(image.to_rgb8()),
+            DynamicImage::ImageRgba32F(_) => DynamicImage::ImageRgb32F(image.to_rgb32f()),
+            other => DynamicImage::ImageRgb16(other.to_rgb16()),
+        },
+        _ => image,
+    };
+    write_image(&image, path)
+}
+
+fn write_image(image: &DynamicImage, path: &Path) -> Result<Staged> {
+    let exr = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    stage(path, |tmp| {
+        let format = if exr {
+            image::ImageFormat::OpenExr
+        } else {
+            image::ImageFormat::Png
+        };
+        image.save_with_format(tmp, format).map_err(|e| match e {
+            image::ImageError::IoError(e) => e,
+            other => std::io::Error::other(other),
+        })
+    })
+}
+
+/// The image as the `image` crate writes it: RGBA (8/16-bit PNG, float EXR), IDs as 16-bit grey.
+fn encode(raster: &Raster, path: &Path) -> Result<DynamicImage> {
     let shown = path.display();
     let ext = path
         .extension()
@@ -125,17 +233,7 @@ pub fn save(raster: &Raster, path: &Path) -> Result<()> {
             DynamicImage::ImageRgba32F(ImageBuffer::from_raw(w, h, v).ok_or_else(size_mismatch)?)
         }
     };
-    write_atomically(path, |tmp| {
-        let format = if exr {
-            image::ImageFormat::OpenExr
-        } else {
-            image::ImageFormat::Png
-        };
-        image.save_with_format(tmp, format).map_err(|e| match e {
-            image::ImageError::IoError(e) => e,
-            other => std::io::Error::other(other),
-        })
-    })
+    Ok(image)
 }
 
 fn size_mismatch() -> Error {
@@ -151,6 +249,41 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::io::Result<()>,
 ) -> Result<()> {
+    stage(path, write)?.commit()
+}
+
+/// An output written to its temporary file and flushed, not yet in place: [`Staged::commit`]
+/// renames it over the target; dropping it uncommitted removes it. A command with several
+/// outputs stages them all, then commits them all, so a failure leaves none of them written.
+pub struct Staged {
+    path: std::path::PathBuf,
+    /// `None`: written through already (a device or FIFO), nothing to rename.
+    tmp: Option<(std::path::PathBuf, std::path::PathBuf, PendingTemp)>,
+}
+
+impl Staged {
+    /// Puts the output in place.
+    pub fn commit(mut self) -> Result<()> {
+        if let Some((tmp, target, _pending)) = self.tmp.take() {
+            std::fs::rename(&tmp, &target).map_err(|e| {
+                let _ = std::fs::remove_file(&tmp);
+                Error::io(&self.path, "cannot write", &e)
+            })?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some((tmp, _, _)) = self.tmp.take() {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}
+
+/// Writes `path`'s temporary file (see [`write_atomically`]) without putting it in place.
+pub fn stage(path: &Path, write: impl FnOnce(&Path) -> std::io::Result<()>) -> Result<Staged> {
     use std::sync::atomic::{AtomicU64, Ordering};
     static CALLS: AtomicU64 = AtomicU64::new(0);
     let shown = path.display();
@@ -175,7 +308,11 @@ pub fn write_atomically(
         }
         if !m.is_file() {
             // A device or FIFO: write through it; renaming over it would replace it.
-            return write(&target).map_err(|e| Error::io(path, "cannot write", &e));
+            write(&target).map_err(|e| Error::io(path, "cannot write", &e))?;
+            return Ok(Staged {
+                path: path.to_path_buf(),
+                tmp: None,
+            });
         }
     }
     let dir = target
@@ -197,12 +334,78 @@ pub fn write_atomically(
         std::process::id(),
         CALLS.fetch_add(1, Ordering::Relaxed)
     ));
-    let result = write(&tmp)
+    let pending = PendingTemp::register(&tmp);
+    let staged = Staged {
+        path: path.to_path_buf(),
+        tmp: Some((tmp.clone(), target.clone(), pending)),
+    };
+    write(&tmp)
         .and_then(|_| std::fs::File::open(&tmp)?.sync_all())
-        .and_then(|_| std::fs::rename(&tmp, &target))
-        .map_err(|e| Error::io(path, "cannot write", &e));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+        .map_err(|e| Error::io(path, "cannot write", &e))?;
+    Ok(staged)
+}
+
+/// Whether a file can be created in `path`'s folder (probed with a temporary file, removed
+/// again): checked before any work, so a read-only folder fails a command before it renders.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        // A device or FIFO is written through.
+        return Ok(());
     }
-    result
+    let probe = dir.join(format!(".vklens-probe.{}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(Error::io(
+            path,
+            &format!("cannot write in folder {}", dir.display()),
+            &e,
+        )),
+    }
+}
+
+/// Temporary files being written right now, for [`remove_pending_temps`] (a command
+/// interrupted by SIGINT or SIGTERM leaves none behind).
+static PENDING: std::sync::Mutex<Vec<std::path::PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// A temporary file's entry in [`PENDING`], removed when the write is over.
+struct PendingTemp(std::path::PathBuf);
+
+impl PendingTemp {
+    fn register(tmp: &Path) -> Self {
+        if let Ok(mut p) = PENDING.lock() {
+            p.push(tmp.to_path_buf());
+        }
+        PendingTemp(tmp.to_path_buf())
+    }
+}
+
+impl Drop for PendingTemp {
+    fn drop(&mut self) {
+        if let Ok(mut p) = PENDING.lock() {
+            p.retain(|t| t != &self.0);
+        }
+    }
+}
+
+/// Removes every temporary file a write in progress has made: what the command line's
+/// SIGINT/SIGTERM handler runs before it exits (the handler runs on its own thread, not in
+/// signal context, so taking the lock is safe; a writer holding it only pushes or retains).
+pub fn remove_pending_temps() {
+    if let Ok(p) = PENDING.lock() {
+        for t in p.iter() {
+            let _ = std::fs::remove_file(t);
+        }
+    }
 }

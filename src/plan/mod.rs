@@ -644,6 +644,27 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 (Some(a), Some(b)) => Some(if b.ms < a.ms { b } else { a }),
                 (a, b) => a.or(b),
             };
+            // A lens no overscanned pinhole source holds (180° and more, or past the image
+            // limit): the planned warp would miss pixels, so it is not a candidate; the vertex
+            // path runs the lens's own model per vertex (`render --path cube` is the
+            // colour-only alternative outside the planner).
+            let no_pinhole_warp = crate::render::pinhole_source_refusal(
+                &camera,
+                1.0,
+                crate::model::MAX_IMAGE_SIDE.min(16384),
+            );
+            if let Some(why) = &no_pinhole_warp {
+                if chromatic.is_some() {
+                    return Err(Error::input(format!(
+                        "{src}: [effects] chromatic_aberration: {why}, and the planner's chromatic warp needs a pinhole source: not planned (drop chromatic_aberration, or use a camera whose frame a pinhole holds)"
+                    )));
+                }
+            }
+            let warp = if no_pinhole_warp.is_some() {
+                None
+            } else {
+                warp
+            };
             let describe_option = |c: &Option<WarpChoice>, what: &str| match c {
                 Some(c) => format!(
                     "{what} {:.1e} px, est. {:.1} ms per frame",
@@ -759,9 +780,11 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     format!(
                         "estimated {:.1} ms against {} for pinhole + warp",
                         vertex_ms.unwrap_or(f64::NAN),
-                        warp_ms
-                            .map(|w| format!("{w:.1} ms"))
-                            .unwrap_or_else(|| "no warp meeting the budget".into())
+                        match (&no_pinhole_warp, warp_ms) {
+                            (Some(why), _) => format!("no pinhole warp ({why})"),
+                            (None, Some(w)) => format!("{w:.1} ms"),
+                            (None, None) => "no warp meeting the budget".into(),
+                        }
                     )
                 };
                 if l.is_some() {

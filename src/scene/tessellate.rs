@@ -43,6 +43,11 @@ pub fn tessellate(mesh: &Mesh, pose: &Pose, camera: &Camera, max_edge_px: f64) -
             .iter()
             .map(|v| {
                 let p = pose.apply(v.position());
+                if camera.fisheye_lens().is_some() {
+                    // A fisheye sees behind the image plane: edges are measured in its own
+                    // image, where Alg. 1 puts them.
+                    return camera.project(p);
+                }
                 (p.z > MIN_DEPTH).then(|| intrinsics.to_pixel(DVec2::new(p.x / p.z, p.y / p.z)))
             })
             .collect();

@@ -1,0 +1,515 @@
+//! The command line over generated bad inputs, as a hostile user would run it: every
+//! command, every input family (camera, image, points, lens, scene, mesh), concurrent
+//! writers, stdout to a closed pipe, a device node as output. Each run must end without a
+//! panic or a signal; a refused input exits 2 with one line naming the file or flag; no output
+//! and no temporary file is left behind.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_vklens")
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vklens-hostile-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(args: &[&str], stdin: Option<&[u8]>) -> Output {
+    let mut cmd = Command::new(bin());
+    cmd.args(args)
+        .env("VKLENS_VALIDATION", "1")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .stdin(if stdin.is_some() {
+            Stdio::piped()
+        } else {
+            Stdio::null()
+        });
+    let mut child = cmd.spawn().expect("spawn vklens");
+    if let (Some(data), Some(mut input)) = (stdin, child.stdin.take()) {
+        use std::io::Write;
+        let _ = input.write_all(data);
+    }
+    child.wait_with_output().expect("wait")
+}
+
+/// No panic, no signal, exit 2, one line on stderr containing `names`, and `dir` holds only
+/// the files it held before (no output, no temporary file).
+fn refused(what: &str, out: &Output, names: &str, dir: &Path, before: &[PathBuf]) -> usize {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.code().is_some(),
+        "{what}: killed by a signal: {stderr}"
+    );
+    assert_ne!(out.status.code(), Some(101), "{what}: panicked: {stderr}");
+    assert_eq!(out.status.code(), Some(2), "{what}: {stderr}");
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("vklens:"))
+        .collect();
+    assert_eq!(lines.len(), 1, "{what}: {stderr}");
+    assert!(
+        lines[0].contains(names),
+        "{what}: `{}` does not name {names}",
+        lines[0]
+    );
+    assert_eq!(&listing(dir), before, "{what}: left files behind");
+    1
+}
+
+fn listing(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Bad camera files: each family of damage, through every command that reads a camera.
+fn camera_cases(dir: &Path) -> Vec<(String, PathBuf)> {
+    let good = r#"{"width": 64, "height": 48, "fx": 50, "fy": 50, "cx": 31.5, "cy": 23.5, "dist_coeffs": [-0.1, 0.01, 0, 0]}"#;
+    let mut cases: Vec<(String, Vec<u8>)> = vec![
+        ("empty".into(), Vec::new()),
+        ("binary".into(), (0..=255u8).cycle().take(4096).collect()),
+        ("nan".into(), good.replace("50,", "NaN,").into_bytes()),
+        (
+            "tiny focal".into(),
+            good.replace("\"fx\": 50", "\"fx\": 1e-308").into_bytes(),
+        ),
+        (
+            "huge coefficient".into(),
+            good.replace("-0.1", "1e300").into_bytes(),
+        ),
+        (
+            "duplicate key".into(),
+            good.replace("\"fy\": 50", "\"fx\": 51, \"fy\": 50")
+                .into_bytes(),
+        ),
+        (
+            "unknown model".into(),
+            good.replace("{", "{\"model\": \"kb8\", ").into_bytes(),
+        ),
+        (
+            "fisheye, 3 coefficients".into(),
+            good.replace("{", "{\"model\": \"opencv_fisheye\", ")
+                .replace(", 0, 0]", "]")
+                .into_bytes(),
+        ),
+        (
+            "colmap, bad count".into(),
+            b"1 OPENCV_FISHEYE 64 48 50 50 32 24 0.1\n".to_vec(),
+        ),
+        (
+            "kalibr, omni".into(),
+            b"cam0:\n  camera_model: omni\n  intrinsics: [1, 2, 3, 4, 5]\n  resolution: [64, 48]\n"
+                .to_vec(),
+        ),
+        ("yaml alias bomb".into(), {
+            let mut s =
+                String::from("a: &a [\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\"]\n");
+            for i in 0..9 {
+                let prev = (b'a' + i) as char;
+                let next = (b'a' + i + 1) as char;
+                s.push_str(&format!("{next}: &{next} [*{prev},*{prev},*{prev},*{prev},*{prev},*{prev},*{prev},*{prev},*{prev}]\n"));
+            }
+            s.into_bytes()
+        }),
+        (
+            "deep xml".into(),
+            format!("{}{}", "<a>".repeat(50_000), "</a>".repeat(50_000)).into_bytes(),
+        ),
+        (
+            "truncated".into(),
+            good[..good.len() / 2].as_bytes().to_vec(),
+        ),
+    ];
+    // A file past the read limit (16 MiB by default).
+    cases.push(("too large".into(), vec![b' '; 17 << 20]));
+    cases
+        .into_iter()
+        .enumerate()
+        .map(|(i, (name, bytes))| {
+            let path = dir.join(format!("cam{i}.json"));
+            std::fs::write(&path, bytes).unwrap();
+            (name, path)
+        })
+        .collect()
+}
+
+#[test]
+fn bad_inputs_of_every_family_are_refused_cleanly() {
+    let dir = temp_dir("inputs");
+    let outs = temp_dir("outputs");
+    let before = listing(&outs);
+    let out = |name: &str| outs.join(name).to_string_lossy().into_owned();
+    let good_cam = dir.join("good.json");
+    std::fs::write(
+        &good_cam,
+        r#"{"width": 64, "height": 48, "fx": 50, "fy": 50, "cx": 31.5, "cy": 23.5, "dist_coeffs": [-0.1, 0.01, 0, 0]}"#,
+    )
+    .unwrap();
+    let png = dir.join("in.png");
+    image::RgbImage::from_pixel(64, 48, image::Rgb([10, 200, 30]))
+        .save(&png)
+        .unwrap();
+    let mut count = 0;
+
+    for (name, cam) in camera_cases(&dir) {
+        let c = cam.to_string_lossy().into_owned();
+        let shown = cam.file_name().unwrap().to_string_lossy().into_owned();
+        for args in [
+            vec![
+                "distort",
+                "--camera",
+                &c,
+                "--input",
+                png.to_str().unwrap(),
+                "--output",
+                &out("o.png"),
+            ],
+            vec![
+                "undistort",
+                "--camera",
+                &c,
+                "--input",
+                png.to_str().unwrap(),
+                "--output",
+                &out("o.png"),
+                "--backend",
+                "cpu",
+            ],
+            vec!["overscan", "--camera", &c],
+            vec![
+                "render",
+                "--camera",
+                &c,
+                "--scene",
+                "boxes",
+                "--output",
+                &out("r.png"),
+            ],
+        ] {
+            let o = run(&args, None);
+            count += refused(&format!("{name}: {}", args[0]), &o, &shown, &outs, &before);
+        }
+        let o = run(
+            &["points", "distort", "--camera", &c],
+            Some(b"[[0.1, 0.2]]"),
+        );
+        count += refused(&format!("{name}: points"), &o, &shown, &outs, &before);
+    }
+
+    // Images: truncated, empty, not an image, a header claiming 20000 × 20000.
+    let good = std::fs::read(&png).unwrap();
+    let mut huge = good.clone();
+    // IHDR width and height (bytes 16..24 of a PNG): 20000 × 20000.
+    huge[16..20].copy_from_slice(&20000u32.to_be_bytes());
+    huge[20..24].copy_from_slice(&20000u32.to_be_bytes());
+    for (name, bytes) in [
+        ("truncated png", good[..good.len() / 2].to_vec()),
+        ("empty png", Vec::new()),
+        ("text as png", b"not an image".to_vec()),
+        ("huge header", huge),
+    ] {
+        let path = dir.join(format!("{}.png", name.replace(' ', "_")));
+        std::fs::write(&path, bytes).unwrap();
+        let p = path.to_string_lossy().into_owned();
+        let shown = path.file_name().unwrap().to_string_lossy().into_owned();
+        let o = run(
+            &[
+                "distort",
+                "--camera",
+                good_cam.to_str().unwrap(),
+                "--input",
+                &p,
+                "--output",
+                &out("o.png"),
+            ],
+            None,
+        );
+        count += refused(name, &o, &shown, &outs, &before);
+    }
+
+    // Points on stdin.
+    for (name, text) in [
+        ("not json", "[[0.1, 0.2"),
+        ("four numbers", "[[1, 2, 3, 4]]"),
+        ("strings", "[[\"a\", 1]]"),
+        ("not a list", "{\"x\": 1}"),
+    ] {
+        let o = run(
+            &["points", "distort", "--camera", good_cam.to_str().unwrap()],
+            Some(text.as_bytes()),
+        );
+        count += refused(name, &o, "stdin", &outs, &before);
+    }
+
+    // Lens files, scene files, meshes.
+    let lens = dir.join("bad.dat");
+    std::fs::write(&lens, "this is not a lens\n50 0 1.5 10\n").unwrap();
+    let o = run(&["lens", "info", "--lens", lens.to_str().unwrap()], None);
+    count += refused("lens", &o, "bad.dat", &outs, &before);
+    let scene = dir.join("bad.toml");
+    std::fs::write(&scene, "[geometry\nscene = 3\n").unwrap();
+    let o = run(
+        &[
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            &out("frames"),
+        ],
+        None,
+    );
+    count += refused("scene", &o, "bad.toml", &outs, &before);
+    let gltf = dir.join("bad.gltf");
+    std::fs::write(
+        &gltf,
+        r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]}"#,
+    )
+    .unwrap();
+    let obj = dir.join("bad.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
+    for mesh in [&gltf, &obj] {
+        let o = run(
+            &[
+                "render",
+                "--camera",
+                good_cam.to_str().unwrap(),
+                "--scene",
+                mesh.to_str().unwrap(),
+                "--output",
+                &out("m.png"),
+            ],
+            None,
+        );
+        let shown = mesh.file_name().unwrap().to_string_lossy().into_owned();
+        count += refused("mesh", &o, &shown, &outs, &before);
+    }
+
+    // Two outputs naming one file; an output in a read-only or missing folder: refused
+    // before rendering, nothing written.
+    let o = run(
+        &[
+            "render",
+            "--camera",
+            good_cam.to_str().unwrap(),
+            "--scene",
+            "boxes",
+            "--output",
+            &out("c.png"),
+            "--ids",
+            &out("c.png"),
+        ],
+        None,
+    );
+    count += refused("same output twice", &o, "c.png", &outs, &before);
+    let o = run(
+        &[
+            "render",
+            "--camera",
+            good_cam.to_str().unwrap(),
+            "--scene",
+            "boxes",
+            "--output",
+            &out("c.png"),
+            "--ids",
+            "/nonexistent-folder/ids.png",
+        ],
+        None,
+    );
+    count += refused("missing folder", &o, "ids.png", &outs, &before);
+    println!("{count} hostile runs refused cleanly");
+    assert!(count >= 80, "{count}");
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&outs);
+}
+
+#[test]
+fn a_closed_stdout_is_an_error_not_a_panic() {
+    let cam = root().join("examples/cameras/prism_tilt.json");
+    let c = cam.to_string_lossy().into_owned();
+    for args in [
+        vec!["overscan", "--camera", c.as_str()],
+        vec!["lens", "info", "--lens", "lenses/dgauss.50mm.dat"],
+        vec!["--help"],
+    ] {
+        let mut child = Command::new(bin())
+            .args(&args)
+            .current_dir(root())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Close the read end before the command writes.
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.code().is_some(), "{args:?}: a signal");
+        assert_ne!(out.status.code(), Some(101), "{args:?}: panicked: {stderr}");
+        assert!(stderr.lines().count() <= 1, "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn concurrent_writers_and_device_nodes() {
+    let outs = temp_dir("concurrent");
+    let cam = root().join("examples/cameras/prism_tilt.json");
+    let src = outs.join("src.png");
+    image::RgbaImage::from_pixel(800, 600, image::Rgba([100, 150, 200, 255]))
+        .save(&src)
+        .unwrap();
+    let target = outs.join("o.png");
+    let children: Vec<_> = (0..4)
+        .map(|i| {
+            Command::new(bin())
+                .args(["distort", "--camera"])
+                .arg(&cam)
+                .arg("--input")
+                .arg(&src)
+                .arg("--output")
+                .arg(&target)
+                .args(["--fill", &format!("0.{i},0,0,1")])
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for c in children {
+        let o = c.wait_with_output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    // One whole image, one writer's; no temporary file left.
+    let img = image::open(&target).expect("a valid PNG");
+    assert_eq!((img.width(), img.height()), (800, 600));
+    let names: Vec<String> = listing(&outs)
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["o.png", "src.png"], "{names:?}");
+    // A device node at the output path is written through, never replaced.
+    let o = Command::new(bin())
+        .args([
+            "lens",
+            "fit-opencv",
+            "--lens",
+            "lenses/dgauss.50mm.dat",
+            "--sensor",
+            "36x24",
+            "--pixels",
+            "360x240",
+            "--out",
+            "/dev/null",
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata("/dev/null")
+        .unwrap()
+        .file_type()
+        .is_char_device());
+    let _ = std::fs::remove_dir_all(&outs);
+}
+
+#[test]
+fn a_calibration_set_never_looks_complete_unless_it_is() {
+    let dir = temp_dir("calibration");
+    let set = dir.join("set");
+    let cam = root().join("examples/cameras/prism_tilt.json");
+    let make = |count: &str| {
+        let mut c = Command::new(bin());
+        c.args([
+            "calibration-set",
+            "--supersample",
+            "1",
+            "--jitter",
+            "1",
+            "--count",
+            count,
+            "--camera",
+        ])
+        .arg(&cam)
+        .arg("--out")
+        .arg(&set)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null());
+        c
+    };
+    assert!(make("5").status().unwrap().success());
+    // A smaller re-run: the stale views of the larger one go.
+    assert!(make("3").status().unwrap().success());
+    let names = |d: &Path| -> Vec<String> {
+        listing(d)
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect()
+    };
+    assert_eq!(
+        names(&set),
+        ["poses.json", "view_00.png", "view_01.png", "view_02.png"]
+    );
+    // Interrupted (SIGTERM) after its first view: no poses.json (the old one is gone first),
+    // no temporary file; exit 130.
+    let mut child = make("40").spawn().unwrap();
+    let start = std::time::Instant::now();
+    while !names(&set).iter().any(|n| n == "view_03.png") {
+        assert!(start.elapsed().as_secs() < 120, "no view rendered");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let _ = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    let left = names(&set);
+    assert!(!left.iter().any(|n| n == "poses.json"), "{left:?}");
+    assert!(!left.iter().any(|n| n.contains("vklens-tmp")), "{left:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_rgb_input_gives_an_rgb_output_unless_the_fill_needs_alpha() {
+    let dir = temp_dir("channels");
+    let cam = root().join("examples/cameras/prism_tilt.json");
+    let src = dir.join("rgb.png");
+    image::RgbImage::from_pixel(800, 600, image::Rgb([120, 60, 30]))
+        .save(&src)
+        .unwrap();
+    let warp = |out: &str, fill: &[&str]| {
+        let o = Command::new(bin())
+            .args(["distort", "--camera"])
+            .arg(&cam)
+            .arg("--input")
+            .arg(&src)
+            .arg("--output")
+            .arg(dir.join(out))
+            .args(fill)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            image::open(dir.join(out)).unwrap().color(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (color, _) = warp("opaque.png", &["--fill", "0,0,0,1"]);
+    assert_eq!(color, image::ColorType::Rgb8);
+    // The default fill is transparent and this lens leaves pixels without a source: RGBA, and
+    // the command says why.
+    let (color, said) = warp("default.png", &[]);
+    assert_eq!(color, image::ColorType::Rgba8);
+    assert!(said.contains("alpha channel the input lacks"), "{said}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -237,6 +237,12 @@ pub(crate) fn write_stdout(args: std::fmt::Arguments) -> Result<(), CliError> {
         .map_err(|e| CliError::io(std::path::Path::new("<stdout>"), "cannot write", &e))
 }
 
+/// Parses the JSON points `vklens points` reads on stdin: rows of two numbers, or (with
+/// `three`) of two or three; errors name the element.
+pub fn parse_point_rows(text: &str, three: bool) -> Result<Vec<Vec<f64>>, CliError> {
+    points::parse_rows(text, three)
+}
+
 /// Loads a camera file, as a one-line input error.
 pub(crate) fn load_camera(path: &std::path::Path) -> Result<Camera, CliError> {
     crate::io::camera::load_camera_at(path, CAMERA_INDEX.get().copied().flatten())
@@ -252,24 +258,74 @@ pub(crate) fn finish(ctx: &crate::gpu::Context) -> Result<(), CliError> {
     ctx.check_validation()
 }
 
-/// Progress on stderr: one redrawn line on a terminal, plain lines otherwise (logs, CI).
-pub(crate) fn progress_line(what: &str) {
-    use std::io::IsTerminal;
-    if std::io::stderr().is_terminal() {
-        eprint!("\r\x1b[2K{what}");
-    } else {
-        eprintln!("{what}");
-    }
+/// The progress bar of this run: drawn on stderr when it is a terminal (indicatif: the step,
+/// its rate and the time left), plain lines otherwise (logs, CI).
+static PROGRESS: std::sync::Mutex<Option<indicatif::ProgressBar>> = std::sync::Mutex::new(None);
+
+/// `N/M` in a progress message (`view 3/17: view_02.png`): the bar's position and length.
+fn step_of(what: &str) -> Option<(u64, u64)> {
+    what.split(|c: char| c.is_whitespace() || c == ':' || c == '(' || c == ')')
+        .find_map(|t| {
+            let (n, m) = t.split_once('/')?;
+            Some((n.parse().ok()?, m.parse().ok()?))
+        })
+        .filter(|&(n, m)| m > 0 && n <= m)
 }
 
-/// Ends a progress display.
-pub(crate) fn progress_done(what: &str) {
+/// Progress on stderr: a bar with rate and ETA when the message counts `N/M`, a spinner with
+/// the elapsed time otherwise; one line per step when stderr is not a terminal.
+pub(crate) fn progress_line(what: &str) {
     use std::io::IsTerminal;
-    if std::io::stderr().is_terminal() {
-        eprintln!("\r\x1b[2K{what}");
-    } else {
+    if !std::io::stderr().is_terminal() {
         eprintln!("{what}");
+        return;
     }
+    let Ok(mut slot) = PROGRESS.lock() else {
+        return;
+    };
+    let step = step_of(what);
+    let bar = slot.get_or_insert_with(|| {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
+        bar
+    });
+    match step {
+        Some((n, m)) => {
+            if bar.length() != Some(m) {
+                bar.set_style(
+                    indicatif::ProgressStyle::with_template(
+                        "{bar:24.cyan/blue} {pos}/{len} {rate} ETA {eta:>4} {msg}",
+                    )
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                    .with_key(
+                        "rate",
+                        |s: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                            let _ = write!(w, "{:>6.2}/s", s.per_sec());
+                        },
+                    ),
+                );
+                bar.set_length(m);
+                bar.reset_eta();
+            }
+            // The message names the step being started: the ones before it are done.
+            bar.set_position(n.saturating_sub(1));
+        }
+        None => bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} {elapsed:>4} {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+        ),
+    }
+    bar.set_message(what.to_string());
+}
+
+/// The end of a run of progress lines: the bar is cleared and `what` printed as a line.
+pub(crate) fn progress_done(what: &str) {
+    if let Ok(mut slot) = PROGRESS.lock() {
+        if let Some(bar) = slot.take() {
+            bar.finish_and_clear();
+        }
+    }
+    eprintln!("{what}");
 }
 
 /// Runs the command line.

@@ -24,7 +24,7 @@ fn read_rows(three: bool) -> Result<Vec<Vec<f64>>, CliError> {
 }
 
 /// Parses a JSON array of rows of two numbers (or, with `three`, of two or three).
-fn parse_rows(text: &str, three: bool) -> Result<Vec<Vec<f64>>, CliError> {
+pub(super) fn parse_rows(text: &str, three: bool) -> Result<Vec<Vec<f64>>, CliError> {
     let shape = if three {
         "[x, y] or [X, Y, Z]"
     } else {

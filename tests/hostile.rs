@@ -513,3 +513,33 @@ fn an_rgb_input_gives_an_rgb_output_unless_the_fill_needs_alpha() {
     assert!(said.contains("alpha channel the input lacks"), "{said}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_lens_whose_surfaces_cross_is_refused_with_the_line() {
+    let dir = temp_dir("lens");
+    let lens = dir.join("crossing.dat");
+    // A biconvex singlet 0.1 mm thick at the axis: its surfaces cross 1.6 mm out.
+    std::fs::write(&lens, "# crossing\n20 0.1 1.5 30\n-20 5 1 30\n").unwrap();
+    let l = lens.to_string_lossy().into_owned();
+    let before = listing(&dir);
+    for args in [
+        vec!["lens", "info", "--lens", l.as_str()],
+        vec![
+            "lens",
+            "fit-opencv",
+            "--lens",
+            l.as_str(),
+            "--sensor",
+            "36x24",
+            "--pixels",
+            "360x240",
+            "--out",
+            "/dev/null",
+        ],
+    ] {
+        let o = run(&args, None);
+        refused("crossing surfaces", &o, "crossing.dat:3", &dir, &before);
+        assert!(String::from_utf8_lossy(&o.stderr).contains("crosses the one on line 2"));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

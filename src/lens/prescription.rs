@@ -89,6 +89,7 @@ impl Prescription {
             line,
             problem,
         };
+        let mut lines = Vec::new();
         let mut surfaces = Vec::new();
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
@@ -152,6 +153,7 @@ impl Prescription {
             if fields.len() == 5 && abbe <= 0.0 {
                 return Err(err(line, format!("Abbe number {abbe} must be positive")));
             }
+            lines.push(line);
             surfaces.push(Surface {
                 radius,
                 thickness,
@@ -163,6 +165,34 @@ impl Prescription {
         }
         if surfaces.len() < 2 {
             return Err(err(0, "a lens needs at least two surfaces".into()));
+        }
+        // Two consecutive surfaces must not cross inside their common clear aperture: glass
+        // (or air) of negative thickness is no lens a ray could pass.
+        let sag = |r: f64, h: f64| {
+            if r == 0.0 {
+                0.0
+            } else {
+                r - r.signum() * (r * r - h * h).max(0.0).sqrt()
+            }
+        };
+        for i in 0..surfaces.len() - 1 {
+            let (a, b) = (&surfaces[i], &surfaces[i + 1]);
+            let h_max = 0.5 * a.aperture.min(b.aperture);
+            for k in 0..=64 {
+                let h = h_max * k as f64 / 64.0;
+                let gap = a.thickness + sag(b.radius, h) - sag(a.radius, h);
+                if gap < -1e-9 * (1.0 + a.thickness) {
+                    return Err(err(
+                        lines[i + 1],
+                        format!(
+                            "this surface crosses the one on line {} at {h:.3} mm from the axis (by {:.3} mm): the thickness {} there is too small for these radii and apertures",
+                            lines[i],
+                            -gap,
+                            a.thickness
+                        ),
+                    ));
+                }
+            }
         }
         match surfaces.iter().filter(|s| s.stop).count() {
             0 | 1 => {}

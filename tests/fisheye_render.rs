@@ -8,9 +8,8 @@ use glam::DVec3;
 use vklens::internal::imaging::Pixels;
 use vklens::internal::model::InverseMethod;
 use vklens::internal::model::{Camera, Fisheye, Intrinsics};
-use vklens::internal::pass::geometry::{ColorFormat, Outputs};
 use vklens::internal::render::{pinhole_source_refusal, render_scene, RenderPath, RenderRequest};
-use vklens::internal::scene::{Mesh, Pose, Scene, Vertex};
+use vklens::internal::scene::{Mesh, Scene, Vertex};
 
 fn fisheye_200() -> Camera {
     let k = Intrinsics {
@@ -85,18 +84,7 @@ fn checker_room() -> Scene {
 }
 
 fn request(camera: &Camera, path: RenderPath) -> RenderRequest {
-    RenderRequest {
-        camera: camera.clone(),
-        pose: Pose::IDENTITY,
-        previous_pose: Pose::IDENTITY,
-        path,
-        outputs: Outputs::color_only(Some(ColorFormat::Rgba8)),
-        supersample: 1,
-        jitter: 1,
-        tessellate: None,
-        background: [0.0; 4],
-        chromatic: None,
-    }
+    RenderRequest::color(camera, path)
 }
 
 fn rgba8(r: &vklens::internal::pass::geometry::Rendered) -> Vec<[u8; 4]> {

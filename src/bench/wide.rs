@@ -27,10 +27,10 @@ use crate::headless::points::{run_project, run_unproject};
 use crate::model::overscan::{cube_face_side, overscan};
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, Fisheye, Intrinsics, InverseMethod};
-use crate::pass::geometry::{ColorFormat, Outputs, DEFAULT_DELTA};
+use crate::pass::geometry::DEFAULT_DELTA;
 use crate::pass::Precision;
 use crate::render::{pinhole_source_refusal, RenderPath, RenderRequest, SceneRenderer};
-use crate::scene::{builtin, Pose, Scene};
+use crate::scene::{builtin, Scene};
 
 /// The output size of every row.
 pub const SIZE: (u32, u32) = (1920, 1080);
@@ -62,18 +62,7 @@ pub fn cameras() -> Vec<(&'static str, Camera)> {
 }
 
 fn request(camera: &Camera, path: RenderPath) -> RenderRequest {
-    RenderRequest {
-        camera: camera.clone(),
-        pose: Pose::IDENTITY,
-        previous_pose: Pose::IDENTITY,
-        path,
-        outputs: Outputs::color_only(Some(ColorFormat::Rgba8)),
-        supersample: 1,
-        jitter: 1,
-        tessellate: None,
-        background: [0.0; 4],
-        chromatic: None,
-    }
+    RenderRequest::color(camera, path)
 }
 
 /// Median wall-clock ms of three renders after a warm-up.

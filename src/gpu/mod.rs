@@ -31,8 +31,8 @@ pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,
 };
 pub use pipeline::{
-    write_buffer_descriptors, write_storage_image_descriptors, ComputePipeline, DescriptorLayout,
-    DescriptorPool, SpecConstants, SpecId,
+    write_buffer_descriptors, write_sampled_image_descriptor, write_storage_image_descriptors,
+    ComputePipeline, DescriptorLayout, DescriptorPool, SpecConstants, SpecId,
 };
 pub use resources::{Buffer, Image, QueryPool};
 

@@ -381,6 +381,31 @@ pub fn write_buffer_descriptors(
     unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
 }
 
+/// Points `binding` of `set` at a sampled image (in `SHADER_READ_ONLY_OPTIMAL`) with `sampler`.
+pub fn write_sampled_image_descriptor(
+    gpu: &Gpu,
+    set: vk::DescriptorSet,
+    binding: u32,
+    sampler: &super::Sampler,
+    view: vk::ImageView,
+) {
+    let info = [vk::DescriptorImageInfo {
+        sampler: sampler.raw,
+        image_view: view,
+        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    }];
+    let write = vk::WriteDescriptorSet::default()
+        .dst_set(set)
+        .dst_binding(binding)
+        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+        .image_info(&info);
+    // SAFETY: `write` points at `info`, alive across the call; `sampler` is a live vklens
+    // sampler. That `set` is live with a combined image sampler at `binding`, that `view` is a
+    // live view of this device, and that no pending work uses `set` is up to the caller: this
+    // safe function cannot check it.
+    unsafe { gpu.device().update_descriptor_sets(&[write], &[]) };
+}
+
 /// Points the bindings of `set` at storage images in `GENERAL` layout: `(binding, view)`.
 pub fn write_storage_image_descriptors(
     gpu: &Gpu,

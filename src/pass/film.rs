@@ -98,20 +98,7 @@ impl FilmPass {
     /// A descriptor set that samples `view` (in `SHADER_READ_ONLY_OPTIMAL` when drawn).
     pub fn bind_image(&self, view: vk::ImageView) -> Result<vk::DescriptorSet> {
         let set = self.pool.allocate(&self.pipeline)?;
-        let info = [vk::DescriptorImageInfo {
-            sampler: self.sampler.raw,
-            image_view: view,
-            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(set)
-            .dst_binding(0)
-            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-            .image_info(&info);
-        // SAFETY: `set` was just allocated from this pass's pool for binding 0's
-        // combined-image-sampler, so no work uses it yet; the sampler is this pass's and `info`
-        // outlives the call. That `view` is a live view of this device is the caller's duty.
-        unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
+        crate::gpu::write_sampled_image_descriptor(&self.gpu, set, 0, &self.sampler, view);
         Ok(set)
     }
 

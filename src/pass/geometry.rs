@@ -816,21 +816,13 @@ impl GeometryPass {
     }
 
     fn write_texture(&self, set: vk::DescriptorSet, mesh: &MeshBuffers) {
-        let info = [vk::DescriptorImageInfo {
-            sampler: self.sampler.raw,
-            image_view: mesh.texture.image.view,
-            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(set)
-            .dst_binding(2)
-            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-            .image_info(&info);
-        // SAFETY: `set` is this pass's own or a slot's, of this layout, whose binding 2 is a
-        // combined image sampler; the sampler and `mesh`'s texture view are live objects of
-        // this device and `info` outlives the call. That no pending work uses `set` is the
-        // caller's duty (documented on `set_frame`/`set_slot`; this safe method cannot check).
-        unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
+        crate::gpu::write_sampled_image_descriptor(
+            &self.gpu,
+            set,
+            2,
+            &self.sampler,
+            mesh.texture.image.view,
+        );
     }
 
     /// Records the render pass: clears every output, draws `mesh`, leaves the outputs in

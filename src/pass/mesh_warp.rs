@@ -206,21 +206,7 @@ impl MeshWarpPass {
     /// this object may be pending on the GPU (wait for its fence first), as Vulkan
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn bind(&mut self, source: vk::ImageView) {
-        let info = [vk::DescriptorImageInfo {
-            sampler: self.sampler.raw,
-            image_view: source,
-            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(self.set)
-            .dst_binding(0)
-            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-            .image_info(&info);
-        // SAFETY: `self.set` has binding 0 as a combined image sampler and `info` outlives the
-        // call. That no pending work uses the set (`&mut self` does not ensure it: recorded
-        // work does not borrow the pass) and that `source` is a live view of this device are
-        // the caller's duty, which this safe function cannot check.
-        unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
+        crate::gpu::write_sampled_image_descriptor(&self.gpu, self.set, 0, &self.sampler, source);
     }
 
     /// Records the warp into `framebuffer` (one colour attachment of `output_size` and this

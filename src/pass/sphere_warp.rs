@@ -285,19 +285,7 @@ impl SphereWarpPass {
             self.set,
             &[(0, vk::DescriptorType::UNIFORM_BUFFER, &self.camera)],
         );
-        let info = [vk::DescriptorImageInfo {
-            sampler: self.sampler.raw,
-            image_view: source,
-            image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(self.set)
-            .dst_binding(1)
-            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-            .image_info(&info);
-        // SAFETY: binding 1 of this set is a combined image sampler; `info` outlives the call;
-        // the caller vouches that no pending work uses the set and that `source` is live.
-        unsafe { self.gpu.device().update_descriptor_sets(&[write], &[]) };
+        crate::gpu::write_sampled_image_descriptor(&self.gpu, self.set, 1, &self.sampler, source);
         write_storage_image_descriptors(&self.gpu, self.set, &[(2, output), (3, mask)]);
     }
 

@@ -94,6 +94,26 @@ pub struct RenderRequest {
     pub chromatic: Option<[f64; 3]>,
 }
 
+impl RenderRequest {
+    /// One 8-bit colour image of `camera` by `path`, from the identity pose (the camera at
+    /// the world origin): no anti-aliasing, tessellation or chromatic aberration, a
+    /// transparent background.
+    pub fn color(camera: &Camera, path: RenderPath) -> Self {
+        RenderRequest {
+            camera: camera.clone(),
+            pose: Pose::IDENTITY,
+            previous_pose: Pose::IDENTITY,
+            path,
+            outputs: Outputs::color_only(Some(ColorFormat::Rgba8)),
+            supersample: 1,
+            jitter: 1,
+            tessellate: None,
+            background: [0.0; 4],
+            chromatic: None,
+        }
+    }
+}
+
 /// Renders scenes through a headless context, keeping geometry passes (their compiled
 /// pipelines) across calls: a new camera of the same size and terms, a new pose or a new mesh
 /// reuses them. A calibration set's views and the jittered passes all share one.

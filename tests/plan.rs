@@ -638,3 +638,40 @@ fn errors_in_files_a_scene_names_name_the_scene_file_and_key() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_lens_past_a_pinholes_reach_is_planned_on_the_vertex_path_and_says_why() {
+    let dir = std::env::temp_dir().join(format!("vklens-plan-fisheye-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("fish.json"),
+        r#"{"model": "opencv_fisheye", "width": 480, "height": 480, "fx": 138, "fy": 138, "cx": 239.5, "cy": 239.5, "dist_coeffs": [0.02, -0.004, 0.0005, 0], "max_fov_deg": 200}"#,
+    )
+    .unwrap();
+    let text = "[geometry]\nscene = \"room\"\n[optics]\ncamera = \"fish.json\"\n[accuracy]\nmax_error_px = 0.5\n";
+    let file = SceneFile::parse(text, &dir.join("scene.toml")).unwrap();
+    let scene = load_geometry(&file).unwrap();
+    let p = plan(&file, &scene).unwrap();
+    assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
+    let why: Vec<&str> = p.steps.iter().map(|s| s.why.as_str()).collect();
+    assert!(
+        why.iter()
+            .any(|w| w.contains("no pinhole warp") && w.contains("90°")),
+        "{why:?}"
+    );
+    assert!(
+        why.iter().any(|w| w.contains("compiled in: fisheye")),
+        "{why:?}"
+    );
+    // Chromatic aberration would need the planner's pinhole warp: refused, naming the key.
+    let chromatic = format!(
+        "{text}[effects]\nchromatic_aberration = true\nchromatic_scales = [1.002, 1.0, 0.998]\n"
+    );
+    let file = SceneFile::parse(&chromatic, &dir.join("scene.toml")).unwrap();
+    let e = plan(&file, &scene).unwrap_err().to_string();
+    assert!(
+        e.contains("chromatic_aberration") && e.contains("pinhole source"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -776,15 +776,15 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                             _ => "flow vectors",
                         }
                     )
+                } else if let Some(why) = &no_pinhole_warp {
+                    format!("no pinhole warp: {why}")
                 } else {
                     format!(
                         "estimated {:.1} ms against {} for pinhole + warp",
                         vertex_ms.unwrap_or(f64::NAN),
-                        match (&no_pinhole_warp, warp_ms) {
-                            (Some(why), _) => format!("no pinhole warp ({why})"),
-                            (None, Some(w)) => format!("{w:.1} ms"),
-                            (None, None) => "no warp meeting the budget".into(),
-                        }
+                        warp_ms
+                            .map(|w| format!("{w:.1} ms"))
+                            .unwrap_or_else(|| "no warp meeting the budget".into())
                     )
                 };
                 if l.is_some() {

@@ -322,10 +322,10 @@ impl SceneFile {
         let scene = r.string(geometry, "geometry", "scene")?.ok_or_else(|| {
             r.err(
                 "[geometry] scene",
-                "missing: a built-in scene (checkerboard, grid, boxes) or a mesh file",
+                "missing: a built-in scene (checkerboard, grid, boxes, room) or a mesh file",
             )
         })?;
-        let builtin = ["checkerboard", "grid", "boxes"]
+        let builtin = ["checkerboard", "grid", "boxes", "room"]
             .iter()
             .any(|b| scene == *b || scene.starts_with(&format!("{b}:")));
         let geometry = if builtin {

@@ -27,7 +27,7 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
         .map(|e| e.to_ascii_lowercase());
     if !path.exists() {
         return Err(err(
-            "no such file (a scene is checkerboard[:COLSxROWS[:SQUARE_M]], grid[:N], boxes, or an .obj/.gltf/.glb file)".into(),
+            "no such file (a scene is checkerboard[:COLSxROWS[:SQUARE_M]], grid[:N], boxes, room, or an .obj/.gltf/.glb file)".into(),
         ));
     }
     let mesh = match ext.as_deref() {

@@ -445,7 +445,6 @@ impl Camera {
         }
         let mut camera = Self::new(width, height, intrinsics, self.distortion)?;
         camera.coeff_count = self.coeff_count;
-        camera.brown = self.brown;
         Ok(camera)
     }
 

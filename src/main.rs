@@ -11,11 +11,13 @@ fn main() {
     // only when complete).
     let _ = ctrlc::set_handler(|| {
         vklens::internal::imaging::file::remove_pending_temps();
+        vklens::internal::cli::progress_clear();
         eprintln!("vklens: interrupted; no output was left half-written");
         std::process::exit(130);
     });
     let cli = vklens::internal::cli::Cli::parse();
     if let Err(e) = vklens::internal::cli::run(cli) {
+        vklens::internal::cli::progress_clear();
         eprintln!("vklens: {e}");
         std::process::exit(vklens::internal::cli::exit_code(&e));
     }

@@ -423,3 +423,15 @@ fn ros_camera_info_carries_every_camera_ros_can_describe() {
     let e = prism.to_ros_camera_info().unwrap_err().to_string();
     assert!(e.contains("thin prism"), "{e}");
 }
+
+#[test]
+fn a_huge_finite_point_lands_on_the_90_degree_circle_not_the_principal_point() {
+    let cam = &index()["cameras"][1];
+    let camera = json_camera(cam);
+    let lens = *camera.fisheye_lens().unwrap();
+    let d = camera
+        .distort_normalized(DVec2::new(1e200, 0.0))
+        .expect("finite");
+    let want = lens.theta_d(std::f64::consts::FRAC_PI_2).0;
+    assert!((d.x - want).abs() < 1e-12 && d.y == 0.0, "{d}");
+}

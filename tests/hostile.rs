@@ -543,3 +543,50 @@ fn a_lens_whose_surfaces_cross_is_refused_with_the_line() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn flags_are_checked_where_they_belong() {
+    let dir = temp_dir("flags");
+    let before = listing(&dir);
+    let cam = root().join("examples/cameras/barrel_k1k2.json");
+    let c = cam.to_string_lossy().into_owned();
+    let out = dir.join("o.png").to_string_lossy().into_owned();
+    // A density that is no density: refused naming the flag, not turned into a cube map.
+    for d in ["0", "-1", "nan"] {
+        let flag = format!("--density={d}");
+        let o = run(
+            &[
+                "render", "--camera", &c, "--scene", "boxes", "--path", "warp", &flag, "--output",
+                &out,
+            ],
+            None,
+        );
+        refused("density", &o, "--density", &dir, &before);
+    }
+    // --camera-index picks the camchain's camera; the pinhole --source-camera is read whole.
+    let chain = dir.join("chain.yaml");
+    std::fs::write(&chain, "cam0:\n  camera_model: pinhole\n  distortion_model: radtan\n  distortion_coeffs: [-0.1, 0.01, 0, 0]\n  intrinsics: [50, 50, 31.5, 23.5]\n  resolution: [64, 48]\ncam1:\n  camera_model: pinhole\n  distortion_model: radtan\n  distortion_coeffs: [-0.2, 0.02, 0, 0]\n  intrinsics: [50, 50, 31.5, 23.5]\n  resolution: [64, 48]\n").unwrap();
+    let pin = dir.join("pin.json");
+    std::fs::write(
+        &pin,
+        r#"{"width": 64, "height": 48, "fx": 50, "fy": 50, "cx": 31.5, "cy": 23.5}"#,
+    )
+    .unwrap();
+    let src = dir.join("src.png");
+    image::RgbImage::from_pixel(64, 48, image::Rgb([1, 2, 3]))
+        .save(&src)
+        .unwrap();
+    let o = Command::new(bin())
+        .args(["distort", "--camera-index", "1", "--camera"])
+        .arg(&chain)
+        .arg("--source-camera")
+        .arg(&pin)
+        .arg("--input")
+        .arg(&src)
+        .arg("--output")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

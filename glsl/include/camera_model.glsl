@@ -165,7 +165,9 @@ void vkl_fisheye_theta_d(VKL_FLOAT t, out VKL_FLOAT td, out VKL_FLOAT dtd) {
 // The fisheye's radial map on pinhole-normalized coordinates (Z > 0): x ↦ g(r) x with
 // g = θ_d(atan r) / r, and its Jacobian g I + (g'(r)/r) x xᵀ (model::Fisheye::distort_normalized).
 void vkl_fisheye_pre_skew(VKL_VEC2 p, out VKL_VEC2 d, out VKL_MAT2 J) {
-    VKL_FLOAT rho = length(p);
+    // |p| by its larger component first: length() of a huge point overflows to ∞ in f32.
+    VKL_FLOAT m = max(abs(p.x), abs(p.y));
+    VKL_FLOAT rho = m > 0.0 ? m * length(p / m) : 0.0;
     VKL_FLOAT g, dg_over_rho;
     if (rho < VKL_FISHEYE_SMALL) {
         VKL_FLOAT c = (VKL_RADIAL ? vkl_cam.radial.x : 0.0) - 1.0 / 3.0;
@@ -200,7 +202,10 @@ bool vkl_fisheye_theta(VKL_FLOAT rho, out VKL_FLOAT theta) {
         theta = (dtd > 0.0 && next > lo && next < hi) ? next : 0.5 * (lo + hi);
         if (hi - lo < 2.0 * VKL_EPSILON * hi) break;
     }
-    return true;
+    // As model::Fisheye::undistort_ray: the answer must reproduce rho.
+    VKL_FLOAT td, dtd;
+    vkl_fisheye_theta_d(theta, td, dtd);
+    return abs(td - rho) <= 4.0 * VKL_NEWTON_ACCEPT * (1.0 + rho);
 }
 
 // Inverse of the fisheye to a unit camera-frame ray, past 90° too: distorted normalized

@@ -94,7 +94,7 @@ Examples:
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
-    /// Which camera of a file that holds several (a Kalibr camchain's camN, a COLMAP
+    /// Which camera of a --camera file that holds several (a Kalibr camchain's camN, a COLMAP
     /// cameras.txt's Nth line), counting from 0. Default: the first.
     #[arg(long, global = true, value_name = "N")]
     camera_index: Option<usize>,
@@ -316,6 +316,15 @@ pub(crate) fn progress_line(what: &str) {
         ),
     }
     bar.set_message(what.to_string());
+}
+
+/// Clears the progress bar, if one is drawn (before an error is printed).
+pub fn progress_clear() {
+    if let Ok(mut slot) = PROGRESS.lock() {
+        if let Some(bar) = slot.take() {
+            bar.finish_and_clear();
+        }
+    }
 }
 
 /// The end of a run of progress lines: the bar is cleared and `what` printed as a line.

@@ -120,7 +120,8 @@ pub struct WarpArgs {
 }
 
 fn pinhole(path: &Path) -> Result<Camera, CliError> {
-    let cam = super::load_camera(path)?;
+    // --camera-index is --camera's: the source camera is a file of its own.
+    let cam = crate::io::load_camera(path)?;
     if !cam.is_pinhole() {
         return Err(CliError::input(format!(
             "{}: the source camera is the pinhole side of the warp and must have no distortion",
@@ -161,9 +162,9 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         let [r, g, b] = <[PathBuf; 3]>::try_from(args.channel_cameras.clone())
             .map_err(|_| CliError::input("--channel-cameras: expected three camera files R,G,B"))?;
         let cams = [
-            super::load_camera(&r)?,
-            super::load_camera(&g)?,
-            super::load_camera(&b)?,
+            crate::io::load_camera(&r)?,
+            crate::io::load_camera(&g)?,
+            crate::io::load_camera(&b)?,
         ];
         for (path, c) in [&r, &g, &b].into_iter().zip(&cams) {
             if (c.width, c.height) != (cam.width, cam.height) {
@@ -250,7 +251,9 @@ fn save_outputs(
     } else {
         input
     };
-    // Both outputs, or neither: staged, then put in place together.
+    // Both outputs, or neither, as far as writing goes: both are staged before either is
+    // renamed into place (a rename failing in between, which a writable folder does not do,
+    // would leave the first).
     let mut staged = vec![image_io::save_staged(out, &args.output, channels)?];
     if let Some(m) = &args.mask {
         let raster = Raster {

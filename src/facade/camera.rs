@@ -190,8 +190,15 @@ impl Camera {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
+        // camera_info has no field of view: a comment keeps the fisheye's for a reader
+        // (camera.json carries it as a key).
+        let fov = self
+            .fisheye_lens()
+            .and_then(|f| f.max_fov_deg())
+            .map(|f| format!("# max_fov_deg: {f} (no camera_info field; camera.json carries it)\n"))
+            .unwrap_or_default();
         Ok(format!(
-            "image_width: {}\nimage_height: {}\ncamera_name: vklens\n\
+            "{fov}image_width: {}\nimage_height: {}\ncamera_name: vklens\n\
              camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{}]\n\
              distortion_model: {model}\n\
              distortion_coefficients:\n  rows: 1\n  cols: {}\n  data: [{}]\n\

@@ -74,7 +74,7 @@ pub unsafe fn image_barrier(
         .subresource_range(super::Image::color_range())];
     // SAFETY: the caller upholds `image_barrier`'s contract: `cmd` is recording outside a
     // render pass and `image` is in layout `from` (or `from` is UNDEFINED). The range is the
-    // one mip level and layer every vklens colour image has; `barrier` outlives the call.
+    // one mip level and every layer (one, or six for a cube map) of a vklens colour image; `barrier` outlives the call.
     unsafe {
         gpu.device().cmd_pipeline_barrier(
             cmd,

@@ -296,6 +296,8 @@ impl Context {
             float64,
             geometry_shader,
             max_image_side: props.limits.max_image_dimension2_d,
+            max_cube_side: props.limits.max_image_dimension_cube,
+            float_linear: super::float_linear(&instance, physical),
             owner: owned,
         });
         let pool_info = vk::CommandPoolCreateInfo::default()

@@ -70,6 +70,10 @@ pub(crate) struct GpuInner {
     pub(crate) geometry_shader: bool,
     /// `maxImageDimension2D`.
     pub(crate) max_image_side: u32,
+    /// `maxImageDimensionCube`.
+    pub(crate) max_cube_side: u32,
+    /// Whether RGBA32F images can be sampled with linear filtering (optimal tiling).
+    pub(crate) float_linear: bool,
     /// Present when vklens created the device (headless [`Context`]); destroys it last.
     pub(crate) owner: Option<context::Owned>,
 }
@@ -117,6 +121,8 @@ impl Gpu {
                 float64: features.shader_float64,
                 geometry_shader: features.geometry_shader,
                 max_image_side: props.limits.max_image_dimension2_d,
+                max_cube_side: props.limits.max_image_dimension_cube,
+                float_linear: float_linear(instance, physical_device),
                 owner: None,
             }),
         })
@@ -153,6 +159,17 @@ impl Gpu {
     /// The largest image side the device supports.
     pub fn max_image_side(&self) -> u32 {
         self.inner.max_image_side
+    }
+
+    /// The largest cube map face (`maxImageDimensionCube`, at least 4096 by the spec).
+    pub fn max_cube_side(&self) -> u32 {
+        self.inner.max_cube_side
+    }
+
+    /// Whether RGBA32F images can be sampled with linear filtering (Vulkan does not require
+    /// it; the cube-map warp needs it for float sources).
+    pub fn supports_float_linear_filter(&self) -> bool {
+        self.inner.float_linear
     }
     /// Whether f64 shader variants can run (`shaderFloat64` enabled).
     pub fn supports_float64(&self) -> bool {
@@ -231,4 +248,15 @@ pub(crate) fn device_name(props: &vk::PhysicalDeviceProperties) -> String {
         .device_name_as_c_str()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|_| "unnamed device".into())
+}
+
+/// Whether `R32G32B32A32_SFLOAT` with optimal tiling supports linear filtering.
+pub(crate) fn float_linear(instance: &ash::Instance, physical: vk::PhysicalDevice) -> bool {
+    // SAFETY: `physical` belongs to the live `instance` (both callers' contracts).
+    let props = unsafe {
+        instance.get_physical_device_format_properties(physical, vk::Format::R32G32B32A32_SFLOAT)
+    };
+    props
+        .optimal_tiling_features
+        .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
 }

@@ -254,7 +254,7 @@ impl Image {
             .usage(usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: `info` fully describes a 2D image (one mip level, one layer or six square ones
-        // for a cube, one sample) on a live device. Vulkan also needs a non-zero extent within maxImageDimension2D and a
+        // for a cube, one sample) on a live device. Vulkan also needs a non-zero extent within maxImageDimension2D (maxImageDimensionCube for a cube) and a
         // format that supports `usage`; this function does not check those, its callers do
         // (validated camera and film sizes, `check_sizes`, formats chosen per usage).
         let raw = unsafe { device.create_image(&info, None).call("vkCreateImage")? };

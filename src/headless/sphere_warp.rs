@@ -36,11 +36,23 @@ fn check_source(gpu: &Gpu, source: &SphereSource) -> Result<(u32, u32)> {
             }
         }
     }
-    let max = gpu.max_image_side();
+    let (max, what) = match source {
+        SphereSource::Cube(_) => (gpu.max_cube_side(), "cube map face"),
+        SphereSource::Equirect(_) => (gpu.max_image_side(), "image"),
+    };
     if size.0 > max || size.1 > max {
         return Err(Error::Input(format!(
-            "the 360° source is {}×{}, larger than the device's {max} px image limit",
+            "the 360° source is {}×{}, larger than the device's {max} px {what} limit",
             size.0, size.1
+        )));
+    }
+    let float = rasters
+        .iter()
+        .any(|r| !matches!(r.pixels, Pixels::Rgba8(_)));
+    if float && !gpu.supports_float_linear_filter() {
+        return Err(Error::Unsupported(format!(
+            "{} cannot filter RGBA32F images linearly, which a 16-bit or float 360° source needs: give an 8-bit source",
+            gpu.device_name()
         )));
     }
     Ok(size)

@@ -82,6 +82,12 @@ pub fn load_with_channels(path: &Path) -> Result<(Raster, Channels)> {
         .into_dimensions()
         .map_err(|e| Error::input(format!("{shown}: cannot read the image header: {e}")))?;
     check_budget(&shown.to_string(), hw, hh)?;
+    // The decoder's own allocation limit follows the budget (its default, 512 MiB, would
+    // refuse what the budget allows, with a message VKLENS_MAX_IMAGE_MB could not help).
+    let mut reader = reader;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(max_image_bytes());
+    reader.limits(limits);
     let img = reader
         .decode()
         .map_err(|e| Error::input(format!("{shown}: cannot decode: {e}")))?;

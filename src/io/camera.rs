@@ -256,7 +256,24 @@ fn fisheye_from_tree(tree: &Value) -> Result<Camera> {
             }
             number_field(obj, "alpha")?
         }
-        None => skew / intrinsics.fx,
+        None if skew == 0.0 => 0.0,
+        None => {
+            // K[0][1] = α fx: fx must be usable before α can be read from it.
+            if !(intrinsics.fx.is_finite() && intrinsics.fx > 0.0) {
+                return Err(Error::input(format!(
+                    "the camera matrix's fx is {}: it must be a positive number (and its [0][1], the skew α·fx, needs it)",
+                    intrinsics.fx
+                )));
+            }
+            let alpha = skew / intrinsics.fx;
+            if !(alpha.abs() < Fisheye::MAX_ALPHA) {
+                return Err(Error::input(format!(
+                    "the camera matrix's [0][1] = {skew} is a skew α = {alpha} (α·fx); |α| must be below {}",
+                    Fisheye::MAX_ALPHA
+                )));
+            }
+            alpha
+        }
     };
     let max_fov = match obj.get("max_fov_deg") {
         None | Some(Value::Null) => None,

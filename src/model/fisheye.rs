@@ -71,13 +71,17 @@ impl Fisheye {
         for (name, &v) in COEFFICIENT_NAMES.iter().zip(k.iter()) {
             check_finite(name, v, ABSURD_MAGNITUDE)?;
         }
-        check_finite("alpha", alpha, Self::MAX_ALPHA)?;
-        if alpha.abs() >= Self::MAX_ALPHA {
-            return Err(ModelError::Absurd {
+        if !alpha.is_finite() {
+            return Err(ModelError::NotFinite {
                 name: "alpha",
                 value: alpha,
-                limit: Self::MAX_ALPHA,
             });
+        }
+        if alpha.abs() >= Self::MAX_ALPHA {
+            return Err(ModelError::Other(format!(
+                "parameter `alpha` = {alpha}: the skew must be below {} in magnitude",
+                Self::MAX_ALPHA
+            )));
         }
         if let Some(fov) = max_fov_deg {
             if !fov.is_finite() {
@@ -210,21 +214,23 @@ impl Fisheye {
         if !x.is_finite() {
             return None;
         }
-        let rho = x.length();
-        let (g, dg_over_rho) = if rho < SMALL_ANGLE {
+        // hypot: |x| of a huge finite point must not overflow to ∞ (and g to 0).
+        let rho = x.x.hypot(x.y);
+        // J = g I + (g'(ρ) ρ) x̂ x̂ᵀ with x̂ = x / ρ: every factor stays finite for huge ρ.
+        let (g, dg_rho) = if rho < SMALL_ANGLE {
             // θ = ρ − ρ³/3 + …, θ_d = θ (1 + k1 θ² + …): g = 1 + (k1 − 1/3) ρ² + O(ρ⁴).
             let c = self.k[0] - 1.0 / 3.0;
-            (1.0 + c * rho * rho, 2.0 * c)
+            (1.0 + c * rho * rho, 2.0 * c * rho * rho)
         } else {
             let theta = rho.atan();
             let (td, dtd) = self.theta_d(theta);
             let g = td / rho;
-            let dg = (dtd / (1.0 + rho * rho) - g) / rho;
-            (g, dg / rho)
+            (g, dtd / (1.0 + rho * rho) - g)
         };
         let pre = x * g;
+        let dir = if rho > 0.0 { x / rho } else { DVec2::ZERO };
         let jac = DMat2::from_diagonal(DVec2::splat(g))
-            + DMat2::from_cols(x * x.x, x * x.y) * dg_over_rho;
+            + DMat2::from_cols(dir * dir.x, dir * dir.y) * dg_rho;
         let shear = DMat2::from_cols(DVec2::new(1.0, 0.0), DVec2::new(self.alpha, 1.0));
         let out = self.skew(pre);
         let jac = shear * jac;
@@ -239,7 +245,7 @@ impl Fisheye {
             return None;
         }
         let pre = self.unskew(y);
-        let rho = pre.length();
+        let rho = pre.x.hypot(pre.y);
         if rho == 0.0 {
             return Some(DVec3::Z);
         }

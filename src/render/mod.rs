@@ -391,7 +391,14 @@ fn render_with(
         RenderPath::Warp { method, density } => {
             render_warp_path(renderer, scene, request, method, density, s, progress)
         }
-        RenderPath::Cube { side } => render_cube_path(renderer, scene, request, side, s, progress),
+        RenderPath::Cube { side } => {
+            if side < 2 {
+                return Err(Error::input(format!(
+                    "cube faces of {side} px: give a positive --density (faces are 2·f·density px)"
+                )));
+            }
+            render_cube_path(renderer, scene, request, side, s, progress)
+        }
     }
 }
 
@@ -455,6 +462,7 @@ fn render_cube_path(
     let wanted = side.saturating_mul(s);
     let big_side = wanted
         .min(renderer.ctx.gpu().max_image_side())
+        .min(renderer.ctx.gpu().max_cube_side())
         .min(budget_side);
     if big_side < wanted {
         progress(&format!(
@@ -521,6 +529,11 @@ fn render_warp_path(
         ));
     }
     let cam = &request.camera;
+    if !(density.is_finite() && density > 0.0 && density <= 16.0) {
+        return Err(Error::input(format!(
+            "--density {density}: source pixels per output pixel must be in (0, 16]"
+        )));
+    }
     // At s× (supersampling), as the source is rendered.
     let max_side = renderer.ctx.gpu().max_image_side();
     if let Some(why) = pinhole_source_refusal(&scaled_camera(cam, s)?, density, max_side) {

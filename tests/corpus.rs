@@ -97,3 +97,22 @@ fn image_corpus() {
         let _ = vklens::internal::imaging::file::load(&temp_file("image", ext, body));
     });
 }
+
+/// The image fuzzer's one finding: a 1 KiB file whose header claims an image of 2 GiB made
+/// the decoder allocate the claimed size before it found the data missing. Refused from the
+/// header now, at once.
+#[test]
+fn an_image_header_claiming_more_than_its_file_can_hold_is_refused_before_decoding() {
+    let data = std::fs::read(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/corpus/image/oom-header-claims-2gib"),
+    )
+    .unwrap();
+    let (&kind, body) = data.split_first().unwrap();
+    let ext = ["png", "exr"][kind as usize % 2];
+    let start = std::time::Instant::now();
+    let e = vklens::internal::imaging::file::load(&temp_file("oom", ext, body))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cannot hold") || e.contains("budget"), "{e}");
+    assert!(start.elapsed().as_secs_f64() < 1.0);
+}

@@ -23,6 +23,9 @@ pub fn max_image_bytes() -> u64 {
         .saturating_mul(1 << 20)
 }
 
+/// More than any PNG or EXR compression packs into one byte (deflate's limit is 1032).
+const MAX_COMPRESSION: u64 = 1100;
+
 /// Refuses an image of `width × height` that exceeds the image budget, naming the limit and
 /// how to raise it; `what` names the image.
 pub fn check_budget(what: &str, width: u32, height: u32) -> Result<()> {
@@ -82,6 +85,16 @@ pub fn load_with_channels(path: &Path) -> Result<(Raster, Channels)> {
         .into_dimensions()
         .map_err(|e| Error::input(format!("{shown}: cannot read the image header: {e}")))?;
     check_budget(&shown.to_string(), hw, hh)?;
+    // A header can claim more than its file could ever hold: PNG's deflate and EXR's
+    // compressions pack at most ~1032 bytes into one, and no pixel takes less than one bit.
+    // Such a file is corrupt or truncated; decoding would allocate the claimed size first.
+    let file_len = std::fs::metadata(path).map(|m| m.len()).unwrap_or(u64::MAX);
+    let least_raw = hw as u64 * hh as u64 / 8;
+    if least_raw > file_len.saturating_mul(MAX_COMPRESSION) {
+        return Err(Error::input(format!(
+            "{shown}: the header says {hw}×{hh}, which {file_len} bytes cannot hold: the file is truncated or corrupt"
+        )));
+    }
     // The decoder's own allocation limit follows the budget (its default, 512 MiB, would
     // refuse what the budget allows, with a message VKLENS_MAX_IMAGE_MB could not help).
     let mut reader = reader;

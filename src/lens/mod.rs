@@ -111,8 +111,9 @@ mod tests {
 
     #[test]
     fn thin_lens_limit_obeys_the_lensmaker_and_gauss_equations() {
-        // Biconvex, R = ±100 mm, n = 1.5, 1 µm thick: f = 1 / ((n − 1)(2/R)) = 100 mm.
-        let p = lens("100 0.001 1.5 20\n-100 100 1 20\n");
+        // Biconvex, R = ±100 mm, n = 1.5, 1 µm thick: f = 1 / ((n − 1)(2/R)) = 100 mm. The
+        // aperture is 0.6 mm: wider, the two surfaces would cross (0.32 mm from the axis).
+        let p = lens("100 0.001 1.5 0.6\n-100 100 1 0.6\n");
         let par = analyse(&p, LAMBDA_D);
         assert!((par.efl.unwrap() - 100.0).abs() < 1e-3, "{par:?}");
         // 1/s + 1/s' = 1/f: an object 300 mm away images 150 mm behind.

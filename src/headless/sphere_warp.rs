@@ -143,7 +143,6 @@ pub fn run_sphere_warp(
         vk::PipelineStageFlags::TRANSFER,
         vk::AccessFlags::TRANSFER_WRITE,
     );
-    let compute = |a| (vk::PipelineStageFlags::COMPUTE_SHADER, a);
     ctx.submit(|cmd| {
         let d = gpu.device();
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.
@@ -179,18 +178,12 @@ pub fn run_sphere_warp(
                     vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 ),
                 transfer_write,
-                compute(vk::AccessFlags::SHADER_READ),
+                (
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::AccessFlags::SHADER_READ,
+                ),
             );
-            for target in [&output, &mask] {
-                image_barrier(
-                    gpu,
-                    cmd,
-                    target.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    none,
-                    compute(vk::AccessFlags::SHADER_WRITE),
-                );
-            }
+            crate::gpu::record_discard_for_compute_write(gpu, cmd, [&output, &mask]);
             pass.record(cmd);
             record_compute_download(gpu, cmd, &output, &download);
             record_compute_download(gpu, cmd, &mask, &download_mask);

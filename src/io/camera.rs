@@ -145,14 +145,7 @@ fn camera_from_tree(tree: &Value) -> Result<Camera> {
             )));
         }
     }
-    let coeffs = if let Some(v) = obj.get("dist_coeffs") {
-        number_list(v, "dist_coeffs")?
-    } else {
-        match matrix_data(obj, &["distortion_coefficients", "D", "d"])? {
-            Some((_, d)) => d,
-            None => Vec::new(),
-        }
-    };
+    let coeffs = distortion_coefficients(obj)?.map_or_else(Vec::new, |(_, d)| d);
     let coeffs = if coeffs.is_empty() {
         vec![0.0; 4]
     } else {
@@ -222,6 +215,15 @@ fn intrinsics_from(obj: &Map<String, Value>, allow_skew: bool) -> Result<(Intrin
     ))
 }
 
+/// The distortion coefficients under `dist_coeffs` (vklens JSON) or as an `opencv-matrix` or
+/// list under `distortion_coefficients` / `D` (FileStorage, ROS), with the key they were under.
+fn distortion_coefficients(obj: &Map<String, Value>) -> Result<Option<(&'static str, Vec<f64>)>> {
+    if let Some(v) = obj.get("dist_coeffs") {
+        return Ok(Some(("dist_coeffs", number_list(v, "dist_coeffs")?)));
+    }
+    matrix_data(obj, &["distortion_coefficients", "D", "d"])
+}
+
 /// A fisheye camera from vklens JSON (`"model": "opencv_fisheye"`) or a ROS `camera_info`
 /// (`distortion_model: equidistant` or `fisheye`).
 fn fisheye_from_tree(tree: &Value) -> Result<Camera> {
@@ -231,16 +233,11 @@ fn fisheye_from_tree(tree: &Value) -> Result<Camera> {
     let width = dimension(obj, &["width", "image_width"])?;
     let height = dimension(obj, &["height", "image_height"])?;
     let (intrinsics, skew) = intrinsics_from(obj, true)?;
-    let (key, coeffs) = if let Some(v) = obj.get("dist_coeffs") {
-        ("dist_coeffs", number_list(v, "dist_coeffs")?)
-    } else {
-        match matrix_data(obj, &["distortion_coefficients", "D", "d"])? {
-            Some((key, d)) => (key, d),
-            None => return Err(Error::input(
-                "missing `dist_coeffs` (or `distortion_coefficients`, `D`): the fisheye's k1..k4",
-            )),
-        }
-    };
+    let (key, coeffs) = distortion_coefficients(obj)?.ok_or_else(|| {
+        Error::input(
+            "missing `dist_coeffs` (or `distortion_coefficients`, `D`): the fisheye's k1..k4",
+        )
+    })?;
     let k: [f64; 4] = coeffs.as_slice().try_into().map_err(|_| {
         Error::input(format!(
             "`{key}`: OpenCV's fisheye model has 4 coefficients (k1..k4), this file has {}",
@@ -342,15 +339,13 @@ fn kalibr_camera(cams: &[(String, Map<String, Value>)], index: Option<usize>) ->
     let f = list("intrinsics", 4)?;
     let res = list("resolution", 2)?;
     let side = |v: f64, what: &str| -> Result<u32> {
-        if v.fract() == 0.0 && v >= 1.0 && v <= crate::model::MAX_IMAGE_SIDE as f64 {
-            Ok(v as u32)
-        } else {
-            Err(Error::input(format!(
+        image_side(v).ok_or_else(|| {
+            Error::input(format!(
                 "{}: the {what} must be a whole number of pixels in 1..={}, got {v}",
                 field("resolution"),
                 crate::model::MAX_IMAGE_SIDE
-            )))
-        }
+            ))
+        })
     };
     let (width, height) = (side(res[0], "width")?, side(res[1], "height")?);
     let intrinsics = Intrinsics {
@@ -551,13 +546,17 @@ fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> Result<u32> {
         })?;
     let n = as_number(v)
         .ok_or_else(|| Error::input(format!("field `{key}` must be a number, got {v}")))?;
-    if !(n.fract() == 0.0 && n >= 1.0 && n <= crate::model::MAX_IMAGE_SIDE as f64) {
-        return Err(Error::input(format!(
+    image_side(n).ok_or_else(|| {
+        Error::input(format!(
             "field `{key}` must be a whole number of pixels in 1..={}, got {v}",
             crate::model::MAX_IMAGE_SIDE
-        )));
-    }
-    Ok(n as u32)
+        ))
+    })
+}
+
+/// An image side: a whole number of pixels in 1..=MAX_IMAGE_SIDE.
+fn image_side(n: f64) -> Option<u32> {
+    (n.fract() == 0.0 && n >= 1.0 && n <= crate::model::MAX_IMAGE_SIDE as f64).then_some(n as u32)
 }
 
 fn number_list(v: &Value, key: &str) -> Result<Vec<f64>> {

@@ -1,18 +1,30 @@
 #version 450
-// Lambers et al. Sec. 3.2's triangle discard without a geometry shader, in two dispatches
-// before the draw (the geometry shader is missing on MoltenVK and many mobile GPUs, and costs
-// a stage per triangle where it exists):
+// Lambers et al. Sec. 3.2's triangle discard without a geometry shader (the geometry shader is
+// missing on MoltenVK and many mobile GPUs, and costs a stage per triangle where it exists).
+// Three dispatches before the draw, the last two sized by the GPU itself (indirect):
 //
-//   STAGE 0, one invocation per vertex: Alg. 1 for the current pose (alg1.glsl, the vertex
-//            shader's own arithmetic) -> the distorted clip position, the Sec. 3.2 test ->
-//            one flag, and (for flow) Alg. 1 for the previous pose -> the flow;
-//   STAGE 1, one invocation per triangle: its three indices when all three flags are set,
-//            else a degenerate triangle (the first index three times) that rasterizes to
-//            nothing. Triangles keep their order, so the depth test resolves ties as the
-//            geometry-shader path does.
+//   STAGE 0, one invocation per vertex: Alg. 1 for the current pose (alg1.glsl, the same
+//            arithmetic as the vertex shader of the geometry-shader path) -> the distorted
+//            NDC, and for flow Alg. 1 for the previous pose -> the pixel motion. The draw
+//            reads both as vertex attributes and rebuilds the clip position from its own
+//            pinhole projection (alg1_clip): the model runs once per vertex and pose, never
+//            again per triangle or per vertex-cache miss. A vertex that fails the Sec. 3.2
+//            test is appended to the dropped list.
+//   STAGE 1, one invocation per vertex on the dropped list of the *previous* draw of this
+//            mesh (run before stage 0 empties it): its triangles get their indices back.
+//   STAGE 2, one invocation per vertex on the new dropped list: each triangle it belongs to
+//            becomes degenerate (its first index three times), which rasterizes to nothing.
 //
-// The draw then reads positions and flow per vertex (geometry.vert, VKL_PULLED) over the
-// rewritten index buffer: the model runs once per vertex and pose, in this pass only.
+// The draw's index buffer is the mesh's own but for the triangles that touch a dropped
+// vertex, so a frame costs its dropped vertices' triangles, not a pass over every triangle;
+// triangles keep their order, so the depth test resolves ties as the geometry-shader path
+// does. Stages 1 and 2 only ever write a triangle's original indices or its degenerate form,
+// so two dropped vertices of one triangle write the same values.
+//
+// What stage 0 reads and stores is what it costs on lavapipe, which turns a storage-buffer
+// access at a per-lane index into a loop over lanes and components: a vertex's three position
+// floats straight from the mesh's vertex buffer, and two floats back, not a clip position's
+// four (its image and texel-buffer stores measured slower still).
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 64) in;
@@ -24,14 +36,28 @@ layout(constant_id = 8) const bool DISTORT = true;
 layout(constant_id = 9) const uint STAGE = 0;
 layout(constant_id = 22) const bool WRITE_FLOW = true;
 
-// The mesh's world positions, one vec4 (w = 1) per vertex: one aligned load per invocation
-// instead of three strided ones from the vertex buffer.
-layout(set = 0, binding = 2, std430) readonly buffer Points { vec4 points[]; };
-layout(set = 0, binding = 3, std430) readonly buffer Indices { uint indices[]; };
-layout(set = 0, binding = 4, std430) buffer Flags { uint flags[]; };
-layout(set = 0, binding = 5, std430) writeonly buffer Kept { uint kept[]; };
-layout(set = 0, binding = 6, std430) writeonly buffer Positions { vec4 positions[]; };
-layout(set = 0, binding = 7, std430) writeonly buffer Motion { vec4 motion[]; };
+// The mesh's vertex buffer (scene::Vertex, 8 floats; the position first).
+layout(set = 0, binding = 2, std430) readonly buffer Vertices { float vertex_data[]; };
+#define VKL_VERTEX_FLOATS 8u
+// Per vertex, read by the draw as vertex attributes: the distorted NDC, and the flow (xy) with
+// whether both poses see the vertex (z).
+layout(set = 0, binding = 3, std430) writeonly buffer Positions { vec2 positions[]; };
+layout(set = 0, binding = 4, std430) writeonly buffer Motion { vec4 motion[]; };
+// The dropped vertices, and the indirect dispatch that visits them: `groups` is
+// ceil(count / 64), `one_y` and `one_z` stay 1 (VkDispatchIndirectCommand). The host resets
+// the header between stages 1 and 0.
+layout(set = 0, binding = 5, std430) buffer Dropped {
+    uint groups;
+    uint one_y;
+    uint one_z;
+    uint count;
+    uint vertices[];
+} dropped;
+// The triangles of vertex v are incidence[incidence_start[v] .. incidence_start[v + 1]].
+layout(set = 0, binding = 6, std430) readonly buffer IncidenceStart { uint incidence_start[]; };
+layout(set = 0, binding = 7, std430) readonly buffer Incidence { uint incidence[]; };
+layout(set = 0, binding = 8, std430) readonly buffer Indices { uint indices[]; };
+layout(set = 0, binding = 9, std430) writeonly buffer Kept { uint kept[]; };
 
 layout(push_constant) uniform DiscardPush { uint count; } pc;
 
@@ -39,27 +65,34 @@ layout(push_constant) uniform DiscardPush { uint count; } pc;
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= pc.count) return;
     if (STAGE == 0u) {
-        vec4 world = points[i];
-        vec4 clip = frame.view_projection * world;
-        vec4 distorted;
-        vec2 pixel, ndc;
-        bool ok = alg1(clip, distorted, pixel, ndc);
-        flags[i] = vkl_vertex_kept(ok, ndc) ? 1u : 0u;
-        positions[i] = distorted;
+        if (i >= pc.count) return;
+        uint v = VKL_VERTEX_FLOATS * i;
+        vec4 world = vec4(vertex_data[v], vertex_data[v + 1u], vertex_data[v + 2u], 1.0);
+        vec2 distorted_ndc, pixel, ndc;
+        bool ok = alg1_ndc(frame.view_projection * world, distorted_ndc, pixel, ndc);
+        positions[i] = distorted_ndc;
         if (WRITE_FLOW) {
-            vec4 previous_distorted;
-            vec2 previous_pixel, previous_ndc;
-            bool previous_ok = alg1(frame.previous_view_projection * world, previous_distorted,
-                                    previous_pixel, previous_ndc);
+            vec2 previous_ndc, previous_pixel, previous_undistorted;
+            bool previous_ok = alg1_ndc(frame.previous_view_projection * world, previous_ndc,
+                                        previous_pixel, previous_undistorted);
             motion[i] = vec4(pixel - previous_pixel, (ok && previous_ok) ? 1.0 : 0.0, 0.0);
         }
+        if (!vkl_vertex_kept(ok, ndc)) {
+            uint slot = atomicAdd(dropped.count, 1u);
+            dropped.vertices[slot] = i;
+            // The first of every 64 adds a workgroup to stage 2's dispatch.
+            if (slot % 64u == 0u) atomicAdd(dropped.groups, 1u);
+        }
     } else {
-        uint a = indices[3u * i], b = indices[3u * i + 1u], c = indices[3u * i + 2u];
-        bool keep = flags[a] != 0u && flags[b] != 0u && flags[c] != 0u;
-        kept[3u * i] = a;
-        kept[3u * i + 1u] = keep ? b : a;
-        kept[3u * i + 2u] = keep ? c : a;
+        if (i >= dropped.count) return;
+        uint v = dropped.vertices[i];
+        uint end = incidence_start[v + 1u];
+        for (uint k = incidence_start[v]; k < end; k++) {
+            uint t = 3u * incidence[k];
+            uint a = indices[t];
+            kept[t + 1u] = STAGE == 1u ? indices[t + 1u] : a;
+            kept[t + 2u] = STAGE == 1u ? indices[t + 2u] : a;
+        }
     }
 }

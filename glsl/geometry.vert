@@ -14,8 +14,14 @@
 // The pinhole render (no geometry shader) is this shader without the discard data.
 // vklens:variant pinhole VKL_PINHOLE
 // With the compute discard, Alg. 1 has already run once per vertex and pose
-// (glsl/discard.comp): this shader only reads its results.
+// (glsl/discard.comp): this shader only reads its results, as vertex attributes (fetched like
+// the mesh's own, so a vertex-cache miss costs a fetch, not the model again).
 // vklens:variant pulled VKL_PULLED
+// The same, with the flow the discard pass computed.
+// vklens:variant pulled_flow VKL_PULLED_FLOW
+#ifdef VKL_PULLED_FLOW
+#define VKL_PULLED
+#endif
 
 #include "camera_model.glsl"
 #include "geometry_frame.glsl"
@@ -39,10 +45,12 @@ layout(location = 4) out float v_depth;     // camera-frame z (metres)
 layout(location = 5) out vec3 v_undistorted; // xy: undistorted NDC; z: 1 if the model applies
 #endif
 #ifdef VKL_PULLED
-// Per vertex, from the discard pass: the distorted clip position, and the flow (xy) with
-// whether both poses see the vertex (z).
-layout(set = 0, binding = 3, std430) readonly buffer Positions { vec4 positions[]; };
-layout(set = 0, binding = 4, std430) readonly buffer Motion { vec4 motion[]; };
+// Per vertex, from the discard pass: the distorted NDC, and the flow (xy) with whether both
+// poses see the vertex (z).
+layout(location = 4) in vec2 in_distorted_ndc;
+#endif
+#ifdef VKL_PULLED_FLOW
+layout(location = 5) in vec4 in_motion;
 #endif
 
 #include "alg1.glsl"
@@ -54,8 +62,12 @@ void main() {
     v_id = in_id;
     v_depth = (frame.view * world).z;
 #ifdef VKL_PULLED
-    gl_Position = positions[gl_VertexIndex];
-    v_flow = WRITE_FLOW ? motion[gl_VertexIndex].xyz : vec3(0.0);
+    gl_Position = alg1_clip(frame.view_projection * world, in_distorted_ndc);
+#ifdef VKL_PULLED_FLOW
+    v_flow = in_motion.xyz;
+#else
+    v_flow = vec3(0.0);
+#endif
 #else
     vec4 clip = frame.view_projection * world;
     vec4 distorted;

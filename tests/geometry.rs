@@ -749,3 +749,113 @@ fn a_device_without_geometry_shaders_renders_the_vertex_path_through_the_compute
     assert!(e.to_string().contains("geometryShader"), "{e}");
     assert_no_validation_messages(&ctx);
 }
+
+/// The compute discard keeps per-mesh state between draws: the triangles it made degenerate
+/// stay so in the mesh's draw index buffer until the next draw of that mesh restores them. A
+/// run of frames that drop different triangles (and none), and two passes of different lenses
+/// sharing one mesh inside one command buffer, each render what a fresh mesh renders.
+#[test]
+fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
+    use vklens::internal::pass::geometry::{Discard, GeometryPass, GeometryTargets, MeshBuffers};
+    let ctx = validated_context();
+    let gpu = ctx.gpu();
+    let barrel = reference_camera("seed_fig1_barrel");
+    let scene = builtin::grid(48);
+    let near = Pose::look_at(DVec3::new(0.0, 0.0, -0.25), DVec3::ZERO, DVec3::Y);
+    let far = Pose::look_at(DVec3::new(0.0, 0.0, -3.0), DVec3::ZERO, DVec3::Y);
+    let aside = Pose::look_at(
+        DVec3::new(0.3, 0.1, -0.3),
+        DVec3::new(0.2, 0.0, 0.0),
+        DVec3::Y,
+    );
+    let mesh = &scene.mesh;
+    let desc = |camera: &Camera| {
+        let mut d = lens(camera, DEFAULT_DELTA);
+        d.discard = Discard::Compute;
+        d
+    };
+    let fresh = |camera: &Camera, pose: &Pose| {
+        render(&ctx, desc(camera), mesh, None, pose, pose)
+            .unwrap()
+            .ids
+            .unwrap()
+    };
+    let dropped = |ids: &[u32]| ids.iter().filter(|&&i| i == 0).count();
+
+    // One pass, one mesh, frame after frame.
+    let buffers = MeshBuffers::new(gpu, mesh, None).unwrap();
+    let mut pass = GeometryPass::new(gpu, desc(&barrel)).unwrap();
+    let targets = GeometryTargets::new(gpu, &pass).unwrap();
+    unsafe { pass.bind_mesh(&buffers) };
+    ctx.submit(|cmd| {
+        unsafe { buffers.record_upload(cmd) };
+        Ok(())
+    })
+    .unwrap();
+    let mut frame = |pose: &Pose| {
+        unsafe { pass.set_frame(pose, pose) }.unwrap();
+        ctx.submit(|cmd| {
+            unsafe {
+                pass.record(cmd, &targets, &buffers);
+                targets.record_download(cmd);
+            }
+            Ok(())
+        })
+        .unwrap();
+        targets.read().unwrap().ids.unwrap()
+    };
+    let expected_near = fresh(&barrel, &near);
+    let expected_far = fresh(&barrel, &far);
+    assert!(
+        dropped(&expected_near) > 1000,
+        "the near view drops triangles"
+    );
+    for (what, pose, expected) in [
+        ("near", &near, &expected_near),
+        ("far", &far, &expected_far),
+        ("near again", &near, &expected_near),
+        ("aside", &aside, &fresh(&barrel, &aside)),
+        ("far again", &far, &expected_far),
+    ] {
+        let got = frame(pose);
+        let differ = got.iter().zip(expected).filter(|(a, b)| a != b).count();
+        assert_eq!(differ, 0, "{what}: {differ} IDs differ from a fresh render");
+    }
+
+    // Two lenses, one mesh, one command buffer: the second draw restores what the first
+    // dropped before dropping its own.
+    let mild = Camera::new(
+        barrel.width,
+        barrel.height,
+        barrel.intrinsics,
+        vklens::internal::model::OpenCvDistortion {
+            k1: -0.05,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut second = GeometryPass::new(gpu, desc(&mild)).unwrap();
+    let second_targets = GeometryTargets::new(gpu, &second).unwrap();
+    unsafe {
+        second.bind_mesh(&buffers);
+        pass.set_frame(&near, &near).unwrap();
+        second.set_frame(&aside, &aside).unwrap();
+    }
+    ctx.submit(|cmd| {
+        unsafe {
+            pass.record(cmd, &targets, &buffers);
+            targets.record_download(cmd);
+            second.record(cmd, &second_targets, &buffers);
+            second_targets.record_download(cmd);
+        }
+        Ok(())
+    })
+    .unwrap();
+    let (first_ids, second_ids) = (
+        targets.read().unwrap().ids.unwrap(),
+        second_targets.read().unwrap().ids.unwrap(),
+    );
+    assert!(first_ids == expected_near, "the first lens");
+    assert!(second_ids == fresh(&mild, &aside), "the second lens");
+    assert_no_validation_messages(&ctx);
+}

@@ -255,7 +255,7 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
     assert!(!stages
         .iter()
         .any(|(s, _)| *s == vk::ShaderStageFlags::GEOMETRY));
-    let [per_vertex, per_triangle] = pass.discard_constants().expect("the compute discard");
+    let [per_vertex, restore, drop] = pass.discard_constants().expect("the compute discard");
     assert_eq!(per_vertex.get(spec::RADIAL), Some(1));
     for id in [
         spec::RATIONAL,
@@ -272,12 +272,13 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
         "no previous pose in the vertex shader"
     );
     assert_eq!(
-        (
-            per_vertex.get(spec::DISCARD_STAGE),
-            per_triangle.get(spec::DISCARD_STAGE)
-        ),
-        (Some(0), Some(1))
+        [per_vertex, restore, drop].map(|c| c.get(spec::DISCARD_STAGE)),
+        [Some(0), Some(1), Some(2)]
     );
+    // Its Sec. 3.2 bound lies well inside this lens's domain: the table lookup is compiled
+    // out of the per-vertex pass (and only there).
+    assert_eq!(per_vertex.get(spec::DOMAIN_TABLE), Some(0));
+    assert_eq!(get(v, spec::DOMAIN_TABLE), Some(1));
     // The geometry shader, when asked for, replaces it.
     let mut desc = GeometryDesc::new(
         pass.desc().camera.clone(),
@@ -293,4 +294,71 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
         .any(|(s, _)| *s == vk::ShaderStageFlags::GEOMETRY));
     assert!(gs.discard_constants().is_none());
     ctx.check_validation().unwrap();
+}
+
+#[test]
+fn the_discard_leaves_the_domain_table_out_only_where_its_bound_needs_none() {
+    use vklens::internal::model::{Camera, Intrinsics, OpenCvDistortion};
+    use vklens::internal::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
+    let ctx = vklens::internal::gpu::Context::new(vklens::internal::gpu::ContextOptions {
+        validation: true,
+        device: None,
+        geometry_shader: true,
+    })
+    .unwrap();
+    let k = Intrinsics {
+        fx: 400.0,
+        fy: 400.0,
+        cx: 399.5,
+        cy: 299.5,
+    };
+    let radial = |k1: f64| {
+        Camera::new(
+            800,
+            600,
+            k,
+            OpenCvDistortion {
+                k1,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
+    // k1 = -0.05 never folds inside the domain's cap; k1 = -0.4 folds at r ≈ 0.91, inside
+    // the image corners (r = 1.25): the same terms, so one pass could take both.
+    let (mild, folding) = (radial(-0.05), radial(-0.4));
+    assert_eq!(mild.terms(), folding.terms());
+    let pass = |camera: &Camera| {
+        let desc = GeometryDesc::new(
+            camera.clone(),
+            Projection::Lens { delta: 0.1 },
+            Outputs::COLOR,
+        );
+        GeometryPass::new(ctx.gpu(), desc).unwrap()
+    };
+    let table = |p: &GeometryPass| p.discard_constants().unwrap()[0].get(spec::DOMAIN_TABLE);
+    let (mut without, mut with) = (pass(&mild), pass(&folding));
+    assert_eq!((table(&without), table(&with)), (Some(0), Some(1)));
+    // A pass built without the table refuses a camera that needs it; one built with it takes
+    // either.
+    assert!(!without.accepts_camera(&folding));
+    assert!(unsafe { without.set_camera(&folding) }.is_err());
+    assert!(with.accepts_camera(&mild));
+    assert!(unsafe { with.set_camera(&mild) }.is_ok());
+    assert!(without.accepts_camera(&radial(-0.06)));
+    ctx.check_validation().unwrap();
+}
+
+#[test]
+fn a_specialization_constant_set_twice_keeps_one_entry() {
+    // Vulkan refuses a specialization map that names an id twice: the last value wins.
+    use vklens::internal::gpu::SpecConstants;
+    let c = SpecConstants::new()
+        .bool(spec::DOMAIN_TABLE, true)
+        .u32(spec::NEWTON_ITERATIONS, 3)
+        .bool(spec::DOMAIN_TABLE, false);
+    assert_eq!(
+        c.entries(),
+        &[(spec::DOMAIN_TABLE.id, 0), (spec::NEWTON_ITERATIONS.id, 3)]
+    );
 }

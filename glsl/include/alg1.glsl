@@ -5,45 +5,49 @@
 #ifndef VKL_ALG1_GLSL
 #define VKL_ALG1_GLSL
 
-// Alg. 1 on one clip-space position: the distorted clip position, its OpenCV pixel, and
-// whether the model is defined there.
-//
 // A fisheye sees behind the image plane: its vertices are projected from their camera-frame
 // position (X, Y, Z), read back from the clip position through Sec. 3.1's projection of the
 // camera's own intrinsics (x_c = sx X + ox Z, y_c = sy Y + oy Z, w_c = Z; no division, so
-// Z = 0 is an ordinary point), by the fisheye's own forward model. Its clip position then has
-// w = |(X, Y, Z)| (positive on every side of the camera, so nothing is clipped away and
-// attributes interpolate with the distance) and depth 1 − near / |(X, Y, Z)|; `ndc` is the
-// distorted NDC, and the vertex is dropped outside the lens's domain or nearer than near.
-bool alg1_fisheye(vec4 clip, out vec4 distorted, out vec2 pixel, out vec2 ndc) {
-    distorted = clip;
-    ndc = vec2(0.0);
-    pixel = vec2(0.0);
+// Z = 0 is an ordinary point), by the fisheye's own forward model; `ndc` is then the distorted
+// NDC, and the vertex is dropped outside the lens's domain or nearer than near.
+
+// The camera-frame point (X, Y, Z) of a fisheye vertex, from its clip position.
+vec3 alg1_fisheye_point(vec4 clip) {
     vec2 size = frame.viewport.xy;
     vec2 f = vkl_cam.intrinsics.xy;
     vec2 lo = -(vkl_cam.intrinsics.zw + 0.5) / f;  // left, top (model::Frustum)
     vec2 hi = size / f + lo;                         // right, bottom
     vec2 s = 2.0 / (hi - lo);
     vec2 o = -(hi + lo) / (hi - lo);
-    vec3 p = vec3((clip.xy - o * clip.w) / s, clip.w);
-    float r = length(p);
-    vec2 d;
-    bool ok = r >= frame.viewport.w && vkl_fisheye_project(p, d);
-    pixel = vkl_to_pixel(d);
-    ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
-    ndc = (pixel + 0.5) / size * 2.0 - 1.0;
-    distorted = vec4(ndc * r, (1.0 - frame.viewport.w / r) * r, r);
-    return ok;
+    return vec3((clip.xy - o * clip.w) / s, clip.w);
 }
 
-bool alg1(vec4 clip, out vec4 distorted, out vec2 pixel, out vec2 ndc) {
-    if (DISTORT && VKL_FISHEYE) return alg1_fisheye(clip, distorted, pixel, ndc);
-    distorted = clip;
+// Alg. 1 in two halves, so that the compute discard can store a vertex's distorted NDC alone
+// (glsl/discard.comp) and the draw rebuild its clip position from the undistorted one.
+//
+// The first half: the distorted NDC, the vertex's OpenCV pixel, its undistorted NDC (`ndc`,
+// for Sec. 3.2's test; for a fisheye the distorted NDC, see above), and whether the model is
+// defined there. Where it is not, `distorted_ndc` is the undistorted NDC or 0 (finite: the
+// vertex is dropped with its triangles, never drawn).
+bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
+    distorted_ndc = vec2(0.0);
     ndc = vec2(0.0);
     pixel = vec2(0.0);
+    vec2 size = frame.viewport.xy;
+    if (DISTORT && VKL_FISHEYE) {
+        vec3 p = alg1_fisheye_point(clip);
+        float r = length(p);
+        vec2 d;
+        bool ok = r >= frame.viewport.w && vkl_fisheye_project(p, d);
+        pixel = vkl_to_pixel(d);
+        ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
+        ndc = (pixel + 0.5) / size * 2.0 - 1.0;
+        distorted_ndc = ok ? ndc : vec2(0.0);
+        return ok;
+    }
     if (!(clip.w > 0.0)) return false;  // at or behind the camera: no image point
     ndc = clip.xy / clip.w;
-    vec2 size = frame.viewport.xy;
+    distorted_ndc = ndc;
     pixel = (ndc * 0.5 + 0.5) * size - 0.5;
     if (!DISTORT) return true;
     vec2 x = vkl_to_normalized(pixel);
@@ -51,8 +55,29 @@ bool alg1(vec4 clip, out vec4 distorted, out vec2 pixel, out vec2 ndc) {
     bool ok = vkl_contains_ideal(x) && vkl_distort(x, d);
     pixel = vkl_to_pixel(d);
     ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
-    vec2 distorted_ndc = (pixel + 0.5) / size * 2.0 - 1.0;
-    distorted = vec4(distorted_ndc * clip.w, clip.zw);
+    distorted_ndc = ok ? (pixel + 0.5) / size * 2.0 - 1.0 : ndc;
+    return ok;
+}
+
+// The second half: the clip position of a vertex with undistorted clip position `clip` whose
+// image lies at `distorted_ndc`. The same w as the pinhole projection, so depth and
+// perspective-correct interpolation are untouched; a fisheye's w is the vertex's distance
+// |(X, Y, Z)| (positive on every side of the camera, so nothing is clipped away and
+// attributes interpolate with the distance), its depth 1 − near / |(X, Y, Z)|.
+vec4 alg1_clip(vec4 clip, vec2 distorted_ndc) {
+    if (DISTORT && VKL_FISHEYE) {
+        float r = length(alg1_fisheye_point(clip));
+        return vec4(distorted_ndc * r, (1.0 - frame.viewport.w / r) * r, r);
+    }
+    return vec4(distorted_ndc * clip.w, clip.zw);
+}
+
+// Alg. 1 on one clip-space position: the distorted clip position, its OpenCV pixel, and
+// whether the model is defined there.
+bool alg1(vec4 clip, out vec4 distorted, out vec2 pixel, out vec2 ndc) {
+    vec2 distorted_ndc;
+    bool ok = alg1_ndc(clip, distorted_ndc, pixel, ndc);
+    distorted = ok ? alg1_clip(clip, distorted_ndc) : clip;
     return ok;
 }
 

@@ -75,6 +75,12 @@ layout(constant_id = 5) const uint VKL_NEWTON_ITERATIONS = 20;
 // 1: OpenCV's fisheye model (model::Fisheye). VKL_RADIAL then says whether any k is non-zero.
 #define VKL_MODEL_FISHEYE 1u
 layout(constant_id = 6) const uint VKL_MODEL = VKL_MODEL_OPENCV;
+// false: every ideal point this shader tests either lies inside the domain's smallest boundary
+// radius or is dropped whatever the answer (the compute discard, when its Sec. 3.2 bound lies
+// inside that radius), so the inner radius alone decides and the table lookup is compiled out.
+// lavapipe runs both sides of every branch for every vertex, so the lookup otherwise costs as
+// much as half of the standard model.
+layout(constant_id = 7) const bool VKL_DOMAIN_TABLE = true;
 #define VKL_FISHEYE (VKL_MODEL == VKL_MODEL_FISHEYE)
 // Below this radius (normalized) θ_d(atan r)/r is its series 1 + (k1 − 1/3) r²: the quotient
 // would lose digits, and the error of the series, O(r⁴), is far below rounding there.
@@ -357,6 +363,7 @@ VKL_FLOAT vkl_domain_radius(float angle, int which) {
 bool vkl_contains_ideal(VKL_VEC2 x) {
     VKL_FLOAT r2 = dot(x, x);
     if (r2 <= vkl_cam.domain_info.x * vkl_cam.domain_info.x) return true;
+    if (!VKL_DOMAIN_TABLE) return false;
     return sqrt(r2) <= vkl_domain_radius(atan(float(x.y), float(x.x)), 0);
 }
 

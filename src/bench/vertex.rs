@@ -108,20 +108,7 @@ fn time_scene(
     mesh: &Mesh,
     pose: &Pose,
 ) -> Result<f64> {
-    time_scene_with(ctx, camera, projection, scene, mesh, pose, Discard::Auto)
-}
-
-/// [`time_scene`] with the discard in `discard`.
-fn time_scene_with(
-    ctx: &Context,
-    camera: &Camera,
-    projection: Projection,
-    scene: &Scene,
-    mesh: &Mesh,
-    pose: &Pose,
-    discard: Discard,
-) -> Result<f64> {
-    let drawn = prepare(ctx, camera, projection, scene, mesh, pose, discard)?;
+    let drawn = prepare(ctx, camera, projection, scene, mesh, pose, Discard::Auto)?;
     time_render(ctx, &drawn)
 }
 
@@ -181,6 +168,83 @@ fn time_pinhole_and_warp(
     Ok(gpu_ms.unwrap_or(wall))
 }
 
+/// Rounds of the paths rows: each round times the plain render, the compute discard and the
+/// geometry shader one after the other, and the × columns are the medians of each round's
+/// ratios, so that a drift of the machine's speed between measurements (±30 % on the 2-core
+/// machine) moves numerator and denominator together.
+pub const ROUNDS: usize = 5;
+
+/// The cheapest lens Alg. 1 can apply (k1 k2 only), beside the 14-term [`bench_camera`]: what
+/// the model's terms cost, against what evaluating any model per vertex costs.
+fn radial_camera(w: u32, h: u32) -> Camera {
+    let c = bench_camera(w, h);
+    Camera::from_coeffs(w, h, c.intrinsics, &[-0.12, 0.04, 0.0, 0.0])
+        .expect("a k1 k2 camera with the bench intrinsics is valid")
+}
+
+/// The median of `v` (NaN when empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Times the plain pinhole render, Alg. 1 with the compute discard and (where the device has
+/// one) with the geometry shader on `scene` through `camera`, interleaved over [`ROUNDS`]
+/// rounds: (median ms of each, median ratio to the pinhole of each, smallest and largest
+/// ratio of the compute discard).
+fn time_paths(ctx: &Context, camera: &Camera, scene: &Scene, pose: &Pose) -> Result<Value> {
+    let mesh = &scene.mesh;
+    let mut drawn = vec![
+        prepare(
+            ctx,
+            camera,
+            Projection::Pinhole,
+            scene,
+            mesh,
+            pose,
+            Discard::Auto,
+        )?,
+        prepare(ctx, camera, LENS, scene, mesh, pose, Discard::Compute)?,
+    ];
+    if ctx.gpu().supports_geometry_shader() {
+        drawn.push(prepare(
+            ctx,
+            camera,
+            LENS,
+            scene,
+            mesh,
+            pose,
+            Discard::GeometryShader,
+        )?);
+    }
+    let mut ms = vec![Vec::new(); drawn.len()];
+    let mut ratios = vec![Vec::new(); drawn.len()];
+    for _ in 0..ROUNDS {
+        let t = drawn
+            .iter()
+            .map(|d| time_render(ctx, d))
+            .collect::<Result<Vec<f64>>>()?;
+        for (k, &tk) in t.iter().enumerate() {
+            ms[k].push(tk);
+            ratios[k].push(tk / t[0]);
+        }
+    }
+    let spread = |r: &[f64]| {
+        let lo = r.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = r.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        [lo, hi]
+    };
+    let compute_spread = spread(&ratios[1]);
+    let mut ms = ms.into_iter().map(median);
+    let mut ratios = ratios.into_iter().map(median);
+    Ok(json!({
+        "pinhole_ms": ms.next(), "vertex_ms": ms.next(), "vertex_gs_ms": ms.next(),
+        "vertex_x_pinhole": ratios.nth(1), "vertex_gs_x_pinhole": ratios.next(),
+        "vertex_x_pinhole_range": compute_spread,
+        "vertex_discard": Discard::Compute.name(), "rounds": ROUNDS,
+    }))
+}
+
 /// Runs every row; `progress` hears each.
 pub fn run(
     ctx: &Context,
@@ -189,42 +253,55 @@ pub fn run(
 ) -> Result<Vec<Value>> {
     let mut rows = Vec::new();
     for &(w, h) in sizes {
-        let camera = bench_camera(w, h);
         for n in GRIDS {
-            progress(&format!("paths: {w}×{h}, grid {n}×{n}"));
             let scene = builtin::grid(n);
-            let pose = scene.default_pose(&camera);
-            let pinhole_ms = time_scene(
-                ctx,
-                &camera,
-                Projection::Pinhole,
-                &scene,
-                &scene.mesh,
-                &pose,
-            )?;
-            let vertex =
-                |discard| time_scene_with(ctx, &camera, LENS, &scene, &scene.mesh, &pose, discard);
-            let vertex_ms = vertex(Discard::Compute)?;
-            // Where the device has geometry shaders, the seed's discard beside it.
-            let gs_ms = if ctx.gpu().supports_geometry_shader() {
-                Some(vertex(Discard::GeometryShader)?)
+            // The k1 k2 lens where the per-vertex pass is large against the draw.
+            let lenses: &[(&str, Camera)] = if n >= 128 {
+                &[
+                    ("14 terms", bench_camera(w, h)),
+                    ("k1 k2", radial_camera(w, h)),
+                ]
             } else {
-                None
+                &[("14 terms", bench_camera(w, h))]
             };
-            let warp_ms =
-                time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Analytic)?;
-            let map_ms = time_pinhole_and_warp(ctx, &camera, &scene, &pose, Coordinates::Map)?;
-            rows.push(json!({
-                "bench": "vertex", "kind": "paths", "width": w, "height": h,
-                "grid": n, "triangles": scene.mesh.triangle_count(),
-                "pinhole_ms": pinhole_ms, "vertex_ms": vertex_ms,
-                "vertex_discard": Discard::Compute.name(),
-                "vertex_gs_ms": gs_ms, "vertex_gs_x_pinhole": gs_ms.map(|g| g / pinhole_ms),
-                "pinhole_warp_analytic_ms": warp_ms, "pinhole_warp_map_ms": map_ms,
-                "vertex_x_pinhole": vertex_ms / pinhole_ms,
-                "warp_map_x_pinhole": map_ms / pinhole_ms,
-                "straight_line_error_px": straight_line_error(&camera, &pose, &scene.mesh),
-            }));
+            for (lens, camera) in lenses {
+                progress(&format!("paths: {w}×{h}, grid {n}×{n}, {lens}"));
+                let pose = scene.default_pose(camera);
+                let mut row = time_paths(ctx, camera, &scene, &pose)?;
+                let pinhole_ms = row["pinhole_ms"].as_f64().unwrap_or(f64::NAN);
+                let (warp_ms, map_ms) = if *lens == "14 terms" {
+                    (
+                        Some(time_pinhole_and_warp(
+                            ctx,
+                            camera,
+                            &scene,
+                            &pose,
+                            Coordinates::Analytic,
+                        )?),
+                        Some(time_pinhole_and_warp(
+                            ctx,
+                            camera,
+                            &scene,
+                            &pose,
+                            Coordinates::Map,
+                        )?),
+                    )
+                } else {
+                    (None, None)
+                };
+                let fields = json!({
+                    "bench": "vertex", "kind": "paths", "width": w, "height": h,
+                    "grid": n, "triangles": scene.mesh.triangle_count(),
+                    "vertices": scene.mesh.vertices.len(), "lens": lens,
+                    "pinhole_warp_analytic_ms": warp_ms, "pinhole_warp_map_ms": map_ms,
+                    "warp_map_x_pinhole": map_ms.map(|m| m / pinhole_ms),
+                    "straight_line_error_px": straight_line_error(camera, &pose, &scene.mesh),
+                });
+                if let (Some(row), Some(fields)) = (row.as_object_mut(), fields.as_object()) {
+                    row.extend(fields.clone());
+                }
+                rows.push(row);
+            }
         }
     }
     // Tessellation on the coarse grid at the first size.
@@ -370,17 +447,26 @@ pub fn run(
 pub fn table(rows: &[Value]) -> String {
     let kind = |k: &'static str| rows.iter().filter(move |r| r["kind"] == k);
     let mut out = String::from(
-        "Paths (GPU ms per frame; × = over the plain pinhole render of the same scene; vertex = \
-         Alg. 1 with Sec. 3.2's discard by compute dispatches, and by a geometry shader)\n\n\
-         | size | grid | triangles | pinhole | vertex, compute discard | × | vertex, geometry shader | × | pinhole + warp, analytic | pinhole + warp, map | × | straight-line error px |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "Paths (GPU ms per frame, medians of the rounds; × = median over the rounds of the ratio to \
+         the plain pinhole render of the same scene, timed in the same round; vertex = Alg. 1 \
+         with Sec. 3.2's discard by compute dispatches, and by a geometry shader)\n\n\
+         | size | grid | lens | triangles | pinhole | vertex, compute discard | × | × range | vertex, geometry shader | × | pinhole + warp, analytic | pinhole + warp, map | × | straight-line error px |\n\
+         |---|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in kind("paths") {
+        let range = r["vertex_x_pinhole_range"]
+            .as_array()
+            .map(|v| {
+                let x = |i: usize| v.get(i).and_then(|x| x.as_f64()).unwrap_or(f64::NAN);
+                format!("{:.2}–{:.2}", x(0), x(1))
+            })
+            .unwrap_or_default();
         out.push_str(&format!(
-            "| {}×{} | {}² | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {}×{} | {}² | {} | {} | {} | {} | {} | {range} | {} | {} | {} | {} | {} | {} |\n",
             r["width"],
             r["height"],
             r["grid"],
+            r["lens"].as_str().unwrap_or(""),
             r["triangles"],
             f(r, "pinhole_ms", 2),
             f(r, "vertex_ms", 2),

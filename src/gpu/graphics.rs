@@ -279,17 +279,20 @@ pub struct Stage<'a> {
     pub constants: SpecConstants,
 }
 
-/// One vertex attribute: (location, format, byte offset) in a single interleaved binding.
+/// One vertex attribute: (location, format, byte offset) in its binding.
 pub type Attribute = (u32, vk::Format, u32);
+
+/// One per-vertex buffer binding: its stride and its attributes.
+pub type VertexBinding<'a> = (u32, &'a [Attribute]);
 
 /// What a [`GraphicsPipeline`] is built from.
 pub struct GraphicsDesc<'a> {
     pub stages: Vec<Stage<'a>>,
     /// Set 0's bindings, visible to every stage.
     pub bindings: &'a [vk::DescriptorType],
-    /// The interleaved vertex binding: stride and attributes (`None`: no vertex input; the
+    /// The per-vertex buffer bindings, binding `i` at index `i` (empty: no vertex input; the
     /// vertex shader computes positions from `gl_VertexIndex`).
-    pub vertex: Option<(u32, &'a [Attribute])>,
+    pub vertex: &'a [VertexBinding<'a>],
     pub render_pass: &'a RenderPass,
     /// Depth test and write (less), when the render pass has a depth attachment.
     pub depth_test: bool,
@@ -383,27 +386,29 @@ impl GraphicsPipeline {
             })
             .collect();
 
-        let (vertex_bindings, attributes): (Vec<_>, Vec<_>) = match desc.vertex {
-            Some((stride, attrs)) => (
-                vec![vk::VertexInputBindingDescription {
-                    binding: 0,
+        let vertex_bindings: Vec<_> = (0u32..)
+            .zip(desc.vertex)
+            .map(
+                |(binding, &(stride, _))| vk::VertexInputBindingDescription {
+                    binding,
                     stride,
                     input_rate: vk::VertexInputRate::VERTEX,
-                }],
-                attrs
-                    .iter()
-                    .map(
-                        |&(location, format, offset)| vk::VertexInputAttributeDescription {
-                            location,
-                            binding: 0,
-                            format,
-                            offset,
-                        },
-                    )
-                    .collect(),
-            ),
-            None => (Vec::new(), Vec::new()),
-        };
+                },
+            )
+            .collect();
+        let attributes: Vec<_> = (0u32..)
+            .zip(desc.vertex)
+            .flat_map(|(binding, &(_, attrs))| {
+                attrs.iter().map(move |&(location, format, offset)| {
+                    vk::VertexInputAttributeDescription {
+                        location,
+                        binding,
+                        format,
+                        offset,
+                    }
+                })
+            })
+            .collect();
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&vertex_bindings)
             .vertex_attribute_descriptions(&attributes);

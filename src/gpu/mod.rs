@@ -29,6 +29,7 @@ pub use barriers::{
 pub use context::{geometry_shader_from_env, Context, ContextOptions};
 pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,
+    VertexBinding,
 };
 pub use pipeline::{
     write_buffer_descriptors, write_sampled_image_descriptor, write_storage_image_descriptors,

@@ -32,31 +32,31 @@ impl SpecConstants {
     pub fn new() -> Self {
         Self::default()
     }
-    /// Sets a `bool` constant.
-    pub fn bool(mut self, spec: SpecId, value: bool) -> Self {
-        let id = spec.id;
-        self.entries.push((id, value as u32));
-        self
+    /// Sets a `bool` constant (again: the new value replaces the old).
+    pub fn bool(self, spec: SpecId, value: bool) -> Self {
+        self.set(spec, value as u32)
     }
     /// Sets a `uint`/`int` constant.
-    pub fn u32(mut self, spec: SpecId, value: u32) -> Self {
-        let id = spec.id;
-        self.entries.push((id, value));
-        self
+    pub fn u32(self, spec: SpecId, value: u32) -> Self {
+        self.set(spec, value)
     }
     /// Sets a `float` constant.
-    pub fn f32(mut self, spec: SpecId, value: f32) -> Self {
-        let id = spec.id;
-        self.entries.push((id, value.to_bits()));
+    pub fn f32(self, spec: SpecId, value: f32) -> Self {
+        self.set(spec, value.to_bits())
+    }
+    /// One entry per id: Vulkan refuses a specialization map that names an id twice.
+    fn set(mut self, spec: SpecId, value: u32) -> Self {
+        match self.entries.iter_mut().find(|(id, _)| *id == spec.id) {
+            Some(entry) => entry.1 = value,
+            None => self.entries.push((spec.id, value)),
+        }
         self
     }
     /// The value given for `id`, if any.
     pub fn get(&self, spec: SpecId) -> Option<u32> {
-        let id = spec.id;
         self.entries
             .iter()
-            .rev()
-            .find(|(i, _)| *i == id)
+            .find(|(i, _)| *i == spec.id)
             .map(|(_, v)| *v)
     }
     /// All entries, in the order set.
@@ -158,6 +158,41 @@ impl ComputePipeline {
                 d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
             d.cmd_dispatch(cmd, groups.0, groups.1, 1);
+        }
+    }
+
+    /// Records a dispatch whose workgroup counts the GPU reads from `args` at `offset` (a
+    /// `VkDispatchIndirectCommand`), with `set` bound at 0 and `push` as the push constants.
+    ///
+    /// # Safety
+    /// As [`Self::record_dispatch`]; `args` must have been made with `INDIRECT_BUFFER` usage,
+    /// hold the command at `offset` (a multiple of 4) when the dispatch executes, with counts
+    /// within the device's limits, and stay alive until the work completes.
+    pub unsafe fn record_dispatch_indirect(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: vk::DescriptorSet,
+        push: &[u8],
+        args: &super::Buffer,
+        offset: u64,
+    ) {
+        let d = self.gpu.device();
+        // SAFETY: the caller upholds this function's contract (`record_dispatch`'s, and the
+        // indirect buffer's); `push` fits the push range as in `record_dispatch`.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[set],
+                &[],
+            );
+            if !push.is_empty() {
+                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            }
+            d.cmd_dispatch_indirect(cmd, args.raw, offset);
         }
     }
 

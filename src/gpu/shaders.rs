@@ -33,9 +33,12 @@ pub const GEOMETRY_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geome
 /// `glsl/geometry.vert` without the discard data: the pinhole render (no geometry shader).
 pub const GEOMETRY_VERT_PINHOLE: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pinhole.spv"));
-/// `glsl/geometry.vert` reading the positions and flow the compute discard computed.
+/// `glsl/geometry.vert` reading the positions the compute discard computed.
 pub const GEOMETRY_VERT_PULLED: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pulled.spv"));
+/// `glsl/geometry.vert` reading the positions and flow the compute discard computed.
+pub const GEOMETRY_VERT_PULLED_FLOW: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pulled_flow.spv"));
 /// `glsl/geometry.geom`: Lambers et al. Sec. 3.2's triangle discard.
 pub const GEOMETRY_GEOM: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.geom.spv"));
 /// `glsl/discard.comp`: Lambers et al. Sec. 3.2's triangle discard without a geometry shader.

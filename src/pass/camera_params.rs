@@ -128,5 +128,6 @@ impl CameraParams {
                     spec::MODEL_OPENCV
                 },
             )
+            .bool(spec::DOMAIN_TABLE, true)
     }
 }

@@ -73,7 +73,7 @@ impl FilmPass {
                     },
                 ],
                 bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],
-                vertex: Some((std::mem::size_of::<FilmVertex>() as u32, &attributes)),
+                vertex: &[(std::mem::size_of::<FilmVertex>() as u32, &attributes)],
                 render_pass: &render_pass,
                 depth_test: false,
                 push_size: std::mem::size_of::<FilmPush>() as u32,

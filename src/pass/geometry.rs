@@ -22,7 +22,7 @@ use super::camera_params::CameraParams;
 use crate::gpu::{
     image_barrier, record_download, shaders, Attribute, Buffer, ComputePipeline, DescriptorPool,
     Error, Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
-    SpecConstants, Stage,
+    SpecConstants, Stage, VertexBinding,
 };
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
@@ -217,6 +217,26 @@ fn discard_bound(projection: &Projection, camera: &Camera) -> Result<f64> {
     }
 }
 
+/// Whether the compute discard's per-vertex pass needs the valid domain's table: not when
+/// every vertex inside `bound` (1 + δ + D on undistorted NDC) lies inside the domain's smallest
+/// boundary radius, for then a vertex beyond that radius is dropped by the bound whatever the
+/// table would say (`VKL_DOMAIN_TABLE` in `glsl/include/camera_model.glsl`). The margin covers
+/// the GPU's f32 rounding of both tests. A fisheye's domain is its own cone, tested without
+/// the table.
+pub fn discard_needs_domain_table(camera: &Camera, bound: f64) -> bool {
+    if camera.fisheye_lens().is_some() {
+        return false;
+    }
+    if !bound.is_finite() {
+        return true;
+    }
+    let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
+    let centre = DVec2::new(f.left + f.right, f.top + f.bottom) / 2.0;
+    let half = DVec2::new(f.right - f.left, f.bottom - f.top) / 2.0 * bound;
+    let corner = centre.abs() + half;
+    !(corner.length() <= camera.domain().min_ideal_radius() * (1.0 - 1e-4))
+}
+
 /// The vertex layout of [`Vertex`].
 const VERTEX_ATTRIBUTES: [Attribute; 4] = [
     (0, vk::Format::R32G32B32_SFLOAT, 0),
@@ -224,6 +244,12 @@ const VERTEX_ATTRIBUTES: [Attribute; 4] = [
     (2, vk::Format::R8G8B8A8_UNORM, 20),
     (3, vk::Format::R32_UINT, 24),
 ];
+/// Binding 0: the mesh's vertices.
+const MESH_BINDING: VertexBinding = (std::mem::size_of::<Vertex>() as u32, &VERTEX_ATTRIBUTES);
+/// Binding 1 with the compute discard: the distorted NDC (`in_distorted_ndc`).
+const POSITION_BINDING: VertexBinding = (8, &[(4, vk::Format::R32G32_SFLOAT, 0)]);
+/// Binding 2 with the compute discard and flow: the motion (`in_motion`).
+const MOTION_BINDING: VertexBinding = (16, &[(5, vk::Format::R32G32B32A32_SFLOAT, 0)]);
 
 /// An RGBA8 texture for sampling, staged for upload ([`Texture::record_upload`]).
 pub struct Texture {
@@ -322,20 +348,57 @@ impl Texture {
 }
 
 /// A mesh on the GPU: vertex and index buffers and its texture (white if it has none), and
-/// the compute discard's scratch: a flag per vertex and the rewritten index buffer.
+/// what the compute discard keeps per mesh ([`DiscardBuffers`]).
 pub struct MeshBuffers {
+    discard: DiscardBuffers,
     pub vertices: Buffer,
     pub indices: Buffer,
     pub index_count: u32,
     pub vertex_count: u32,
     pub texture: Texture,
-    /// World positions as vec4 (w = 1), for the discard pass's aligned reads.
-    points: Buffer,
-    flags: Buffer,
-    kept: Buffer,
-    /// Per vertex: the distorted clip position, and the flow with its validity.
+}
+
+/// The compute discard's per-mesh state (`glsl/discard.comp`; it reads the positions from the
+/// mesh's own vertex buffer).
+struct DiscardBuffers {
+    /// Per vertex, read by the draw as vertex attributes: the distorted NDC (two floats), and
+    /// the flow with its validity (four).
     positions: Buffer,
     motion: Buffer,
+    /// The vertices the last discard dropped, behind the indirect dispatch that visits them
+    /// (`Dropped` in the shader: groups, 1, 1, count, then the list).
+    dropped: Buffer,
+    /// Which triangles each vertex belongs to (compressed rows: vertex v's triangles are
+    /// `incidence[incidence_start[v] .. incidence_start[v + 1]]`).
+    incidence_start: Buffer,
+    incidence: Buffer,
+    /// The index buffer the draw uses: the mesh's, but for the triangles of dropped vertices,
+    /// which are degenerate.
+    kept: Buffer,
+}
+
+/// The dropped-vertex buffer's header (`Dropped` in `glsl/discard.comp`): no workgroups,
+/// y = z = 1, no vertices.
+const DROPPED_HEADER: [u32; 4] = [0, 1, 1, 0];
+
+/// The triangles each vertex belongs to, as compressed rows: (start per vertex and one past
+/// the last, triangle ids).
+fn incidence(indices: &[u32], vertex_count: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; vertex_count + 1];
+    for &i in indices {
+        start[i as usize + 1] += 1;
+    }
+    for v in 0..vertex_count {
+        start[v + 1] += start[v];
+    }
+    let mut next = start.clone();
+    let mut triangles = vec![0u32; indices.len()];
+    for (k, &i) in indices.iter().enumerate() {
+        let slot = &mut next[i as usize];
+        triangles[*slot as usize] = (k / 3) as u32;
+        *slot += 1;
+    }
+    (start, triangles)
 }
 
 impl MeshBuffers {
@@ -349,58 +412,63 @@ impl MeshBuffers {
             pixels: Pixels::Rgba8(vec![[255; 4]]),
             bit_depth: BitDepth::U8,
         };
-        // The discard pass reads positions and indices as storage buffers.
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let points: Vec<[f32; 4]> = mesh
-            .vertices
-            .iter()
-            .map(|v| [v.position[0], v.position[1], v.position[2], 1.0])
-            .collect();
+        use vk::BufferUsageFlags as U;
+        let n = mesh.vertices.len();
+        let (start, triangles) = incidence(&mesh.indices, n);
+        let mut dropped = DROPPED_HEADER.to_vec();
+        dropped.resize(DROPPED_HEADER.len() + n, 0);
+        let storage = U::STORAGE_BUFFER;
+        let per_vertex = |name, bytes: u64| {
+            Buffer::new(
+                gpu,
+                name,
+                n as u64 * bytes,
+                U::VERTEX_BUFFER | storage,
+                MemoryLocation::GpuOnly,
+            )
+        };
+        let discard = DiscardBuffers {
+            positions: per_vertex("mesh.discard.positions", 8)?,
+            motion: per_vertex("mesh.discard.motion", 16)?,
+            dropped: Buffer::from_pod(
+                gpu,
+                "mesh.discard.dropped",
+                &dropped,
+                storage | U::INDIRECT_BUFFER | U::TRANSFER_DST,
+            )?,
+            incidence_start: Buffer::from_pod(
+                gpu,
+                "mesh.discard.incidence_start",
+                &start,
+                storage,
+            )?,
+            incidence: Buffer::from_pod(gpu, "mesh.discard.incidence", &triangles, storage)?,
+            // Starts as the mesh's own indices: the first discard has nothing to restore.
+            kept: Buffer::from_pod(
+                gpu,
+                "mesh.discard.kept",
+                &mesh.indices,
+                U::INDEX_BUFFER | storage,
+            )?,
+        };
         Ok(MeshBuffers {
+            discard,
+            // The discard's per-vertex pass reads the positions too.
             vertices: Buffer::from_pod(
                 gpu,
                 "mesh.vertices",
                 &mesh.vertices,
-                vk::BufferUsageFlags::VERTEX_BUFFER,
+                U::VERTEX_BUFFER | storage,
             )?,
             indices: Buffer::from_pod(
                 gpu,
                 "mesh.indices",
                 &mesh.indices,
-                vk::BufferUsageFlags::INDEX_BUFFER | storage,
+                U::INDEX_BUFFER | storage,
             )?,
             index_count: mesh.indices.len() as u32,
-            vertex_count: mesh.vertices.len() as u32,
+            vertex_count: n as u32,
             texture: Texture::new(gpu, texture.unwrap_or(&white))?,
-            points: Buffer::from_pod(gpu, "mesh.discard.points", &points, storage)?,
-            flags: Buffer::new(
-                gpu,
-                "mesh.discard.flags",
-                mesh.vertices.len() as u64 * 4,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?,
-            kept: Buffer::new(
-                gpu,
-                "mesh.discard.indices",
-                mesh.indices.len() as u64 * 4,
-                vk::BufferUsageFlags::INDEX_BUFFER | storage,
-                MemoryLocation::GpuOnly,
-            )?,
-            positions: Buffer::new(
-                gpu,
-                "mesh.discard.positions",
-                mesh.vertices.len() as u64 * 16,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?,
-            motion: Buffer::new(
-                gpu,
-                "mesh.discard.motion",
-                mesh.vertices.len() as u64 * 16,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?,
         })
     }
 
@@ -427,19 +495,24 @@ pub struct GeometryPass {
     frame: Buffer,
     sampler: Sampler,
     discard_bound: f64,
+    /// Whether the compute discard was built with the valid domain's table
+    /// ([`discard_needs_domain_table`]).
+    domain_table: bool,
     /// The compute discard (a lens projection with [`Discard::Compute`]).
     discard: Option<DiscardPass>,
 }
 
-/// The compute discard's two pipelines (`glsl/discard.comp`, STAGE 0 and 1) and their set.
+/// The compute discard's three pipelines (`glsl/discard.comp`, STAGE 0 per vertex, 1 restore,
+/// 2 drop) and their set.
 struct DiscardPass {
-    flags: ComputePipeline,
-    triangles: ComputePipeline,
-    _pool: DescriptorPool,
+    stages: [ComputePipeline; 3],
+    /// The set before the pool it lives in.
     set: vk::DescriptorSet,
+    _pool: DescriptorPool,
 }
 
-/// `DiscardPush` of `glsl/discard.comp`: how many vertices (stage 0) or triangles (stage 1).
+/// `DiscardPush` of `glsl/discard.comp`: how many vertices (stage 0; the other stages read
+/// their count from the dropped list).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct DiscardPush {
@@ -485,20 +558,17 @@ impl GeometryPass {
             .bool(spec::WRITE_FLOW, o.flow)
             .bool(spec::WRITE_DEPTH, o.depth);
         let geometry_stage = lens && desc.discard.resolve() == Discard::GeometryShader;
-        let compute_discard = lens && !geometry_stage;
         // With the compute discard, Alg. 1 runs there once per vertex and pose, and the draw
-        // reads its positions and flow.
-        let pulled = compute_discard;
+        // reads its positions and flow as vertex attributes.
+        let pulled = lens && !geometry_stage;
+        let flow = desc.outputs.flow;
         let mut stages = vec![Stage {
             stage: vk::ShaderStageFlags::VERTEX,
-            // With the compute discard, Alg. 1 ran in the discard pass: the vertex shader reads
-            // its positions and flow.
-            spirv: if geometry_stage {
-                shaders::GEOMETRY_VERT
-            } else if pulled {
-                shaders::GEOMETRY_VERT_PULLED
-            } else {
-                shaders::GEOMETRY_VERT_PINHOLE
+            spirv: match (geometry_stage, pulled, flow) {
+                (true, _, _) => shaders::GEOMETRY_VERT,
+                (_, true, true) => shaders::GEOMETRY_VERT_PULLED_FLOW,
+                (_, true, false) => shaders::GEOMETRY_VERT_PULLED,
+                _ => shaders::GEOMETRY_VERT_PINHOLE,
             },
             constants: vertex_constants.clone(),
         }];
@@ -514,21 +584,23 @@ impl GeometryPass {
             spirv: shaders::GEOMETRY_FRAG,
             constants: fragment_constants,
         });
-        let all_bindings = [
+        let bindings = [
             vk::DescriptorType::UNIFORM_BUFFER,
             vk::DescriptorType::UNIFORM_BUFFER,
             vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-            // The discard pass's positions and flow (VKL_PULLED).
-            vk::DescriptorType::STORAGE_BUFFER,
-            vk::DescriptorType::STORAGE_BUFFER,
         ];
-        let bindings = &all_bindings[..if pulled { 5 } else { 3 }];
+        // The mesh's vertices, then (pulled) the discard pass's positions and flow.
+        let vertex_bindings: &[VertexBinding] = match (pulled, flow) {
+            (true, true) => &[MESH_BINDING, POSITION_BINDING, MOTION_BINDING],
+            (true, false) => &[MESH_BINDING, POSITION_BINDING],
+            _ => &[MESH_BINDING],
+        };
         let pipeline = GraphicsPipeline::new(
             gpu,
             GraphicsDesc {
                 stages,
-                bindings,
-                vertex: Some((std::mem::size_of::<Vertex>() as u32, &VERTEX_ATTRIBUTES)),
+                bindings: &bindings,
+                vertex: vertex_bindings,
                 render_pass: &render_pass,
                 depth_test: true,
                 push_size: 0,
@@ -557,8 +629,10 @@ impl GeometryPass {
                 (1, vk::DescriptorType::UNIFORM_BUFFER, &frame),
             ],
         );
-        let discard = if compute_discard {
-            Some(DiscardPass::new(gpu, vertex_constants, &camera, &frame)?)
+        let domain_table = discard_needs_domain_table(cam, discard_bound);
+        let discard = if pulled {
+            let constants = vertex_constants.bool(spec::DOMAIN_TABLE, domain_table);
+            Some(DiscardPass::new(gpu, constants, &camera, &frame)?)
         } else {
             None
         };
@@ -574,6 +648,7 @@ impl GeometryPass {
             camera,
             frame,
             discard_bound,
+            domain_table,
         };
         // SAFETY: no submission using it is pending (`submit` waits on its fence).
         unsafe { pass.set_frame(&Pose::IDENTITY, &Pose::IDENTITY) }?;
@@ -589,13 +664,13 @@ impl GeometryPass {
         &self.pipeline
     }
 
-    /// The compute discard's two pipelines' specialization constants (per vertex, per
-    /// triangle), when the pass drops triangles by compute; `None` with a geometry shader or a
-    /// pinhole projection.
-    pub fn discard_constants(&self) -> Option<[&SpecConstants; 2]> {
+    /// The compute discard's specialization constants (per vertex, restore, drop), when the
+    /// pass drops triangles by compute; `None` with a geometry shader or a pinhole
+    /// projection.
+    pub fn discard_constants(&self) -> Option<[&SpecConstants; 3]> {
         self.discard
             .as_ref()
-            .map(|d| [&d.flags.constants, &d.triangles.constants])
+            .map(|d| d.stages.each_ref().map(|p| &p.constants))
     }
 
     /// 1 + δ + D: the bound on undistorted NDC beyond which a vertex drops its triangles
@@ -618,7 +693,13 @@ impl GeometryPass {
     /// same distortion terms, which are compiled in).
     pub fn accepts_camera(&self, camera: &Camera) -> bool {
         let c = &self.desc.camera;
-        (c.width, c.height) == (camera.width, camera.height) && c.terms() == camera.terms()
+        (c.width, c.height) == (camera.width, camera.height)
+            && c.terms() == camera.terms()
+            // A discard built without the domain table takes only cameras that need none.
+            && (self.discard.is_none()
+                || self.domain_table
+                || discard_bound(&self.desc.projection, camera)
+                    .is_ok_and(|bound| !discard_needs_domain_table(camera, bound)))
     }
 
     /// Switches to another camera of the same size and terms without rebuilding the pipeline
@@ -632,7 +713,9 @@ impl GeometryPass {
     pub unsafe fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         if !self.accepts_camera(camera) {
             return Err(Error::Input(
-                "set_camera needs the same image size and distortion terms; build a new pass"
+                "set_camera needs the same image size and distortion terms (and a camera whose \
+                 discard bound lies inside its domain's smallest radius, if this one's did); \
+                 build a new pass"
                     .into(),
             ));
         }
@@ -791,27 +874,11 @@ impl GeometryPass {
     /// This rewrites the pass's descriptor set: no recorded work that uses
     /// this object may be pending on the GPU (wait for its fence first), as Vulkan
     /// requires of descriptor sets and memory the device reads.
+    /// With the compute discard, its set is pointed at the mesh's buffers too.
     pub unsafe fn bind_mesh(&mut self, mesh: &MeshBuffers) {
         self.write_texture(self.set, mesh);
         if let Some(d) = &self.discard {
-            let storage = vk::DescriptorType::STORAGE_BUFFER;
-            crate::gpu::write_buffer_descriptors(
-                &self.gpu,
-                d.set,
-                &[
-                    (2, storage, &mesh.points),
-                    (3, storage, &mesh.indices),
-                    (4, storage, &mesh.flags),
-                    (5, storage, &mesh.kept),
-                    (6, storage, &mesh.positions),
-                    (7, storage, &mesh.motion),
-                ],
-            );
-            crate::gpu::write_buffer_descriptors(
-                &self.gpu,
-                self.set,
-                &[(3, storage, &mesh.positions), (4, storage, &mesh.motion)],
-            );
+            d.bind(&self.gpu, mesh);
         }
     }
 
@@ -895,15 +962,19 @@ impl GeometryPass {
         // alive until the work completes. `clears` has one value per attachment in attachment
         // order; there are no push constants; `mesh`'s indices address its vertices (checked by
         // `Mesh::validate` in `MeshBuffers::new`); the render pass is ended here.
-        let indices = match &self.discard {
+        let (indices, vertex_buffers) = match &self.discard {
             // SAFETY: as above, and the discard's set was written for `mesh` by `bind_mesh`
             // (the contract's "mesh must be bound"); `record_slot` never reaches here with a
             // discard (`slots` refuses).
             Some(discard) => unsafe {
                 discard.record(&self.gpu, cmd, mesh);
-                mesh.kept.raw
+                let m = &mesh.discard;
+                let all = [mesh.vertices.raw, m.positions.raw, m.motion.raw];
+                // The bindings the pipeline was built with (`new`): motion only with flow.
+                let n = if self.desc.outputs.flow { 3 } else { 2 };
+                (m.kept.raw, all[..n].to_vec())
             },
-            None => mesh.indices.raw,
+            None => (mesh.indices.raw, vec![mesh.vertices.raw]),
         };
         unsafe {
             self.pipeline.begin(
@@ -914,7 +985,7 @@ impl GeometryPass {
                 set,
                 &[],
             );
-            d.cmd_bind_vertex_buffers(cmd, 0, &[mesh.vertices.raw], &[0]);
+            d.cmd_bind_vertex_buffers(cmd, 0, &vertex_buffers, &vec![0; vertex_buffers.len()]);
             d.cmd_bind_index_buffer(cmd, indices, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
             d.cmd_end_render_pass(cmd);
@@ -923,14 +994,15 @@ impl GeometryPass {
 }
 
 impl DiscardPass {
-    /// Both stages' pipelines, specialized like the vertex shader, and a set whose uniforms
-    /// are the pass's own (the mesh's buffers are written by [`GeometryPass::bind_mesh`]).
+    /// The three stages' pipelines, specialized like the vertex shader (camera terms,
+    /// DISTORT, WRITE_FLOW), and a set whose uniforms are the pass's own (the mesh's buffers
+    /// are written by [`GeometryPass::bind_mesh`]).
     fn new(gpu: &Gpu, vertex: SpecConstants, camera: &Buffer, frame: &Buffer) -> Result<Self> {
-        let uniform = vk::DescriptorType::UNIFORM_BUFFER;
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let bindings = [
-            uniform, uniform, storage, storage, storage, storage, storage, storage,
-        ];
+        use vk::DescriptorType as T;
+        let (uniform, storage) = (T::UNIFORM_BUFFER, T::STORAGE_BUFFER);
+        let mut bindings = [storage; 10];
+        bindings[0] = uniform;
+        bindings[1] = uniform;
         let pipeline = |stage: u32| {
             ComputePipeline::new(
                 gpu,
@@ -940,78 +1012,114 @@ impl DiscardPass {
                 vertex.clone().u32(spec::DISCARD_STAGE, stage),
             )
         };
-        let flags = pipeline(0)?;
-        let triangles = pipeline(1)?;
-        let pool = DescriptorPool::for_pipeline(gpu, &flags, 1)?;
-        // One set for both: their set layouts are identically defined, hence compatible.
-        let set = pool.allocate(&flags)?;
+        let stages = [pipeline(0)?, pipeline(1)?, pipeline(2)?];
+        let pool = DescriptorPool::for_pipeline(gpu, &stages[0], 1)?;
+        // One set for all three: their set layouts are identically defined, hence compatible.
+        let set = pool.allocate(&stages[0])?;
         crate::gpu::write_buffer_descriptors(
             gpu,
             set,
             &[(0, uniform, camera), (1, uniform, frame)],
         );
         Ok(DiscardPass {
-            flags,
-            triangles,
-            _pool: pool,
+            stages,
             set,
+            _pool: pool,
         })
     }
 
-    /// Records the per-vertex pass (flags, positions, flow), then the rewritten indices, with
-    /// the barriers around them: after an earlier draw's reads and dispatch (the buffers are
-    /// reused every frame), and before this draw's index and vertex-shader reads.
+    /// Points the set at `mesh`'s buffers. No pending work may use the set (the caller's
+    /// part: [`GeometryPass::bind_mesh`]'s contract).
+    fn bind(&self, gpu: &Gpu, mesh: &MeshBuffers) {
+        let m = &mesh.discard;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        crate::gpu::write_buffer_descriptors(
+            gpu,
+            self.set,
+            &[
+                (2, storage, &mesh.vertices),
+                (3, storage, &m.positions),
+                (4, storage, &m.motion),
+                (5, storage, &m.dropped),
+                (6, storage, &m.incidence_start),
+                (7, storage, &m.incidence),
+                (8, storage, &mesh.indices),
+                (9, storage, &m.kept),
+            ],
+        );
+    }
+
+    /// Records the three stages with the barriers around them: the restore of the triangles
+    /// the last discard of this mesh dropped, the dropped list emptied, the per-vertex pass,
+    /// the drop; after earlier draws' reads of the index and attribute buffers (they are
+    /// reused every frame), and before this draw's.
     ///
     /// # Safety
-    /// `cmd` is recording outside a render pass on a queue with graphics and compute; the set
-    /// was written for `mesh`, which stays alive until the work completes.
+    /// `cmd` is recording outside a render pass on a queue with graphics and compute; `mesh`
+    /// is the mesh last bound ([`Self::bind`]) and stays alive until the work completes.
     unsafe fn record(&self, gpu: &Gpu, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
         use vk::{AccessFlags as A, PipelineStageFlags as S};
-        let groups = |n: u32| (n.div_ceil(64).max(1), 1);
-        let triangles = mesh.index_count / 3;
+        let m = &mesh.discard;
+        let none = bytemuck::bytes_of(&DiscardPush { count: 0 });
+        let compute = S::COMPUTE_SHADER | S::DRAW_INDIRECT;
+        let shader_rw = A::SHADER_READ | A::SHADER_WRITE;
         // SAFETY: the caller upholds this function's contract; the push constants are the
-        // `DiscardPush` both pipelines were built with, and the dispatch sizes cover exactly
-        // the vertex and triangle counts the buffers were sized for in `MeshBuffers::new`.
+        // `DiscardPush` the pipelines were built with; the per-vertex dispatch covers exactly
+        // the vertices the buffers were sized for in `MeshBuffers::new`, and the indirect ones
+        // read `m.dropped`'s header (INDIRECT_BUFFER usage), whose group count stage 0 keeps
+        // at ceil(count / 64) ≤ the vertex count / 64 + 1.
         unsafe {
+            // Earlier draws of this mesh read `kept` and the attributes; earlier discards wrote
+            // them and the dropped list.
             crate::gpu::memory_barrier(
                 gpu,
                 cmd,
+                (S::VERTEX_INPUT | compute, A::SHADER_WRITE),
+                (compute, shader_rw | A::INDIRECT_COMMAND_READ),
+            );
+            let [per_vertex, restore, drop] = &self.stages;
+            restore.record_dispatch_indirect(cmd, self.set, none, &m.dropped, 0);
+            // The restore has read the list (and its dispatch the header) before it is emptied;
+            // its writes of `kept` come before the drop's.
+            crate::gpu::memory_barrier(
+                gpu,
+                cmd,
+                (compute, A::SHADER_WRITE),
                 (
-                    S::VERTEX_INPUT | S::VERTEX_SHADER | S::COMPUTE_SHADER,
-                    A::empty(),
+                    S::TRANSFER | S::COMPUTE_SHADER,
+                    A::TRANSFER_WRITE | shader_rw,
                 ),
-                (S::COMPUTE_SHADER, A::SHADER_WRITE),
+            );
+            let header = bytemuck::cast_slice(&DROPPED_HEADER);
+            gpu.device()
+                .cmd_update_buffer(cmd, m.dropped.raw, 0, header);
+            crate::gpu::memory_barrier(
+                gpu,
+                cmd,
+                (S::TRANSFER, A::TRANSFER_WRITE),
+                (S::COMPUTE_SHADER, shader_rw),
             );
             let push = DiscardPush {
                 count: mesh.vertex_count,
             };
-            self.flags.record_dispatch(
+            per_vertex.record_dispatch(
                 cmd,
                 self.set,
                 bytemuck::bytes_of(&push),
-                groups(push.count),
+                (push.count.div_ceil(64).max(1), 1),
             );
             crate::gpu::memory_barrier(
                 gpu,
                 cmd,
                 (S::COMPUTE_SHADER, A::SHADER_WRITE),
-                (S::COMPUTE_SHADER, A::SHADER_READ),
+                (compute, shader_rw | A::INDIRECT_COMMAND_READ),
             );
-            let push = DiscardPush { count: triangles };
-            self.triangles.record_dispatch(
-                cmd,
-                self.set,
-                bytemuck::bytes_of(&push),
-                groups(triangles),
-            );
+            drop.record_dispatch_indirect(cmd, self.set, none, &m.dropped, 0);
             crate::gpu::memory_barrier(
                 gpu,
                 cmd,
                 (S::COMPUTE_SHADER, A::SHADER_WRITE),
-                (
-                    S::VERTEX_INPUT | S::VERTEX_SHADER,
-                    A::INDEX_READ | A::SHADER_READ,
-                ),
+                (S::VERTEX_INPUT, A::INDEX_READ | A::VERTEX_ATTRIBUTE_READ),
             );
         }
     }
@@ -1239,6 +1347,25 @@ pub struct Rendered {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn incidence_lists_each_vertexs_triangles() {
+        // Two triangles sharing an edge, and a degenerate one repeating a vertex.
+        let (start, triangles) = incidence(&[0, 1, 2, 2, 1, 3, 3, 3, 0], 5);
+        let of = |v: usize| &triangles[start[v] as usize..start[v + 1] as usize];
+        assert_eq!(of(0), [0, 2]);
+        assert_eq!(of(1), [0, 1]);
+        assert_eq!(of(2), [0, 1]);
+        assert_eq!(of(3), [1, 2, 2]);
+        assert_eq!(of(4), [] as [u32; 0]);
+    }
+
+    #[test]
+    fn the_discard_reads_positions_where_the_vertex_buffer_has_them() {
+        // glsl/discard.comp reads scene::Vertex as 8 floats with the position first.
+        assert_eq!(std::mem::size_of::<Vertex>(), 32);
+        assert_eq!(std::mem::offset_of!(Vertex, position), 0);
+    }
 
     #[test]
     fn half_floats_convert() {

@@ -156,7 +156,7 @@ impl MeshWarpPass {
                     },
                 ],
                 bindings: &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER],
-                vertex: Some((std::mem::size_of::<GridVertex>() as u32, &attributes)),
+                vertex: &[(std::mem::size_of::<GridVertex>() as u32, &attributes)],
                 render_pass: &render_pass,
                 depth_test: false,
                 push_size: std::mem::size_of::<MeshWarpPush>() as u32,

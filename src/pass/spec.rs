@@ -23,9 +23,12 @@ pub const MODEL: SpecId = SpecId::new("VKL_MODEL", 6);
 pub const MODEL_OPENCV: u32 = 0;
 /// [`MODEL`]'s value for OpenCV's fisheye model.
 pub const MODEL_FISHEYE: u32 = 1;
+/// Whether the valid-domain test may look up its table (false: the smallest boundary radius
+/// alone decides, where that is all a pass can need; see `glsl/include/camera_model.glsl`).
+pub const DOMAIN_TABLE: SpecId = SpecId::new("VKL_DOMAIN_TABLE", 7);
 /// Every camera-model constant: the term groups in the order of [`crate::model::Terms`]'s
-/// fields, the Newton iterations, the model.
-pub const CAMERA: [SpecId; 7] = [
+/// fields, the Newton iterations, the model, the domain table.
+pub const CAMERA: [SpecId; 8] = [
     RADIAL,
     RATIONAL,
     TANGENTIAL,
@@ -33,6 +36,7 @@ pub const CAMERA: [SpecId; 7] = [
     TILT,
     NEWTON_ITERATIONS,
     MODEL,
+    DOMAIN_TABLE,
 ];
 
 // glsl/include/warp_coords.glsl and glsl/points.comp: what a coordinate pass computes.

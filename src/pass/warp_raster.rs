@@ -70,7 +70,7 @@ impl RasterWarpPass {
                     },
                 ],
                 bindings: &[vk::DescriptorType::STORAGE_IMAGE; 4],
-                vertex: None,
+                vertex: &[],
                 render_pass: &render_pass,
                 depth_test: false,
                 push_size: std::mem::size_of::<WarpPush>() as u32,

@@ -235,11 +235,13 @@ pub fn inverse_error_px(camera: &Camera, method: InverseMethod) -> Option<f64> {
 const RENDER_NS_PER_PIXEL: f64 = 12.0;
 /// A pinhole render, per triangle (ns) (`bench vertex`, plain render at 128² and 512² quads).
 const RENDER_NS_PER_TRIANGLE: f64 = 230.0;
-/// Alg. 1 with its compute discard (the default), per triangle (ns): 1.3× the plain render's
-/// per-triangle cost (`bench vertex`, 2026-12-02, medians of 3 runs: 169 against 130 ns at 512²
-/// quads, 519 against 378 ns at 128², 800×600). The geometry-shader discard it replaced cost
-/// 1.9× (253 and 677 ns), and 600 ns here before.
-const VERTEX_NS_PER_TRIANGLE: f64 = 300.0;
+/// Alg. 1 with its compute discard (the default), per vertex, beyond the plain render of the
+/// same triangles (ns): the per-vertex pass (the model once per vertex, the discard's
+/// bookkeeping); the draw that follows costs what the plain render does. `bench vertex`,
+/// 2026-12-02, 512² quads (263,169 vertices), the 14-term lens: 112.3 against 92.2 ms at
+/// 800×600 (76 ns a vertex), 140.6 against 113.2 ms at 1920×1080 (104 ns). The geometry-shader
+/// discard costs 2.2× and 1.9× the plain render there.
+const DISCARD_NS_PER_VERTEX: f64 = 90.0;
 /// The overscanned source a warp renders, in source pixels per output pixel (density 1 on
 /// the shipped barrel and prism cameras).
 const OVERSCAN_AREA: f64 = 1.3;
@@ -281,8 +283,8 @@ struct WarpChoice {
 enum Cost {
     /// A pinhole render of the camera.
     Pinhole,
-    /// Alg. 1.
-    Vertex,
+    /// Alg. 1 on a mesh of this many vertices.
+    Vertex { vertices: f64 },
     /// The overscanned pinhole render, then a warp spending `coordinate_ns` per output pixel
     /// on its coordinates and samples.
     Warp { coordinate_ns: f64 },
@@ -292,7 +294,11 @@ enum Cost {
 fn estimate_ms(pixels: f64, triangles: f64, cost: Cost) -> f64 {
     let ns = match cost {
         Cost::Pinhole => RENDER_NS_PER_PIXEL * pixels + RENDER_NS_PER_TRIANGLE * triangles,
-        Cost::Vertex => RENDER_NS_PER_PIXEL * pixels + VERTEX_NS_PER_TRIANGLE * triangles,
+        Cost::Vertex { vertices } => {
+            RENDER_NS_PER_PIXEL * pixels
+                + RENDER_NS_PER_TRIANGLE * triangles
+                + DISCARD_NS_PER_VERTEX * vertices
+        }
         Cost::Warp { coordinate_ns } => {
             RENDER_NS_PER_PIXEL * OVERSCAN_AREA * pixels
                 + RENDER_NS_PER_TRIANGLE * triangles
@@ -556,7 +562,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             // when nothing can go that way: chromatic colour without IDs or flow).
             let data_needs_vertex = o.ids || o.flow;
             let pose = poses[0];
-            let mut vertex: Option<(Option<f64>, f64, usize)> = None;
+            let mut vertex: Option<(Option<f64>, f64, usize, usize)> = None;
             let candidates = if chromatic.is_none() || data_needs_vertex {
                 &[
                     None,
@@ -583,7 +589,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 }
                 let err = crate::scene::tessellate::straight_line_error(&camera, &pose, &mesh);
                 if err <= budget {
-                    vertex = Some((l, err, mesh.triangle_count()));
+                    vertex = Some((l, err, mesh.triangle_count(), mesh.vertices.len()));
                     break;
                 }
             }
@@ -688,7 +694,9 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     )
                 )
             );
-            let vertex_ms = vertex.map(|(_, _, t)| estimate_ms(pixels, t as f64, Cost::Vertex));
+            let vertex_ms = vertex.map(|(_, _, t, v)| {
+                estimate_ms(pixels, t as f64, Cost::Vertex { vertices: v as f64 })
+            });
             let warp_ms = warp.map(|c| c.ms);
             let describe_tess = |l: Option<f64>, err: f64, tris: usize| {
                 match l {
@@ -732,7 +740,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     ),
                 ));
                 if data_needs_vertex {
-                    let Some((l, verr, tris)) = vertex else {
+                    let Some((l, verr, tris, _)) = vertex else {
                         return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: tessellation cannot meet it for the ID/flow outputs")));
                     };
                     steps.push(step(
@@ -764,7 +772,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     )
                 }
             } else {
-                let Some((l, verr, tris)) = vertex else {
+                let Some((l, verr, tris, _)) = vertex else {
                     return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: even 1 px edges do not meet it, and the outputs (IDs/flow) need the vertex path")));
                 };
                 let why = if data_needs_vertex {

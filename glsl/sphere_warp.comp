@@ -9,9 +9,12 @@
 // no seam. The panorama wraps in longitude (sampler REPEAT in u).
 //
 // Variant: VKL_EQUIRECT samples a 2D panorama instead of the cube. The output is rgba32f
-// whatever the source's format (sampling returns floats for UNORM and float images alike).
+// whatever the source's format (sampling returns floats for UNORM and float images alike), or
+// with VKL_RGBA8_TARGET rgba8, for 8-bit colour: a quarter of the bytes to store and read back
+// (and lavapipe stores rgba8 texels several times faster than rgba32f ones).
 #extension GL_GOOGLE_include_directive : require
 // vklens:variant equirect VKL_EQUIRECT
+// vklens:variant rgba8 VKL_RGBA8_TARGET
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -25,7 +28,11 @@ layout(set = 0, binding = 1) uniform sampler2D source;
 #else
 layout(set = 0, binding = 1) uniform samplerCube source;
 #endif
+#ifdef VKL_RGBA8_TARGET
+layout(set = 0, binding = 2, rgba8) uniform writeonly image2D target;
+#else
 layout(set = 0, binding = 2, rgba32f) uniform writeonly image2D target;
+#endif
 layout(set = 0, binding = 3, r8) uniform writeonly image2D mask;
 
 layout(push_constant) uniform SpherePush {

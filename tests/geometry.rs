@@ -792,7 +792,7 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
         Ok(())
     })
     .unwrap();
-    let mut frame = |pose: &Pose| {
+    let frame = |pose: &Pose| {
         unsafe { pass.set_frame(pose, pose) }.unwrap();
         ctx.submit(|cmd| {
             unsafe {

@@ -129,7 +129,7 @@ fn camera_cases(dir: &Path) -> Vec<(String, PathBuf)> {
         ),
         (
             "truncated".into(),
-            good[..good.len() / 2].as_bytes().to_vec(),
+            good.as_bytes()[..good.len() / 2].to_vec(),
         ),
     ];
     // A file past the read limit (16 MiB by default).

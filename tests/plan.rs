@@ -640,7 +640,7 @@ fn errors_in_files_a_scene_names_name_the_scene_file_and_key() {
 }
 
 #[test]
-fn a_lens_past_a_pinholes_reach_is_planned_on_the_vertex_path_and_says_why() {
+fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_map() {
     let dir = std::env::temp_dir().join(format!("vklens-plan-fisheye-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(
@@ -649,28 +649,108 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_vertex_path_and_says_why() {
     )
     .unwrap();
     let text = "[geometry]\nscene = \"room\"\n[optics]\ncamera = \"fish.json\"\n[accuracy]\nmax_error_px = 0.5\n";
-    let file = SceneFile::parse(text, &dir.join("scene.toml")).unwrap();
+    let parse = |t: &str| SceneFile::parse(t, &dir.join("scene.toml")).unwrap();
+    let file = parse(text);
     let scene = load_geometry(&file).unwrap();
+    // Colour alone: both can render it; Alg. 1 draws the 12,288 triangles once, the cube map
+    // six times and warps every pixel, so Alg. 1 is estimated cheaper, and says so.
     let p = plan(&file, &scene).unwrap();
     assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
     let why: Vec<&str> = p.steps.iter().map(|s| s.why.as_str()).collect();
     assert!(
-        why.iter()
-            .any(|w| w.contains("no pinhole warp") && w.contains("90°")),
+        why.iter().any(|w| w.contains("no pinhole warp")
+            && w.contains("90°")
+            && w.contains("for a cube map")),
         "{why:?}"
     );
     assert!(
         why.iter().any(|w| w.contains("compiled in: fisheye")),
         "{why:?}"
     );
-    // Chromatic aberration would need the planner's pinhole warp: refused, naming the key.
+
+    // Chromatic aberration: Alg. 1 cannot give each channel its own lens and no pinhole
+    // source holds the lens, so the cube map renders it, on the GPU, each channel through its
+    // own rays; what the planner records is what `render --path cube` draws.
     let chromatic = format!(
         "{text}[effects]\nchromatic_aberration = true\nchromatic_scales = [1.002, 1.0, 0.998]\n"
     );
-    let file = SceneFile::parse(&chromatic, &dir.join("scene.toml")).unwrap();
+    let file = parse(&chromatic);
+    let p = plan(&file, &scene).unwrap();
+    let Route::Cube {
+        side,
+        chromatic: Some(scales),
+    } = p.route
+    else {
+        panic!("not the cube route: {:?}", p.route);
+    };
+    assert_eq!(
+        side, 276,
+        "one face pixel per output pixel at the centre: 2 fx"
+    );
+    assert_eq!(scales, [1.002, 1.0, 0.998]);
+    assert_eq!(
+        p.steps.iter().map(|s| s.stage).collect::<Vec<_>>(),
+        [Stage::CubeFaces, Stage::SphereWarp { chromatic: true }]
+    );
+    assert!(
+        p.steps[0].why.contains("no pinhole warp"),
+        "{}",
+        p.steps[0].why
+    );
+    let ctx = validated_context();
+    let mut planned = None;
+    let recorded = execute(&ctx, &p, &scene, 0..1, &mut |f| {
+        planned = f.rendered.color;
+        Ok(())
+    })
+    .unwrap();
+    assert!(recorded.has(PassKind::SphereWarp));
+    assert_eq!(
+        constant(
+            &recorded,
+            PassKind::SphereWarp,
+            vk::ShaderStageFlags::COMPUTE,
+            spec::CHROMATIC
+        ),
+        Some(1)
+    );
+    let planned = planned.expect("the cube route renders colour");
+    let camera = p.camera.clone().unwrap();
+    let mut request = vklens::internal::render::RenderRequest::color(
+        &camera,
+        vklens::internal::render::RenderPath::Cube { side },
+    );
+    request.pose = p.poses[0];
+    request.chromatic = Some(scales);
+    let flag = vklens::internal::render::render_scene(&ctx, &scene, &request, &mut |_| {})
+        .unwrap()
+        .color
+        .unwrap();
+    assert!(
+        planned.pixels == flag.pixels,
+        "the plan and render --path cube differ"
+    );
+    let lit = (0..planned.len())
+        .filter(|&i| planned.rgba_f32(i)[3] > 0.5)
+        .count();
+    assert!(lit * 2 > planned.len(), "the room fills the image circle");
+    // Supersampled, the faces are as fine as the larger camera's pixels.
+    let file = parse(&format!("{chromatic}[render]\nsupersample = 2\n"));
+    let p2 = plan(&file, &scene).unwrap();
+    execute(&ctx, &p2, &scene, 0..1, &mut |f| {
+        let c = f.rendered.color.expect("colour");
+        assert_eq!((c.width, c.height), (480, 480));
+        Ok(())
+    })
+    .unwrap();
+    assert_no_validation_messages(&ctx);
+
+    // A cube map carries colour alone: chromatic aberration with IDs cannot be planned.
+    let with_ids = format!("{chromatic}[outputs]\nids = true\n");
+    let file = parse(&with_ids);
     let e = plan(&file, &scene).unwrap_err().to_string();
     assert!(
-        e.contains("chromatic_aberration") && e.contains("pinhole source"),
+        e.contains("chromatic_aberration") && e.contains("cube map") && e.contains("colour alone"),
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);

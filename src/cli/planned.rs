@@ -75,6 +75,14 @@ pub fn explain(p: &Plan, measured_ms: Option<f64>, passes: &[(&str, f64)]) -> St
                 };
                 format!("warp ({how}, chromatic) for colour + vertex path for the data")
             }
+            Route::Cube { side, chromatic } => format!(
+                "cube map of six {side}×{side} pinhole faces + sphere warp{}",
+                if chromatic.is_some() {
+                    " (chromatic)"
+                } else {
+                    ""
+                }
+            ),
             Route::LensModel { samples, .. } => {
                 format!("image-based lens model, {samples} lens sample(s)")
             }

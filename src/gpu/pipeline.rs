@@ -140,24 +140,10 @@ impl ComputePipeline {
         push: &[u8],
         groups: (u32, u32),
     ) {
-        let d = self.gpu.device();
-        // SAFETY: the caller upholds `record_dispatch`'s contract: `cmd` is recording outside a
-        // render pass on a compute queue and `set` matches this layout. `push` must fit the push
-        // range: each pass pushes the struct whose size it built the pipeline with.
+        // SAFETY: the caller upholds `record_dispatch`'s contract, which `bind` shares.
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &[set],
-                &[],
-            );
-            if !push.is_empty() {
-                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
-            }
-            d.cmd_dispatch(cmd, groups.0, groups.1, 1);
+            self.bind(cmd, set, push);
+            self.gpu.device().cmd_dispatch(cmd, groups.0, groups.1, 1);
         }
     }
 
@@ -176,9 +162,25 @@ impl ComputePipeline {
         args: &super::Buffer,
         offset: u64,
     ) {
+        // SAFETY: the caller upholds this function's contract (`record_dispatch`'s, which
+        // `bind` shares, and the indirect buffer's).
+        unsafe {
+            self.bind(cmd, set, push);
+            self.gpu
+                .device()
+                .cmd_dispatch_indirect(cmd, args.raw, offset);
+        }
+    }
+
+    /// Binds the pipeline and `set`, and pushes `push` (none when empty).
+    ///
+    /// # Safety
+    /// As [`Self::record_dispatch`].
+    unsafe fn bind(&self, cmd: vk::CommandBuffer, set: vk::DescriptorSet, push: &[u8]) {
         let d = self.gpu.device();
-        // SAFETY: the caller upholds this function's contract (`record_dispatch`'s, and the
-        // indirect buffer's); `push` fits the push range as in `record_dispatch`.
+        // SAFETY: the caller upholds `record_dispatch`'s contract: `cmd` is recording outside a
+        // render pass on a compute queue and `set` matches this layout. `push` must fit the push
+        // range: each pass pushes the struct whose size it built the pipeline with.
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
             d.cmd_bind_descriptor_sets(
@@ -192,7 +194,6 @@ impl ComputePipeline {
             if !push.is_empty() {
                 d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
-            d.cmd_dispatch_indirect(cmd, args.raw, offset);
         }
     }
 

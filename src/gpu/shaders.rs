@@ -17,6 +17,9 @@ pub const WARP_COMP_R32F: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp
 /// `glsl/sphere_warp.comp`: the warp from a cube map of six pinhole faces.
 pub const SPHERE_WARP_COMP: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/sphere_warp.comp.spv"));
+/// `glsl/sphere_warp.comp` from a cube map into an rgba8 target (8-bit colour).
+pub const SPHERE_WARP_COMP_RGBA8: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/sphere_warp.comp.rgba8.spv"));
 /// `glsl/sphere_warp.comp` sampling an equirectangular panorama.
 pub const SPHERE_WARP_COMP_EQUIRECT: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/sphere_warp.comp.equirect.spv"));

@@ -459,7 +459,7 @@ fn colmap_camera(text: &str, index: Option<usize>) -> Result<Camera> {
     let side = |s: &str, what: &str| -> Result<u32> {
         s.parse::<u32>()
             .ok()
-            .filter(|&v| v >= 1 && v <= crate::model::MAX_IMAGE_SIDE)
+            .filter(|v| (1..=crate::model::MAX_IMAGE_SIDE).contains(v))
             .ok_or_else(|| {
                 at(format!(
                     "the {what} must be a whole number of pixels in 1..={}, got `{s}`",

@@ -4,6 +4,7 @@
 
 pub mod camera_params;
 pub mod copy;
+pub mod cube_stage;
 pub mod film;
 pub mod geometry;
 pub mod grid_demo;

@@ -195,24 +195,38 @@ pub struct SphereWarpPass {
     camera: Buffer,
     push: SpherePush,
     output_size: (u32, u32),
+    /// The terms compiled in.
+    terms: crate::model::Terms,
 }
 
 impl SphereWarpPass {
     /// Builds the pipeline for `camera` (the output's lens) sampling a cube (`equirect` false)
-    /// or a panorama.
+    /// or a panorama, into an RGBA32F target.
     pub fn new(
         gpu: &Gpu,
         camera: &Camera,
         equirect: bool,
         options: &SphereWarpOptions,
     ) -> Result<Self> {
+        Self::with_target(gpu, camera, equirect, options, false)
+    }
+
+    /// [`Self::new`], into an RGBA8 target where `eight_bit` (from a cube only).
+    pub fn with_target(
+        gpu: &Gpu,
+        camera: &Camera,
+        equirect: bool,
+        options: &SphereWarpOptions,
+        eight_bit: bool,
+    ) -> Result<Self> {
         let constants = CameraParams::spec_constants(camera.terms())
             .bool(spec::CHROMATIC, options.chromatic.is_some())
             .bool(spec::WRITE_MASK, options.write_mask);
-        let spirv = if equirect {
-            shaders::SPHERE_WARP_COMP_EQUIRECT
-        } else {
-            shaders::SPHERE_WARP_COMP
+        let spirv = match (equirect, eight_bit) {
+            (true, false) => shaders::SPHERE_WARP_COMP_EQUIRECT,
+            (false, false) => shaders::SPHERE_WARP_COMP,
+            (false, true) => shaders::SPHERE_WARP_COMP_RGBA8,
+            (true, true) => return Err(Error::internal("the panorama warp writes RGBA32F only")),
         };
         let pipeline = ComputePipeline::new(
             gpu,
@@ -260,6 +274,7 @@ impl SphereWarpPass {
                 sizes: [0, 0, camera.width, camera.height],
             },
             output_size: (camera.width, camera.height),
+            terms: camera.terms(),
         })
     }
 
@@ -268,8 +283,25 @@ impl SphereWarpPass {
         &self.pipeline
     }
 
+    /// Moves the warp to another lens camera of the same size and terms (the terms are
+    /// compiled in): a jittered pass of anti-aliasing.
+    ///
+    /// # Safety
+    /// A host write to the camera uniform: no recorded work using this pass may be pending.
+    pub unsafe fn set_camera(&mut self, camera: &Camera) -> Result<()> {
+        let (w, h) = self.output_size;
+        if (camera.width, camera.height) != (w, h) || camera.terms() != self.terms {
+            return Err(Error::Input(
+                "the sphere warp takes a camera of the size and terms it was built for".into(),
+            ));
+        }
+        self.camera
+            .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))
+    }
+
     /// Points the pass at its source (a cube view or a 2D view, in `SHADER_READ_ONLY_OPTIMAL`)
-    /// and its output and mask (storage images in `GENERAL`).
+    /// and its output (of the target format it was built for) and mask (storage images in
+    /// `GENERAL`).
     ///
     /// # Safety
     /// No recorded work using this pass may be pending; the views must be live views of this

@@ -266,23 +266,36 @@ impl WarpStage {
 
     /// The warped image (after the submission completed).
     pub fn read(&self) -> Result<Raster> {
-        let e = self.output.extent;
-        let n = e.width as usize * e.height as usize;
-        let (pixels, depth) = match self.format {
-            PixelFormat::Rgba8 => (
-                Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
-                BitDepth::U8,
-            ),
-            _ => (
-                Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
-                BitDepth::F32,
-            ),
-        };
-        Ok(Raster {
-            width: e.width,
-            height: e.height,
-            pixels,
-            bit_depth: depth,
-        })
+        read_rgba(
+            &self.download,
+            self.output.extent,
+            self.format == PixelFormat::Rgba8,
+        )
     }
+}
+
+/// An RGBA image read back into `download`: 8-bit, or f32 samples.
+pub(crate) fn read_rgba(
+    download: &Buffer,
+    extent: vk::Extent2D,
+    eight_bit: bool,
+) -> Result<Raster> {
+    let n = extent.width as usize * extent.height as usize;
+    let (pixels, bit_depth) = if eight_bit {
+        (
+            Pixels::Rgba8(download.read_pod::<[u8; 4]>(n)?),
+            BitDepth::U8,
+        )
+    } else {
+        (
+            Pixels::Rgba32F(download.read_pod::<[f32; 4]>(n)?),
+            BitDepth::F32,
+        )
+    };
+    Ok(Raster {
+        width: extent.width,
+        height: extent.height,
+        pixels,
+        bit_depth,
+    })
 }

@@ -61,6 +61,13 @@ pub enum Route {
         /// As for [`Route::Warp`].
         map: bool,
     },
+    /// Six pinhole faces of a cube map (`side` pixels each, at 1×), rendered into the cube on
+    /// the GPU, then the sphere warp sampling it along each output pixel's ray: colour for a
+    /// lens no pinhole source holds, where it is cheaper than Alg. 1.
+    Cube {
+        side: u32,
+        chromatic: Option<[f64; 3]>,
+    },
     /// Heidrich et al.'s image-based model through a lens prescription.
     LensModel {
         samples: u32,
@@ -100,6 +107,10 @@ pub enum Stage {
     VertexRenderData,
     /// Supersampled, jittered colour, averaged.
     Antialias,
+    /// The six pinhole faces of a cube map.
+    CubeFaces,
+    /// The warp from the cube map; `chromatic`: three fetches, one per channel's lens.
+    SphereWarp { chromatic: bool },
     /// Heidrich et al.'s image-based model.
     LensModel,
     /// The film the cells accumulate on.
@@ -119,6 +130,9 @@ impl Stage {
             Stage::Warp { chromatic: false } => "warp, single fetch",
             Stage::Warp { chromatic: true } => "warp, 3 fetches (chromatic)",
             Stage::Tessellation => "tessellation",
+            Stage::CubeFaces => "cube faces (6 pinhole renders)",
+            Stage::SphereWarp { chromatic: false } => "sphere warp, single fetch",
+            Stage::SphereWarp { chromatic: true } => "sphere warp, 3 fetches (chromatic)",
             Stage::VertexRender => "Alg. 1 (vertex + discard)",
             Stage::VertexRenderData => "Alg. 1 (vertex + discard) for IDs/flow/depth",
             Stage::Antialias => "anti-aliasing",
@@ -253,6 +267,19 @@ const MAP_WARP_CHROMATIC_NS: f64 = 22.0;
 /// Building a coarse map (every 8th pixel solved, cubic between), per output pixel and
 /// channel (ns): "inverse map build: coarse8+cubic", 3.2 ms at 800×600.
 const MAP_BUILD_NS: f64 = 6.7;
+/// The sphere warp from a cube map, per output pixel and fetch (ns): each pixel's ray (the
+/// lens's inverse) and a bilinear cube fetch into an RGBA8 target. `bench wide`, 2026-12-02,
+/// GPU time of the warp pass at 1920×1080: 24 and 23 ns a pixel on the 180° and 200°
+/// fisheyes, 30 on the GoPro-like lens (its inverse is a Newton solve).
+const SPHERE_WARP_NS: f64 = 25.0;
+/// The cube path's geometric error (px): the pixel each output pixel's f32 ray reprojects
+/// to, against the f64 model, the largest over `bench wide`'s three lenses (2.2e-4 px on the
+/// GoPro-like lens, 1.1e-4 and 8.5e-5 on the 180° and 200° fisheyes).
+const CUBE_RAY_ERROR_PX: f64 = 2.5e-4;
+/// The largest face the planner asks for: the smallest `maxImageDimensionCube` Vulkan allows
+/// (the recorder clamps to the device's own limit and the cube budget again).
+const PLANNED_CUBE_MAX_SIDE: u32 = 4096;
+
 /// The f32 floor of a coarse cubic map's coordinates (px): its measured error at 1080p on
 /// `prism_tilt` ("map max error px" in `bench warp`), where the f64 estimate is 3e-6 px.
 const MAP_F32_FLOOR_PX: f64 = 5.3e-4;
@@ -288,6 +315,9 @@ enum Cost {
     /// The overscanned pinhole render, then a warp spending `coordinate_ns` per output pixel
     /// on its coordinates and samples.
     Warp { coordinate_ns: f64 },
+    /// Six pinhole faces of `side` pixels, each drawing every triangle, then the sphere warp
+    /// with `fetches` per output pixel.
+    Cube { side: u32, fetches: f64 },
 }
 
 /// Estimated frame time (ms) of `pixels` output pixels and `triangles` triangles.
@@ -298,6 +328,11 @@ fn estimate_ms(pixels: f64, triangles: f64, cost: Cost) -> f64 {
             RENDER_NS_PER_PIXEL * pixels
                 + RENDER_NS_PER_TRIANGLE * triangles
                 + DISCARD_NS_PER_VERTEX * vertices
+        }
+        Cost::Cube { side, fetches } => {
+            6.0 * (RENDER_NS_PER_PIXEL * side as f64 * side as f64
+                + RENDER_NS_PER_TRIANGLE * triangles)
+                + SPHERE_WARP_NS * fetches * pixels
         }
         Cost::Warp { coordinate_ns } => {
             RENDER_NS_PER_PIXEL * OVERSCAN_AREA * pixels
@@ -652,25 +687,38 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             };
             // A lens no overscanned pinhole source holds (180° and more, or past the image
             // limit): the planned warp would miss pixels, so it is not a candidate; the vertex
-            // path runs the lens's own model per vertex (`render --path cube` is the
-            // colour-only alternative outside the planner).
+            // path runs the lens's own model per vertex, the cube map samples six pinhole
+            // faces along each pixel's ray.
             let no_pinhole_warp = crate::render::pinhole_source_refusal(
                 &camera,
                 1.0,
                 crate::model::MAX_IMAGE_SIDE.min(16384),
             );
-            if let Some(why) = &no_pinhole_warp {
-                if chromatic.is_some() {
-                    return Err(Error::input(format!(
-                        "{src}: [effects] chromatic_aberration: {why}, and the planner's chromatic warp needs a pinhole source: not planned (drop chromatic_aberration, or use a camera whose frame a pinhole holds)"
-                    )));
-                }
-            }
             let warp = if no_pinhole_warp.is_some() {
                 None
             } else {
                 warp
             };
+            // The cube map carries colour alone: a face's depth is not the lens camera's, and
+            // IDs are never filtered across faces. Faces of one face pixel per output pixel at
+            // the centre (density 1, as the warp's source).
+            let cube = (o.color && !data_needs_vertex && !o.depth && CUBE_RAY_ERROR_PX <= budget)
+                .then(|| {
+                    let texel = if o.exr { 16 } else { 4 };
+                    let wanted = crate::model::overscan::cube_face_side(&camera, 1.0);
+                    let side = crate::render::cube_side(wanted, texel, PLANNED_CUBE_MAX_SIDE);
+                    (
+                        side,
+                        estimate_ms(pixels, triangles, Cost::Cube { side, fetches }),
+                    )
+                });
+            if let Some(why) = &no_pinhole_warp {
+                if chromatic.is_some() && cube.is_none() {
+                    return Err(Error::input(format!(
+                        "{src}: [effects] chromatic_aberration: {why}, and a chromatic warp needs a pinhole source, or a cube map, which carries colour alone (no IDs, flow or depth): not planned (drop chromatic_aberration or the data outputs, or use a camera whose frame a pinhole holds)"
+                    )));
+                }
+            }
             let describe_option = |c: &Option<WarpChoice>, what: &str| match c {
                 Some(c) => format!(
                     "{what} {:.1e} px, est. {:.1} ms per frame",
@@ -698,6 +746,20 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 estimate_ms(pixels, t as f64, Cost::Vertex { vertices: v as f64 })
             });
             let warp_ms = warp.map(|c| c.ms);
+            let cube_ms = cube.map(|(_, ms)| ms);
+            // Whether `a` is cheaper than `b` (a missing `b` loses to any `a`).
+            let cheaper = |a: Option<f64>, b: Option<f64>| match (a, b) {
+                (Some(a), Some(b)) => a < b,
+                (a, _) => a.is_some(),
+            };
+            // Alg. 1 cannot give each channel its own lens: with chromatic aberration only the
+            // warps compete.
+            let pick_cube =
+                cheaper(cube_ms, warp_ms) && (chromatic.is_some() || cheaper(cube_ms, vertex_ms));
+            let ms_or = |ms: Option<f64>, none: &str| {
+                ms.map(|m| format!("{m:.1} ms"))
+                    .unwrap_or_else(|| none.into())
+            };
             let describe_tess = |l: Option<f64>, err: f64, tris: usize| {
                 match l {
                 None => format!("the mesh as it is: its straight edges stay within {err:.1e} px of the true curves ({tris} triangles)"),
@@ -711,7 +773,35 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     format!("inverse {}: the cheapest method whose error on this camera, {:.1e} px, meets the budget ({options_note}); overscanned source so every valid pixel has one", c.method, c.error_px)
                 }
             };
-            let (route, expected, estimated) = if chromatic.is_some()
+            let (route, expected, estimated) = if let (true, Some((side, ms))) = (pick_cube, cube) {
+                let why = match &no_pinhole_warp {
+                    Some(why) => format!("no pinhole warp: {why}"),
+                    None => format!("cheaper than the pinhole warp ({})", ms_or(warp_ms, "none")),
+                };
+                steps.push(step(
+                    Stage::CubeFaces,
+                    format!("{why}: six 90° pinhole faces of {side}×{side} px (one face pixel per output pixel at the centre), rendered into a cube map on the GPU"),
+                ));
+                steps.push(step(
+                    Stage::SphereWarp {
+                        chromatic: chromatic.is_some(),
+                    },
+                    format!(
+                        "each output pixel samples the cube along its ray, bilinear across faces: {CUBE_RAY_ERROR_PX:.1e} px; est. {ms:.1} ms per frame (Alg. 1: {}); {}; {terms_note}",
+                        match vertex_ms {
+                            Some(v) if chromatic.is_none() => format!("est. {v:.1} ms"),
+                            _ if chromatic.is_some() => "cannot give each channel its own lens".into(),
+                            _ => "no tessellation meets the budget".into(),
+                        },
+                        if chromatic.is_some() {
+                            "chromatic aberration asked: each channel through its own radial scale"
+                        } else {
+                            "no chromatic aberration: the single-fetch variant"
+                        },
+                    ),
+                ));
+                (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX, ms)
+            } else if chromatic.is_some()
                 || (!data_needs_vertex
                     && warp.is_some()
                     && (vertex.is_none() || warp_ms < vertex_ms))
@@ -785,7 +875,19 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                         }
                     )
                 } else if let Some(why) = &no_pinhole_warp {
-                    format!("no pinhole warp: {why}")
+                    format!(
+                        "no pinhole warp: {why}; {}",
+                        match cube_ms {
+                            Some(c) => format!(
+                                "estimated {:.1} ms against {c:.1} ms for a cube map",
+                                vertex_ms.unwrap_or(f64::NAN)
+                            ),
+                            None if CUBE_RAY_ERROR_PX > budget => format!(
+                                "a cube map's rays ({CUBE_RAY_ERROR_PX:.1e} px) miss the budget"
+                            ),
+                            None => "a cube map carries colour alone".into(),
+                        }
+                    )
                 } else {
                     format!(
                         "estimated {:.1} ms against {} for pinhole + warp",
@@ -915,18 +1017,27 @@ pub fn execute(
                 depth: false,
                 ..o
             };
-            if let Route::WarpAndVertex {
-                method,
-                chromatic,
-                map,
-                ..
-            } = plan.route
-            {
-                p.route = Route::Warp {
+            match plan.route {
+                Route::WarpAndVertex {
                     method,
                     chromatic,
                     map,
-                };
+                    ..
+                } => {
+                    p.route = Route::Warp {
+                        method,
+                        chromatic,
+                        map,
+                    };
+                }
+                // Faces as fine as the s× lens camera's pixels.
+                Route::Cube { side, chromatic } => {
+                    p.route = Route::Cube {
+                        side: side.saturating_mul(s),
+                        chromatic,
+                    };
+                }
+                _ => {}
             }
             Some(PlanRecorder::build(gpu, &p, &mesh, texture)?)
         }

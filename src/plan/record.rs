@@ -4,7 +4,7 @@
 //!
 //! What it records per route: a pinhole render or Alg. 1 (every output), the warp path's
 //! pinhole render + warp (colour, and depth by a second, nearest warp), both for warp + Alg. 1,
-//! or the lens model's frame.
+//! a cube map's six faces + the sphere warp, or the lens model's frame.
 
 use ash::vk;
 use glam::DVec2;
@@ -14,15 +14,17 @@ use crate::gpu::{Error, Gpu, QueryPool, Result};
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, OpenCvDistortion};
+use crate::pass::cube_stage::CubeStage;
 use crate::pass::geometry::Rendered;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
     DEFAULT_DELTA,
 };
 use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
+use crate::pass::sphere_warp::SphereWarpOptions;
 use crate::pass::warp::Coordinates;
 use crate::render::WarpStage;
-use crate::render::{geometry_kind, PassKind, RecordedPipeline};
+use crate::render::{PassKind, RecordedPipeline};
 use crate::scene::{Mesh, Pose, Scene};
 
 /// A bug: a plan the planner cannot have made.
@@ -58,6 +60,8 @@ pub struct PlanRecorder {
     geometry: Option<(GeometryPass, GeometryTargets)>,
     /// The warp path's colour.
     warp: Option<WarpStage>,
+    /// The cube path's colour.
+    cube: Option<CubeStage>,
     lens: Option<LensRenderer>,
     mesh: MeshBuffers,
     poses: Vec<Pose>,
@@ -146,6 +150,7 @@ impl PlanRecorder {
         let mut r = PlanRecorder {
             geometry: None,
             warp: None,
+            cube: None,
             lens: None,
             mesh: MeshBuffers::new(gpu, mesh, texture)?,
             poses: plan.poses.clone(),
@@ -228,6 +233,38 @@ impl PlanRecorder {
                         )?);
                         r.names.push("Alg. 1 (vertex + discard), data outputs");
                     }
+                    Route::Cube { side, chromatic } => {
+                        if o.ids || o.flow || o.depth {
+                            return Err(internal(
+                                "the planner routes only colour through a cube map",
+                            ));
+                        }
+                        let f = if format == ColorFormat::Rgba8 {
+                            ColorFormat::Rgba8
+                        } else {
+                            ColorFormat::Rgba32F
+                        };
+                        // Within this device's limits and the cube budget.
+                        let texel = if f == ColorFormat::Rgba8 { 4 } else { 16 };
+                        let side = crate::render::cube_side(
+                            *side,
+                            texel,
+                            gpu.max_image_side().min(gpu.max_cube_side()),
+                        );
+                        let options = SphereWarpOptions {
+                            chromatic: *chromatic,
+                            fill: plan.background,
+                            write_mask: false,
+                        };
+                        let stage = CubeStage::new(gpu, camera, side, f, &options)?;
+                        r.pipelines.extend([
+                            RecordedPipeline::geometry(&stage.pass),
+                            RecordedPipeline::compute(PassKind::SphereWarp, stage.warp.pipeline()),
+                        ]);
+                        r.cube = Some(stage);
+                        r.names
+                            .extend(["cube faces (6 pinhole renders)", "sphere warp"]);
+                    }
                     Route::LensModel { .. } => {
                         return Err(internal("the lens route is handled above"))
                     }
@@ -235,34 +272,21 @@ impl PlanRecorder {
             }
         }
         if let Some((pass, _)) = &r.geometry {
-            r.pipelines.push(RecordedPipeline {
-                kind: geometry_kind(pass),
-                constants: pass.pipeline().constants.clone(),
-            });
+            r.pipelines.push(RecordedPipeline::geometry(pass));
         }
         Ok(r)
     }
 
     fn set_warp(&mut self, (stage, source, geometry): (WarpStage, Camera, WarpGeometry)) {
-        self.pipelines.push(RecordedPipeline {
-            kind: geometry_kind(&stage.pass),
-            constants: stage.pass.pipeline().constants.clone(),
-        });
-        self.pipelines.push(RecordedPipeline {
-            kind: PassKind::Warp,
-            constants: vec![(
-                vk::ShaderStageFlags::COMPUTE,
-                stage.warp.pipeline().constants.clone(),
-            )],
-        });
+        self.pipelines.extend([
+            RecordedPipeline::geometry(&stage.pass),
+            RecordedPipeline::compute(PassKind::Warp, stage.warp.pipeline()),
+        ]);
         if let Some(d) = &stage.depth {
-            self.pipelines.push(RecordedPipeline {
-                kind: PassKind::DepthWarp,
-                constants: vec![(
-                    vk::ShaderStageFlags::COMPUTE,
-                    d.warp.pipeline().constants.clone(),
-                )],
-            });
+            self.pipelines.push(RecordedPipeline::compute(
+                PassKind::DepthWarp,
+                d.warp.pipeline(),
+            ));
         }
         self.warp = Some(stage);
         self.warp_source = Some((source, geometry));
@@ -284,6 +308,11 @@ impl PlanRecorder {
         if let Some((pass, _)) = &mut self.geometry {
             // SAFETY: no submission using it is pending (`submit` waits on its fence).
             unsafe { pass.set_camera(camera) }?;
+        }
+        // The faces stay: only the rays the lens casts into them move.
+        if let Some(c) = &mut self.cube {
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { c.set_camera(camera) }?;
         }
         if let (Some(st), Some((source, built))) = (&mut self.warp, &self.warp_source) {
             let mut k = source.intrinsics;
@@ -337,6 +366,9 @@ impl PlanRecorder {
             st.pass.bind_mesh(&self.mesh);
             st.pass.set_frame(&pose, &pose)?;
         }
+        if let Some(c) = &self.cube {
+            c.prepare(&self.mesh, &pose)?;
+        }
         if let Some(l) = &mut self.lens {
             l.prepare(&self.mesh, &pose)?;
         }
@@ -357,6 +389,9 @@ impl PlanRecorder {
             self.mesh.record_upload(cmd);
             if let Some(st) = &self.warp {
                 st.record_prepare(cmd);
+            }
+            if let Some(c) = &self.cube {
+                c.record_prepare(cmd);
             }
         }
     }
@@ -398,6 +433,12 @@ impl PlanRecorder {
                 st.record_warps(cmd);
                 stamp();
             }
+            if let Some(c) = &self.cube {
+                c.record_faces(cmd, &self.mesh);
+                stamp();
+                c.record_warp(cmd);
+                stamp();
+            }
             if let Some((pass, targets)) = &self.geometry {
                 pass.record(cmd, targets, &self.mesh);
                 stamp();
@@ -417,6 +458,8 @@ impl PlanRecorder {
     pub fn images(&self) -> (Option<&crate::gpu::Image>, Option<&GeometryTargets>) {
         let colour = if let Some(st) = &self.warp {
             Some(&st.output)
+        } else if let Some(c) = &self.cube {
+            Some(&c.output)
         } else if let Some(l) = &self.lens {
             Some(&l.film().image)
         } else {
@@ -437,6 +480,9 @@ impl PlanRecorder {
         unsafe {
             if let Some(l) = &self.lens {
                 l.film().record_download(cmd);
+            }
+            if let Some(c) = &self.cube {
+                c.record_download(cmd);
             }
             if let Some(st) = &self.warp {
                 if self.outputs.color {
@@ -495,6 +541,11 @@ impl PlanRecorder {
                 pixels,
                 bit_depth,
             });
+        }
+        if let Some(c) = &self.cube {
+            let colour = c.read()?;
+            (out.width, out.height) = (colour.width, colour.height);
+            out.color = Some(colour);
         }
         if let Some(st) = &self.warp {
             let e = st.output.extent;

@@ -95,8 +95,10 @@ pub(crate) fn average(images: &[Raster]) -> Raster {
         _ => Pixels::Rgba32F(sums),
     };
     Raster {
+        width: first.width,
+        height: first.height,
         pixels,
-        ..first.clone()
+        bit_depth: first.bit_depth,
     }
 }
 
@@ -113,9 +115,16 @@ pub(crate) fn antialiased(
     for offset in jitter_offsets(passes) {
         let shift = offset / s as f64;
         let big = scaled_camera(&shifted(camera, shift)?, s)?;
-        images.push(downsample(&pass(big, shift)?, s));
+        let image = pass(big, shift)?;
+        images.push(if s == 1 { image } else { downsample(&image, s) });
     }
-    Ok(average(&images))
+    // One sample per pixel: the image is its own mean (no copy, no rounding trip).
+    match images.len() {
+        1 => images
+            .pop()
+            .ok_or_else(|| Error::internal("one image expected")),
+        _ => Ok(average(&images)),
+    }
 }
 
 /// Box-filters an image by `s` per axis (its size must be a multiple of `s`).

@@ -121,6 +121,7 @@ pub struct SceneRenderer<'a> {
     ctx: &'a Context,
     passes: Vec<(GeometryPass, GeometryTargets)>,
     warp_stages: Vec<WarpStage>,
+    cube_stages: Vec<crate::pass::cube_stage::CubeStage>,
 }
 
 /// What a pipeline does, as recorded.
@@ -134,6 +135,8 @@ pub enum PassKind {
     Warp,
     /// The nearest warp that carries depth along the colour's.
     DepthWarp,
+    /// The warp from a cube map of six pinhole faces.
+    SphereWarp,
     /// Heidrich et al.'s image-based lens model: cell renders accumulated on the film.
     LensModel,
 }
@@ -146,6 +149,7 @@ impl PassKind {
             PassKind::VertexRender => "Alg. 1 (vertex + discard)",
             PassKind::Warp => "warp",
             PassKind::DepthWarp => "depth warp",
+            PassKind::SphereWarp => "sphere warp",
             PassKind::LensModel => "image-based lens model",
         }
     }
@@ -160,12 +164,31 @@ pub struct RecordedPipeline {
     pub constants: Vec<(vk::ShaderStageFlags, crate::gpu::SpecConstants)>,
 }
 
+impl RecordedPipeline {
+    /// A geometry pass's pipeline (pinhole or Alg. 1, by its projection), every stage.
+    pub fn geometry(pass: &GeometryPass) -> Self {
+        RecordedPipeline {
+            kind: geometry_kind(pass),
+            constants: pass.pipeline().constants.clone(),
+        }
+    }
+
+    /// A compute pipeline doing `kind`.
+    pub fn compute(kind: PassKind, pipeline: &crate::gpu::ComputePipeline) -> Self {
+        RecordedPipeline {
+            kind,
+            constants: vec![(vk::ShaderStageFlags::COMPUTE, pipeline.constants.clone())],
+        }
+    }
+}
+
 impl<'a> SceneRenderer<'a> {
     pub fn new(ctx: &'a Context) -> Self {
         SceneRenderer {
             ctx,
             passes: Vec::new(),
             warp_stages: Vec::new(),
+            cube_stages: Vec::new(),
         }
     }
 
@@ -402,6 +425,13 @@ fn render_with(
     }
 }
 
+/// The cube faces' side for `wanted` pixels: at most `max_side` (the device's image and cube
+/// limits) and within [`MAX_CUBE_BYTES`] for six faces of `texel_bytes` per pixel.
+pub fn cube_side(wanted: u32, texel_bytes: u64, max_side: u32) -> u32 {
+    let budget_side = ((MAX_CUBE_BYTES / (6 * texel_bytes)) as f64).sqrt() as u32;
+    wanted.min(max_side).min(budget_side)
+}
+
 /// Why the warp path cannot use an overscanned pinhole source for `camera`, if it cannot.
 pub fn pinhole_source_refusal(camera: &Camera, density: f64, max_side: u32) -> Option<String> {
     if crate::model::overscan::beyond_a_pinhole(camera) {
@@ -420,14 +450,15 @@ pub fn pinhole_source_refusal(camera: &Camera, density: f64, max_side: u32) -> O
             "the overscanned pinhole source would be {}×{} ({} MiB), beyond the {} MiB budget",
             ov.width,
             ov.height,
-            ov.width as u64 * ov.height as u64 * 16 >> 20,
+            (ov.width as u64 * ov.height as u64 * 16) >> 20,
             MAX_WARP_SOURCE_BYTES >> 20
         )),
         Ok(_) => None,
     }
 }
 
-/// The cube path: six face renders, then the sphere warp (per jittered pass, at s×).
+/// The cube path: six face renders into a cube map on the GPU, then the sphere warp (per
+/// jittered pass, at s×).
 fn render_cube_path(
     renderer: &mut SceneRenderer,
     scene: &Scene,
@@ -436,8 +467,8 @@ fn render_cube_path(
     s: u32,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Rendered> {
-    use crate::headless::sphere_warp::run_sphere_warp;
-    use crate::pass::sphere_warp::{CubeFace, SphereSource, SphereWarpOptions};
+    use crate::pass::cube_stage::CubeStage;
+    use crate::pass::sphere_warp::SphereWarpOptions;
     let o = request.outputs;
     if o.flow || o.ids || o.depth {
         return Err(Error::input(
@@ -458,12 +489,9 @@ fn render_cube_path(
         _ => ColorFormat::Rgba32F,
     };
     let texel = if format == ColorFormat::Rgba8 { 4 } else { 16 };
-    let budget_side = ((MAX_CUBE_BYTES / (6 * texel)) as f64).sqrt() as u32;
     let wanted = side.saturating_mul(s);
-    let big_side = wanted
-        .min(renderer.ctx.gpu().max_image_side())
-        .min(renderer.ctx.gpu().max_cube_side())
-        .min(budget_side);
+    let gpu = renderer.ctx.gpu();
+    let big_side = cube_side(wanted, texel, gpu.max_image_side().min(gpu.max_cube_side()));
     if big_side < wanted {
         progress(&format!(
             "cube faces clamped to {big_side}×{big_side} (the device limit or the {} MiB cube budget): {:.2} face pixels per output pixel at the centre instead of {:.2}",
@@ -477,38 +505,57 @@ fn render_cube_path(
         request.jitter.max(1)
     ));
     let buffers = renderer.upload(&scene.mesh, scene.texture.as_ref())?;
-    let face_camera = CubeFace::camera(big_side)?;
-    let mut faces = Vec::with_capacity(6);
-    for face in CubeFace::ALL {
-        let r = face.rotation();
-        let pose = Pose {
-            rotation: r * request.pose.rotation,
-            translation: r * request.pose.translation,
-        };
-        let mut desc = GeometryDesc::new(
-            face_camera.clone(),
-            Projection::Pinhole,
-            Outputs::color_only(Some(format)),
-        );
-        desc.background = request.background;
-        let rendered = renderer.draw(desc, &buffers, &pose, &pose)?;
-        faces.push(
-            rendered
-                .color
-                .ok_or_else(|| Error::internal("a cube face rendered no colour"))?,
-        );
-    }
-    let faces: [Raster; 6] = faces
-        .try_into()
-        .map_err(|_| Error::internal("six cube faces expected"))?;
     let options = SphereWarpOptions {
         chromatic: request.chromatic,
         fill: request.background,
         write_mask: false,
     };
+    // Built for the s× camera (and kept across renders, like the geometry passes); the
+    // jittered passes move the lens (its rays into the cube), never the faces, which are
+    // rendered once on the GPU and stay there.
     let ctx = renderer.ctx;
+    let big = scaled_camera(cam, s)?;
+    let index = match renderer
+        .cube_stages
+        .iter()
+        .position(|st| st.fits(&big, big_side, format, &options))
+    {
+        Some(i) => i,
+        None => {
+            let st = CubeStage::new(ctx.gpu(), &big, big_side, format, &options)?;
+            renderer.cube_stages.push(st);
+            renderer.cube_stages.len() - 1
+        }
+    };
+    let stage = &mut renderer.cube_stages[index];
+    // SAFETY: no submission using the stage is pending (`submit` waits on its fence).
+    unsafe { stage.prepare(&buffers, &request.pose) }?;
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // the context's graphics and compute queue; the mesh upload precedes the faces that
+        // draw it, `record_prepare` the faces and warp; everything outlives the submission,
+        // which `submit` waits for.
+        unsafe {
+            buffers.record_upload(cmd);
+            stage.record_prepare(cmd);
+            stage.record_faces(cmd, &buffers);
+        }
+        Ok(())
+    })?;
     out.color = Some(antialiased(cam, s, request.jitter, &mut |big, _| {
-        Ok(run_sphere_warp(ctx, &big, SphereSource::Cube(&faces), &options)?.0)
+        // SAFETY: the last submission using the stage has completed (`submit` waits).
+        unsafe { stage.set_camera(&big) }?;
+        ctx.submit(|cmd| {
+            // SAFETY: as above; the faces were recorded into the cube by the first submission,
+            // which left it in SHADER_READ_ONLY_OPTIMAL for every warp after it.
+            unsafe {
+                stage.record_warp(cmd);
+                stage.record_download(cmd);
+                crate::gpu::host_read_barrier(ctx.gpu(), cmd);
+            }
+            Ok(())
+        })?;
+        stage.read()
     })?);
     Ok(out)
 }

@@ -1,0 +1,334 @@
+//! The cube-map warp on the GPU as one record-only stage: six pinhole renders of a cube map's
+//! 90° faces, each copied into its layer of a cube image, then the sphere warp
+//! (`glsl/sphere_warp.comp`) sampling it by the ray each output pixel sees. Nothing makes a
+//! round trip through the host, so an engine records it as it records the warp path, and the
+//! planner can weigh it against Alg. 1 and the pinhole warp for a lens no pinhole source
+//! holds (a fisheye of 180° and more, a wide lens past the device's image limit).
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use crate::gpu::{image_barrier, Buffer, Image};
+use crate::imaging::Raster;
+use crate::model::Camera;
+use crate::pass::geometry::{
+    ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
+    Projection,
+};
+use crate::pass::sphere_warp::{CubeFace, SphereWarpOptions, SphereWarpPass};
+use crate::scene::Pose;
+use crate::{Error, Result};
+
+/// Six face renders into a cube image, then the sphere warp into an output of the lens
+/// camera's size: RGBA8 for 8-bit faces, RGBA32F for float ones.
+pub struct CubeStage {
+    gpu: crate::gpu::Gpu,
+    /// The pinhole render of a face (90° across), one slot per face.
+    pub pass: GeometryPass,
+    slots: GeometrySlots,
+    /// The face the pass renders into before it is copied to its layer.
+    pub targets: GeometryTargets,
+    /// The six faces (`SHADER_READ_ONLY_OPTIMAL` after a frame).
+    pub cube: Image,
+    pub warp: SphereWarpPass,
+    /// The faces' format (RGBA8 or RGBA32F), the lens camera's size, `GENERAL` after a frame.
+    pub output: Image,
+    mask: Image,
+    download: Buffer,
+    side: u32,
+    face_camera: Camera,
+    format: ColorFormat,
+    options: SphereWarpOptions,
+    /// The lens camera's size and terms (a jittered pass keeps both).
+    lens: ((u32, u32), crate::model::Terms),
+}
+
+impl CubeStage {
+    /// Faces of `side` pixels in `format` (RGBA8 or RGBA32F: the cube is sampled with linear
+    /// filtering), cleared to `background`, warped through `camera`.
+    pub fn new(
+        gpu: &crate::gpu::Gpu,
+        camera: &Camera,
+        side: u32,
+        format: ColorFormat,
+        options: &SphereWarpOptions,
+    ) -> Result<Self> {
+        let max = gpu.max_image_side().min(gpu.max_cube_side());
+        if side < 2 || side > max {
+            return Err(Error::input(format!(
+                "cube faces of {side} px: the device holds 2 to {max}"
+            )));
+        }
+        let vk_format = match format {
+            ColorFormat::Rgba8 => vk::Format::R8G8B8A8_UNORM,
+            ColorFormat::Rgba32F if gpu.supports_float_linear_filter() => {
+                vk::Format::R32G32B32A32_SFLOAT
+            }
+            ColorFormat::Rgba32F => {
+                return Err(Error::Unsupported(format!(
+                    "{} cannot filter RGBA32F images linearly, which float cube faces need: render 8-bit colour",
+                    gpu.device_name()
+                )))
+            }
+            ColorFormat::Rgba16F => {
+                return Err(Error::input("cube faces are RGBA8 or RGBA32F"));
+            }
+        };
+        let face_camera = CubeFace::camera(side)?;
+        let mut desc = GeometryDesc::new(
+            face_camera.clone(),
+            Projection::Pinhole,
+            Outputs::color_only(Some(format)),
+        );
+        desc.background = options.fill;
+        let pass = GeometryPass::new(gpu, desc)?;
+        let slots = pass.slots(6)?;
+        let targets = GeometryTargets::new(gpu, &pass)?;
+        let cube = Image::new_cube(
+            gpu,
+            "cube_stage.cube",
+            vk_format,
+            side,
+            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        )?;
+        let (ow, oh) = (camera.width, camera.height);
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        let eight_bit = format == ColorFormat::Rgba8;
+        let (out_format, texel) = if eight_bit {
+            (vk::Format::R8G8B8A8_UNORM, 4)
+        } else {
+            (vk::Format::R32G32B32A32_SFLOAT, 16)
+        };
+        let output = Image::new_2d(gpu, "cube_stage.output", out_format, ow, oh, usage)?;
+        let mask = Image::new_2d(gpu, "cube_stage.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
+        let download = Buffer::new(
+            gpu,
+            "cube_stage.download",
+            ow as u64 * oh as u64 * texel,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let options = SphereWarpOptions {
+            write_mask: false,
+            ..options.clone()
+        };
+        let mut warp = SphereWarpPass::with_target(gpu, camera, false, &options, eight_bit)?;
+        let lens = ((camera.width, camera.height), camera.terms());
+        // SAFETY: the pass is new, so no recorded work uses it; the views are a cube view and
+        // two 2D storage views of this device, in the layouts `record` leaves them in.
+        unsafe { warp.bind(cube.view, output.view, mask.view) };
+        Ok(CubeStage {
+            gpu: gpu.clone(),
+            pass,
+            slots,
+            targets,
+            cube,
+            warp,
+            output,
+            mask,
+            download,
+            side,
+            face_camera,
+            format,
+            options,
+            lens,
+        })
+    }
+
+    /// Whether this stage renders what [`Self::new`] with these arguments would, once moved to
+    /// `camera` with [`Self::set_camera`].
+    pub fn fits(
+        &self,
+        camera: &Camera,
+        side: u32,
+        format: ColorFormat,
+        options: &SphereWarpOptions,
+    ) -> bool {
+        self.side == side
+            && self.format == format
+            && self.options.chromatic == options.chromatic
+            && self.options.fill == options.fill
+            && self.lens == ((camera.width, camera.height), camera.terms())
+    }
+
+    /// The faces' side in pixels.
+    pub fn side(&self) -> u32 {
+        self.side
+    }
+
+    /// Points the faces at `mesh` and puts them at `pose` (the lens camera's): face `f`
+    /// looks from the same centre, turned by [`CubeFace::rotation`].
+    ///
+    /// # Safety
+    /// Host writes to the face slots' uniforms and descriptor sets: no recorded work that uses
+    /// this stage may be pending on the GPU.
+    pub unsafe fn prepare(&self, mesh: &MeshBuffers, pose: &Pose) -> Result<()> {
+        // SAFETY: the caller upholds this function's contract (nothing pending uses the slots).
+        unsafe {
+            self.pass.bind_slots_mesh(&self.slots, mesh);
+            for face in CubeFace::ALL {
+                let r = face.rotation();
+                let face_pose = Pose {
+                    rotation: r * pose.rotation,
+                    translation: r * pose.translation,
+                };
+                self.pass.set_slot(
+                    &self.slots,
+                    face.layer() as usize,
+                    &self.face_camera,
+                    &face_pose,
+                    &face_pose,
+                )?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Moves the lens to `camera` (same size and terms): a jittered pass of anti-aliasing.
+    ///
+    /// # Safety
+    /// A host write to the warp's camera uniform: no recorded work that uses this stage may be
+    /// pending on the GPU.
+    pub unsafe fn set_camera(&mut self, camera: &Camera) -> Result<()> {
+        // SAFETY: the caller upholds this function's contract.
+        unsafe { self.warp.set_camera(camera) }
+    }
+
+    /// Records the one-off work: output and mask to `GENERAL`.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass; not while earlier work is pending.
+    pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds this function's contract: nothing using the images is
+        // pending, so UNDEFINED is a valid old layout for the stage's own output and mask.
+        unsafe {
+            crate::gpu::record_discard_for_compute_write(&self.gpu, cmd, [&self.output, &self.mask])
+        };
+    }
+
+    /// Records one frame: [`Self::record_faces`], then [`Self::record_warp`].
+    ///
+    /// # Safety
+    /// As [`Self::record_faces`].
+    pub unsafe fn record(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+        // SAFETY: the caller upholds `record_faces`'s contract, which `record_warp` needs too.
+        unsafe {
+            self.record_faces(cmd, mesh);
+            self.record_warp(cmd);
+        }
+    }
+
+    /// Records each face rendered (`prepare`d) and copied into its layer; leaves the cube in
+    /// `SHADER_READ_ONLY_OPTIMAL`, its writes visible to compute.
+    ///
+    /// # Safety
+    /// After [`Self::record_prepare`] and [`Self::prepare`]; `cmd` recording outside a render
+    /// pass on a queue with graphics and compute; `mesh` uploaded and alive until the work
+    /// completes.
+    pub unsafe fn record_faces(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+        use vk::{AccessFlags as A, ImageLayout as L, PipelineStageFlags as S};
+        let d = self.gpu.device();
+        let Some(face_image) = self.targets.color() else {
+            // `new` made a colour output: unreachable.
+            return;
+        };
+        let whole = |layer: u32| vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: layer,
+            layer_count: 1,
+        };
+        let extent = vk::Extent3D {
+            width: self.side,
+            height: self.side,
+            depth: 1,
+        };
+        // SAFETY: the caller upholds this function's contract. The cube is written whole each
+        // frame, so it starts from UNDEFINED (after the last frame's warp read it); the face
+        // target is left in TRANSFER_SRC_OPTIMAL by the geometry pass (its desc's default final
+        // layout), whose render pass orders its clear after the copy's read; copies are
+        // within both images (same side, one layer each).
+        unsafe {
+            image_barrier(
+                &self.gpu,
+                cmd,
+                self.cube.raw,
+                (L::UNDEFINED, L::TRANSFER_DST_OPTIMAL),
+                (S::COMPUTE_SHADER, A::empty()),
+                (S::TRANSFER, A::TRANSFER_WRITE),
+            );
+            for face in CubeFace::ALL {
+                let layer = face.layer();
+                self.pass
+                    .record_slot(cmd, &self.targets, mesh, &self.slots, layer as usize);
+                d.cmd_copy_image(
+                    cmd,
+                    face_image.raw,
+                    L::TRANSFER_SRC_OPTIMAL,
+                    self.cube.raw,
+                    L::TRANSFER_DST_OPTIMAL,
+                    &[vk::ImageCopy {
+                        src_subresource: whole(0),
+                        src_offset: vk::Offset3D::default(),
+                        dst_subresource: whole(layer),
+                        dst_offset: vk::Offset3D::default(),
+                        extent,
+                    }],
+                );
+            }
+            image_barrier(
+                &self.gpu,
+                cmd,
+                self.cube.raw,
+                (L::TRANSFER_DST_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
+                (S::TRANSFER, A::TRANSFER_WRITE),
+                (S::COMPUTE_SHADER, A::SHADER_READ),
+            );
+        }
+    }
+
+    /// Records the sphere warp of the faces [`Self::record_faces`] rendered. Leaves the output
+    /// in `GENERAL`, its writes visible to transfers and compute.
+    ///
+    /// # Safety
+    /// As [`Self::record_faces`], recorded after it.
+    pub unsafe fn record_warp(&self, cmd: vk::CommandBuffer) {
+        use vk::{AccessFlags as A, PipelineStageFlags as S};
+        // SAFETY: the caller upholds this function's contract: the cube is in
+        // SHADER_READ_ONLY_OPTIMAL with its writes visible to compute, and `record_prepare` put
+        // the output and mask, which the warp was bound to with the cube in `new`, in GENERAL.
+        unsafe {
+            self.warp.record(cmd);
+            crate::gpu::memory_barrier(
+                &self.gpu,
+                cmd,
+                (S::COMPUTE_SHADER, A::SHADER_WRITE),
+                (
+                    S::TRANSFER | S::COMPUTE_SHADER,
+                    A::TRANSFER_READ | A::SHADER_READ,
+                ),
+            );
+        }
+    }
+
+    /// Records the readback of the output (after [`Self::record`]).
+    ///
+    /// # Safety
+    /// As [`Self::record`].
+    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds this function's contract (after `record`): the output is
+        // in GENERAL with its writes visible to transfers, and `download` holds it whole.
+        unsafe {
+            crate::gpu::record_compute_readback(&self.gpu, cmd, &self.output, &self.download)
+        };
+    }
+
+    /// The warped image (after the submission completed), in the faces' format.
+    pub fn read(&self) -> Result<Raster> {
+        crate::pass::warp_stage::read_rgba(
+            &self.download,
+            self.output.extent,
+            self.format == ColorFormat::Rgba8,
+        )
+    }
+}

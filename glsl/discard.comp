@@ -14,6 +14,9 @@
 //            mesh (run before stage 0 empties it): its triangles get their indices back.
 //   STAGE 2, one invocation per vertex on the new dropped list: each triangle it belongs to
 //            becomes degenerate (its first index three times), which rasterizes to nothing.
+//            A kept vertex at or behind the image plane (a fisheye seeing past 90°) is on the
+//            list too, marked: of its triangles, only those spread more than 90° around the
+//            axis are dropped (alg1_spans_behind).
 //
 // The draw's index buffer is the mesh's own but for the triangles that touch a dropped
 // vertex, so a frame costs its dropped vertices' triangles, not a pass over every triangle;
@@ -43,7 +46,8 @@ layout(set = 0, binding = 2, std430) readonly buffer Vertices { float vertex_dat
 // whether both poses see the vertex (z).
 layout(set = 0, binding = 3, std430) writeonly buffer Positions { vec2 positions[]; };
 layout(set = 0, binding = 4, std430) writeonly buffer Motion { vec4 motion[]; };
-// The dropped vertices, and the indirect dispatch that visits them: `groups` is
+// The dropped vertices (and, marked with VKL_CHECK_BIT, kept vertices whose triangles are
+// tested for wrapping behind the lens), and the indirect dispatch that visits them: `groups` is
 // ceil(count / 64), `one_y` and `one_z` stay 1 (VkDispatchIndirectCommand). The host resets
 // the header between stages 1 and 0.
 layout(set = 0, binding = 5, std430) buffer Dropped {
@@ -61,16 +65,24 @@ layout(set = 0, binding = 9, std430) writeonly buffer Kept { uint kept[]; };
 
 layout(push_constant) uniform DiscardPush { uint count; } pc;
 
+#define VKL_CHECK_BIT 0x80000000u
+
+// Vertex v's world position, from the mesh's vertex buffer.
+vec4 vkl_world(uint v) {
+    uint k = VKL_VERTEX_FLOATS * v;
+    return vec4(vertex_data[k], vertex_data[k + 1u], vertex_data[k + 2u], 1.0);
+}
+
 #include "alg1.glsl"
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (STAGE == 0u) {
         if (i >= pc.count) return;
-        uint v = VKL_VERTEX_FLOATS * i;
-        vec4 world = vec4(vertex_data[v], vertex_data[v + 1u], vertex_data[v + 2u], 1.0);
+        vec4 world = vkl_world(i);
+        vec4 clip = frame.view_projection * world;
         vec2 distorted_ndc, pixel, ndc;
-        bool ok = alg1_ndc(frame.view_projection * world, distorted_ndc, pixel, ndc);
+        bool ok = alg1_ndc(clip, distorted_ndc, pixel, ndc);
         positions[i] = distorted_ndc;
         if (WRITE_FLOW) {
             vec2 previous_ndc, previous_pixel, previous_undistorted;
@@ -78,21 +90,39 @@ void main() {
                                         previous_pixel, previous_undistorted);
             motion[i] = vec4(pixel - previous_pixel, (ok && previous_ok) ? 1.0 : 0.0, 0.0);
         }
-        if (!vkl_vertex_kept(ok, ndc)) {
+        bool kept = vkl_vertex_kept(ok, ndc);
+        // clip.w is the camera-frame z (Sec. 3.1's projection).
+        if (!kept || !(clip.w > 0.0)) {
             uint slot = atomicAdd(dropped.count, 1u);
-            dropped.vertices[slot] = i;
+            dropped.vertices[slot] = kept ? (i | VKL_CHECK_BIT) : i;
             // The first of every 64 adds a workgroup to stage 2's dispatch.
             if (slot % 64u == 0u) atomicAdd(dropped.groups, 1u);
         }
     } else {
         if (i >= dropped.count) return;
-        uint v = dropped.vertices[i];
+        uint entry = dropped.vertices[i];
+        uint v = entry & ~VKL_CHECK_BIT;
+        bool check = (entry & VKL_CHECK_BIT) != 0u;
         uint end = incidence_start[v + 1u];
         for (uint k = incidence_start[v]; k < end; k++) {
             uint t = 3u * incidence[k];
             uint a = indices[t];
-            kept[t + 1u] = STAGE == 1u ? indices[t + 1u] : a;
-            kept[t + 2u] = STAGE == 1u ? indices[t + 2u] : a;
+            if (STAGE == 1u) {
+                kept[t + 1u] = indices[t + 1u];
+                kept[t + 2u] = indices[t + 2u];
+            } else {
+                bool drop = true;
+                if (check) {
+                    vec3 p = (frame.view * vkl_world(a)).xyz;
+                    vec3 q = (frame.view * vkl_world(indices[t + 1u])).xyz;
+                    vec3 r = (frame.view * vkl_world(indices[t + 2u])).xyz;
+                    drop = alg1_spans_behind(p, q, r);
+                }
+                if (drop) {
+                    kept[t + 1u] = a;
+                    kept[t + 2u] = a;
+                }
+            }
         }
     }
 }

@@ -6,6 +6,7 @@
 #extension GL_GOOGLE_include_directive : require
 
 #include "geometry_frame.glsl"
+#include "wraps_behind.glsl"
 
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 3) out;
@@ -16,6 +17,7 @@ layout(location = 2) flat in uint v_id[];
 layout(location = 3) in vec3 v_flow[];
 layout(location = 4) in float v_depth[];
 layout(location = 5) in vec3 v_undistorted[];
+layout(location = 6) in vec3 v_camera[];
 
 layout(location = 0) out vec4 g_color;
 layout(location = 1) out vec2 g_uv;
@@ -30,6 +32,9 @@ void main() {
         // Written so that NaN fails: !(a <= b) is true for NaN.
         if (!(u.z > 0.5) || !(abs(u.x) <= bound) || !(abs(u.y) <= bound)) return;
     }
+    // A fisheye that sees past 90° keeps vertices behind the image plane: a triangle there
+    // spread far around the axis goes (alg1_spans_behind).
+    if (alg1_spans_behind(v_camera[0], v_camera[1], v_camera[2])) return;
     for (int i = 0; i < 3; i++) {
         gl_Position = gl_in[i].gl_Position;
         g_color = v_color[i];

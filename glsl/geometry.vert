@@ -43,6 +43,7 @@ layout(location = 3) out vec3 v_flow;       // xy: pixel motion since the previo
 layout(location = 4) out float v_depth;     // camera-frame z (metres)
 #if !defined(VKL_PINHOLE) && !defined(VKL_PULLED)
 layout(location = 5) out vec3 v_undistorted; // xy: undistorted NDC; z: 1 if the model applies
+layout(location = 6) out vec3 v_camera;      // camera-frame position (the wrap-behind test)
 #endif
 #ifdef VKL_PULLED
 // Per vertex, from the discard pass: the distorted NDC, and the flow (xy) with whether both
@@ -86,6 +87,7 @@ void main() {
     v_flow = vec3(pixel - previous_pixel, (ok && previous_ok) ? 1.0 : 0.0);
 #ifndef VKL_PINHOLE
     v_undistorted = vec3(ndc, ok ? 1.0 : 0.0);
+    v_camera = (frame.view * world).xyz;
 #endif
 #endif
 }

@@ -5,6 +5,8 @@
 #ifndef VKL_ALG1_GLSL
 #define VKL_ALG1_GLSL
 
+#include "wraps_behind.glsl"
+
 // A fisheye sees behind the image plane: its vertices are projected from their camera-frame
 // position (X, Y, Z), read back from the clip position through Sec. 3.1's projection of the
 // camera's own intrinsics (x_c = sx X + ox Z, y_c = sy Y + oy Z, w_c = Z; no division, so
@@ -38,7 +40,10 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
         vec3 p = alg1_fisheye_point(clip);
         float r = length(p);
         vec2 d;
-        bool ok = r >= frame.viewport.w && vkl_fisheye_project(p, d);
+        // rational.w: the cosine of the angle past which a vertex is dropped where the domain
+        // reaches straight behind the lens (model::Camera::fisheye_vertex_limit), else -2.
+        bool ok = r >= frame.viewport.w && p.z >= r * vkl_cam.rational.w
+                  && vkl_fisheye_project(p, d);
         pixel = vkl_to_pixel(d);
         ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
         ndc = (pixel + 0.5) / size * 2.0 - 1.0;

@@ -353,6 +353,20 @@ impl Camera {
         self.fisheye.as_ref()
     }
 
+    /// The largest angle off the axis at which Alg. 1 keeps a vertex, for a fisheye whose
+    /// domain reaches the direction straight behind the lens (θ_max = π): there the whole
+    /// direction maps to the image circle's rim, a triangle near it spans an arc of the rim
+    /// however small it is (no tessellation converges), so vertices stop where the ring left
+    /// outside is one pixel wide. `None` for every other camera (the domain decides).
+    pub fn fisheye_vertex_limit(&self) -> Option<f64> {
+        let lens = self.fisheye.as_ref()?;
+        let f = self.intrinsics.fx.max(self.intrinsics.fy);
+        let (_, slope) = lens.theta_d(lens.theta_max());
+        let ring = 1.0 / (f * slope.max(f64::MIN_POSITIVE));
+        let limit = std::f64::consts::PI - ring.min(std::f64::consts::FRAC_PI_2);
+        (lens.theta_max() > limit).then_some(limit)
+    }
+
     /// Which term groups (and which model) the camera's shaders compile in.
     pub fn terms(&self) -> Terms {
         match &self.fisheye {

@@ -62,11 +62,18 @@ macro_rules! camera_params {
                 for (slot, [ideal, distorted]) in table.iter_mut().zip(domain.table()) {
                     *slot = [f(ideal), f(distorted), f(0.0), f(0.0)];
                 }
-                // The fisheye's k1..k4 fill `radial`; α, θ_max and θ_d(θ_max) `rational`.
+                // The fisheye's k1..k4 fill `radial`; α, θ_max, θ_d(θ_max) and the cosine of
+                // Alg. 1's vertex limit (`Camera::fisheye_vertex_limit`) `rational`.
                 let (radial, rational) = match camera.fisheye_lens() {
                     Some(l) => (
                         l.k.map(f),
-                        [f(l.alpha), f(l.theta_max()), f(l.theta_d_max()), f(0.0)],
+                        [
+                            f(l.alpha),
+                            f(l.theta_max()),
+                            f(l.theta_d_max()),
+                            // cos of Alg. 1's vertex limit; -2 where the domain decides.
+                            f(camera.fisheye_vertex_limit().map_or(-2.0, f64::cos)),
+                        ],
                     ),
                     None => (
                         [f(d.k1), f(d.k2), f(d.k3), f(0.0)],

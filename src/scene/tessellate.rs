@@ -10,7 +10,7 @@
 use crate::{Error, Result};
 use std::collections::HashMap;
 
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 
 use super::{Mesh, Pose, Vertex, MAX_TRIANGLES};
 use crate::model::{Camera, Intrinsics};
@@ -38,21 +38,37 @@ pub fn tessellate(mesh: &Mesh, pose: &Pose, camera: &Camera, max_edge_px: f64) -
     let mut out = mesh.clone();
     // Each round at least halves the longest edge; 40 rounds is far past any real need.
     for _ in 0..40 {
-        let pixels: Vec<Option<DVec2>> = out
+        // Camera-frame positions, and where Alg. 1 puts them.
+        let points: Vec<DVec3> = out
             .vertices
             .iter()
-            .map(|v| {
-                let p = pose.apply(v.position());
+            .map(|v| pose.apply(v.position()))
+            .collect();
+        let pixels: Vec<Option<DVec2>> = points
+            .iter()
+            .map(|&p| {
                 if camera.fisheye_lens().is_some() {
                     // A fisheye sees behind the image plane: edges are measured in its own
-                    // image, where Alg. 1 puts them.
-                    return camera.project(p);
+                    // image, where Alg. 1 puts them (and not past the vertex limit, where
+                    // Alg. 1 drops them).
+                    let kept = camera
+                        .fisheye_vertex_limit()
+                        .is_none_or(|limit| p.z >= p.length() * limit.cos());
+                    return camera.project(p).filter(|_| kept);
                 }
                 (p.z > MIN_DEPTH).then(|| intrinsics.to_pixel(DVec2::new(p.x / p.z, p.y / p.z)))
             })
             .collect();
+        // Two vertices behind the image plane (one is enough) more than 90° apart around the
+        // axis: every triangle with this edge is dropped by Alg. 1's discard
+        // (`alg1_spans_behind` in glsl/include/wraps_behind.glsl), and near the direction
+        // straight behind a fisheye, splitting it would never end.
+        let dropped = |a: u32, b: u32| {
+            let (p, q) = (points[a as usize], points[b as usize]);
+            (p.z <= 0.0 || q.z <= 0.0) && !(p.truncate().dot(q.truncate()) > 0.0)
+        };
         let long = |a: u32, b: u32| match (pixels[a as usize], pixels[b as usize]) {
-            (Some(p), Some(q)) => near_image(p, q) && p.distance(q) > max_edge_px,
+            (Some(p), Some(q)) => near_image(p, q) && p.distance(q) > max_edge_px && !dropped(a, b),
             _ => false,
         };
         let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();

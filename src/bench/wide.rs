@@ -146,18 +146,7 @@ fn cube_pass_ms(ctx: &Context, camera: &Camera, scene: &Scene, side: u32) -> Res
     };
     let stage = CubeStage::new(gpu, camera, side, ColorFormat::Rgba8, &options)?;
     let mesh = MeshBuffers::new(gpu, &scene.mesh, scene.texture.as_ref())?;
-    // SAFETY: the stage is new: nothing recorded with it is pending.
-    unsafe { stage.prepare(&mesh, &crate::scene::Pose::IDENTITY) }?;
-    ctx.submit(|cmd| {
-        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
-        // the context's graphics and compute queue; everything outlives the submission.
-        unsafe {
-            mesh.record_upload(cmd);
-            stage.record_prepare(cmd);
-            stage.record_faces(cmd, &mesh);
-        }
-        Ok(())
-    })?;
+    crate::render::render_cube_faces(ctx, &stage, &mesh, &crate::scene::Pose::IDENTITY)?;
     let gpu_ms = |(wall, gpu): (f64, Option<f64>)| gpu.unwrap_or(wall);
     // SAFETY (both): `time_batch` records only into buffers `ctx.submit` is recording, outside
     // any render pass, and waits for each; the mesh is uploaded and the stage prepared, and

@@ -251,6 +251,17 @@ const POSITION_BINDING: VertexBinding = (8, &[(4, vk::Format::R32G32_SFLOAT, 0)]
 /// Binding 2 with the compute discard and flow: the motion (`in_motion`).
 const MOTION_BINDING: VertexBinding = (16, &[(5, vk::Format::R32G32B32A32_SFLOAT, 0)]);
 
+/// The draw's vertex bindings: the mesh's vertices, then (`pulled`: the compute discard ran)
+/// its positions and, with `flow`, its motion. The pipeline is built with these and the draw
+/// binds one buffer for each.
+fn vertex_bindings(pulled: bool, flow: bool) -> &'static [VertexBinding<'static>] {
+    match (pulled, flow) {
+        (true, true) => &[MESH_BINDING, POSITION_BINDING, MOTION_BINDING],
+        (true, false) => &[MESH_BINDING, POSITION_BINDING],
+        _ => &[MESH_BINDING],
+    }
+}
+
 /// An RGBA8 texture for sampling, staged for upload ([`Texture::record_upload`]).
 pub struct Texture {
     gpu: Gpu,
@@ -589,18 +600,12 @@ impl GeometryPass {
             vk::DescriptorType::UNIFORM_BUFFER,
             vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         ];
-        // The mesh's vertices, then (pulled) the discard pass's positions and flow.
-        let vertex_bindings: &[VertexBinding] = match (pulled, flow) {
-            (true, true) => &[MESH_BINDING, POSITION_BINDING, MOTION_BINDING],
-            (true, false) => &[MESH_BINDING, POSITION_BINDING],
-            _ => &[MESH_BINDING],
-        };
         let pipeline = GraphicsPipeline::new(
             gpu,
             GraphicsDesc {
                 stages,
                 bindings: &bindings,
-                vertex: vertex_bindings,
+                vertex: vertex_bindings(pulled, flow),
                 render_pass: &render_pass,
                 depth_test: true,
                 push_size: 0,
@@ -962,19 +967,19 @@ impl GeometryPass {
         // alive until the work completes. `clears` has one value per attachment in attachment
         // order; there are no push constants; `mesh`'s indices address its vertices (checked by
         // `Mesh::validate` in `MeshBuffers::new`); the render pass is ended here.
-        let (indices, vertex_buffers) = match &self.discard {
+        let m = &mesh.discard;
+        // One buffer per binding the pipeline was built with (`vertex_bindings`, in order).
+        let buffers = [mesh.vertices.raw, m.positions.raw, m.motion.raw];
+        let bound = vertex_bindings(self.discard.is_some(), self.desc.outputs.flow).len();
+        let indices = match &self.discard {
             // SAFETY: as above, and the discard's set was written for `mesh` by `bind_mesh`
             // (the contract's "mesh must be bound"); `record_slot` never reaches here with a
             // discard (`slots` refuses).
             Some(discard) => unsafe {
                 discard.record(&self.gpu, cmd, mesh);
-                let m = &mesh.discard;
-                let all = [mesh.vertices.raw, m.positions.raw, m.motion.raw];
-                // The bindings the pipeline was built with (`new`): motion only with flow.
-                let n = if self.desc.outputs.flow { 3 } else { 2 };
-                (m.kept.raw, all[..n].to_vec())
+                m.kept.raw
             },
-            None => (mesh.indices.raw, vec![mesh.vertices.raw]),
+            None => mesh.indices.raw,
         };
         unsafe {
             self.pipeline.begin(
@@ -985,7 +990,7 @@ impl GeometryPass {
                 set,
                 &[],
             );
-            d.cmd_bind_vertex_buffers(cmd, 0, &vertex_buffers, &vec![0; vertex_buffers.len()]);
+            d.cmd_bind_vertex_buffers(cmd, 0, &buffers[..bound], &[0; 3][..bound]);
             d.cmd_bind_index_buffer(cmd, indices, 0, vk::IndexType::UINT32);
             d.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
             d.cmd_end_render_pass(cmd);

@@ -239,18 +239,8 @@ impl PlanRecorder {
                                 "the planner routes only colour through a cube map",
                             ));
                         }
-                        let f = if format == ColorFormat::Rgba8 {
-                            ColorFormat::Rgba8
-                        } else {
-                            ColorFormat::Rgba32F
-                        };
                         // Within this device's limits and the cube budget.
-                        let texel = if f == ColorFormat::Rgba8 { 4 } else { 16 };
-                        let side = crate::render::cube_side(
-                            *side,
-                            texel,
-                            gpu.max_image_side().min(gpu.max_cube_side()),
-                        );
+                        let (f, side) = crate::render::device_cube_faces(gpu, format, *side);
                         let options = SphereWarpOptions {
                             chromatic: *chromatic,
                             fill: plan.background,

@@ -432,6 +432,49 @@ pub fn cube_side(wanted: u32, texel_bytes: u64, max_side: u32) -> u32 {
     wanted.min(max_side).min(budget_side)
 }
 
+/// The faces this device renders for a colour output in `format` that wants faces of
+/// `wanted` pixels: their format (8-bit stays 8-bit, anything else is RGBA32F, the float
+/// format every device filters) and their side ([`cube_side`] within the device's image and
+/// cube limits).
+pub(crate) fn device_cube_faces(
+    gpu: &crate::gpu::Gpu,
+    format: ColorFormat,
+    wanted: u32,
+) -> (ColorFormat, u32) {
+    let (format, texel) = match format {
+        ColorFormat::Rgba8 => (ColorFormat::Rgba8, 4),
+        _ => (ColorFormat::Rgba32F, 16),
+    };
+    let max_side = gpu.max_image_side().min(gpu.max_cube_side());
+    (format, cube_side(wanted, texel, max_side))
+}
+
+/// Uploads `mesh` and renders `stage`'s faces of it at `pose` into its cube, once: the warps
+/// that follow sample them.
+pub(crate) fn render_cube_faces(
+    ctx: &Context,
+    stage: &crate::pass::cube_stage::CubeStage,
+    mesh: &MeshBuffers,
+    pose: &Pose,
+) -> Result<()> {
+    // SAFETY: every submission `ctx` made has completed (`submit` waits on its fence), so
+    // nothing using the stage is pending.
+    unsafe { stage.prepare(mesh, pose) }?;
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // the context's graphics and compute queue; the mesh upload precedes the faces that
+        // draw it, `record_prepare` the faces and warp; everything outlives the submission,
+        // which `submit` waits for.
+        unsafe {
+            mesh.record_upload(cmd);
+            stage.record_prepare(cmd);
+            stage.record_faces(cmd, mesh);
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
 /// Why the warp path cannot use an overscanned pinhole source for `camera`, if it cannot.
 pub fn pinhole_source_refusal(camera: &Camera, density: f64, max_side: u32) -> Option<String> {
     if crate::model::overscan::beyond_a_pinhole(camera) {
@@ -484,14 +527,8 @@ fn render_cube_path(
     let Some(format) = o.color else {
         return Ok(out);
     };
-    let format = match format {
-        ColorFormat::Rgba8 => ColorFormat::Rgba8,
-        _ => ColorFormat::Rgba32F,
-    };
-    let texel = if format == ColorFormat::Rgba8 { 4 } else { 16 };
     let wanted = side.saturating_mul(s);
-    let gpu = renderer.ctx.gpu();
-    let big_side = cube_side(wanted, texel, gpu.max_image_side().min(gpu.max_cube_side()));
+    let (format, big_side) = device_cube_faces(renderer.ctx.gpu(), format, wanted);
     if big_side < wanted {
         progress(&format!(
             "cube faces clamped to {big_side}×{big_side} (the device limit or the {} MiB cube budget): {:.2} face pixels per output pixel at the centre instead of {:.2}",
@@ -528,20 +565,7 @@ fn render_cube_path(
         }
     };
     let stage = &mut renderer.cube_stages[index];
-    // SAFETY: no submission using the stage is pending (`submit` waits on its fence).
-    unsafe { stage.prepare(&buffers, &request.pose) }?;
-    ctx.submit(|cmd| {
-        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
-        // the context's graphics and compute queue; the mesh upload precedes the faces that
-        // draw it, `record_prepare` the faces and warp; everything outlives the submission,
-        // which `submit` waits for.
-        unsafe {
-            buffers.record_upload(cmd);
-            stage.record_prepare(cmd);
-            stage.record_faces(cmd, &buffers);
-        }
-        Ok(())
-    })?;
+    render_cube_faces(ctx, stage, &buffers, &request.pose)?;
     out.color = Some(antialiased(cam, s, request.jitter, &mut |big, _| {
         // SAFETY: the last submission using the stage has completed (`submit` waits).
         unsafe { stage.set_camera(&big) }?;

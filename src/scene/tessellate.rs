@@ -35,6 +35,9 @@ pub fn tessellate(mesh: &Mesh, pose: &Pose, camera: &Camera, max_edge_px: f64) -
             "tessellation edge length {max_edge_px} px: expected a number of pixels ≥ 0.25"
         )));
     }
+    // A fisheye's vertex limit as the cosine of its angle off the axis (Alg. 1 drops vertices
+    // past it); `None` where the domain alone decides.
+    let fisheye_limit_cos = camera.fisheye_vertex_limit().map(f64::cos);
     let mut out = mesh.clone();
     // Each round at least halves the longest edge; 40 rounds is far past any real need.
     for _ in 0..40 {
@@ -51,9 +54,7 @@ pub fn tessellate(mesh: &Mesh, pose: &Pose, camera: &Camera, max_edge_px: f64) -
                     // A fisheye sees behind the image plane: edges are measured in its own
                     // image, where Alg. 1 puts them (and not past the vertex limit, where
                     // Alg. 1 drops them).
-                    let kept = camera
-                        .fisheye_vertex_limit()
-                        .is_none_or(|limit| p.z >= p.length() * limit.cos());
+                    let kept = fisheye_limit_cos.is_none_or(|c| p.z >= p.length() * c);
                     return camera.project(p).filter(|_| kept);
                 }
                 (p.z > MIN_DEPTH).then(|| intrinsics.to_pixel(DVec2::new(p.x / p.z, p.y / p.z)))

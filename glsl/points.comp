@@ -32,8 +32,8 @@ void main() {
     if (MODE == 2u) {
         VKL_VEC3 q = VKL_VEC3(inputs[2u * i], inputs[2u * i + 1u].x);
         VKL_VEC2 d = VKL_VEC2(0.0);
-        if (VKL_FISHEYE) {
-            valid = vkl_fisheye_project(q, d);
+        if (VKL_RAY_MODEL) {
+            valid = vkl_ray_project(q, d);
         } else {
             valid = q.z > 0.0 && vkl_distort(q.xy / q.z, d);
         }
@@ -46,8 +46,8 @@ void main() {
     if (MODE == 3u) {
         VKL_VEC3 ray = VKL_VEC3(0.0);
         VKL_VEC2 d = vkl_to_normalized(p);
-        if (VKL_FISHEYE) {
-            valid = vkl_fisheye_unproject(d, ray);
+        if (VKL_RAY_MODEL) {
+            valid = vkl_ray_unproject(d, ray);
         } else {
             VKL_VEC2 x;
             valid = vkl_undistort_newton(d, x);

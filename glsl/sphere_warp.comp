@@ -45,7 +45,7 @@ layout(push_constant) uniform SpherePush {
 bool ray_of(vec2 p, float scale, out vec3 ray) {
     vec2 d = vkl_to_normalized(p) / scale;
     ray = vec3(0.0, 0.0, 1.0);
-    if (VKL_FISHEYE) return vkl_fisheye_unproject(d, ray);
+    if (VKL_RAY_MODEL) return vkl_ray_unproject(d, ray);
     vec2 x;
     if (!vkl_undistort_newton(d, x)) return false;
     ray = normalize(vec3(x, 1.0));

@@ -111,12 +111,12 @@ void main() {
                 vec2 fx;
                 mat2 J;
                 for (uint n = 0u; n < REFINE; ++n) {
-                    ok = ok && vkl_distort_pre_tilt(x, fx, J) && determinant(J) > 0.0;
+                    ok = ok && vkl_map_pre_tilt(x, fx, J) && determinant(J) > 0.0;
                     if (ok) x -= inverse(J) * (fx - t);
                 }
                 s = x * pc.ideal.xy + pc.ideal.zw;
                 if (CHECK_RESIDUAL) {
-                    ok = ok && vkl_distort_pre_tilt(x, fx, J)
+                    ok = ok && vkl_map_pre_tilt(x, fx, J)
                         && length((fx - t) * vkl_cam.intrinsics.xy) <= MAX_RESIDUAL_PX;
                 }
             }

@@ -36,7 +36,7 @@ fn every_shared_calibration_file_loads_with_the_true_parameters() {
             ] {
                 assert_eq!(v, cam[name].as_f64().unwrap(), "{} {name}", path.display());
             }
-            let coeffs = got.distortion.to_coeffs();
+            let coeffs = got.distortion().to_coeffs();
             for (i, t) in truth.iter().enumerate() {
                 assert!(
                     (coeffs[i] - t).abs() <= 1e-15,
@@ -60,7 +60,7 @@ fn reference_cases_are_camera_files_as_they_stand() {
     for case in v["cases"].as_array().unwrap() {
         let cam =
             vklens::internal::io::camera::camera_from_value(case).unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(cam.distortion.to_coeffs().len(), 14);
+        assert_eq!(cam.distortion().to_coeffs().len(), 14);
     }
 }
 
@@ -132,7 +132,7 @@ fn missing_distortion_means_a_pinhole() {
         "p.json",
     )
     .unwrap();
-    assert_eq!(cam.distortion.to_coeffs(), [0.0; 14]);
+    assert_eq!(cam.distortion().to_coeffs(), [0.0; 14]);
 }
 
 /// Hostile camera files are refused quickly, naming the limit: a YAML "billion laughs" (730

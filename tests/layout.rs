@@ -18,6 +18,7 @@ macro_rules! host_offsets {
             ("tilt", offset_of!($t, tilt)),
             ("untilt", offset_of!($t, untilt)),
             ("domain_info", offset_of!($t, domain_info)),
+            ("model", offset_of!($t, model)),
             ("domain", offset_of!($t, domain)),
         ]
     };

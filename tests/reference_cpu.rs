@@ -95,7 +95,8 @@ fn fixed_point_5_reproduces_opencv_default_undistort_points() {
         for p in &case.points {
             let y = cam.intrinsics.to_normalized(DVec2::from(p.distorted_pixel));
             let pre = cam.remove_tilt(y).expect("untilt");
-            if let Some(x) = vklens::internal::model::opencv::fixed_point(&cam.distortion, pre, 5) {
+            if let Some(x) = vklens::internal::model::opencv::fixed_point(&cam.distortion(), pre, 5)
+            {
                 let opencv = DVec2::from(p.opencv_undistort_default);
                 worst = worst.max((x - opencv).length() * cam.intrinsics.fx);
                 compared += 1;

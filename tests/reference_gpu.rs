@@ -224,7 +224,7 @@ fn specialization_constants_compile_out_unused_terms() {
         .find(|c| c.name == "prism_tilt")
         .unwrap();
     let cam = case.camera().unwrap();
-    let mut terms = cam.distortion.terms();
+    let mut terms = cam.distortion().terms();
     let run = |terms: vklens::internal::model::Terms| -> Vec<[f32; 4]> {
         let constants = CameraParams::spec_constants(terms)
             .u32(spec::MODE, 0)
@@ -304,7 +304,7 @@ fn specialization_constants_compile_out_unused_terms() {
     terms.prism = false;
     let no_prism = run(terms);
     let mut cpu = cam.clone();
-    let mut d = cam.distortion;
+    let mut d = cam.distortion();
     (d.s1, d.s2, d.s3, d.s4) = (0.0, 0.0, 0.0, 0.0);
     cpu = vklens::internal::model::Camera::new(cpu.width, cpu.height, cpu.intrinsics, d).unwrap();
     let (mut moved, mut worst) = (0.0f64, 0.0f64);

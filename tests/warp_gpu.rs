@@ -283,7 +283,7 @@ fn a_full_camera_per_channel_matches_the_reference() {
     let ctx = common::validated_context();
     let g_cam = common::reference_camera("seed_fig2");
     let variant = |dk1: f64, df: f64| {
-        let mut d = g_cam.distortion;
+        let mut d = g_cam.distortion();
         d.k1 += dk1;
         let mut k = g_cam.intrinsics;
         k.fx *= 1.0 + df;

@@ -36,14 +36,14 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
     ndc = vec2(0.0);
     pixel = vec2(0.0);
     vec2 size = frame.viewport.xy;
-    if (DISTORT && VKL_FISHEYE) {
+    if (DISTORT && VKL_RAY_MODEL) {
         vec3 p = alg1_fisheye_point(clip);
         float r = length(p);
         vec2 d;
-        // rational.w: the cosine of the angle past which a vertex is dropped where the domain
+        // domain_info.z: the cosine of the angle past which a vertex is dropped where the domain
         // reaches straight behind the lens (model::Camera::fisheye_vertex_limit), else -2.
-        bool ok = r >= frame.viewport.w && p.z >= r * vkl_cam.rational.w
-                  && vkl_fisheye_project(p, d);
+        bool ok = r >= frame.viewport.w && p.z >= r * vkl_cam.domain_info.z
+                  && vkl_ray_project(p, d);
         pixel = vkl_to_pixel(d);
         ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
         ndc = (pixel + 0.5) / size * 2.0 - 1.0;
@@ -70,7 +70,7 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
 // |(X, Y, Z)| (positive on every side of the camera, so nothing is clipped away and
 // attributes interpolate with the distance), its depth 1 − near / |(X, Y, Z)|.
 vec4 alg1_clip(vec4 clip, vec2 distorted_ndc) {
-    if (DISTORT && VKL_FISHEYE) {
+    if (DISTORT && VKL_RAY_MODEL) {
         float r = length(alg1_fisheye_point(clip));
         return vec4(distorted_ndc * r, (1.0 - frame.viewport.w / r) * r, r);
     }

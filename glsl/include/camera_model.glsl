@@ -74,6 +74,17 @@ layout(constant_id = 5) const uint VKL_NEWTON_ITERATIONS = 20;
 #define VKL_MODEL_OPENCV 0u
 // 1: OpenCV's fisheye model (model::Fisheye). VKL_RADIAL then says whether any k is non-zero.
 #define VKL_MODEL_FISHEYE 1u
+// 2..9: the other models of the table (model::ModelKind, in its order), one include each
+// under include/models/. Each maps camera-frame rays, and the pinhole-side maps a warp needs
+// follow from its forward map and inverse (vkl_distort_jacobian, vkl_undistort_newton).
+#define VKL_MODEL_OMNI 2u
+#define VKL_MODEL_UCM 3u
+#define VKL_MODEL_EUCM 4u
+#define VKL_MODEL_DOUBLE_SPHERE 5u
+#define VKL_MODEL_FOV 6u
+#define VKL_MODEL_EQUIRECTANGULAR 7u
+#define VKL_MODEL_FTHETA 8u
+#define VKL_MODEL_OCAM 9u
 layout(constant_id = 6) const uint VKL_MODEL = VKL_MODEL_OPENCV;
 // false: every ideal point this shader tests either lies inside the domain's smallest boundary
 // radius or is dropped whatever the answer (the compute discard, when its Sec. 3.2 bound lies
@@ -82,6 +93,12 @@ layout(constant_id = 6) const uint VKL_MODEL = VKL_MODEL_OPENCV;
 // much as half of the standard model.
 layout(constant_id = 7) const bool VKL_DOMAIN_TABLE = true;
 #define VKL_FISHEYE (VKL_MODEL == VKL_MODEL_FISHEYE)
+// The models after the fisheye: rays in, rays out, through include/models/.
+#define VKL_GENERIC (VKL_MODEL >= VKL_MODEL_OMNI)
+// Every model but the standard one maps camera-frame rays (and may see past 90°).
+#define VKL_RAY_MODEL (VKL_MODEL != VKL_MODEL_OPENCV)
+// model::ValidDomain::RADIUS_CAP: the pinhole side of a ray model ends here (88.9°).
+#define VKL_RADIUS_CAP 50.0
 // Below this radius (normalized) θ_d(atan r)/r is its series 1 + (k1 − 1/3) r²: the quotient
 // would lose digits, and the error of the series, O(r⁴), is far below rounding there.
 #define VKL_FISHEYE_SMALL 1e-4
@@ -94,7 +111,9 @@ layout(set = VKL_CAMERA_SET, binding = VKL_CAMERA_BINDING, std140) uniform VKL_P
     VKL_VEC4 prism;             // s3 s4 - -
     VKL_VEC4 tilt[3];           // rows of OpenCV's tilt matrix (xyz)
     VKL_VEC4 untilt[3];         // rows of its inverse
-    VKL_VEC4 domain_info;       // x: smallest ideal boundary radius, y: smallest distorted one
+    VKL_VEC4 domain_info;       // x: smallest ideal boundary radius, y: smallest distorted one,
+                                // z: cos of Alg. 1's vertex limit for a ray model (-2: none)
+    VKL_VEC4 model[8];          // the ray model's own parameters (model::table::RayModel::gpu_params)
     VKL_VEC4 domain[VKL_DOMAIN_SAMPLES]; // x: ideal boundary radius, y: distorted, at angle TAU*i/N
 } vkl_cam;
 
@@ -155,8 +174,28 @@ void vkl_sin_cos(double theta, out double sn, out double cs) {
     cs = -ss;
 }
 #else
-float vkl_atan(float x) { return atan(x); }
-float vkl_atan2(float y, float x) { return atan(y, x); }
+// atan in f32 by the same reduction and series as the f64 one: GLSL leaves atan's precision
+// to the driver, and lavapipe's is ~1e-6 rad, which an f-theta lens of 1900 px/rad turns
+// into 3e-3 px (measured); this one is within a few ulp.
+float vkl_atan(float x) {
+    bool inv = x > 1.0;
+    if (inv) x = 1.0 / x;
+    bool shift = x > 0.26794919;
+    if (shift) x = (x * 1.7320508 - 1.0) / (x + 1.7320508);
+    float x2 = x * x, term = x, sum = x;
+    for (int n = 1; n < 7; ++n) {
+        term *= -x2;
+        sum += term / float(2 * n + 1);
+    }
+    if (shift) sum += 0.52359878;
+    return inv ? 1.5707964 - sum : sum;
+}
+// atan2(y, x) for y ≥ 0 (an angle off the axis, 0..π).
+float vkl_atan2(float y, float x) {
+    if (x > 0.0) return vkl_atan(y / x);
+    if (x < 0.0) return 3.1415927 - vkl_atan(y / -x);
+    return y > 0.0 ? 1.5707964 : 0.0;
+}
 void vkl_sin_cos(float theta, out float sn, out float cs) { sn = sin(theta); cs = cos(theta); }
 #endif
 
@@ -328,25 +367,20 @@ bool vkl_remove_tilt(VKL_VEC2 d, out VKL_VEC2 p) {
     return true;
 }
 
-// Forward model on normalized coordinates with its Jacobian: ideal (X/Z, Y/Z) -> distorted.
-bool vkl_distort_jacobian(VKL_VEC2 x, out VKL_VEC2 d, out VKL_MAT2 J) {
+// The standard model's and the fisheye's forward map on normalized coordinates with its
+// Jacobian: ideal (X/Z, Y/Z) -> distorted.
+bool vkl_standard_distort(VKL_VEC2 x, out VKL_VEC2 d, out VKL_MAT2 J) {
     VKL_VEC2 pre;
     VKL_MAT2 Jpre;
     VKL_MAT2 T;
     d = x;
     J = VKL_MAT2(1.0);
-    if (VKL_MODEL != VKL_MODEL_OPENCV && !VKL_FISHEYE) return false;
     if (!vkl_distort_pre_tilt(x, pre, Jpre)) return false;
     if (!vkl_apply_tilt(pre, d, T)) return false;
     J = T * Jpre;
     return true;
 }
 
-// Forward model on normalized coordinates.
-bool vkl_distort(VKL_VEC2 x, out VKL_VEC2 d) {
-    VKL_MAT2 J;
-    return vkl_distort_jacobian(x, d, J);
-}
 
 // Boundary radius of the valid domain at `angle`: component 0 ideal, 1 distorted.
 VKL_FLOAT vkl_domain_radius(float angle, int which) {
@@ -358,9 +392,9 @@ VKL_FLOAT vkl_domain_radius(float angle, int which) {
     return mix(a, b, f);
 }
 
-// Whether an ideal (pre-tilt normalized) point is in the valid domain. Inside the smallest
-// boundary radius no table lookup is needed (the common case).
-bool vkl_contains_ideal(VKL_VEC2 x) {
+// Whether an ideal (pre-tilt normalized) point is in the domain table's valid domain. Inside
+// the smallest boundary radius no table lookup is needed (the common case).
+bool vkl_table_contains_ideal(VKL_VEC2 x) {
     VKL_FLOAT r2 = dot(x, x);
     if (r2 <= vkl_cam.domain_info.x * vkl_cam.domain_info.x) return true;
     if (!VKL_DOMAIN_TABLE) return false;
@@ -420,7 +454,7 @@ bool vkl_newton_from(VKL_VEC2 t, inout VKL_VEC2 x) {
             VKL_VEC2 c = x - step * s;
             VKL_VEC2 fc;
             VKL_MAT2 Jc;
-            if (vkl_contains_ideal(c) && vkl_distort_pre_tilt(c, fc, Jc)
+            if (vkl_table_contains_ideal(c) && vkl_distort_pre_tilt(c, fc, Jc)
                     && length(fc - t) < residual * (1.0 - 1e-4 * s)) {
                 x = c;
                 f = fc;
@@ -433,7 +467,7 @@ bool vkl_newton_from(VKL_VEC2 t, inout VKL_VEC2 x) {
         if (!accepted) break;
     }
     return length(f - t) <= VKL_NEWTON_ACCEPT * (1.0 + rho) && determinant(J) > 0.0
-        && vkl_contains_ideal(x);
+        && vkl_table_contains_ideal(x);
 }
 
 // Newton's method with the analytic Jacobian, damped to stay in the valid domain.
@@ -441,7 +475,7 @@ bool vkl_newton_from(VKL_VEC2 t, inout VKL_VEC2 x) {
 // radial inverse; where that start lies in another basin (tangential or prism terms next to a
 // fold at a wide angle), continuation from the principal point along the segment to t
 // (model::opencv::CONTINUATION_STEPS steps). Only such pixels ever run the second loop.
-bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
+bool vkl_standard_undistort(VKL_VEC2 d, out VKL_VEC2 x) {
     x = VKL_VEC2(0.0);
     VKL_VEC2 t;
     if (!vkl_remove_tilt(d, t)) return false;
@@ -455,7 +489,7 @@ bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
         vkl_sin_cos(theta, sn, cs);
         if (!(cs > 0.0)) return false;
         x = t / length(t) * (sn / cs);
-        return vkl_contains_ideal(x);
+        return vkl_table_contains_ideal(x);
     }
     x = vkl_radial_start(t);
     // One call site, so the iteration is compiled once: round 0 is the radial start; rounds
@@ -470,11 +504,106 @@ bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
     return true;
 }
 
+#include "models/omni.glsl"
+#include "models/unified.glsl"
+#include "models/fov_equirect.glsl"
+#include "models/polynomial.glsl"
+
+// A ray model's forward map: camera-frame point (any length, any hemisphere) -> distorted
+// normalized point. False outside the model's domain.
+bool vkl_ray_project(VKL_VEC3 p, out VKL_VEC2 m) {
+    m = VKL_VEC2(0.0);
+    if (VKL_FISHEYE) return vkl_fisheye_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_OMNI) return vkl_omni_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_UCM) return vkl_ucm_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_EUCM) return vkl_eucm_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_DOUBLE_SPHERE) return vkl_ds_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_FOV) return vkl_fov_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_EQUIRECTANGULAR) return vkl_equirect_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_FTHETA) return vkl_ftheta_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_OCAM) return vkl_ocam_project(p, m);
+    return false;
+}
+
+// A ray model's inverse: distorted normalized point -> unit camera-frame ray. False outside
+// the domain.
+bool vkl_ray_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
+    ray = VKL_VEC3(0.0, 0.0, 1.0);
+    if (VKL_FISHEYE) return vkl_fisheye_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_OMNI) return vkl_omni_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_UCM) return vkl_ucm_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_EUCM) return vkl_eucm_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_DOUBLE_SPHERE) return vkl_ds_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_FOV) return vkl_fov_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_EQUIRECTANGULAR) return vkl_equirect_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_FTHETA) return vkl_ftheta_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_OCAM) return vkl_ocam_unproject(m, ray);
+    return false;
+}
+
+// The pinhole side of a model after the fisheye: ideal normalized x -> distorted normalized,
+// and its Jacobian by central differences (it only steers Newton's refinements; the residual
+// decides, so its f32 truncation costs iterations, never accuracy).
+bool vkl_generic_distort(VKL_VEC2 x, out VKL_VEC2 d, out VKL_MAT2 J) {
+    J = VKL_MAT2(1.0);
+    if (!(dot(x, x) <= VKL_RADIUS_CAP * VKL_RADIUS_CAP)) { d = x; return false; }
+    if (!vkl_ray_project(VKL_VEC3(x, 1.0), d)) return false;
+    VKL_FLOAT h = 1e-3 * max(1.0, length(x));
+    VKL_VEC2 a, b, c, e;
+    bool ok = vkl_ray_project(VKL_VEC3(x + VKL_VEC2(h, 0.0), 1.0), a)
+        && vkl_ray_project(VKL_VEC3(x - VKL_VEC2(h, 0.0), 1.0), b)
+        && vkl_ray_project(VKL_VEC3(x + VKL_VEC2(0.0, h), 1.0), c)
+        && vkl_ray_project(VKL_VEC3(x - VKL_VEC2(0.0, h), 1.0), e);
+    if (ok) J = VKL_MAT2((a - b) / (2.0 * h), (c - e) / (2.0 * h));
+    return true;
+}
+
+// Whether an ideal (pinhole-normalized) point is in the valid domain.
+bool vkl_contains_ideal(VKL_VEC2 x) {
+    if (VKL_GENERIC) {
+        VKL_VEC2 d;
+        return dot(x, x) <= VKL_RADIUS_CAP * VKL_RADIUS_CAP && vkl_ray_project(VKL_VEC3(x, 1.0), d);
+    }
+    return vkl_table_contains_ideal(x);
+}
+
+// The pre-tilt map and its Jacobian for a pass that refines on the pinhole side (the
+// map upsampler): the standard model's pre-tilt distortion, or a ray model's whole map.
+bool vkl_map_pre_tilt(VKL_VEC2 x, out VKL_VEC2 d, out VKL_MAT2 J) {
+    if (VKL_GENERIC) return vkl_generic_distort(x, d, J);
+    return vkl_distort_pre_tilt(x, d, J);
+}
+
+// Distorted normalized -> ideal normalized; false outside the valid domain (and, for a ray
+// model, behind the image plane or past the radius cap).
+bool vkl_undistort_newton(VKL_VEC2 d, out VKL_VEC2 x) {
+    x = VKL_VEC2(0.0);
+    if (VKL_GENERIC) {
+        VKL_VEC3 ray;
+        if (!vkl_ray_unproject(d, ray) || !(ray.z > 0.0)) return false;
+        x = ray.xy / ray.z;
+        return dot(x, x) <= VKL_RADIUS_CAP * VKL_RADIUS_CAP;
+    }
+    return vkl_standard_undistort(d, x);
+}
+
+// Forward model on normalized coordinates with its Jacobian: ideal (X/Z, Y/Z) -> distorted.
+bool vkl_distort_jacobian(VKL_VEC2 x, out VKL_VEC2 d, out VKL_MAT2 J) {
+    if (VKL_GENERIC) return vkl_generic_distort(x, d, J);
+    return vkl_standard_distort(x, d, J);
+}
+
+// Forward model on normalized coordinates.
+bool vkl_distort(VKL_VEC2 x, out VKL_VEC2 d) {
+    VKL_MAT2 J;
+    return vkl_distort_jacobian(x, d, J);
+}
+
 // Lambers et al. Eq. 2 (Heikkilä): closed-form approximate inverse, k1 k2 p1 p2 only.
 bool vkl_undistort_heikkila(VKL_VEC2 d, out VKL_VEC2 x) {
     x = VKL_VEC2(0.0);
-    // The standard model's approximation; the host refuses it for a fisheye.
-    if (VKL_FISHEYE) return false;
+    // The standard model's approximation; the host refuses it for the ray models.
+    if (VKL_RAY_MODEL) return false;
     VKL_VEC2 t;
     if (!vkl_remove_tilt(d, t)) return false;
     if (!vkl_contains_distorted(t)) return false;
@@ -495,8 +624,8 @@ bool vkl_undistort_heikkila(VKL_VEC2 d, out VKL_VEC2 x) {
 // OpenCV's undistortPoints iteration with n iterations.
 bool vkl_undistort_fixed_point(VKL_VEC2 d, uint n, out VKL_VEC2 x) {
     x = VKL_VEC2(0.0);
-    // The standard model's iteration; the host refuses it for a fisheye.
-    if (VKL_FISHEYE) return false;
+    // The standard model's iteration; the host refuses it for the ray models.
+    if (VKL_RAY_MODEL) return false;
     VKL_VEC2 y0;
     if (!vkl_remove_tilt(d, y0)) return false;
     if (!vkl_contains_distorted(y0)) return false;

@@ -212,18 +212,64 @@ struct PyCamera {
 #[pymethods]
 impl PyCamera {
     #[new]
-    #[pyo3(signature = (width, height, fx, fy, cx, cy, dist_coeffs = None))]
+    #[pyo3(signature = (width, height, fx = None, fy = None, cx = None, cy = None, dist_coeffs = None, model = None, **params))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         width: i64,
         height: i64,
-        fx: f64,
-        fy: f64,
-        cx: f64,
-        cy: f64,
+        fx: Option<f64>,
+        fy: Option<f64>,
+        cx: Option<f64>,
+        cy: Option<f64>,
         dist_coeffs: Option<&Bound<'_, PyAny>>,
+        model: Option<String>,
+        params: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
+        if model.as_deref().is_some_and(|m| m != "opencv") || params.is_some_and(|p| !p.is_empty())
+        {
+            // Every other model: the keywords are its vklens JSON keys, read by the one reader
+            // camera files go through.
+            let mut obj = serde_json::Map::new();
+            obj.insert(
+                "model".into(),
+                model.unwrap_or_else(|| "opencv".into()).into(),
+            );
+            obj.insert("width".into(), width.into());
+            obj.insert("height".into(), height.into());
+            for (key, v) in [("fx", fx), ("fy", fy), ("cx", cx), ("cy", cy)] {
+                if let Some(v) = v {
+                    obj.insert(key.into(), v.into());
+                }
+            }
+            if let Some(d) = dist_coeffs {
+                obj.insert(
+                    "dist_coeffs".into(),
+                    vector(py, d, "dist_coeffs", None)?.into(),
+                );
+            }
+            for (key, value) in params.into_iter().flat_map(|p| p.iter()) {
+                let key: String = key.extract()?;
+                let v = if let Ok(s) = value.extract::<String>() {
+                    serde_json::Value::from(s)
+                } else if let Ok(x) = value.extract::<f64>() {
+                    serde_json::Value::from(x)
+                } else {
+                    serde_json::Value::from(vector(py, &value, &key, None)?)
+                };
+                obj.insert(key, v);
+            }
+            let text = serde_json::Value::Object(obj).to_string();
+            return Ok(PyCamera {
+                inner: Camera::parse(&text, "Camera(...)").py(py)?,
+            });
+        }
+        let (Some(fx), Some(fy), Some(cx), Some(cy)) = (fx, fy, cx, cy) else {
+            return Err(input(
+                py,
+                "Camera(width, height, fx, fy, cx, cy, dist_coeffs): fx, fy, cx and cy are required for OpenCV's standard model",
+            ));
+        };
         let d = match dist_coeffs {
             Some(d) => vector(py, d, "dist_coeffs", None)?,
             None => vec![0.0; 5],
@@ -426,6 +472,25 @@ impl PyCamera {
     fn __repr__(&self) -> String {
         let c = &self.inner;
         let k = c.intrinsics;
+        if c.model().is_ray_model() && c.fisheye_lens().is_none() {
+            let params: Vec<String> = c
+                .lens()
+                .params()
+                .iter()
+                .map(|(n, v)| format!("{n}={v}"))
+                .collect();
+            return format!(
+                "Camera(model='{}', {}×{}, fx={}, fy={}, cx={}, cy={}, {})",
+                c.model_name(),
+                c.width,
+                c.height,
+                k.fx,
+                k.fy,
+                k.cx,
+                k.cy,
+                params.join(", ")
+            );
+        }
         if c.fisheye_lens().is_some() {
             return format!(
                 "Camera(model='opencv_fisheye', {}×{}, fx={}, fy={}, cx={}, cy={}, k={:?})",

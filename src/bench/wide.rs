@@ -95,7 +95,7 @@ fn vertex_error(ctx: &Context, camera: &Camera, scene: &Scene) -> Result<f64> {
     let mut worst = 0.0f64;
     for (p, g) in points.iter().zip(gpu) {
         let p = DVec3::from_array(*p);
-        let kept = camera.fisheye_lens().is_some()
+        let kept = camera.model().is_ray_model()
             || (p.z > 0.0
                 && camera
                     .domain()

@@ -136,6 +136,9 @@ impl Camera {
     /// The camera as a vklens JSON camera object (a Brown lens as `{"model": "brown", ...}`, a
     /// fisheye as `{"model": "opencv_fisheye", ...}`).
     pub fn to_json(&self) -> serde_json::Value {
+        if let Some(v) = crate::io::models::camera_to_json(self) {
+            return v;
+        }
         let k = self.intrinsics;
         if let Some(f) = self.fisheye_lens() {
             let mut v = serde_json::json!({
@@ -170,14 +173,19 @@ impl Camera {
         let k = self.intrinsics;
         let (skew, model, coeffs) = if let Some(f) = self.fisheye_lens() {
             (f.alpha * k.fx, "equidistant", f.k.to_vec())
+        } else if self.model().is_ray_model() {
+            return Err(Error::Unsupported(format!(
+                "ROS camera_info has no `{}` model (only plumb_bob, rational_polynomial and equidistant): only camera.json describes this camera",
+                self.model_name()
+            )));
         } else {
-            let t = self.distortion.terms();
+            let t = self.distortion().terms();
             if t.prism || t.tilt {
                 return Err(Error::Unsupported(
                     "ROS camera_info has no thin prism (s1..s4) or tilt (tau_x, tau_y) terms: only camera.json describes this camera".into(),
                 ));
             }
-            let c = self.distortion.to_coeffs();
+            let c = self.distortion().to_coeffs();
             if t.rational {
                 (0.0, "rational_polynomial", c[..8].to_vec())
             } else {

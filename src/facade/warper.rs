@@ -158,6 +158,12 @@ pub fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeome
             WarpGeometry::undistort(camera.clone())
         }
     };
+    if options.source_camera.is_none() && !camera.model().has_focal_length() {
+        return Err(Error::input(format!(
+            "the `{}` model has no pinhole focal length for the pinhole side of the warp: give that side's camera (--source-camera; Python `source_camera=`)",
+            camera.model_name()
+        )));
+    }
     if let Some(p) = &options.source_camera {
         if !p.is_pinhole() {
             return Err(Error::input(

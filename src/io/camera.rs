@@ -26,7 +26,11 @@ use std::path::Path;
 
 use serde_json::{Map, Value};
 
-use crate::model::{BrownRadial, Camera, Fisheye, Intrinsics, ModelError};
+use crate::model::double_sphere::DoubleSphere;
+use crate::model::eucm::Eucm;
+use crate::model::fov::Fov;
+use crate::model::omni::Omni;
+use crate::model::{BrownRadial, Camera, Fisheye, Intrinsics, Lens, ModelError};
 use crate::{Error, Result};
 
 /// Reads a camera file (format detected from its content). A Brown lens file gives a camera
@@ -52,6 +56,14 @@ pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
 pub fn parse_camera_at(text: &str, origin: &str, index: Option<usize>) -> Result<Camera> {
     let err = |e: Error| e.context(origin);
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
+    if super::models::looks_like_ocam(trimmed) {
+        if let Some(i) = index.filter(|&i| i > 0) {
+            return Err(err(Error::input(format!(
+                "camera index {i} asked, but an OCamCalib file holds one camera (index 0)"
+            ))));
+        }
+        return super::models::ocam_camera(trimmed).map_err(err);
+    }
     if looks_like_colmap(trimmed) {
         return colmap_camera(trimmed, index).map_err(err);
     }
@@ -74,10 +86,19 @@ fn camera_from_any_tree(tree: &Value, index: Option<usize>) -> Result<Camera> {
     if let Some(cams) = kalibr_cameras(tree) {
         return kalibr_camera(&cams, index);
     }
+    if let Some(camera) = super::models::ncore_camera(tree) {
+        return camera;
+    }
+    if let Some(camera) = super::models::basalt_camera(tree, index) {
+        return camera;
+    }
     if let Some(i) = index.filter(|&i| i > 0) {
         return Err(Error::input(format!(
             "camera index {i} asked, but this file holds one camera (index 0)"
         )));
+    }
+    if let Some(camera) = super::models::camodocal_camera(tree) {
+        return camera;
     }
     match tree.get("model") {
         Some(Value::String(m)) if m == "brown" => {
@@ -87,11 +108,18 @@ fn camera_from_any_tree(tree: &Value, index: Option<usize>) -> Result<Camera> {
         Some(Value::String(m)) if m == "opencv_fisheye" => {
             return fisheye_from_tree(tree);
         }
+        Some(Value::String(m)) if super::models::MODEL_NAMES.contains(&m.as_str()) => {
+            let obj = tree
+                .as_object()
+                .ok_or_else(|| Error::input("expected an object/mapping at the top level"))?;
+            return super::models::camera_from_json(m, obj);
+        }
         // A model vklens does not implement must not load as the standard model: a fisheye's
         // k1..k4 read as k1 k2 p1 p2 put pixels hundreds of thousands of pixels off.
         Some(Value::String(m)) if m != "opencv" => {
             return Err(Error::input(format!(
-                "`model` is `{m}`; vklens reads `opencv` (OpenCV's standard model, the default), `opencv_fisheye` and `brown`"
+                "`model` is `{m}`; vklens reads `opencv` (OpenCV's standard model, the default), `opencv_fisheye`, `brown`, `{}`",
+                super::models::MODEL_NAMES.join("`, `")
             )));
         }
         Some(Value::String(_)) | None => {}
@@ -161,7 +189,10 @@ fn camera_from_tree(tree: &Value) -> Result<Camera> {
 
 /// `fx fy cx cy` from the keys or from a camera matrix `K`; with `allow_skew`, `K[0][1]` is
 /// returned beside them (the fisheye model's `α fx`), else it must be 0.
-fn intrinsics_from(obj: &Map<String, Value>, allow_skew: bool) -> Result<(Intrinsics, f64)> {
+pub(super) fn intrinsics_from(
+    obj: &Map<String, Value>,
+    allow_skew: bool,
+) -> Result<(Intrinsics, f64)> {
     if obj.contains_key("fx") {
         return Ok((
             Intrinsics {
@@ -330,13 +361,26 @@ fn kalibr_camera(cams: &[(String, Map<String, Value>)], index: Option<usize>) ->
         Ok(values)
     };
     let model = text("camera_model")?;
-    if model != "pinhole" {
-        return Err(Error::input(format!(
-            "{} is `{model}`; vklens reads Kalibr's `pinhole` cameras (with `equidistant` or `radtan` distortion)",
-            field("camera_model")
-        )));
-    }
-    let f = list("intrinsics", 4)?;
+    // Kalibr's intrinsics: the model's own parameters first, then fu fv pu pv.
+    type LensOf = fn(&[f64]) -> std::result::Result<Option<Lens>, ModelError>;
+    let (own, lens_of): (usize, LensOf) = match model.as_str() {
+        "pinhole" => (0, |_| Ok(None)),
+        "omni" => (1, |p| {
+            Omni::new(p[0], [0.0; 4]).map(|l| Some(Lens::Omni(l)))
+        }),
+        "eucm" => (2, |p| Eucm::new(p[0], p[1]).map(|l| Some(Lens::Eucm(l)))),
+        "ds" => (2, |p| {
+            DoubleSphere::new(p[0], p[1]).map(|l| Some(Lens::DoubleSphere(l)))
+        }),
+        _ => {
+            return Err(Error::input(format!(
+                "{} is `{model}`; vklens reads Kalibr's `pinhole`, `omni`, `eucm` and `ds` cameras",
+                field("camera_model")
+            )))
+        }
+    };
+    let all = list("intrinsics", own + 4)?;
+    let (p, f) = all.split_at(own);
     let res = list("resolution", 2)?;
     let side = |v: f64, what: &str| -> Result<u32> {
         image_side(v).ok_or_else(|| {
@@ -358,26 +402,36 @@ fn kalibr_camera(cams: &[(String, Map<String, Value>)], index: Option<usize>) ->
         None => "none".to_string(),
         Some(_) => text("distortion_model")?,
     };
-    let coeffs = || match cam.get("distortion_coeffs") {
-        None => Ok(vec![0.0; 4]),
-        Some(_) => list("distortion_coeffs", 4),
-    };
     let named = |e: ModelError| Error::input(format!("{name}: {e}"));
-    match distortion.as_str() {
-        "equidistant" => {
-            let c = coeffs()?;
-            let lens = Fisheye::new([c[0], c[1], c[2], c[3]], 0.0, None).map_err(named)?;
-            Camera::fisheye(width, height, intrinsics, lens).map_err(named)
+    let base = lens_of(p).map_err(named)?;
+    let coeffs = |n: usize| match cam.get("distortion_coeffs") {
+        None if distortion == "none" => Ok(vec![0.0; n]),
+        _ => list("distortion_coeffs", n),
+    };
+    let lens = match (base, distortion.as_str()) {
+        (None, "equidistant") => {
+            let c = coeffs(4)?;
+            Lens::Fisheye(Fisheye::new([c[0], c[1], c[2], c[3]], 0.0, None).map_err(named)?)
         }
         // Kalibr's radtan is k1 k2 r1 r2: OpenCV's k1 k2 p1 p2.
-        "radtan" | "none" => {
-            Camera::from_coeffs(width, height, intrinsics, &coeffs()?).map_err(named)
+        (None, "radtan" | "none") => {
+            return Camera::from_coeffs(width, height, intrinsics, &coeffs(4)?).map_err(named)
         }
-        other => Err(Error::input(format!(
-            "{} is `{other}`; vklens reads Kalibr's `equidistant` and `radtan`",
-            field("distortion_model")
-        ))),
-    }
+        // Kalibr's pinhole-fov: one coefficient, ω.
+        (None, "fov") => Lens::Fov(Fov::new(coeffs(1)?[0]).map_err(named)?),
+        (Some(Lens::Omni(o)), "radtan" | "none") => {
+            let c = coeffs(4)?;
+            Lens::Omni(Omni::new(o.xi, [c[0], c[1], c[2], c[3]]).map_err(named)?)
+        }
+        (Some(lens), "none") => lens,
+        (_, other) => {
+            return Err(Error::input(format!(
+                "{} is `{other}` on a `{model}` camera; vklens reads Kalibr's pinhole with none, radtan, equidistant or fov, omni with none or radtan, eucm and ds with none",
+                field("distortion_model")
+            )))
+        }
+    };
+    Camera::with_lens(width, height, intrinsics, lens).map_err(named)
 }
 
 /// COLMAP camera models vklens reads: name, parameter names (in COLMAP's order).
@@ -508,7 +562,7 @@ fn colmap_camera(text: &str, index: Option<usize>) -> Result<Camera> {
     }
 }
 
-fn as_number(v: &Value) -> Option<f64> {
+pub(super) fn as_number(v: &Value) -> Option<f64> {
     match v {
         Value::Number(n) => n.as_f64(),
         // FileStorage writes `.Nan`/`.Inf` and YAML floats like `400.`; they arrive as text.
@@ -517,7 +571,7 @@ fn as_number(v: &Value) -> Option<f64> {
     }
 }
 
-fn parse_float(s: &str) -> Option<f64> {
+pub(super) fn parse_float(s: &str) -> Option<f64> {
     let t = s.trim();
     match t.to_ascii_lowercase().as_str() {
         ".nan" | "nan" => Some(f64::NAN),
@@ -527,14 +581,14 @@ fn parse_float(s: &str) -> Option<f64> {
     }
 }
 
-fn number_field(obj: &Map<String, Value>, key: &str) -> Result<f64> {
+pub(super) fn number_field(obj: &Map<String, Value>, key: &str) -> Result<f64> {
     let v = obj
         .get(key)
         .ok_or_else(|| Error::input(format!("missing field `{key}`")))?;
     as_number(v).ok_or_else(|| Error::input(format!("field `{key}` must be a number, got {v}")))
 }
 
-fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> Result<u32> {
+pub(super) fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> Result<u32> {
     let (key, v) = keys
         .iter()
         .find_map(|k| obj.get(*k).map(|v| (*k, v)))
@@ -554,12 +608,22 @@ fn dimension(obj: &Map<String, Value>, keys: &[&str]) -> Result<u32> {
     })
 }
 
+/// An image side from a number, or an error naming `what`.
+pub(super) fn image_side_of(n: f64, what: &str) -> Result<u32> {
+    image_side(n).ok_or_else(|| {
+        Error::input(format!(
+            "the image {what} must be a whole number of pixels in 1..={}, got {n}",
+            crate::model::MAX_IMAGE_SIDE
+        ))
+    })
+}
+
 /// An image side: a whole number of pixels in 1..=MAX_IMAGE_SIDE.
 fn image_side(n: f64) -> Option<u32> {
     (n.fract() == 0.0 && n >= 1.0 && n <= crate::model::MAX_IMAGE_SIDE as f64).then_some(n as u32)
 }
 
-fn number_list(v: &Value, key: &str) -> Result<Vec<f64>> {
+pub(super) fn number_list(v: &Value, key: &str) -> Result<Vec<f64>> {
     let arr = v
         .as_array()
         .ok_or_else(|| Error::input(format!("field `{key}` must be a list of numbers, got {v}")))?;

@@ -1,6 +1,7 @@
 //! Reading what users bring: camera files, the shared reference data.
 
 pub mod camera;
+pub mod models;
 pub mod reference;
 
 pub use camera::{load_camera, parse_camera};

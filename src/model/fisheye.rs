@@ -29,7 +29,9 @@ use std::f64::consts::PI;
 
 use glam::{DMat2, DVec2, DVec3};
 
+use super::jet::Scalar;
 use super::solve::solve_increasing;
+use super::table::RayModel;
 use super::{check_finite, ModelError, ABSURD_MAGNITUDE};
 
 /// Names of the four coefficients, as `cv2.fisheye` orders them.
@@ -182,16 +184,9 @@ impl Fisheye {
     /// one direction straight behind the lens (θ = π, where x'/r has no limit). Whether the
     /// direction is in the domain is [`Fisheye::contains_ray`]'s to say.
     pub fn distort_ray(&self, p: DVec3) -> Option<DVec2> {
-        if !p.is_finite() {
-            return None;
-        }
-        let r = p.x.hypot(p.y);
-        if r == 0.0 {
-            return (p.z > 0.0).then_some(DVec2::ZERO);
-        }
-        let theta = r.atan2(p.z);
-        let (td, _) = self.theta_d(theta);
-        let out = self.skew(DVec2::new(p.x, p.y) * (td / r));
+        let p = super::table::scaled(p)?;
+        let [x, y] = self.project_generic([p.x, p.y, p.z])?;
+        let out = DVec2::new(x, y);
         out.is_finite().then_some(out)
     }
 
@@ -260,5 +255,55 @@ impl Fisheye {
         let dir = pre / rho;
         let (s, c) = theta.sin_cos();
         Some(DVec3::new(dir.x * s, dir.y * s, c))
+    }
+}
+
+impl RayModel for Fisheye {
+    const NAME: &'static str = "opencv_fisheye";
+
+    fn param_names(&self) -> Vec<&'static str> {
+        vec!["k1", "k2", "k3", "k4", "alpha"]
+    }
+
+    fn params(&self) -> Vec<f64> {
+        let [k1, k2, k3, k4] = self.k;
+        vec![k1, k2, k3, k4, self.alpha]
+    }
+
+    fn project_generic<T: Scalar>(&self, p: [T; 3]) -> Option<[T; 2]> {
+        let r2 = p[0] * p[0] + p[1] * p[1];
+        let z = p[2].value();
+        let scale = if r2.value() == 0.0 {
+            if !(z > 0.0) {
+                // Straight behind the lens x'/r has no limit.
+                return None;
+            }
+            T::cst(1.0) / p[2]
+        } else if z > 0.0 && r2.value() < (SMALL_ANGLE * z) * (SMALL_ANGLE * z) {
+            // θ = ρ − ρ³/3 + …, θ_d = θ (1 + k1 θ² + …): θ_d / r = (1 + (k1 − 1/3) ρ²) / z.
+            let rho2 = r2 / (p[2] * p[2]);
+            (rho2 * (self.k[0] - 1.0 / 3.0) + 1.0) / p[2]
+        } else {
+            let r = r2.sqrt();
+            let theta = r.atan2(p[2]);
+            let [k1, k2, k3, k4] = self.k;
+            let t2 = theta * theta;
+            let poly = (((t2 * k4 + k3) * t2 + k2) * t2 + k1) * t2 + 1.0;
+            theta * poly / r
+        };
+        let (x, y) = (p[0] * scale, p[1] * scale);
+        Some([x + y * self.alpha, y])
+    }
+
+    fn contains_ray(&self, p: DVec3) -> bool {
+        Fisheye::contains_ray(self, p)
+    }
+
+    fn unproject(&self, m: DVec2) -> Option<DVec3> {
+        self.undistort_ray(m)
+    }
+
+    fn max_angle(&self) -> f64 {
+        self.theta_max
     }
 }

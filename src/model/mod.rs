@@ -11,6 +11,10 @@
 //!
 //! * [`opencv`] — the OpenCV "standard" model with all 14 coefficients (Lambers et al., Eq. 1, and
 //!   OpenCV's own `projectPoints`), its analytic Jacobian and three inverse methods.
+//! * [`table`] — the table every other model slots into ([`table::RayModel`]: name and
+//!   parameters, forward map written once for values and exact Jacobians, domain, inverse),
+//!   and [`lens`], the enum over its models that a [`Camera`] holds: [`fisheye`], [`omni`],
+//!   [`ucm`], [`eucm`], [`double_sphere`], [`fov`], [`equirect`], [`ftheta`], [`ocam`].
 //! * [`fisheye`] — OpenCV's fisheye model (Kannala–Brandt k1..k4 and skew), defined past 90°
 //!   off the axis, with its Jacobian, its inverse by Newton on θ and its cone-shaped domain.
 //! * [`brown`] — the Durham radial-correction paper's Brown radial model for headset lenses (Eq. 1, Eq. 2).
@@ -22,11 +26,26 @@
 
 pub mod brown;
 pub mod domain;
+pub mod double_sphere;
+pub mod equirect;
+pub mod eucm;
 pub mod fisheye;
+pub mod fov;
+pub mod ftheta;
+pub mod jet;
+pub mod lens;
+pub mod ocam;
+pub mod omni;
 pub mod opencv;
 pub mod overscan;
+pub mod poly;
 pub mod projection;
+pub mod samples;
 pub mod solve;
+#[cfg(test)]
+mod suite;
+pub mod table;
+pub mod ucm;
 pub mod warp;
 
 use std::fmt;
@@ -37,6 +56,7 @@ use glam::{DMat2, DVec2};
 pub use brown::BrownRadial;
 pub use domain::ValidDomain;
 pub use fisheye::Fisheye;
+pub use lens::{Lens, ModelKind};
 pub use opencv::{Camera, Intrinsics, OpenCvDistortion, Terms};
 pub use projection::{vulkan_projection, Frustum};
 

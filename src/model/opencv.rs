@@ -21,6 +21,7 @@ use glam::{DMat2, DMat3, DVec2, DVec3};
 
 use super::domain::ValidDomain;
 use super::fisheye::Fisheye;
+use super::lens::{Lens, ModelKind};
 use super::solve::solve_increasing;
 use super::{check_finite, check_size, CameraModel, InverseMethod, ModelError, ABSURD_MAGNITUDE};
 
@@ -94,8 +95,9 @@ pub struct Terms {
     pub prism: bool,
     /// tau_x tau_y.
     pub tilt: bool,
-    /// OpenCV's fisheye model (`radial` then says whether any of its k1..k4 is non-zero).
-    pub fisheye: bool,
+    /// Which model the shaders evaluate (for OpenCV's fisheye, `radial` says whether any of
+    /// its k1..k4 is non-zero; the other models of the table compile in whole).
+    pub model: ModelKind,
 }
 
 impl Terms {
@@ -107,8 +109,15 @@ impl Terms {
             tangential: self.tangential || other.tangential,
             prism: self.prism || other.prism,
             tilt: self.tilt || other.tilt,
-            fisheye: self.fisheye || other.fisheye,
+            // One shader evaluates one model: the union of two models is the first one's
+            // (callers share a shader only between cameras of one model).
+            model: self.model,
         }
+    }
+
+    /// Whether the model maps camera-frame rays (every model but the standard one).
+    pub fn is_ray_model(self) -> bool {
+        self.model.is_ray_model()
     }
 }
 
@@ -171,7 +180,7 @@ impl OpenCvDistortion {
             tangential: self.p1 != 0.0 || self.p2 != 0.0,
             prism: self.s1 != 0.0 || self.s2 != 0.0 || self.s3 != 0.0 || self.s4 != 0.0,
             tilt: self.tau_x != 0.0 || self.tau_y != 0.0,
-            fisheye: false,
+            model: ModelKind::Standard,
         }
     }
 
@@ -252,11 +261,11 @@ impl OpenCvDistortion {
 /// matrices and valid domain. This is the one camera noun of vklens: every pass, the planner
 /// and the front ends take it, whatever model it holds.
 ///
-/// Two models are evaluated: OpenCV's standard model, and OpenCV's fisheye model
-/// ([`Camera::fisheye`], [`super::Fisheye`]), whose `distortion` is then all zeros. Brown's
-/// radial model (the Durham radial-correction paper) is exactly the standard model with
-/// `k1 = c1, k2 = c2` in per-axis normalized coordinates, and the camera remembers that it
-/// came from one ([`Camera::brown`]).
+/// The camera holds one [`Lens`]: OpenCV's standard model, evaluated on the pinhole-normalized
+/// point with its own inverses, or one of the ray models of the table ([`super::table`]),
+/// OpenCV's fisheye among them. Brown's radial model (the Durham radial-correction paper) is
+/// exactly the standard model with `k1 = c1, k2 = c2` in per-axis normalized coordinates, and
+/// the camera remembers that it came from one ([`Camera::brown`]).
 #[derive(Debug, Clone)]
 pub struct Camera {
     /// Image width in pixels.
@@ -265,16 +274,11 @@ pub struct Camera {
     pub height: u32,
     /// fx fy cx cy, in OpenCV's pixel-centre convention.
     pub intrinsics: Intrinsics,
-    /// OpenCV's 14 standard-model coefficients.
-    pub distortion: OpenCvDistortion,
+    lens: Lens,
+    /// The standard model's tilt matrix and its inverse (computed once).
     tilt: Option<(DMat3, DMat3)>,
+    /// The pinhole-side valid domain (computed once).
     domain: ValidDomain,
-    /// How many coefficients the camera was given (4, 5, 8, 12 or 14).
-    coeff_count: usize,
-    /// `Some((c1, c2))` for a Brown radial lens.
-    brown: Option<(f64, f64)>,
-    /// The fisheye lens, for a camera of OpenCV's fisheye model.
-    fisheye: Option<Fisheye>,
 }
 
 impl Camera {
@@ -304,12 +308,13 @@ impl Camera {
             width,
             height,
             intrinsics,
-            distortion,
+            lens: Lens::Standard {
+                distortion,
+                coeff_count,
+                brown: None,
+            },
             tilt,
             domain: ValidDomain::unbounded(),
-            coeff_count,
-            brown: None,
-            fisheye: None,
         };
         if distortion.terms() != Terms::default() {
             let d = distortion;
@@ -339,18 +344,101 @@ impl Camera {
             width,
             height,
             intrinsics,
-            distortion: OpenCvDistortion::default(),
+            lens: Lens::Fisheye(lens),
             tilt: None,
             domain,
-            coeff_count: 4,
-            brown: None,
-            fisheye: Some(lens),
         })
+    }
+
+    /// A camera of any model. Its pinhole-side domain (what a perspective image can hold,
+    /// [`Camera::domain`]) is found once from the model's forward map and Jacobian.
+    pub fn with_lens(
+        width: u32,
+        height: u32,
+        intrinsics: Intrinsics,
+        lens: Lens,
+    ) -> Result<Self, ModelError> {
+        match lens {
+            Lens::Standard {
+                distortion,
+                coeff_count,
+                brown,
+            } => {
+                let mut camera = Self::new(width, height, intrinsics, distortion)?;
+                if let Lens::Standard {
+                    coeff_count: c,
+                    brown: b,
+                    ..
+                } = &mut camera.lens
+                {
+                    (*c, *b) = (coeff_count, brown);
+                }
+                Ok(camera)
+            }
+            Lens::Fisheye(f) => Self::fisheye(width, height, intrinsics, f),
+            lens => {
+                check_intrinsics(width, height, &intrinsics)?;
+                let domain = ValidDomain::compute(
+                    |x| lens.ray_distort_normalized(x).map(|(m, _)| m),
+                    |x, dir| {
+                        lens.ray_distort_normalized(x)
+                            .is_some_and(|(m, j)| j.determinant() > 0.0 && m.dot(j * dir) > 0.0)
+                    },
+                );
+                Ok(Camera {
+                    width,
+                    height,
+                    intrinsics,
+                    lens,
+                    tilt: None,
+                    domain,
+                })
+            }
+        }
+    }
+
+    /// The camera's lens model and parameters.
+    pub fn lens(&self) -> &Lens {
+        &self.lens
+    }
+
+    /// Which model the camera holds.
+    pub fn model(&self) -> ModelKind {
+        self.lens.kind()
+    }
+
+    /// The standard model's 14 coefficients (all zero for a camera of another model).
+    pub fn distortion(&self) -> OpenCvDistortion {
+        match &self.lens {
+            Lens::Standard { distortion, .. } => *distortion,
+            _ => OpenCvDistortion::default(),
+        }
+    }
+
+    /// The standard-model coefficients the shaders' standard-model code evaluates: the
+    /// camera's own, or the radial-tangential part of an omni lens (zero for other models).
+    pub fn shader_coefficients(&self) -> OpenCvDistortion {
+        match &self.lens {
+            Lens::Omni(o) => o.radtan().distortion(),
+            _ => self.distortion(),
+        }
+    }
+
+    /// The valid-domain table the shaders read: the pinhole-side domain, or for an omni lens
+    /// its radial-tangential part's (on the plane of Mei's sphere point).
+    pub fn shader_domain(&self) -> &ValidDomain {
+        match &self.lens {
+            Lens::Omni(o) => o.radtan().domain(),
+            _ => &self.domain,
+        }
     }
 
     /// The fisheye lens of a camera of OpenCV's fisheye model.
     pub fn fisheye_lens(&self) -> Option<&Fisheye> {
-        self.fisheye.as_ref()
+        match &self.lens {
+            Lens::Fisheye(f) => Some(f),
+            _ => None,
+        }
     }
 
     /// The largest angle off the axis at which Alg. 1 keeps a vertex, for a fisheye whose
@@ -359,7 +447,7 @@ impl Camera {
     /// however small it is (no tessellation converges), so vertices stop where the ring left
     /// outside is one pixel wide. `None` for every other camera (the domain decides).
     pub fn fisheye_vertex_limit(&self) -> Option<f64> {
-        let lens = self.fisheye.as_ref()?;
+        let lens = self.fisheye_lens()?;
         let f = self.intrinsics.fx.max(self.intrinsics.fy);
         let (_, slope) = lens.theta_d(lens.theta_max());
         let ring = 1.0 / (f * slope.max(f64::MIN_POSITIVE));
@@ -369,13 +457,21 @@ impl Camera {
 
     /// Which term groups (and which model) the camera's shaders compile in.
     pub fn terms(&self) -> Terms {
-        match &self.fisheye {
-            Some(f) => Terms {
+        match &self.lens {
+            Lens::Standard { distortion, .. } => distortion.terms(),
+            Lens::Fisheye(f) => Terms {
                 radial: f.k.iter().any(|&k| k != 0.0),
-                fisheye: true,
+                model: ModelKind::Fisheye,
                 ..Terms::default()
             },
-            None => self.distortion.terms(),
+            Lens::Omni(o) => Terms {
+                model: ModelKind::Omni,
+                ..o.radtan().distortion().terms()
+            },
+            lens => Terms {
+                model: lens.kind(),
+                ..Terms::default()
+            },
         }
     }
 
@@ -388,9 +484,10 @@ impl Camera {
     /// inverted by Newton on θ only (Heikkilä's and OpenCV's iterations are the standard
     /// model's).
     pub fn check_method(&self, method: InverseMethod) -> Result<(), ModelError> {
-        if self.fisheye.is_some() && method != InverseMethod::Newton {
+        if self.model().is_ray_model() && method != InverseMethod::Newton {
             return Err(ModelError::Other(format!(
-                "inverse method `{method}` is the standard model's; a fisheye camera is inverted by `newton` (on θ, exact)"
+                "inverse method `{method}` is the standard model's; a camera of the `{}` model is inverted by `newton` (its own exact inverse)",
+                self.model().name()
             )));
         }
         Ok(())
@@ -403,48 +500,60 @@ impl Camera {
         intrinsics: Intrinsics,
         coeffs: &[f64],
     ) -> Result<Self, ModelError> {
-        let mut camera = Self::new(
+        Self::with_lens(
             width,
             height,
             intrinsics,
-            OpenCvDistortion::from_coeffs(coeffs)?,
-        )?;
-        camera.coeff_count = coeffs.len();
-        Ok(camera)
+            Lens::Standard {
+                distortion: OpenCvDistortion::from_coeffs(coeffs)?,
+                coeff_count: coeffs.len(),
+                brown: None,
+            },
+        )
     }
 
     /// The camera of a Brown radial lens (evaluated as its exact standard-model twin, see
     /// [`BrownRadial::to_opencv`](super::BrownRadial::to_opencv)).
     pub fn from_brown(brown: &super::BrownRadial) -> Result<Self, ModelError> {
         let mut camera = brown.to_opencv()?;
-        camera.brown = Some((brown.c1, brown.c2));
+        if let Lens::Standard { brown: b, .. } = &mut camera.lens {
+            *b = Some((brown.c1, brown.c2));
+        }
         Ok(camera)
     }
 
     /// The Brown radial model this camera was made from, if it was.
     pub fn brown(&self) -> Option<super::BrownRadial> {
-        let (c1, c2) = self.brown?;
+        let Lens::Standard {
+            brown: Some((c1, c2)),
+            ..
+        } = self.lens
+        else {
+            return None;
+        };
         super::BrownRadial::new(self.width, self.height, c1, c2).ok()
     }
 
-    /// The model's name as camera files spell it: `opencv` or `brown`.
+    /// The model's name as camera files spell it: `opencv`, `brown`, `opencv_fisheye`, `omni`…
     pub fn model_name(&self) -> &'static str {
-        if self.brown.is_some() {
-            "brown"
-        } else if self.fisheye.is_some() {
-            "opencv_fisheye"
-        } else {
-            "opencv"
+        match self.lens {
+            Lens::Standard { brown: Some(_), .. } => "brown",
+            _ => self.model().name(),
         }
     }
 
     /// The distortion coefficients as OpenCV orders them, as many as the camera was given
-    /// (4, 5, 8, 12 or 14).
+    /// (4, 5, 8, 12 or 14); a fisheye's k1..k4; another model's own parameters.
     pub fn dist_coeffs(&self) -> Vec<f64> {
-        if let Some(f) = &self.fisheye {
-            return f.k.to_vec();
+        match &self.lens {
+            Lens::Standard {
+                distortion,
+                coeff_count,
+                ..
+            } => distortion.to_coeffs()[..*coeff_count].to_vec(),
+            Lens::Fisheye(f) => f.k.to_vec(),
+            lens => lens.params().into_iter().map(|(_, v)| v).collect(),
         }
-        self.distortion.to_coeffs()[..self.coeff_count].to_vec()
     }
 
     /// The same camera with another size and intrinsics (the lens unchanged).
@@ -454,12 +563,12 @@ impl Camera {
         height: u32,
         intrinsics: Intrinsics,
     ) -> Result<Self, ModelError> {
-        if let Some(f) = self.fisheye {
-            return Self::fisheye(width, height, intrinsics, f);
+        let mut lens = self.lens.clone();
+        // The moved intrinsics are no longer Brown's per-axis normalization.
+        if let Lens::Standard { brown, .. } = &mut lens {
+            *brown = None;
         }
-        let mut camera = Self::new(width, height, intrinsics, self.distortion)?;
-        camera.coeff_count = self.coeff_count;
-        Ok(camera)
+        Self::with_lens(width, height, intrinsics, lens)
     }
 
     /// The valid domain (pre-tilt normalized coordinates).
@@ -476,33 +585,37 @@ impl Camera {
     /// (x'', y''). This is `cv2.projectPoints` before the intrinsics. `None` only where the
     /// model is undefined (zero denominator, non-finite input or result).
     pub fn distort_normalized(&self, x: DVec2) -> Option<DVec2> {
-        if let Some(f) = &self.fisheye {
-            return f.distort_normalized(x).map(|(y, _)| y);
+        self.jacobian_and_distort(x).map(|(y, _)| y)
+    }
+
+    /// [`Camera::distort_normalized`] with its Jacobian.
+    fn jacobian_and_distort(&self, x: DVec2) -> Option<(DVec2, DMat2)> {
+        match &self.lens {
+            Lens::Standard { distortion, .. } => {
+                let (pre, jac) = distortion.distort_pre_tilt(x)?;
+                let (y, tilt_jac) = self.apply_tilt(pre)?;
+                Some((y, tilt_jac * jac))
+            }
+            Lens::Fisheye(f) => f.distort_normalized(x),
+            lens => lens.ray_distort_normalized(x),
         }
-        let (pre, _) = self.distortion.distort_pre_tilt(x)?;
-        self.apply_tilt(pre).map(|(y, _)| y)
     }
 
     /// Jacobian of [`Camera::distort_normalized`].
     pub fn jacobian_normalized(&self, x: DVec2) -> Option<DMat2> {
-        if let Some(f) = &self.fisheye {
-            return f.distort_normalized(x).map(|(_, j)| j);
-        }
-        let (pre, jac) = self.distortion.distort_pre_tilt(x)?;
-        let (_, tilt_jac) = self.apply_tilt(pre)?;
-        Some(tilt_jac * jac)
+        self.jacobian_and_distort(x).map(|(_, j)| j)
     }
 
     /// Projects a 3D point in the OpenCV camera frame to the distorted pixel, as
-    /// `cv2.projectPoints` does. `None` for points at or behind the camera plane (z ≤ 0); a
-    /// fisheye sees there, up to its domain's edge ([`Fisheye::contains_ray`]), and gives
-    /// `None` past it.
+    /// `cv2.projectPoints` does. `None` for points at or behind the camera plane (z ≤ 0) for
+    /// the standard model; the ray models see wherever their domain reaches, past 90° too
+    /// ([`super::table::RayModel::contains_ray`]), and give `None` past it.
     pub fn project(&self, p: DVec3) -> Option<DVec2> {
-        if let Some(f) = &self.fisheye {
-            if !f.contains_ray(p) {
-                return None;
-            }
-            return f.distort_ray(p).map(|y| self.intrinsics.to_pixel(y));
+        if self.model().is_ray_model() {
+            return self
+                .lens
+                .project_ray(p)
+                .map(|y| self.intrinsics.to_pixel(y));
         }
         if !(p.z > 0.0) || !p.is_finite() {
             return None;
@@ -536,8 +649,11 @@ impl Camera {
     /// Removes the tilt: distorted normalized (x'', y'') → pre-tilt (x', y'), exactly (for a
     /// fisheye, the skew: the domain's distorted table is in these coordinates).
     pub fn remove_tilt(&self, y: DVec2) -> Option<DVec2> {
-        if let Some(f) = &self.fisheye {
-            return y.is_finite().then(|| f.unskew(y));
+        match &self.lens {
+            Lens::Fisheye(f) => return y.is_finite().then(|| f.unskew(y)),
+            Lens::Standard { .. } => {}
+            // The other models' domain tables are in their own distorted coordinates.
+            _ => return y.is_finite().then_some(y),
         }
         let Some((_, inv)) = self.tilt else {
             return y.is_finite().then_some(y);
@@ -553,7 +669,7 @@ impl Camera {
     /// Inverse model on normalized coordinates: distorted (x'', y'') → ideal (X/Z, Y/Z), or
     /// `None` when the point has no preimage in the valid domain.
     pub fn undistort_normalized(&self, y: DVec2, method: InverseMethod) -> Option<DVec2> {
-        if self.fisheye.is_some() {
+        if self.model().is_ray_model() {
             let ray = self.unproject_normalized(y)?;
             let x = DVec2::new(ray.x / ray.z, ray.y / ray.z);
             return (ray.z > 0.0 && self.domain.contains_ideal(x)).then_some(x);
@@ -562,10 +678,11 @@ impl Camera {
         if !self.domain.contains_distorted(pre) {
             return None;
         }
+        let d = self.distortion();
         let x = match method {
             InverseMethod::Newton => self.newton(pre)?,
-            InverseMethod::Heikkila => heikkila(&self.distortion, pre)?,
-            InverseMethod::FixedPoint(n) => fixed_point(&self.distortion, pre, n)?,
+            InverseMethod::Heikkila => heikkila(&d, pre)?,
+            InverseMethod::FixedPoint(n) => fixed_point(&d, pre, n)?,
         };
         x.is_finite().then_some(x)
     }
@@ -573,11 +690,12 @@ impl Camera {
     /// Inverse model to a unit camera-frame ray: distorted normalized point → the direction it
     /// sees, past 90° off the axis too for a fisheye; `None` outside the valid domain.
     pub fn unproject_normalized(&self, y: DVec2) -> Option<DVec3> {
-        match &self.fisheye {
-            Some(f) => f.undistort_ray(y),
-            None => self
+        match &self.lens {
+            Lens::Standard { .. } => self
                 .undistort_normalized(y, InverseMethod::Newton)
                 .map(|x| DVec3::new(x.x, x.y, 1.0).normalize()),
+            Lens::Fisheye(f) => f.undistort_ray(y),
+            lens => lens.unproject_ray(y),
         }
     }
 
@@ -617,7 +735,7 @@ impl Camera {
     /// The damped Newton iteration from `start`; `None` unless it ends in the domain with a
     /// vanishing residual and a positive Jacobian determinant.
     fn newton_from(&self, start: DVec2, target: DVec2) -> Option<DVec2> {
-        let d = &self.distortion;
+        let d = &self.distortion();
         let rho = target.length();
         let mut x = start;
         let (mut f, mut jac) = d.distort_pre_tilt(x)?;
@@ -664,7 +782,7 @@ impl Camera {
     /// Start for Newton: solve the radial part r·R(r²) = |target| along the target's direction
     /// on [0, boundary radius], where it is increasing by construction of the domain.
     fn radial_start(&self, target: DVec2) -> DVec2 {
-        let d = &self.distortion;
+        let d = &self.distortion();
         let rho = target.length();
         if rho == 0.0 {
             return DVec2::ZERO;

@@ -34,8 +34,11 @@ macro_rules! camera_params {
             pub tilt: [[$t; 4]; 3],
             /// Rows of its inverse.
             pub untilt: [[$t; 4]; 3],
-            /// x: smallest ideal boundary radius, y: smallest distorted boundary radius.
+            /// x: smallest ideal boundary radius, y: smallest distorted boundary radius, z:
+            /// the cosine of Alg. 1's vertex limit for a ray model (-2 where the domain decides).
             pub domain_info: [$t; 4],
+            /// The ray model's own parameters (`model::table::RayModel::gpu_params`).
+            pub model: [[$t; 4]; 8],
             /// x: ideal boundary radius, y: distorted boundary radius, at angle TAU·i/N.
             pub domain: [[$t; 4]; DOMAIN_SAMPLES],
         }
@@ -44,7 +47,7 @@ macro_rules! camera_params {
             /// The camera's parameters for the shaders.
             pub fn from_camera(camera: &Camera) -> Self {
                 let k = camera.intrinsics;
-                let d = camera.distortion;
+                let d = camera.shader_coefficients();
                 let f = |v: f64| v as $t;
                 let rows = |m: glam::DMat3| -> [[$t; 4]; 3] {
                     let t = m.transpose(); // columns of the transpose are the rows
@@ -57,23 +60,16 @@ macro_rules! camera_params {
                     .tilt_matrices()
                     .map(|(m, inv)| (rows(m), rows(inv)))
                     .unwrap_or_else(|| (rows(glam::DMat3::IDENTITY), rows(glam::DMat3::IDENTITY)));
-                let domain = camera.domain();
+                let domain = camera.shader_domain();
                 let mut table = [[f(0.0); 4]; DOMAIN_SAMPLES];
                 for (slot, [ideal, distorted]) in table.iter_mut().zip(domain.table()) {
                     *slot = [f(ideal), f(distorted), f(0.0), f(0.0)];
                 }
-                // The fisheye's k1..k4 fill `radial`; α, θ_max, θ_d(θ_max) and the cosine of
-                // Alg. 1's vertex limit (`Camera::fisheye_vertex_limit`) `rational`.
+                // The fisheye's k1..k4 fill `radial`; α, θ_max and θ_d(θ_max) `rational`.
                 let (radial, rational) = match camera.fisheye_lens() {
                     Some(l) => (
                         l.k.map(f),
-                        [
-                            f(l.alpha),
-                            f(l.theta_max()),
-                            f(l.theta_d_max()),
-                            // cos of Alg. 1's vertex limit; -2 where the domain decides.
-                            f(camera.fisheye_vertex_limit().map_or(-2.0, f64::cos)),
-                        ],
+                        [f(l.alpha), f(l.theta_max()), f(l.theta_d_max()), f(0.0)],
                     ),
                     None => (
                         [f(d.k1), f(d.k2), f(d.k3), f(0.0)],
@@ -91,9 +87,14 @@ macro_rules! camera_params {
                     domain_info: [
                         f(domain.min_ideal_radius()),
                         f(domain.min_distorted_radius()),
-                        f(0.0),
+                        // cos of Alg. 1's vertex limit; -2 where the domain decides.
+                        f(camera.fisheye_vertex_limit().map_or(-2.0, f64::cos)),
                         f(0.0),
                     ],
+                    model: {
+                        let p = camera.lens().gpu_params();
+                        [0, 1, 2, 3, 4, 5, 6, 7].map(|i| [0, 1, 2, 3].map(|j| f(p[4 * i + j])))
+                    },
                     domain: table,
                 }
             }
@@ -114,8 +115,8 @@ camera_params!(
     f64
 );
 
-const _: () = assert!(std::mem::size_of::<CameraParams>() == 192 + 16 * DOMAIN_SAMPLES);
-const _: () = assert!(std::mem::size_of::<CameraParams64>() == 384 + 32 * DOMAIN_SAMPLES);
+const _: () = assert!(std::mem::size_of::<CameraParams>() == 320 + 16 * DOMAIN_SAMPLES);
+const _: () = assert!(std::mem::size_of::<CameraParams64>() == 640 + 32 * DOMAIN_SAMPLES);
 
 impl CameraParams {
     /// Specialization constants that compile out every term group the camera does not use.
@@ -127,14 +128,7 @@ impl CameraParams {
             .bool(spec::PRISM, terms.prism)
             .bool(spec::TILT, terms.tilt)
             .u32(spec::NEWTON_ITERATIONS, GPU_NEWTON_ITERATIONS)
-            .u32(
-                spec::MODEL,
-                if terms.fisheye {
-                    spec::MODEL_FISHEYE
-                } else {
-                    spec::MODEL_OPENCV
-                },
-            )
+            .u32(spec::MODEL, terms.model.gpu_id())
             .bool(spec::DOMAIN_TABLE, true)
     }
 }

@@ -205,8 +205,8 @@ fn discard_bound(projection: &Projection, camera: &Camera) -> Result<f64> {
                     "δ = {delta}: the discard tolerance must be ≥ 0"
                 )));
             }
-            if camera.fisheye_lens().is_some() {
-                // A fisheye's vertices are tested in its own distorted image (alg1.glsl): its
+            if camera.model().is_ray_model() {
+                // A ray model's (a fisheye's…) vertices are tested in its own distorted image (alg1.glsl): its
                 // domain check, not a frustum, keeps the model from folding; a triangle off
                 // the image is clipped by the rasterizer like any other.
                 return Ok(f64::INFINITY);
@@ -224,8 +224,9 @@ fn discard_bound(projection: &Projection, camera: &Camera) -> Result<f64> {
 /// the GPU's f32 rounding of both tests. A fisheye's domain is its own cone, tested without
 /// the table.
 pub fn discard_needs_domain_table(camera: &Camera, bound: f64) -> bool {
-    if camera.fisheye_lens().is_some() {
-        return false;
+    if camera.model().is_ray_model() {
+        // Only an omni lens reads the table (its radial-tangential part's domain).
+        return camera.model() == crate::model::ModelKind::Omni;
     }
     if !bound.is_finite() {
         return true;

@@ -17,12 +17,9 @@ pub const PRISM: SpecId = SpecId::new("VKL_PRISM", 3);
 pub const TILT: SpecId = SpecId::new("VKL_TILT", 4);
 /// Newton iterations of the GPU inverse.
 pub const NEWTON_ITERATIONS: SpecId = SpecId::new("VKL_NEWTON_ITERATIONS", 5);
-/// Which camera model the shader evaluates ([`MODEL_OPENCV`], [`MODEL_FISHEYE`]).
+/// Which camera model the shader evaluates: `model::ModelKind::gpu_id` (0 OpenCV's standard
+/// model and Brown's, 1 OpenCV's fisheye, 2.. the other models of the table).
 pub const MODEL: SpecId = SpecId::new("VKL_MODEL", 6);
-/// [`MODEL`]'s value for OpenCV's standard model (and a Brown lens, its exact twin).
-pub const MODEL_OPENCV: u32 = 0;
-/// [`MODEL`]'s value for OpenCV's fisheye model.
-pub const MODEL_FISHEYE: u32 = 1;
 /// Whether the valid-domain test may look up its table (false: the smallest boundary radius
 /// alone decides, where that is all a pass can need; see `glsl/include/camera_model.glsl`).
 pub const DOMAIN_TABLE: SpecId = SpecId::new("VKL_DOMAIN_TABLE", 7);

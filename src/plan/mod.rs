@@ -181,8 +181,9 @@ pub struct Plan {
 /// fixed-point ~22 + N × (1.2 for radial lenses, 6 with rational, prism or tilt terms, e.g.
 /// 36 → 129 ns from 5 to 20 iterations on `prism_tilt`); Newton ~70 (radial) to ~100.
 pub fn inverse_candidates_for(terms: crate::model::Terms) -> Vec<(InverseMethod, f64)> {
-    if terms.fisheye {
-        // One inverse for the fisheye: Newton on θ, a 1D solve (cheaper than the 2D one).
+    if terms.is_ray_model() {
+        // One inverse for the ray models: their own (closed form, or Newton on one
+        // variable), cheaper than the standard model's 2D Newton.
         return vec![(InverseMethod::Newton, 70.0)];
     }
     let complex = terms.rational || terms.prism || terms.tilt;
@@ -207,7 +208,7 @@ pub fn inverse_candidates() -> Vec<(InverseMethod, f64)> {
         tangential: true,
         prism: true,
         tilt: true,
-        fisheye: false,
+        model: crate::model::ModelKind::Standard,
     })
 }
 
@@ -549,7 +550,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             let terms_note = format!(
                 "compiled in: {}",
                 [
-                    (terms.fisheye, "fisheye"),
+                    (terms.is_ray_model(), terms.model.name()),
                     (terms.radial, "radial"),
                     (terms.rational, "rational"),
                     (terms.tangential, "tangential"),

@@ -50,8 +50,8 @@ pub fn tessellate(mesh: &Mesh, pose: &Pose, camera: &Camera, max_edge_px: f64) -
         let pixels: Vec<Option<DVec2>> = points
             .iter()
             .map(|&p| {
-                if camera.fisheye_lens().is_some() {
-                    // A fisheye sees behind the image plane: edges are measured in its own
+                if camera.model().is_ray_model() {
+                    // A ray model (a fisheye…) sees behind the image plane: edges are measured in its own
                     // image, where Alg. 1 puts them (and not past the vertex limit, where
                     // Alg. 1 drops them).
                     let kept = fisheye_limit_cos.is_none_or(|c| p.z >= p.length() * c);

@@ -1,0 +1,502 @@
+//! Camera files of the models of the table beyond OpenCV's two: vklens JSON (`"model":
+//! "omni"`, `"ucm"`, `"eucm"`, `"double_sphere"`, `"fov"`, `"equirectangular"`, `"ftheta"`,
+//! `"ocam"`), NCore's camera JSON for f-theta and OCamCalib's `calib_results.txt`, and the
+//! vklens JSON written back for each.
+
+use serde_json::{json, Map, Value};
+
+use super::camera::{dimension, intrinsics_from, number_field, number_list, parse_float};
+use crate::error::{Error, Result};
+use crate::model::double_sphere::DoubleSphere;
+use crate::model::equirect::Equirectangular;
+use crate::model::eucm::Eucm;
+use crate::model::fov::Fov;
+use crate::model::ftheta::{FTheta, Reference};
+use crate::model::ocam::Ocam;
+use crate::model::omni::Omni;
+use crate::model::table::RayModel;
+use crate::model::ucm::Ucm;
+use crate::model::{Camera, Intrinsics, Lens};
+
+/// The model names this module reads.
+pub const MODEL_NAMES: [&str; 8] = [
+    Omni::NAME,
+    Ucm::NAME,
+    Eucm::NAME,
+    DoubleSphere::NAME,
+    Fov::NAME,
+    Equirectangular::NAME,
+    FTheta::NAME,
+    Ocam::NAME,
+];
+
+/// NCore's rolling-shutter names (`shutter_type`), kept on an f-theta camera.
+pub const SHUTTER_TYPES: [&str; 5] = [
+    "ROLLING_TOP_TO_BOTTOM",
+    "ROLLING_LEFT_TO_RIGHT",
+    "ROLLING_BOTTOM_TO_TOP",
+    "ROLLING_RIGHT_TO_LEFT",
+    "GLOBAL",
+];
+
+/// A vklens JSON camera of model `model` (one of [`MODEL_NAMES`]).
+pub fn camera_from_json(model: &str, obj: &Map<String, Value>) -> Result<Camera> {
+    let width = dimension(obj, &["width", "image_width"])?;
+    let height = dimension(obj, &["height", "image_height"])?;
+    let num = |k: &str| number_field(obj, k);
+    let (lens, intrinsics) = match model {
+        "omni" => {
+            let (key, d) = match obj.get("dist_coeffs") {
+                Some(v) => ("dist_coeffs", number_list(v, "dist_coeffs")?),
+                None => ("dist_coeffs", vec![0.0; 4]),
+            };
+            let d: [f64; 4] = d.as_slice().try_into().map_err(|_| {
+                Error::input(format!(
+                    "`{key}`: the omni model's radial-tangential part has 4 coefficients (k1 k2 p1 p2), this file has {}",
+                    d.len()
+                ))
+            })?;
+            (Lens::Omni(Omni::new(num("xi")?, d)?), pinhole_k(obj)?)
+        }
+        "ucm" => (Lens::Ucm(Ucm::new(num("alpha")?)?), pinhole_k(obj)?),
+        "eucm" => (
+            Lens::Eucm(Eucm::new(num("alpha")?, num("beta")?)?),
+            pinhole_k(obj)?,
+        ),
+        "double_sphere" => (
+            Lens::DoubleSphere(DoubleSphere::new(num("xi")?, num("alpha")?)?),
+            pinhole_k(obj)?,
+        ),
+        "fov" => (Lens::Fov(Fov::new(num("omega")?)?), pinhole_k(obj)?),
+        "equirectangular" => {
+            let k = if obj.contains_key("fx") || obj.contains_key("camera_matrix") {
+                pinhole_k(obj)?
+            } else {
+                let [fx, fy, cx, cy] = Equirectangular::full_sphere(width, height);
+                Intrinsics { fx, fy, cx, cy }
+            };
+            (Lens::Equirectangular(Equirectangular), k)
+        }
+        "ftheta" => (Lens::FTheta(ftheta_from(obj)?), centre_only(obj)?),
+        "ocam" => {
+            let poly = number_list(required(obj, "poly")?, "poly")?;
+            let inverse = match obj.get("inverse_poly") {
+                Some(v) => number_list(v, "inverse_poly")?,
+                None => Vec::new(),
+            };
+            let k = centre_only(obj)?;
+            let lens = Ocam::new(
+                poly,
+                inverse,
+                [num("c")?, num("d")?, num("e")?],
+                corner_radius(width, height, &k),
+            )?;
+            (Lens::Ocam(lens), k)
+        }
+        other => {
+            return Err(Error::input(format!(
+                "`model` is `{other}`, which this reader does not know"
+            )))
+        }
+    };
+    Camera::with_lens(width, height, intrinsics, lens).map_err(Error::from)
+}
+
+fn required<'a>(obj: &'a Map<String, Value>, key: &str) -> Result<&'a Value> {
+    obj.get(key)
+        .ok_or_else(|| Error::input(format!("missing field `{key}`")))
+}
+
+/// fx fy cx cy (or a camera matrix without skew).
+fn pinhole_k(obj: &Map<String, Value>) -> Result<Intrinsics> {
+    intrinsics_from(obj, false).map(|(k, _)| k)
+}
+
+/// The models whose own parameters carry the scale (f-theta, OCamCalib): cx cy only, and
+/// unit focal lengths (the model's distorted point is in pixels).
+fn centre_only(obj: &Map<String, Value>) -> Result<Intrinsics> {
+    for key in ["fx", "fy"] {
+        if obj.contains_key(key) {
+            return Err(Error::input(format!(
+                "`{key}` is not a parameter of this model: its polynomials map angles to pixel distances directly"
+            )));
+        }
+    }
+    Ok(Intrinsics {
+        fx: 1.0,
+        fy: 1.0,
+        cx: number_field(obj, "cx")?,
+        cy: number_field(obj, "cy")?,
+    })
+}
+
+/// The largest distance from the principal point that a pixel of the image reaches (its
+/// corners, pixel edges included).
+fn corner_radius(width: u32, height: u32, k: &Intrinsics) -> f64 {
+    let xs = [-0.5 - k.cx, width as f64 - 0.5 - k.cx];
+    let ys = [-0.5 - k.cy, height as f64 - 0.5 - k.cy];
+    xs.iter()
+        .flat_map(|x| ys.iter().map(move |y| x.hypot(*y)))
+        .fold(0.0, f64::max)
+}
+
+fn ftheta_from(obj: &Map<String, Value>) -> Result<FTheta> {
+    let reference = match required(obj, "reference_poly")? {
+        Value::String(s) => Reference::parse(s).ok_or_else(|| {
+            Error::input(format!(
+                "`reference_poly` is `{s}`; NCore spells it `PIXELDIST_TO_ANGLE` or `ANGLE_TO_PIXELDIST`"
+            ))
+        })?,
+        other => {
+            return Err(Error::input(format!(
+                "`reference_poly` must be a string (`PIXELDIST_TO_ANGLE` or `ANGLE_TO_PIXELDIST`), got {other}"
+            )))
+        }
+    };
+    let poly = |key: &str| -> Result<Vec<f64>> {
+        match obj.get(key) {
+            Some(v) => number_list(v, key),
+            None => Ok(Vec::new()),
+        }
+    };
+    let cde = match obj.get("linear_cde") {
+        Some(v) => {
+            let l = number_list(v, "linear_cde")?;
+            <[f64; 3]>::try_from(l.as_slice()).map_err(|_| {
+                Error::input(format!(
+                    "`linear_cde` has 3 numbers [c, d, e], got {}",
+                    l.len()
+                ))
+            })?
+        }
+        None => [1.0, 0.0, 0.0],
+    };
+    let mut lens = FTheta::new(
+        reference,
+        poly("pixeldist_to_angle_poly")?,
+        poly("angle_to_pixeldist_poly")?,
+        cde,
+        number_field(obj, "max_angle")?,
+    )?;
+    lens.shutter_type = match obj.get("shutter_type") {
+        None | Some(Value::Null) => None,
+        Some(Value::String(s)) if SHUTTER_TYPES.contains(&s.as_str()) => Some(s.clone()),
+        Some(other) => {
+            return Err(Error::input(format!(
+                "`shutter_type` is {other}; NCore's are {}",
+                SHUTTER_TYPES.join(", ")
+            )))
+        }
+    };
+    Ok(lens)
+}
+
+/// NCore's camera JSON (`{"camera_model_type": "ftheta", "camera_model_parameters": {...}}`).
+pub fn ncore_camera(tree: &Value) -> Option<Result<Camera>> {
+    let kind = tree.get("camera_model_type")?;
+    Some((|| {
+        if kind.as_str() != Some("ftheta") {
+            return Err(Error::input(format!(
+                "`camera_model_type` is {kind}; vklens reads NCore's `ftheta` cameras from this layout (its OpenCV cameras as OpenCV files)"
+            )));
+        }
+        let params = tree
+            .get("camera_model_parameters")
+            .and_then(Value::as_object)
+            .ok_or_else(|| Error::input("missing object `camera_model_parameters`"))?;
+        if params
+            .get("external_distortion_parameters")
+            .is_some_and(|v| !v.is_null())
+        {
+            return Err(Error::unsupported(
+                "`external_distortion_parameters` (NCore's windshield distortion) is not a model vklens has: refusing rather than ignoring it",
+            ));
+        }
+        let res = number_list(required(params, "resolution")?, "resolution")?;
+        let pp = number_list(required(params, "principal_point")?, "principal_point")?;
+        let (&[w, h], &[cx, cy]) = (res.as_slice(), pp.as_slice()) else {
+            return Err(Error::input(
+                "`resolution` and `principal_point` each have two numbers",
+            ));
+        };
+        let mut obj = params.clone();
+        obj.insert("width".into(), json!(w));
+        obj.insert("height".into(), json!(h));
+        obj.insert("cx".into(), json!(cx));
+        obj.insert("cy".into(), json!(cy));
+        camera_from_json("ftheta", &obj)
+    })())
+}
+
+/// OCamCalib's `calib_results.txt`: comment lines (`#`) and blank lines between five data
+/// lines — `pol` (its length first), `invpol` (likewise), `xc yc` (row, column centre),
+/// `c d e`, `height width`.
+pub fn looks_like_ocam(text: &str) -> bool {
+    text.lines().next().is_some_and(|l| {
+        l.trim_start()
+            .starts_with("#polynomial coefficients for the DIRECT mapping function")
+    })
+}
+
+/// The camera of an OCamCalib `calib_results.txt`.
+pub fn ocam_camera(text: &str) -> Result<Camera> {
+    let lines: Vec<Vec<f64>> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .map(|l| {
+            l.split_whitespace()
+                .map(|t| {
+                    parse_float(t).ok_or_else(|| {
+                        Error::input(format!("`{t}` is not a number (in line `{l}`)"))
+                    })
+                })
+                .collect::<Result<Vec<f64>>>()
+        })
+        .collect::<Result<_>>()?;
+    let what = ["pol", "invpol", "xc yc", "c d e", "height width"];
+    if lines.len() < what.len() {
+        return Err(Error::input(format!(
+            "an OCamCalib calib_results.txt has 5 data lines ({}), this one has {}",
+            what.join("; "),
+            lines.len()
+        )));
+    }
+    let counted = |i: usize| -> Result<Vec<f64>> {
+        let l = &lines[i];
+        let n = l.first().copied().unwrap_or(-1.0);
+        if !(n.fract() == 0.0 && n >= 1.0 && (n as usize) == l.len() - 1) {
+            return Err(Error::input(format!(
+                "the `{}` line must start with its number of coefficients, then that many: {l:?}",
+                what[i]
+            )));
+        }
+        Ok(l[1..].to_vec())
+    };
+    let pair = |i: usize, n: usize| -> Result<&[f64]> {
+        let l = &lines[i];
+        if l.len() != n {
+            return Err(Error::input(format!(
+                "the `{}` line must have {n} numbers, got {l:?}",
+                what[i]
+            )));
+        }
+        Ok(l)
+    };
+    let (pol, invpol) = (counted(0)?, counted(1)?);
+    let centre = pair(2, 2)?;
+    let cde = pair(3, 3)?;
+    let size = pair(4, 2)?;
+    let mut obj = Map::new();
+    obj.insert("model".into(), json!("ocam"));
+    obj.insert("height".into(), json!(size[0]));
+    obj.insert("width".into(), json!(size[1]));
+    // Rows first: xc is the row centre (vklens cy), yc the column centre (cx).
+    obj.insert("cy".into(), json!(centre[0]));
+    obj.insert("cx".into(), json!(centre[1]));
+    obj.insert("poly".into(), json!(pol));
+    obj.insert("inverse_poly".into(), json!(invpol));
+    for (k, v) in ["c", "d", "e"].into_iter().zip(cde) {
+        obj.insert(k.into(), json!(v));
+    }
+    camera_from_json("ocam", &obj)
+}
+
+/// The vklens JSON of a camera of one of these models (`None` for OpenCV's two and Brown's).
+pub fn camera_to_json(camera: &Camera) -> Option<Value> {
+    let k = camera.intrinsics;
+    let mut v = json!({
+        "model": camera.model_name(), "width": camera.width, "height": camera.height,
+    });
+    let pinhole = |v: &mut Value| {
+        v["fx"] = k.fx.into();
+        v["fy"] = k.fy.into();
+        v["cx"] = k.cx.into();
+        v["cy"] = k.cy.into();
+    };
+    match camera.lens() {
+        Lens::Standard { .. } | Lens::Fisheye(_) => return None,
+        Lens::Omni(m) => {
+            pinhole(&mut v);
+            v["xi"] = m.xi.into();
+            v["dist_coeffs"] = json!(m.dist_coeffs());
+        }
+        Lens::FTheta(m) => {
+            v["cx"] = k.cx.into();
+            v["cy"] = k.cy.into();
+            v["reference_poly"] = m.reference.name().into();
+            v["pixeldist_to_angle_poly"] = json!(m.pixeldist_to_angle);
+            v["angle_to_pixeldist_poly"] = json!(m.angle_to_pixeldist);
+            v["linear_cde"] = json!(m.linear_cde);
+            v["max_angle"] = m.max_angle.into();
+            if let Some(s) = &m.shutter_type {
+                v["shutter_type"] = s.as_str().into();
+            }
+        }
+        Lens::Ocam(m) => {
+            v["cx"] = k.cx.into();
+            v["cy"] = k.cy.into();
+            v["poly"] = json!(m.poly);
+            v["inverse_poly"] = json!(m.inverse_poly);
+            for (name, c) in ["c", "d", "e"].into_iter().zip(m.cde) {
+                v[name] = c.into();
+            }
+        }
+        lens => {
+            pinhole(&mut v);
+            for (name, value) in lens.params() {
+                v[name] = value.into();
+            }
+        }
+    }
+    Some(v)
+}
+
+/// camodocal's (and VINS-Fusion's) camera YAML: `model_type: MEI | PINHOLE | KANNALA_BRANDT`
+/// with its own parameter names.
+pub fn camodocal_camera(tree: &Value) -> Option<Result<Camera>> {
+    let kind = tree.get("model_type")?;
+    let obj = tree.as_object()?;
+    Some((|| {
+        let group = |key: &str| -> Result<&Map<String, Value>> {
+            obj.get(key)
+                .and_then(Value::as_object)
+                .ok_or_else(|| Error::input(format!("missing mapping `{key}`")))
+        };
+        let num = |g: &Map<String, Value>, key: &str| number_field(g, key);
+        let width = dimension(obj, &["image_width"])?;
+        let height = dimension(obj, &["image_height"])?;
+        let kind = kind.as_str().unwrap_or_default();
+        let (intrinsics, lens) = match kind {
+            "MEI" => {
+                let p = group("projection_parameters")?;
+                let d = group("distortion_parameters")?;
+                let xi = num(group("mirror_parameters")?, "xi")?;
+                let k = Intrinsics {
+                    fx: num(p, "gamma1")?,
+                    fy: num(p, "gamma2")?,
+                    cx: num(p, "u0")?,
+                    cy: num(p, "v0")?,
+                };
+                let c = [num(d, "k1")?, num(d, "k2")?, num(d, "p1")?, num(d, "p2")?];
+                (k, Lens::Omni(Omni::new(xi, c)?))
+            }
+            "PINHOLE" => {
+                let p = group("projection_parameters")?;
+                let d = group("distortion_parameters")?;
+                let k = Intrinsics {
+                    fx: num(p, "fx")?,
+                    fy: num(p, "fy")?,
+                    cx: num(p, "cx")?,
+                    cy: num(p, "cy")?,
+                };
+                let c = [num(d, "k1")?, num(d, "k2")?, num(d, "p1")?, num(d, "p2")?];
+                return Camera::from_coeffs(width, height, k, &c).map_err(Error::from);
+            }
+            "KANNALA_BRANDT" => {
+                // camodocal's k2..k5 are OpenCV's fisheye k1..k4 (its θ series starts at θ³).
+                let p = group("projection_parameters")?;
+                let k = Intrinsics {
+                    fx: num(p, "mu")?,
+                    fy: num(p, "mv")?,
+                    cx: num(p, "u0")?,
+                    cy: num(p, "v0")?,
+                };
+                let c = [num(p, "k2")?, num(p, "k3")?, num(p, "k4")?, num(p, "k5")?];
+                (k, Lens::Fisheye(crate::model::Fisheye::new(c, 0.0, None)?))
+            }
+            other => {
+                return Err(Error::input(format!(
+                    "`model_type` is `{other}`; vklens reads camodocal's MEI, PINHOLE and KANNALA_BRANDT"
+                )))
+            }
+        };
+        Camera::with_lens(width, height, intrinsics, lens).map_err(Error::from)
+    })())
+}
+
+/// Basalt's calibration JSON (`value0.intrinsics[i].camera_type`, `value0.resolution[i]`):
+/// camera `index` (default 0).
+pub fn basalt_camera(tree: &Value, index: Option<usize>) -> Option<Result<Camera>> {
+    let root = tree.get("value0")?;
+    let cams = root.get("intrinsics")?.as_array()?;
+    Some((|| {
+        let i = index.unwrap_or(0);
+        let cam = cams.get(i).ok_or_else(|| {
+            Error::input(format!(
+                "camera index {i} asked, but this Basalt calibration holds {} camera(s)",
+                cams.len()
+            ))
+        })?;
+        let res = root
+            .get("resolution")
+            .and_then(Value::as_array)
+            .and_then(|r| r.get(i))
+            .ok_or_else(|| Error::input(format!("missing `value0.resolution[{i}]`")))?;
+        let res = number_list(res, "resolution")?;
+        let &[w, h] = res.as_slice() else {
+            return Err(Error::input(format!(
+                "`value0.resolution[{i}]` has two numbers [width, height]"
+            )));
+        };
+        let kind = cam
+            .get("camera_type")
+            .and_then(Value::as_str)
+            .ok_or_else(|| Error::input(format!("missing `value0.intrinsics[{i}].camera_type`")))?;
+        let p = cam
+            .get("intrinsics")
+            .and_then(Value::as_object)
+            .ok_or_else(|| Error::input(format!("missing `value0.intrinsics[{i}].intrinsics`")))?;
+        let mut obj = p.clone();
+        obj.insert("width".into(), json!(w));
+        obj.insert("height".into(), json!(h));
+        let model = match kind {
+            "ds" => "double_sphere",
+            "eucm" | "ucm" => kind,
+            "fov" => {
+                let omega = number_field(p, "w")?;
+                obj.insert("omega".into(), json!(omega));
+                "fov"
+            }
+            "pinhole" | "kb4" | "pinhole-radtan8" => {
+                let k = pinhole_k(p)?;
+                let (w, h) = (
+                    super::camera::image_side_of(w, "width")?,
+                    super::camera::image_side_of(h, "height")?,
+                );
+                let n = |key: &str| number_field(p, key);
+                return match kind {
+                    "pinhole" => Camera::from_coeffs(w, h, k, &[0.0; 4]),
+                    "kb4" => crate::model::Fisheye::new(
+                        [n("k1")?, n("k2")?, n("k3")?, n("k4")?],
+                        0.0,
+                        None,
+                    )
+                    .and_then(|f| Camera::fisheye(w, h, k, f)),
+                    _ => Camera::from_coeffs(
+                        w,
+                        h,
+                        k,
+                        &[
+                            n("k1")?,
+                            n("k2")?,
+                            n("p1")?,
+                            n("p2")?,
+                            n("k3")?,
+                            n("k4")?,
+                            n("k5")?,
+                            n("k6")?,
+                        ],
+                    ),
+                }
+                .map_err(Error::from);
+            }
+            other => {
+                return Err(Error::input(format!(
+                    "`value0.intrinsics[{i}].camera_type` is `{other}`; vklens reads Basalt's pinhole, ds, eucm, ucm, kb4, fov and pinhole-radtan8"
+                )))
+            }
+        };
+        camera_from_json(model, &obj)
+    })())
+}

@@ -99,6 +99,16 @@ fn calibrate_fisheye(camera: &str, path: &str) -> serde_json::Value {
         .join("reference")
         .join("fisheye")
         .join(format!("{camera}.json"));
+    let r = calibrate_file(&cam_file, camera, path);
+    assert_eq!(r["model"], "opencv_fisheye", "{r}");
+    r
+}
+
+/// Renders a calibration set through the camera file `cam_file`, runs `tests/calibrate.py`
+/// on it (its mode follows the camera's model) and checks that at least 8 views were used and
+/// every parameter the script gates passes (`"gated": false` rows are reported only).
+/// Returns the report.
+fn calibrate_file(cam_file: &std::path::Path, camera: &str, path: &str) -> serde_json::Value {
     let dir = std::env::temp_dir().join(format!(
         "vklens-calib-{camera}-{path}-{}",
         std::process::id()
@@ -106,7 +116,7 @@ fn calibrate_fisheye(camera: &str, path: &str) -> serde_json::Value {
     let out = dir.join("set");
     let o = Command::new(env!("CARGO_BIN_EXE_vklens"))
         .args(["calibration-set", "--camera"])
-        .arg(&cam_file)
+        .arg(cam_file)
         .arg("--out")
         .arg(&out)
         .args(["--path", path])
@@ -124,13 +134,41 @@ fn calibrate_fisheye(camera: &str, path: &str) -> serde_json::Value {
     let r: serde_json::Value = serde_json::from_str(text.trim())
         .unwrap_or_else(|_| panic!("calibrate.py: {text}{}", String::from_utf8_lossy(&o.stderr)));
     println!("{camera} {path}: {r}");
-    assert_eq!(r["model"], "opencv_fisheye", "{r}");
     assert!(r["views_used"].as_u64().unwrap() >= 8, "{r}");
     for p in r["parameters"].as_array().unwrap() {
-        assert!(p["pass"].as_bool().unwrap(), "{camera} {path}: {p}");
+        if p["gated"].as_bool() != Some(false) {
+            assert!(p["pass"].as_bool().unwrap(), "{camera} {path}: {p}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
     r
+}
+
+/// Mei's unified omnidirectional model + radtan (`examples/cameras/omni.json`, 1024×768,
+/// γ 820/816, ξ 0.95), calibrated with cv2.omnidir.calibrate: fx fy cx cy within 0.5 %, ξ
+/// within 1 %, p1 p2 within 0.005; k1 k2 reported only (they trade with ξ, see
+/// tests/calibrate.py). About 30 s (render ~25 s on lavapipe, calibration ~2 s).
+///
+/// Caveat: γ and ξ lie in a flat valley of the fit (the paraxial γ/(1 + ξ) is what the views
+/// pin down, within 0.01 %), so this pass depends on this exact pose set: the same camera's
+/// 21- and 25-view sets miss the ξ limit (1.6 %, 4.3 %). A driver whose renders move the corners
+/// by a few thousandths of a pixel can flip it; the report's fx/(1+xi) rows tell noise from bias.
+#[test]
+fn omni_vertex_path_recovers_the_lens() {
+    let cam_file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples")
+        .join("cameras")
+        .join("omni.json");
+    let r = calibrate_file(&cam_file, "omni", "vertex");
+    assert_eq!(r["model"], "omni", "{r}");
+    let names: Vec<&str> = r["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["gated"] == true)
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["fx", "fy", "cx", "cy", "xi", "p1", "p2"], "{r}");
 }
 
 #[test]

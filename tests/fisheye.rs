@@ -329,7 +329,7 @@ fn a_colmap_camera_and_its_opencv_twin_see_a_point_at_the_same_pixel() {
 
 #[test]
 fn malformed_fisheye_files_name_the_file_and_the_key() {
-    let cases: [(&str, &str, &[&str]); 9] = [
+    let cases: [(&str, &str, &[&str]); 10] = [
         (
             r#"{"model": "opencv_fisheye", "width": 800, "height": 600, "fx": 300, "fy": 300, "cx": 400, "cy": 300, "dist_coeffs": [0.1, 0.0, 0.0]}"#,
             "cam.json",
@@ -356,9 +356,14 @@ fn malformed_fisheye_files_name_the_file_and_the_key() {
             &["ros.yaml", "distortion_coefficients", "4 coefficients"],
         ),
         (
-            "cam0:\n  camera_model: omni\n  intrinsics: [1, 300, 300, 400, 300]\n  resolution: [800, 600]\n",
+            "cam0:\n  camera_model: omni\n  distortion_model: equidistant\n  distortion_coeffs: [0, 0, 0, 0]\n  intrinsics: [1, 300, 300, 400, 300]\n  resolution: [800, 600]\n",
             "camchain.yaml",
-            &["camchain.yaml", "cam0.camera_model", "omni"],
+            &["camchain.yaml", "cam0.distortion_model", "equidistant", "omni"],
+        ),
+        (
+            "cam0:\n  camera_model: unified\n  intrinsics: [1, 300, 300, 400, 300]\n  resolution: [800, 600]\n",
+            "camchain.yaml",
+            &["camchain.yaml", "cam0.camera_model", "unified"],
         ),
         (
             "cam0:\n  camera_model: pinhole\n  distortion_model: equidistant\n  distortion_coeffs: [0, 0, 0]\n  intrinsics: [300, 300, 400, 300]\n  resolution: [800, 600]\n",

@@ -664,7 +664,8 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
         "{why:?}"
     );
     assert!(
-        why.iter().any(|w| w.contains("compiled in: fisheye")),
+        why.iter()
+            .any(|w| w.contains("compiled in: opencv_fisheye")),
         "{why:?}"
     );
 

@@ -417,6 +417,105 @@ unsafe fn write_pairs(out: *mut f64, values: &[Option<[f64; 2]>]) {
     }
 }
 
+/// The camera's model as camera files name it (`opencv`, `brown`, `opencv_fisheye`, `omni`,
+/// `ucm`, `eucm`, `double_sphere`, `fov`, `equirectangular`, `ftheta`, `ocam`): a static
+/// NUL-terminated string the caller never frees; NULL for a NULL camera.
+///
+/// # Safety
+/// `c` is NULL or a live camera.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_model(c: vkl_camera) -> *const c_char {
+    // SAFETY: NULL or a live camera (the caller's contract).
+    let Ok(c) = (unsafe { arg(c, "camera") }) else {
+        return ptr::null();
+    };
+    let name: &'static CStr = match c.camera.model_name() {
+        "opencv" => c"opencv",
+        "brown" => c"brown",
+        "opencv_fisheye" => c"opencv_fisheye",
+        "omni" => c"omni",
+        "ucm" => c"ucm",
+        "eucm" => c"eucm",
+        "double_sphere" => c"double_sphere",
+        "fov" => c"fov",
+        "equirectangular" => c"equirectangular",
+        "ftheta" => c"ftheta",
+        "ocam" => c"ocam",
+        _ => c"unknown",
+    };
+    name.as_ptr()
+}
+
+/// Camera-frame points (X, Y, Z; 3n doubles, OpenCV's frame) to distorted pixels (2n
+/// doubles), exact in f64; a pair of NaN where the model does not see the point (behind the
+/// image plane for the standard model, outside the domain for the others, which see past 90°).
+///
+/// # Safety
+/// `c` is NULL or a live camera; `xyz` is NULL or points to 3n doubles and `uv_out` to 2n
+/// writable doubles that do not overlap them.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_project_points(
+    c: vkl_camera,
+    xyz: *const f64,
+    n: usize,
+    uv_out: *mut f64,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live camera (the caller's contract).
+        let c = unsafe { arg(c, "camera")? };
+        let count = n
+            .checked_mul(3)
+            .ok_or_else(|| input(format!("n: {n} points is too many")))?;
+        if n > 0 && uv_out.is_null() {
+            return Err(input(format!("uv_out: NULL pointer for {n} point(s)")));
+        }
+        // SAFETY: 3n readable doubles (the caller's contract).
+        let flat = unsafe { slice(xyz, count, "xyz")? };
+        let points: Vec<[f64; 3]> = flat.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+        let result = c.camera.project_points(&points);
+        // SAFETY: 2n writable doubles (the caller's contract).
+        unsafe { write_pairs(uv_out, &result) };
+        Ok(())
+    })
+}
+
+/// Distorted pixels (2n doubles) to unit camera-frame rays (3n doubles), past 90° where the
+/// model sees there; a triple of NaN outside the valid domain.
+///
+/// # Safety
+/// `c` is NULL or a live camera; `uv` is NULL or points to 2n doubles and `rays_out` to 3n
+/// writable doubles that do not overlap them.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_unproject_points(
+    c: vkl_camera,
+    uv: *const f64,
+    n: usize,
+    rays_out: *mut f64,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live camera (the caller's contract).
+        let c = unsafe { arg(c, "camera")? };
+        // 3n doubles out: 2n in cannot overflow once 3n does not.
+        n.checked_mul(3)
+            .ok_or_else(|| input(format!("n: {n} points is too many")))?;
+        if n > 0 && rays_out.is_null() {
+            return Err(input(format!("rays_out: NULL pointer for {n} point(s)")));
+        }
+        // SAFETY: 2n readable doubles (the caller's contract; 2n ≤ 3n, which did not overflow).
+        let flat = unsafe { slice(uv, 2 * n, "uv")? };
+        let pixels: Vec<[f64; 2]> = flat.chunks_exact(2).map(|p| [p[0], p[1]]).collect();
+        let rays = c.camera.unproject_points(&pixels);
+        for (i, r) in rays.iter().enumerate() {
+            let r = r.unwrap_or([f64::NAN; 3]);
+            for (j, v) in r.into_iter().enumerate() {
+                // SAFETY: in bounds of the 3n doubles the caller provides.
+                unsafe { rays_out.add(3 * i + j).write(v) };
+            }
+        }
+        Ok(())
+    })
+}
+
 /// Frees a camera and sets `*c` to NULL; warpers built from it keep their own copy.
 ///
 /// # Safety

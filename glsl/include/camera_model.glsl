@@ -85,6 +85,8 @@ layout(constant_id = 5) const uint VKL_NEWTON_ITERATIONS = 20;
 #define VKL_MODEL_EQUIRECTANGULAR 7u
 #define VKL_MODEL_FTHETA 8u
 #define VKL_MODEL_OCAM 9u
+#define VKL_MODEL_DIVISION 10u
+#define VKL_MODEL_THIN_PRISM_FISHEYE 11u
 layout(constant_id = 6) const uint VKL_MODEL = VKL_MODEL_OPENCV;
 // false: every ideal point this shader tests either lies inside the domain's smallest boundary
 // radius or is dropped whatever the answer (the compute discard, when its Sec. 3.2 bound lies
@@ -508,6 +510,7 @@ bool vkl_standard_undistort(VKL_VEC2 d, out VKL_VEC2 x) {
 #include "models/unified.glsl"
 #include "models/fov_equirect.glsl"
 #include "models/polynomial.glsl"
+#include "models/thin_prism.glsl"
 
 // A ray model's forward map: camera-frame point (any length, any hemisphere) -> distorted
 // normalized point. False outside the model's domain.
@@ -522,6 +525,8 @@ bool vkl_ray_project(VKL_VEC3 p, out VKL_VEC2 m) {
     if (VKL_MODEL == VKL_MODEL_EQUIRECTANGULAR) return vkl_equirect_project(p, m);
     if (VKL_MODEL == VKL_MODEL_FTHETA) return vkl_ftheta_project(p, m);
     if (VKL_MODEL == VKL_MODEL_OCAM) return vkl_ocam_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_DIVISION) return vkl_division_project(p, m);
+    if (VKL_MODEL == VKL_MODEL_THIN_PRISM_FISHEYE) return vkl_tp_project(p, m);
     return false;
 }
 
@@ -538,6 +543,8 @@ bool vkl_ray_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
     if (VKL_MODEL == VKL_MODEL_EQUIRECTANGULAR) return vkl_equirect_unproject(m, ray);
     if (VKL_MODEL == VKL_MODEL_FTHETA) return vkl_ftheta_unproject(m, ray);
     if (VKL_MODEL == VKL_MODEL_OCAM) return vkl_ocam_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_DIVISION) return vkl_division_unproject(m, ray);
+    if (VKL_MODEL == VKL_MODEL_THIN_PRISM_FISHEYE) return vkl_tp_unproject(m, ray);
     return false;
 }
 

@@ -618,3 +618,60 @@ def test_ocam(tmp_path):
     # OCamCalib's own world2cam (the invpol fit) lands within a fraction of a pixel.
     approx = ocam_world2cam(ref, invpol)
     worst(np.abs(approx - got).max(axis=1), "ocam: OCamCalib's world2cam (invpol) vs vklens px", 0.5)
+
+
+# --------------------------------------------------------------------------------------------
+# COLMAP's models, through vklens's `colmap` model and cameras.txt, against pycolmap itself.
+
+COLMAP_CASES = [
+    ("SIMPLE_RADIAL", [420.0, 376.0, 240.5, -0.08]),
+    ("OPENCV", [458.7, 457.3, 367.7, 248.9, -0.28, 0.074, 2e-4, 1.8e-5]),
+    ("OPENCV_FISHEYE", [190.9, 190.9, 255.4, 257.4, -0.013, 0.017, -0.012, 0.003]),
+    ("FOV", [300.0, 302.0, 370.5, 240.2, 0.93]),
+    ("SIMPLE_DIVISION", [420.0, 375.7, 239.6, -0.35]),
+    ("DIVISION", [420.0, 421.0, 375.7, 239.6, 0.08]),
+    ("SIMPLE_FISHEYE", [240.0, 376.0, 240.0]),
+    ("FISHEYE", [240.0, 241.0, 376.0, 240.0]),
+    ("EUCM", [460.8, 459.7, 366.4, 250.3, 0.63, 1.04]),
+    ("THIN_PRISM_FISHEYE", [240.3, 240.1, 376.9, 242.4, 0.012, -0.004, 2e-4, -3e-4, 0.0011, -1.5e-4, 4e-4, -2e-4]),
+    ("RAD_TAN_THIN_PRISM_FISHEYE", [241.0, 241.0, 375.6, 241.1, 0.025, -0.016, 0.003, 0.001, -5e-4, 6e-5,
+                                    3e-4, -1e-4, 2e-4, -1e-5, 1e-4, 2e-5]),
+]
+
+
+@pytest.mark.parametrize("name,params", COLMAP_CASES, ids=[c[0] for c in COLMAP_CASES])
+def test_colmap_models_match_pycolmap(tmp_path, name, params):
+    w, h = 752, 480
+    ref = pycolmap.Camera(model=name, width=w, height=h, params=params)
+    cam = vklens.Camera(width=w, height=h, model="colmap", colmap_model=name, params=params)
+    # The same camera from a cameras.txt line.
+    txt = load(tmp_path, f"# Camera list\n1 {name} {w} {h} " + " ".join(repr(p) for p in params) + "\n",
+               "cameras.txt")
+    # Points in front of the camera (COLMAP projects nothing behind it), up to 80° off the axis.
+    rng = np.random.default_rng(3)
+    theta = rng.uniform(0, np.radians(80), 3000)
+    phi = rng.uniform(0, 2 * np.pi, theta.size)
+    P = np.column_stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+    want = np.asarray(ref.img_from_cam(P), dtype=np.float64) - 0.5   # COLMAP's centres are at +0.5
+    for c in (cam, txt):
+        got = c.project_points(P)
+        ok = valid_rows(got) & valid_rows(want)
+        # Where vklens sees, COLMAP agrees (COLMAP may also answer beyond a fold, where no
+        # inverse is right; vklens says invalid there, and that is the only difference).
+        assert ok.sum() > 0.8 * len(P), f"{name}: only {ok.sum()} points valid"
+        on_image = ok & (want[:, 0] > -0.5) & (want[:, 0] < w - 0.5) & (want[:, 1] > -0.5) & (want[:, 1] < h - 0.5)
+        err = np.linalg.norm(got[on_image] - want[on_image], axis=1).max()
+        # COLMAP's FOV uses short series within r² < 1e-4 of the axis (1e-8 px there).
+        tol = 1e-7 if name == "FOV" else PX_TOL
+        assert err <= tol, f"{name}: {err:.2e} px from pycolmap"
+        assert not (valid_rows(got) & ~valid_rows(want)).any(), f"{name}: vklens sees what COLMAP does not"
+    # Inverse: rays of pixels across the image against cam_ray_from_img.
+    uv = image_pixels(w, h, 41)
+    rays = cam.unproject_points(uv)
+    ref_rays = np.asarray(ref.cam_ray_from_img(uv + 0.5), dtype=np.float64)
+    both = valid_rows(rays) & valid_rows(ref_rays) & (ref_rays[:, 2] > 0)
+    assert both.sum() > 0.5 * len(uv), f"{name}: only {both.sum()} rays to compare"
+    # COLMAP stops its Newton on the step size (|step|² < 1e-10), not the residual.
+    tol = 1e-7 if "FISHEYE" in name and name not in ("SIMPLE_FISHEYE", "FISHEYE") else RAD_TOL
+    err = ray_angle(rays[both], ref_rays[both]).max()
+    assert err <= max(tol, RAD_TOL), f"{name}: rays {err:.2e} rad from pycolmap"

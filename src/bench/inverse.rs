@@ -232,12 +232,40 @@ fn gpu_run(
     pixels: &[[f64; 2]],
     options: &InverseBenchOptions,
 ) -> crate::gpu::Result<(Vec<Option<DVec2>>, Option<f64>)> {
+    let (raw, ns) = time_points(
+        ctx,
+        cam,
+        PointsMode::Undistort(method),
+        precision,
+        pixels,
+        options.gpu_batch,
+        options.gpu_repeats,
+    )?;
+    let got = raw
+        .iter()
+        .map(|r| (r[2] > 0.5).then(|| DVec2::new(r[0], r[1])))
+        .collect();
+    Ok((got, ns))
+}
+
+/// Runs the points pass on `inputs` (`mode.inputs_per_point()` per point) repeated to at least
+/// `batch` points, and times `repeats` back-to-back dispatches: the raw `vec4` of each of the
+/// first points (those `inputs` hold) and the GPU time per point in ns (None where the device
+/// has no timestamps).
+pub(crate) fn time_points(
+    ctx: &Context,
+    cam: &Camera,
+    mode: PointsMode,
+    precision: Precision,
+    inputs: &[[f64; 2]],
+    batch: usize,
+    repeats: u32,
+) -> crate::gpu::Result<(Vec<[f64; 4]>, Option<f64>)> {
     let gpu = ctx.gpu();
-    let n = options
-        .gpu_batch
-        .max(pixels.len())
-        .min(crate::pass::points::MAX_POINTS);
-    let batch: Vec<[f64; 2]> = pixels.iter().cycle().take(n).copied().collect();
+    let per = mode.inputs_per_point();
+    let points = inputs.len() / per;
+    let n = batch.max(points).min(crate::pass::points::MAX_POINTS);
+    let batch: Vec<[f64; 2]> = inputs.iter().cycle().take(n * per).copied().collect();
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
     let (inputs, out_bytes) = match precision {
         Precision::F32 => {
@@ -253,7 +281,7 @@ fn gpu_run(
         usage,
         MemoryLocation::GpuToCpu,
     )?;
-    let mut pass = PointsPass::new(gpu, cam, PointsMode::Undistort(method), precision)?;
+    let mut pass = PointsPass::new(gpu, cam, mode, precision)?;
     // SAFETY: no submission using it is pending (`submit` waits on its fence).
     unsafe { pass.bind(&inputs, &outputs) };
     // Warm-up run (the driver compiles the pipeline at its first dispatch); its results are
@@ -270,28 +298,24 @@ fn gpu_run(
     })?;
     let raw: Vec<[f64; 4]> = match precision {
         Precision::F32 => outputs
-            .read_pod::<[f32; 4]>(pixels.len())?
+            .read_pod::<[f32; 4]>(points)?
             .iter()
             .map(|r| r.map(f64::from))
             .collect(),
-        Precision::F64 => outputs.read_pod::<[f64; 4]>(pixels.len())?,
+        Precision::F64 => outputs.read_pod::<[f64; 4]>(points)?,
     };
-    let got = raw
-        .iter()
-        .map(|r| (r[2] > 0.5).then(|| DVec2::new(r[0], r[1])))
-        .collect();
     let ns = match QueryPool::timestamps(gpu, 2) {
         Ok(queries) => {
             ctx.submit(|cmd| {
                 queries.cmd_reset(cmd);
                 queries.cmd_write(cmd, 0);
-                for i in 0..options.gpu_repeats {
+                for i in 0..repeats {
                     // SAFETY: as in the warm-up: `cmd` is the fresh buffer `submit` is
                     // recording, outside any render pass, and the bound buffers hold `n` points
                     // and outlive the submission; the barrier orders each dispatch's writes.
                     unsafe {
                         pass.record(cmd, n as u32);
-                        if i + 1 < options.gpu_repeats {
+                        if i + 1 < repeats {
                             // Each dispatch rewrites the outputs: order the writes.
                             let write = (
                                 vk::PipelineStageFlags::COMPUTE_SHADER,
@@ -305,11 +329,11 @@ fn gpu_run(
                 Ok(())
             })?;
             let t = queries.read_ns()?;
-            Some((t[1] - t[0]) / (options.gpu_repeats as f64 * n as f64))
+            Some((t[1] - t[0]) / (repeats as f64 * n as f64))
         }
         Err(_) => None,
     };
-    Ok((got, ns))
+    Ok((raw, ns))
 }
 
 /// The rows as one Markdown table: a row per camera and method, max error (median in

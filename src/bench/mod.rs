@@ -3,6 +3,7 @@
 
 pub mod inverse;
 pub mod lens;
+pub mod models;
 pub mod plan;
 pub mod vertex;
 pub mod warp;

@@ -246,6 +246,42 @@ pub fn wide(args: WideArgs) -> Result<(), CliError> {
 }
 
 #[derive(Args, Debug)]
+pub struct ModelsArgs {
+    /// One JSON object per line instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// CPU columns only (no Vulkan device needed).
+    #[arg(long)]
+    cpu_only: bool,
+}
+
+pub fn models(args: ModelsArgs) -> Result<(), CliError> {
+    let ctx = if args.cpu_only {
+        None
+    } else {
+        let ctx = context()?;
+        eprintln!("device: {}", ctx.gpu().device_name());
+        Some(ctx)
+    };
+    let rows =
+        crate::bench::models::run(ctx.as_ref(), super::progress_line).map_err(bench_error)?;
+    super::progress_done(&format!("measured {} models", rows.len()));
+    if let Some(ctx) = &ctx {
+        finish(ctx)?;
+    }
+    if args.json {
+        for r in &rows {
+            let v = serde_json::to_value(r)
+                .map_err(|e| CliError::from(crate::Error::internal(e.to_string())))?;
+            outln!("{v}")?;
+        }
+    } else {
+        outln!("{}", crate::bench::models::table(&rows))?;
+    }
+    Ok(())
+}
+
+#[derive(Args, Debug)]
 pub struct AllArgs {
     /// One JSON object per line (each row with its "bench", "device", "driver" and "date")
     /// instead of writing the tables.
@@ -348,6 +384,14 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
         let rows = crate::bench::wide::run(&ctx, &mut |s| super::progress_line(s))?;
         let table = crate::bench::wide::table(&rows);
         Ok((rows, table))
+    })?;
+    timed("models", &mut || {
+        let rows = crate::bench::models::run(Some(&ctx), super::progress_line)?;
+        let json = rows
+            .iter()
+            .map(|r| serde_json::to_value(r).map_err(|e| crate::Error::internal(e.to_string())))
+            .collect::<crate::Result<Vec<_>>>()?;
+        Ok((json, crate::bench::models::table(&rows)))
     })?;
     timed("plan", &mut || {
         let rows = crate::bench::plan::run(&ctx, &scenes, &mut |s| super::progress_line(s))?;

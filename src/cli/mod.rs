@@ -204,6 +204,11 @@ enum BenchCommand {
     /// each with its coordinate error against the f64 model and its frame time × a plain
     /// pinhole render, and the cube face size each needs.
     Wide(bench::WideArgs),
+    /// Every camera model of the table (one realistic camera each) beside OpenCV's standard
+    /// model: CPU forward and inverse time and round-trip error, the GPU's f32 error and time,
+    /// the inverse over a 1080p frame as a ratio to the standard model, and the error of the
+    /// fits of the inverse that f-theta files carry.
+    Models(bench::ModelsArgs),
     /// Every bench above on the device VKLENS_DEVICE picks, in one run: writes (or replaces)
     /// that device's section of docs/benchmarks.md, each table headed by the device, the
     /// driver and the date. Run it on a machine with a real GPU to add its rows beside
@@ -360,6 +365,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Lens(args)) => bench::lens(args),
         Command::Bench(BenchCommand::Plan(args)) => bench::plan(args),
         Command::Bench(BenchCommand::Wide(args)) => bench::wide(args),
+        Command::Bench(BenchCommand::Models(args)) => bench::models(args),
         Command::Bench(BenchCommand::All(args)) => bench::all(args),
         Command::Demo(args) => demo::run(args),
         Command::Distort(args) => warp::run(args, crate::WarpDirection::Distort),

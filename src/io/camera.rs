@@ -434,27 +434,6 @@ fn kalibr_camera(cams: &[(String, Map<String, Value>)], index: Option<usize>) ->
     Camera::with_lens(width, height, intrinsics, lens).map_err(named)
 }
 
-/// COLMAP camera models vklens reads: name, parameter names (in COLMAP's order).
-const COLMAP_MODELS: [(&str, &[&str]); 9] = [
-    ("SIMPLE_PINHOLE", &["f", "cx", "cy"]),
-    ("PINHOLE", &["fx", "fy", "cx", "cy"]),
-    ("SIMPLE_RADIAL", &["f", "cx", "cy", "k"]),
-    ("RADIAL", &["f", "cx", "cy", "k1", "k2"]),
-    ("OPENCV", &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"]),
-    (
-        "FULL_OPENCV",
-        &[
-            "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6",
-        ],
-    ),
-    (
-        "OPENCV_FISHEYE",
-        &["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"],
-    ),
-    ("SIMPLE_RADIAL_FISHEYE", &["f", "cx", "cy", "k"]),
-    ("RADIAL_FISHEYE", &["f", "cx", "cy", "k1", "k2"]),
-];
-
 /// Whether the text is a COLMAP `cameras.txt`: its first line that is not a comment reads
 /// `CAMERA_ID MODEL WIDTH HEIGHT ...` with an upper-case model name.
 fn looks_like_colmap(text: &str) -> bool {
@@ -493,23 +472,6 @@ fn colmap_camera(text: &str, index: Option<usize>) -> Result<Camera> {
     let at = |msg: String| Error::input(format!("line {line_no}: {msg}"));
     let t: Vec<&str> = line.split_whitespace().collect();
     let model = t.get(1).copied().unwrap_or("");
-    let (_, names) = COLMAP_MODELS
-        .iter()
-        .find(|(m, _)| *m == model)
-        .ok_or_else(|| {
-            at(format!(
-                "COLMAP model `{model}` is not one vklens reads ({})",
-                COLMAP_MODELS.map(|m| m.0).join(", ")
-            ))
-        })?;
-    if t.len() != 4 + names.len() {
-        return Err(at(format!(
-            "{model} has {} parameters ({}), this line has {}",
-            names.len(),
-            names.join(" "),
-            t.len().saturating_sub(4)
-        )));
-    }
     let side = |s: &str, what: &str| -> Result<u32> {
         s.parse::<u32>()
             .ok()
@@ -521,45 +483,26 @@ fn colmap_camera(text: &str, index: Option<usize>) -> Result<Camera> {
                 ))
             })
     };
-    let (width, height) = (side(t[2], "width")?, side(t[3], "height")?);
-    let mut p = Vec::with_capacity(names.len());
-    for (name, s) in names.iter().zip(&t[4..]) {
+    let (width, height) = (
+        side(t.get(2).copied().unwrap_or(""), "width")?,
+        side(t.get(3).copied().unwrap_or(""), "height")?,
+    );
+    let names = super::models::COLMAP_MODELS
+        .iter()
+        .find(|(m, _)| *m == model)
+        .map(|(_, n)| *n)
+        .unwrap_or(&[]);
+    let mut p = Vec::with_capacity(t.len().saturating_sub(4));
+    for (i, s) in t[4..].iter().enumerate() {
+        let name = names.get(i).copied().unwrap_or("extra");
         p.push(parse_float(s).ok_or_else(|| {
             at(format!(
                 "{model} parameter `{name}` must be a number, got `{s}`"
             ))
         })?);
     }
-    let named = |e: ModelError| at(format!("{model}: {e}"));
-    // COLMAP's pixel centres are at 0.5, OpenCV's at 0.
-    let (fx, fy, c) = if names[0] == "f" {
-        (p[0], p[0], 1)
-    } else {
-        (p[0], p[1], 2)
-    };
-    let intrinsics = Intrinsics {
-        fx,
-        fy,
-        cx: p[c] - 0.5,
-        cy: p[c + 1] - 0.5,
-    };
-    let rest = &p[c + 2..];
-    let fisheye = model.ends_with("FISHEYE");
-    let mut k = [0.0; 4];
-    let mut opencv = vec![0.0; 4];
-    match model {
-        "SIMPLE_RADIAL" | "RADIAL" => opencv[..rest.len()].copy_from_slice(rest),
-        "OPENCV" => opencv.copy_from_slice(rest),
-        "FULL_OPENCV" => opencv = rest.to_vec(),
-        _ if fisheye => k[..rest.len()].copy_from_slice(rest),
-        _ => {}
-    }
-    if fisheye {
-        let lens = Fisheye::new(k, 0.0, None).map_err(named)?;
-        Camera::fisheye(width, height, intrinsics, lens).map_err(named)
-    } else {
-        Camera::from_coeffs(width, height, intrinsics, &opencv).map_err(named)
-    }
+    super::models::colmap_camera(model, width, height, &p)
+        .map_err(|e| e.context(format!("line {line_no}")))
 }
 
 pub(super) fn as_number(v: &Value) -> Option<f64> {

@@ -7,6 +7,7 @@ use serde_json::{json, Map, Value};
 
 use super::camera::{dimension, intrinsics_from, number_field, number_list, parse_float};
 use crate::error::{Error, Result};
+use crate::model::division::Division;
 use crate::model::double_sphere::DoubleSphere;
 use crate::model::equirect::Equirectangular;
 use crate::model::eucm::Eucm;
@@ -15,11 +16,12 @@ use crate::model::ftheta::{FTheta, Reference};
 use crate::model::ocam::Ocam;
 use crate::model::omni::Omni;
 use crate::model::table::RayModel;
+use crate::model::thin_prism::ThinPrismFisheye;
 use crate::model::ucm::Ucm;
 use crate::model::{Camera, Intrinsics, Lens};
 
 /// The model names this module reads.
-pub const MODEL_NAMES: [&str; 8] = [
+pub const MODEL_NAMES: [&str; 11] = [
     Omni::NAME,
     Ucm::NAME,
     Eucm::NAME,
@@ -28,6 +30,9 @@ pub const MODEL_NAMES: [&str; 8] = [
     Equirectangular::NAME,
     FTheta::NAME,
     Ocam::NAME,
+    Division::NAME,
+    ThinPrismFisheye::NAME,
+    "colmap",
 ];
 
 /// NCore's rolling-shutter names (`shutter_type`), kept on an f-theta camera.
@@ -68,6 +73,50 @@ pub fn camera_from_json(model: &str, obj: &Map<String, Value>) -> Result<Camera>
             pinhole_k(obj)?,
         ),
         "fov" => (Lens::Fov(Fov::new(num("omega")?)?), pinhole_k(obj)?),
+        "division" => (Lens::Division(Division::new(num("k")?)?), pinhole_k(obj)?),
+        "thin_prism_fisheye" => {
+            let list = |key: &str, n: usize| -> Result<Vec<f64>> {
+                let v = number_list(required(obj, key)?, key)?;
+                if v.len() != n {
+                    return Err(Error::input(format!(
+                        "`{key}` has {n} numbers, got {}",
+                        v.len()
+                    )));
+                }
+                Ok(v)
+            };
+            let radial = number_list(required(obj, "radial")?, "radial")?;
+            let p = list("p", 2)?;
+            let s = list("s", 4)?;
+            let radial_first = match obj.get("radial_first") {
+                None => false,
+                Some(Value::Bool(b)) => *b,
+                Some(other) => {
+                    return Err(Error::input(format!(
+                        "`radial_first` must be true or false, got {other}"
+                    )))
+                }
+            };
+            let lens = ThinPrismFisheye::new(
+                radial,
+                [p[0], p[1]],
+                [s[0], s[1], s[2], s[3]],
+                radial_first,
+            )?;
+            (Lens::ThinPrismFisheye(lens), pinhole_k(obj)?)
+        }
+        "colmap" => {
+            let name = match required(obj, "colmap_model")? {
+                Value::String(s) => s.clone(),
+                other => {
+                    return Err(Error::input(format!(
+                        "`colmap_model` must be a COLMAP model name, got {other}"
+                    )))
+                }
+            };
+            let params = number_list(required(obj, "params")?, "params")?;
+            return colmap_camera(&name, width, height, &params);
+        }
         "equirectangular" => {
             let k = if obj.contains_key("fx") || obj.contains_key("camera_matrix") {
                 pinhole_k(obj)?
@@ -333,6 +382,13 @@ pub fn camera_to_json(camera: &Camera) -> Option<Value> {
                 v["shutter_type"] = s.as_str().into();
             }
         }
+        Lens::ThinPrismFisheye(m) => {
+            pinhole(&mut v);
+            v["radial"] = json!(m.radial);
+            v["p"] = json!(m.p);
+            v["s"] = json!(m.s);
+            v["radial_first"] = m.radial_first.into();
+        }
         Lens::Ocam(m) => {
             v["cx"] = k.cx.into();
             v["cy"] = k.cy.into();
@@ -499,4 +555,145 @@ pub fn basalt_camera(tree: &Value, index: Option<usize>) -> Option<Result<Camera
         };
         camera_from_json(model, &obj)
     })())
+}
+
+/// COLMAP's camera models vklens reads: name and parameter names, in COLMAP's order
+/// (`src/colmap/sensor/models.h`).
+pub const COLMAP_MODELS: [(&str, &[&str]); 18] = [
+    ("SIMPLE_PINHOLE", &["f", "cx", "cy"]),
+    ("PINHOLE", &["fx", "fy", "cx", "cy"]),
+    ("SIMPLE_RADIAL", &["f", "cx", "cy", "k"]),
+    ("RADIAL", &["f", "cx", "cy", "k1", "k2"]),
+    ("OPENCV", &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"]),
+    (
+        "FULL_OPENCV",
+        &[
+            "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6",
+        ],
+    ),
+    (
+        "OPENCV_FISHEYE",
+        &["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"],
+    ),
+    ("FOV", &["fx", "fy", "cx", "cy", "omega"]),
+    ("SIMPLE_RADIAL_FISHEYE", &["f", "cx", "cy", "k"]),
+    ("RADIAL_FISHEYE", &["f", "cx", "cy", "k1", "k2"]),
+    ("SIMPLE_DIVISION", &["f", "cx", "cy", "k"]),
+    ("DIVISION", &["fx", "fy", "cx", "cy", "k"]),
+    ("SIMPLE_FISHEYE", &["f", "cx", "cy"]),
+    ("FISHEYE", &["fx", "fy", "cx", "cy"]),
+    ("EUCM", &["fx", "fy", "cx", "cy", "alpha", "beta"]),
+    ("EQUIRECTANGULAR", &["w", "h"]),
+    (
+        "THIN_PRISM_FISHEYE",
+        &[
+            "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "sx1", "sy1",
+        ],
+    ),
+    (
+        "RAD_TAN_THIN_PRISM_FISHEYE",
+        &[
+            "fx", "fy", "cx", "cy", "k0", "k1", "k2", "k3", "k4", "k5", "p0", "p1", "s0", "s1",
+            "s2", "s3",
+        ],
+    ),
+];
+
+/// The camera of COLMAP model `model` with COLMAP's `params` (its pixel centres at +0.5,
+/// moved to OpenCV's 0). Errors name the model and the parameter.
+pub fn colmap_camera(model: &str, width: u32, height: u32, p: &[f64]) -> Result<Camera> {
+    let (_, names) = COLMAP_MODELS
+        .iter()
+        .find(|(m, _)| *m == model)
+        .ok_or_else(|| {
+            Error::input(format!(
+                "COLMAP model `{model}` is not one vklens reads ({})",
+                COLMAP_MODELS.map(|m| m.0).join(", ")
+            ))
+        })?;
+    if p.len() != names.len() {
+        return Err(Error::input(format!(
+            "{model} has {} parameters ({}), got {}",
+            names.len(),
+            names.join(" "),
+            p.len()
+        )));
+    }
+    let named = |e: crate::model::ModelError| Error::input(format!("{model}: {e}"));
+    if model == "EQUIRECTANGULAR" {
+        // Its parameters are the panorama's size; COLMAP's x = (lon/2π + 0.5) W.
+        let (w, h) = (p[0], p[1]);
+        for (name, v) in [("w", w), ("h", h)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::input(format!(
+                    "{model} parameter `{name}` must be a positive size, got {v}"
+                )));
+            }
+        }
+        let k = Intrinsics {
+            fx: w / (2.0 * std::f64::consts::PI),
+            fy: h / std::f64::consts::PI,
+            cx: w / 2.0 - 0.5,
+            cy: h / 2.0 - 0.5,
+        };
+        return Camera::with_lens(width, height, k, Lens::Equirectangular(Equirectangular))
+            .map_err(named);
+    }
+    let (fx, fy, c) = if names[0] == "f" {
+        (p[0], p[0], 1)
+    } else {
+        (p[0], p[1], 2)
+    };
+    let k = Intrinsics {
+        fx,
+        fy,
+        cx: p[c] - 0.5,
+        cy: p[c + 1] - 0.5,
+    };
+    let rest = &p[c + 2..];
+    let lens = match model {
+        "SIMPLE_PINHOLE" | "PINHOLE" | "SIMPLE_RADIAL" | "RADIAL" | "OPENCV" | "FULL_OPENCV" => {
+            let mut opencv = vec![0.0; 4.max(rest.len())];
+            opencv[..rest.len()].copy_from_slice(rest);
+            return Camera::from_coeffs(width, height, k, &opencv).map_err(named);
+        }
+        "OPENCV_FISHEYE"
+        | "SIMPLE_RADIAL_FISHEYE"
+        | "RADIAL_FISHEYE"
+        | "SIMPLE_FISHEYE"
+        | "FISHEYE" => {
+            let mut c = [0.0; 4];
+            c[..rest.len()].copy_from_slice(rest);
+            Lens::Fisheye(crate::model::Fisheye::new(c, 0.0, None).map_err(named)?)
+        }
+        "FOV" => Lens::Fov(Fov::new(rest[0]).map_err(named)?),
+        "SIMPLE_DIVISION" | "DIVISION" => Lens::Division(Division::new(rest[0]).map_err(named)?),
+        "EUCM" => Lens::Eucm(Eucm::new(rest[0], rest[1]).map_err(named)?),
+        // k1 k2 p1 p2 k3 k4 sx1 sy1: radial k1..k4, thin prism sx1 sy1 (OpenCV's s1 s3).
+        "THIN_PRISM_FISHEYE" => Lens::ThinPrismFisheye(
+            ThinPrismFisheye::new(
+                vec![rest[0], rest[1], rest[4], rest[5]],
+                [rest[2], rest[3]],
+                [rest[6], 0.0, rest[7], 0.0],
+                false,
+            )
+            .map_err(named)?,
+        ),
+        // k0..k5 p0 p1 s0..s3: COLMAP's p0 is OpenCV's p2, its p1 OpenCV's p1.
+        "RAD_TAN_THIN_PRISM_FISHEYE" => Lens::ThinPrismFisheye(
+            ThinPrismFisheye::new(
+                rest[..6].to_vec(),
+                [rest[7], rest[6]],
+                [rest[8], rest[9], rest[10], rest[11]],
+                true,
+            )
+            .map_err(named)?,
+        ),
+        _ => {
+            return Err(Error::input(format!(
+                "COLMAP model `{model}` is not one vklens reads"
+            )))
+        }
+    };
+    Camera::with_lens(width, height, k, lens).map_err(named)
 }

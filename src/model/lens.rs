@@ -8,6 +8,7 @@
 
 use glam::{DMat2, DVec2, DVec3};
 
+use super::division::Division;
 use super::double_sphere::DoubleSphere;
 use super::equirect::Equirectangular;
 use super::eucm::Eucm;
@@ -18,6 +19,7 @@ use super::ocam::Ocam;
 use super::omni::Omni;
 use super::opencv::OpenCvDistortion;
 use super::table::{self, RayModel};
+use super::thin_prism::ThinPrismFisheye;
 use super::ucm::Ucm;
 
 /// Which model a lens is: the shaders' `VKL_MODEL` specialization constant is
@@ -45,11 +47,15 @@ pub enum ModelKind {
     FTheta,
     /// Scaramuzza's OCamCalib model.
     Ocam,
+    /// Fitzgibbon's division model (COLMAP's).
+    Division,
+    /// COLMAP's thin-prism fisheyes (THIN_PRISM_FISHEYE, RAD_TAN_THIN_PRISM_FISHEYE).
+    ThinPrismFisheye,
 }
 
 impl ModelKind {
     /// Every model, in `gpu_id` order.
-    pub const ALL: [ModelKind; 10] = [
+    pub const ALL: [ModelKind; 12] = [
         ModelKind::Standard,
         ModelKind::Fisheye,
         ModelKind::Omni,
@@ -60,6 +66,8 @@ impl ModelKind {
         ModelKind::Equirectangular,
         ModelKind::FTheta,
         ModelKind::Ocam,
+        ModelKind::Division,
+        ModelKind::ThinPrismFisheye,
     ];
 
     /// The value of the shaders' `VKL_MODEL` constant (`glsl/include/camera_model.glsl`).
@@ -80,6 +88,8 @@ impl ModelKind {
             ModelKind::Equirectangular => Equirectangular::NAME,
             ModelKind::FTheta => FTheta::NAME,
             ModelKind::Ocam => Ocam::NAME,
+            ModelKind::Division => Division::NAME,
+            ModelKind::ThinPrismFisheye => ThinPrismFisheye::NAME,
         }
     }
 
@@ -130,6 +140,10 @@ pub enum Lens {
     FTheta(FTheta),
     /// Scaramuzza's OCamCalib model.
     Ocam(Ocam),
+    /// Fitzgibbon's division model.
+    Division(Division),
+    /// COLMAP's thin-prism fisheyes.
+    ThinPrismFisheye(ThinPrismFisheye),
 }
 
 /// Runs `$body` with `$m` bound to the ray model inside `$lens`, or `$standard` for the
@@ -147,6 +161,8 @@ macro_rules! for_each_ray_model {
             Lens::Equirectangular($m) => $body,
             Lens::FTheta($m) => $body,
             Lens::Ocam($m) => $body,
+            Lens::Division($m) => $body,
+            Lens::ThinPrismFisheye($m) => $body,
         }
     };
 }
@@ -165,6 +181,8 @@ impl Lens {
             Lens::Equirectangular(_) => ModelKind::Equirectangular,
             Lens::FTheta(_) => ModelKind::FTheta,
             Lens::Ocam(_) => ModelKind::Ocam,
+            Lens::Division(_) => ModelKind::Division,
+            Lens::ThinPrismFisheye(_) => ModelKind::ThinPrismFisheye,
         }
     }
 
@@ -219,5 +237,27 @@ impl Lens {
     /// The largest angle off the axis the domain reaches (π/2 at most for the standard model).
     pub fn max_angle(&self) -> f64 {
         for_each_ray_model!(self, m => m.max_angle(), standard => std::f64::consts::FRAC_PI_2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shaders number the models as `ModelKind` does: each `#define VKL_MODEL_<NAME> <id>u`
+    /// of `glsl/include/camera_model.glsl` against `gpu_id`.
+    #[test]
+    fn the_shaders_number_the_models_as_the_host_does() {
+        let glsl = include_str!("../../glsl/include/camera_model.glsl");
+        for (i, kind) in ModelKind::ALL.into_iter().enumerate() {
+            assert_eq!(kind.gpu_id(), i as u32);
+            let name = match kind {
+                ModelKind::Standard => "OPENCV".to_string(),
+                ModelKind::Fisheye => "FISHEYE".to_string(),
+                k => k.name().to_ascii_uppercase(),
+            };
+            let define = format!("#define VKL_MODEL_{name} {i}u");
+            assert!(glsl.contains(&define), "camera_model.glsl lacks `{define}`");
+        }
     }
 }

@@ -25,6 +25,7 @@
 //!   pixel and the distorted pixel, in both directions, with an explicit "invalid".
 
 pub mod brown;
+pub mod division;
 pub mod domain;
 pub mod double_sphere;
 pub mod equirect;
@@ -45,6 +46,7 @@ pub mod solve;
 #[cfg(test)]
 mod suite;
 pub mod table;
+pub mod thin_prism;
 pub mod ucm;
 pub mod warp;
 

@@ -429,6 +429,7 @@ impl Camera {
     pub fn shader_domain(&self) -> &ValidDomain {
         match &self.lens {
             Lens::Omni(o) => o.radtan().domain(),
+            Lens::ThinPrismFisheye(t) => t.domain(),
             _ => &self.domain,
         }
     }

@@ -25,14 +25,14 @@ pub fn sample_cameras() -> Result<Vec<(&'static str, Camera)>, ModelError> {
     let ftheta_bw = FTheta::new(
         Reference::PixeldistToAngle,
         vec![0.0, 5.28e-4, 1.2e-9, -2.5e-12, 1.1e-15, -2.2e-19],
-        vec![0.0, 1893.0, -5.1, 30.2, -12.5, 2.1],
+        vec![0.0, 1893.98, -8.55142, 33.3686, -28.2658, 10.8627],
         [1.0002, 0.0001, -0.0001],
         1.2,
     )?;
     let ftheta_fw = FTheta::new(
         Reference::AngleToPixeldist,
         vec![0.0, 5.28e-4, 1.2e-9, -2.5e-12, 1.1e-15, -2.2e-19],
-        vec![0.0, 1893.0, -5.1, 30.2, -12.5, 2.1],
+        vec![0.0, 1893.98, -8.55142, 33.3686, -28.2658, 10.8627],
         [1.0, 0.0, 0.0],
         1.3,
     )?;
@@ -139,6 +139,52 @@ pub fn sample_cameras() -> Result<Vec<(&'static str, Camera)>, ModelError> {
                 2168,
                 k(1.0, 1.0, 1904.9, 1090.6),
                 Lens::FTheta(ftheta_fw),
+            )?,
+        ),
+        (
+            "division",
+            Camera::with_lens(
+                w,
+                h,
+                k(420.0, 421.0, 375.2, 239.1),
+                Lens::Division(super::division::Division::new(-0.35)?),
+            )?,
+        ),
+        (
+            "division_pincushion",
+            Camera::with_lens(
+                w,
+                h,
+                k(420.0, 421.0, 375.2, 239.1),
+                Lens::Division(super::division::Division::new(0.08)?),
+            )?,
+        ),
+        (
+            "thin_prism_fisheye",
+            Camera::with_lens(
+                w,
+                h,
+                k(240.3, 240.1, 376.4, 241.9),
+                Lens::ThinPrismFisheye(super::thin_prism::ThinPrismFisheye::new(
+                    vec![0.012, -0.004, 0.0011, -1.5e-4],
+                    [2e-4, -3e-4],
+                    [4e-4, 0.0, -2e-4, 0.0],
+                    false,
+                )?),
+            )?,
+        ),
+        (
+            "rad_tan_thin_prism_fisheye",
+            Camera::with_lens(
+                w,
+                h,
+                k(241.0, 241.0, 375.1, 240.6),
+                Lens::ThinPrismFisheye(super::thin_prism::ThinPrismFisheye::new(
+                    vec![0.025, -0.016, 0.003, 0.001, -5e-4, 6e-5],
+                    [-1e-4, 3e-4],
+                    [2e-4, -1e-5, 1e-4, 2e-5],
+                    true,
+                )?),
             )?,
         ),
         (

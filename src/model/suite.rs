@@ -36,7 +36,10 @@ fn rays_inside(camera: &Camera) -> Vec<DVec3> {
 
 /// Whether the model's domain is a cone about the axis (every ray inside its max angle sees).
 fn cone_domain(camera: &Camera) -> bool {
-    !matches!(camera.model(), ModelKind::Standard | ModelKind::Omni)
+    !matches!(
+        camera.model(),
+        ModelKind::Standard | ModelKind::Omni | ModelKind::ThinPrismFisheye
+    )
 }
 
 #[test]

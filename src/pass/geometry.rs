@@ -226,7 +226,10 @@ fn discard_bound(projection: &Projection, camera: &Camera) -> Result<f64> {
 pub fn discard_needs_domain_table(camera: &Camera, bound: f64) -> bool {
     if camera.model().is_ray_model() {
         // Only an omni lens reads the table (its radial-tangential part's domain).
-        return camera.model() == crate::model::ModelKind::Omni;
+        return matches!(
+            camera.model(),
+            crate::model::ModelKind::Omni | crate::model::ModelKind::ThinPrismFisheye
+        );
     }
     if !bound.is_finite() {
         return true;

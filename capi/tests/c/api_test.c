@@ -99,6 +99,30 @@ static void cameras(void) {
     expect("NaN pair outside the valid domain", isnan(out[0]) && isnan(out[1]));
     vkl_camera_free(&pin);
 
+    /* Every model of the table through the same calls: a double sphere seeing past 90°. */
+    expect("model of the standard camera", strcmp(vkl_camera_model(c), "opencv") == 0);
+    expect("model of NULL", vkl_camera_model(NULL) == NULL);
+    const char *ds_path = "vkl_api_test_ds.json";
+    FILE *f = fopen(ds_path, "w");
+    expect("temporary camera file", f != NULL);
+    if (f) {
+        fputs("{\"model\": \"double_sphere\", \"width\": 752, \"height\": 480, \"fx\": 349.7, "
+              "\"fy\": 348.9, \"cx\": 365.8, \"cy\": 249.9, \"xi\": -0.2, \"alpha\": 0.57}", f);
+        fclose(f);
+        vkl_camera ds = NULL;
+        expect_ok("load a double sphere", vkl_camera_load(ds_path, &ds));
+        remove(ds_path);
+        expect("its model", ds && strcmp(vkl_camera_model(ds), "double_sphere") == 0);
+        double xyz[6] = {1.0, 0.5, -0.2, 0.0, 0.0, -1.0}, px[4], rays[6];
+        expect_ok("project", vkl_camera_project_points(ds, xyz, 2, px));
+        expect("past 90 degrees seen, straight behind not", !isnan(px[0]) && isnan(px[2]));
+        expect_ok("unproject", vkl_camera_unproject_points(ds, px, 1, rays));
+        double norm = sqrt(1.0 + 0.25 + 0.04);
+        expect("the ray back", fabs(rays[0] - 1.0 / norm) < 1e-12 && fabs(rays[2] + 0.2 / norm) < 1e-12);
+        expect_error("project(NULL out)", vkl_camera_project_points(ds, xyz, 2, NULL), VKL_ERROR_INPUT, "uv_out");
+        vkl_camera_free(&ds);
+    }
+
     /* Frees: NULL, and twice through the nulled handle. */
     vkl_camera_free(&c);
     expect("free nulls the handle", c == NULL);

@@ -284,8 +284,8 @@ vkl_error vkl_camera_distort_points(vkl_camera c, const double *xy, size_t n, do
 vkl_error vkl_camera_undistort_points(vkl_camera c, const double *uv, size_t n, double *xy_out);
 
 /*
- The camera's model as camera files name it ("opencv", "brown", "opencv_fisheye", "omni",
- "ucm", "eucm", "double_sphere", "fov", "equirectangular", "ftheta", "ocam"): a static
+ The camera's model as camera files name it (`opencv`, `brown`, `opencv_fisheye`, `omni`,
+ `ucm`, `eucm`, `double_sphere`, `fov`, `equirectangular`, `ftheta`, `ocam`): a static
  NUL-terminated string the caller never frees; NULL for a NULL camera.
 
  # Safety
@@ -294,9 +294,9 @@ vkl_error vkl_camera_undistort_points(vkl_camera c, const double *uv, size_t n, 
 const char *vkl_camera_model(vkl_camera c);
 
 /*
- Camera-frame points (X, Y, Z; 3n doubles, OpenCV's frame) to distorted pixels (2n doubles),
- exact in f64; a pair of NaN where the model does not see the point (behind the image plane
- for the standard model, outside the domain for the others, which see past 90°).
+ Camera-frame points (X, Y, Z; 3n doubles, OpenCV's frame) to distorted pixels (2n
+ doubles), exact in f64; a pair of NaN where the model does not see the point (behind the
+ image plane for the standard model, outside the domain for the others, which see past 90°).
 
  # Safety
  `c` is NULL or a live camera; `xyz` is NULL or points to 3n doubles and `uv_out` to 2n

@@ -96,7 +96,8 @@ fn cpu_ns<T>(items: &[T], mut f: impl FnMut(&T)) -> f64 {
     start.elapsed().as_nanos() as f64 / calls as f64
 }
 
-/// The f-theta fit's worst error (px) over the domain, against the exact inverse.
+/// The f-theta fit's worst error (px of pixel distance) over the domain, against the exact
+/// inverse: the file's non-reference polynomial against the solved reference.
 fn fit_error(camera: &Camera) -> Option<f64> {
     let Lens::FTheta(f) = camera.lens() else {
         return None;
@@ -105,24 +106,20 @@ fn fit_error(camera: &Camera) -> Option<f64> {
     let mut worst = 0.0f64;
     for i in 1..=200 {
         let theta = max * i as f64 / 200.0;
-        let p = DVec3::new(theta.sin(), 0.0, theta.cos());
-        let Some(exact) = camera.lens().project_ray(p) else {
+        let Some(exact) = f.distance(theta) else {
             continue;
         };
-        let r = exact.length();
         let err = match f.reference {
             // The fit is fw: its distance against the exact one.
             crate::model::ftheta::Reference::PixeldistToAngle => {
-                (f.approximate_distance(theta) - r).abs()
+                (f.approximate_distance(theta) - exact).abs()
             }
-            // The fit is bw: its angle error, in pixels through the exact model's slope.
+            // The fit is bw: the distance of its angle against the pixel distance it was given.
             crate::model::ftheta::Reference::AngleToPixeldist => {
-                let back = f.approximate_angle(r);
-                let q = DVec3::new(back.sin(), 0.0, back.cos());
-                let Some(fit) = camera.lens().project_ray(q) else {
+                let Some(back) = f.distance(f.approximate_angle(exact)) else {
                     continue;
                 };
-                (fit.length() - r).abs()
+                (back - exact).abs()
             }
         };
         worst = worst.max(err);

@@ -181,8 +181,8 @@ impl FTheta {
         DMat2::from_cols(DVec2::new(c, e), DVec2::new(d, 1.0))
     }
 
-    /// Pixel distance of the angle θ, exactly (inside the domain).
-    fn distance(&self, theta: f64) -> Option<f64> {
+    /// Pixel distance (before the linear term) of the angle θ, exactly (inside the domain).
+    pub fn distance(&self, theta: f64) -> Option<f64> {
         match self.reference {
             Reference::AngleToPixeldist => Some(poly::eval(&self.angle_to_pixeldist, theta)),
             Reference::PixeldistToAngle => poly::solve_monotone(

@@ -261,3 +261,21 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod union_tests {
+    use crate::model::{ModelKind, Terms};
+
+    /// A shader serving several cameras (a warp's channels) folds their terms from the
+    /// default: the union must keep the ray model, or the shader evaluates the standard one.
+    #[test]
+    fn the_union_of_terms_keeps_the_ray_model() {
+        let fisheye = Terms {
+            radial: true,
+            model: ModelKind::Fisheye,
+            ..Terms::default()
+        };
+        assert_eq!(Terms::default().union(fisheye).model, ModelKind::Fisheye);
+        assert_eq!(fisheye.union(Terms::default()).model, ModelKind::Fisheye);
+    }
+}

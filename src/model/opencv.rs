@@ -109,9 +109,14 @@ impl Terms {
             tangential: self.tangential || other.tangential,
             prism: self.prism || other.prism,
             tilt: self.tilt || other.tilt,
-            // One shader evaluates one model: the union of two models is the first one's
-            // (callers share a shader only between cameras of one model).
-            model: self.model,
+            // One shader evaluates one model, and callers share a shader only between
+            // cameras of one model: the union keeps the model that is not the default
+            // (a fold starts from `Terms::default()`).
+            model: if self.model == ModelKind::Standard {
+                other.model
+            } else {
+                self.model
+            },
         }
     }
 

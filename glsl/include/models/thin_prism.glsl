@@ -1,27 +1,39 @@
 // thin_prism.glsl — COLMAP's thin-prism fisheyes (model::thin_prism): the equidistant point
-// q = θ (x, y)/r distorted on its plane, inverted by damped Newton inside the plane's domain
-// table (which sits where the standard model's does). model[0] = (radial first, radial
+// q = θ (x, y)/r distorted on its plane, inverted by damped Newton (closed-form Jacobian)
+// inside the plane's domain table (which sits where the standard model's does). model[0] = (radial first, radial
 // coefficient count, -, -); then the radial coefficients (6), p1 p2, s1..s4.
 
-VKL_VEC2 vkl_tp_distort(VKL_VEC2 q) {
+// The plane's distortion and its Jacobian J (column-major: J[0] = d/dq.x), in closed form:
+// Newton needs it at every step, and differences would cost four more evaluations.
+VKL_VEC2 vkl_tp_distort_jacobian(VKL_VEC2 q, out VKL_MAT2 J) {
     VKL_FLOAT s2 = dot(q, q);
     int n = int(vkl_cam.model[0].y);
-    VKL_FLOAT f = 0.0;
+    // f(s) = Σ k_i s^(i+1), and f'(s) = Σ (i+1) k_i s^i, both by Horner.
+    VKL_FLOAT f = 0.0, df = 0.0;
     for (int i = n - 1; i >= 0; --i) f = (f + vkl_coef(4 + i)) * s2;
+    for (int i = n - 1; i >= 0; --i) df = df * s2 + VKL_FLOAT(i + 1) * vkl_coef(4 + i);
     VKL_VEC2 x = q * (1.0 + f);
-    VKL_VEC2 v = vkl_cam.model[0].x > 0.5 ? x : q;
+    VKL_MAT2 dx = VKL_MAT2(1.0 + f) + VKL_MAT2(q * q.x, q * q.y) * (2.0 * df);
+    bool first = vkl_cam.model[0].x > 0.5;
+    VKL_VEC2 v = first ? x : q;
     VKL_FLOAT r2 = dot(v, v);
     VKL_FLOAT p1 = vkl_coef(10), p2 = vkl_coef(11);
+    VKL_FLOAT sa = vkl_coef(12), sb = vkl_coef(13), sc = vkl_coef(14), sd = vkl_coef(15);
     VKL_FLOAT txy = 2.0 * v.x * v.y;
-    return VKL_VEC2(x.x + txy * p1 + (r2 + 2.0 * v.x * v.x) * p2 + r2 * vkl_coef(12) + r2 * r2 * vkl_coef(13),
-                    x.y + (r2 + 2.0 * v.y * v.y) * p1 + txy * p2 + r2 * vkl_coef(14) + r2 * r2 * vkl_coef(15));
+    VKL_VEC2 d = VKL_VEC2(x.x + txy * p1 + (r2 + 2.0 * v.x * v.x) * p2 + r2 * sa + r2 * r2 * sb,
+                          x.y + (r2 + 2.0 * v.y * v.y) * p1 + txy * p2 + r2 * sc + r2 * r2 * sd);
+    // Tangential and thin prism terms' Jacobian in v.
+    VKL_FLOAT px = sa + 2.0 * sb * r2, py = sc + 2.0 * sd * r2;
+    VKL_MAT2 jt = VKL_MAT2(
+        VKL_VEC2(2.0 * p1 * v.y + 6.0 * p2 * v.x + 2.0 * v.x * px, 2.0 * p1 * v.x + 2.0 * p2 * v.y + 2.0 * v.x * py),
+        VKL_VEC2(2.0 * p1 * v.x + 2.0 * p2 * v.y + 2.0 * v.y * px, 6.0 * p1 * v.y + 2.0 * p2 * v.x + 2.0 * v.y * py));
+    J = first ? dx + jt * dx : dx + jt;
+    return d;
 }
 
-// The plane map's Jacobian by central differences: it steers Newton, the residual decides.
-VKL_MAT2 vkl_tp_jacobian(VKL_VEC2 q) {
-    VKL_FLOAT h = 1e-3 * max(1.0, length(q));
-    return VKL_MAT2((vkl_tp_distort(q + VKL_VEC2(h, 0.0)) - vkl_tp_distort(q - VKL_VEC2(h, 0.0))) / (2.0 * h),
-                    (vkl_tp_distort(q + VKL_VEC2(0.0, h)) - vkl_tp_distort(q - VKL_VEC2(0.0, h))) / (2.0 * h));
+VKL_VEC2 vkl_tp_distort(VKL_VEC2 q) {
+    VKL_MAT2 J;
+    return vkl_tp_distort_jacobian(q, J);
 }
 
 bool vkl_tp_project(VKL_VEC3 p, out VKL_VEC2 m) {
@@ -38,21 +50,23 @@ bool vkl_tp_project(VKL_VEC3 p, out VKL_VEC2 m) {
 // vanishing residual.
 bool vkl_tp_newton(VKL_VEC2 t, inout VKL_VEC2 q) {
     VKL_FLOAT rho = length(t);
-    VKL_VEC2 f = vkl_tp_distort(q);
+    VKL_MAT2 J;
+    VKL_VEC2 f = vkl_tp_distort_jacobian(q, J);
     for (uint i = 0u; i < VKL_NEWTON_ITERATIONS; ++i) {
         VKL_FLOAT residual = length(f - t);
         if (residual <= VKL_EPSILON * (1.0 + rho)) break;
-        VKL_MAT2 J = vkl_tp_jacobian(q);
         if (!(determinant(J) > 0.0)) return false;
         VKL_VEC2 step = inverse(J) * (f - t);
         VKL_FLOAT s = 1.0;
         bool accepted = false;
         for (int k = 0; k < VKL_NEWTON_MAX_HALVINGS; ++k) {
             VKL_VEC2 c = q - step * s;
-            VKL_VEC2 fc = vkl_tp_distort(c);
+            VKL_MAT2 Jc;
+            VKL_VEC2 fc = vkl_tp_distort_jacobian(c, Jc);
             if (vkl_table_contains_ideal(c) && length(fc - t) < residual * (1.0 - 1e-4 * s)) {
                 q = c;
                 f = fc;
+                J = Jc;
                 accepted = true;
                 break;
             }

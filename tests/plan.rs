@@ -756,3 +756,26 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A model of the table beyond OpenCV's (the double sphere example, 195°): planned on the
+/// vertex path for its IDs and depth, its shaders specialized for that model alone.
+#[test]
+fn a_double_sphere_scene_runs_alg1_specialized_for_its_model() {
+    let file = SceneFile::load(&examples().join("double_sphere.toml")).unwrap();
+    let (p, recorded) = run(&file);
+    assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
+    assert!(recorded.has(PassKind::VertexRender));
+    let model = vklens::internal::model::ModelKind::DoubleSphere.gpu_id();
+    let got = constant(
+        &recorded,
+        PassKind::VertexRender,
+        vk::ShaderStageFlags::VERTEX,
+        spec::MODEL,
+    );
+    assert_eq!(got, Some(model), "{:?}", recorded.pipelines);
+    let why: Vec<&str> = p.steps.iter().map(|s| s.why.as_str()).collect();
+    assert!(
+        why.iter().any(|w| w.contains("compiled in: double_sphere")),
+        "{why:?}"
+    );
+}

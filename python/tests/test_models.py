@@ -679,3 +679,35 @@ def test_colmap_models_match_pycolmap(tmp_path, name, params):
     tol = 1e-7 if "FISHEYE" in name and name not in ("SIMPLE_FISHEYE", "FISHEYE") else RAD_TOL
     err = ray_angle(rays[both], ref_rays[both]).max()
     assert err <= max(tol, RAD_TOL), f"{name}: rays {err:.2e} rad from pycolmap"
+
+
+# --------------------------------------------------------------------------------------------
+# The warp: rectifying an omni photo as cv2.omnidir does (Knew = K, Mei's γ as the pinhole's
+# focal length).
+
+
+def test_omni_undistort_matches_cv2_omnidir(tmp_path):
+    w, h = 1024, 768
+    cam_json = {"model": "omni", "width": w, "height": h, "fx": 820.0, "fy": 816.0, "cx": 514.5,
+                "cy": 381.5, "xi": 0.95, "dist_coeffs": [-0.05, 0.02, 0.0006, -0.0004]}
+    path = tmp_path / "omni.json"
+    path.write_text(json.dumps(cam_json))
+    cam = vklens.Camera.load(str(path))
+    y, x = np.mgrid[0:h, 0:w]
+    photo = np.dstack([128 + 100 * np.sin(x / 9.0), 128 + 100 * np.cos(y / 11.0),
+                       128 + 90 * np.sin((x + y) / 13.0)]).astype(np.uint8)
+    warper = vklens.Warper(cam, direction="undistort")
+    ours, mask = warper(photo, return_mask=True)
+    K = np.array([[820.0, 0, 514.5], [0, 816.0, 381.5], [0, 0, 1]])
+    D = np.array([[-0.05, 0.02, 0.0006, -0.0004]])
+    xi = np.array([[0.95]])
+    mx, my = cv2.omnidir.initUndistortRectifyMap(K, D, xi, np.eye(3), K, (w, h), cv2.CV_32FC1,
+                                                 cv2.omnidir.RECTIFY_PERSPECTIVE)
+    theirs = cv2.remap(photo, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+    inner = mask & (mx >= 0.5) & (my >= 0.5) & (mx <= w - 1.5) & (my <= h - 1.5)
+    d = np.abs(ours.astype(int) - theirs.astype(int))[inner]
+    # The maps themselves: cv2.omnidir's to its float32 rounding.
+    ox, oy = warper.maps()[:2]
+    both = inner & ~np.isnan(ox)
+    assert np.abs(ox - mx)[both].max() <= 1e-3 and np.abs(oy - my)[both].max() <= 1e-3
+    assert inner.sum() > 0.5 * w * h and d.max() <= 1 and d.mean() < 0.05

@@ -67,8 +67,14 @@ distortion_coefficients, image_width, image_height; %YAML:1.0 headers welcome), 
 or a Brown headset lens {\"model\": \"brown\", \"width\", \"height\", \"c1\", \"c2\"} (the Durham radial-correction paper).
 Fisheye cameras (OpenCV's cv2.fisheye, k1..k4): vklens JSON with \"model\": \"opencv_fisheye\"
 (optional \"alpha\" skew and \"max_fov_deg\"), ROS camera_info with distortion_model equidistant,
-a Kalibr camchain (cam0, or --camera-index N), or a COLMAP cameras.txt (OPENCV_FISHEYE, and
-PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, FULL_OPENCV for the standard model).
+a Kalibr camchain (cam0, or --camera-index N), or a COLMAP cameras.txt.
+Every other model the field calibrates, exact to its tool: vklens JSON with \"model\": \"omni\"
+(xi, dist_coeffs k1 k2 p1 p2), \"ucm\" (alpha), \"eucm\" (alpha, beta), \"double_sphere\" (xi,
+alpha), \"fov\" (omega), \"equirectangular\", \"ftheta\" (NCore's keys), \"ocam\" (poly,
+inverse_poly, c, d, e), \"division\" (k), \"thin_prism_fisheye\", or \"colmap\" (colmap_model,
+params: all 18 of COLMAP's models); and the tools' own files: Kalibr omni/eucm/ds/pinhole-fov,
+Basalt calibration JSON, camodocal/VINS YAML (MEI, PINHOLE, KANNALA_BRANDT), NCore camera JSON,
+OCamCalib calib_results.txt, COLMAP cameras.txt. docs/how-it-works.md defines each model.
 
 Environment: VKLENS_DEVICE picks the Vulkan device (cpu, gpu, an index, or part of its name);
 VKLENS_VALIDATION=1 turns the Khronos validation layer on (any message fails the command).
@@ -140,7 +146,8 @@ enum Command {
 #[derive(Subcommand, Debug)]
 enum PointsCommand {
     /// Forward model: undistorted normalized points [[x, y], ...] (x = X/Z, y = Y/Z) or
-    /// camera-frame points [[X, Y, Z], ...] (a fisheye sees Z ≤ 0 too, up to its field of view)
+    /// camera-frame points [[X, Y, Z], ...] (fisheyes and the other wide models see Z ≤ 0 too,
+    /// up to their domain's edge)
     /// on stdin → distorted pixels [[u, v], ...] on stdout (null where the model is undefined
     /// or, for points, where the lens does not see).
     Distort {
@@ -157,7 +164,7 @@ enum PointsCommand {
     /// Inverse model: distorted pixels [[u, v], ...] on stdin → undistorted normalized points
     /// [[x, y] | null, ...] on stdout; null where the pixel has no preimage in the valid domain
     /// (the lens folds over there, or a rational denominator vanishes) and where it sees at or
-    /// behind the image plane (a fisheye past 90°). With --rays: unit camera-frame rays
+    /// behind the image plane (a wide model past 90°). With --rays: unit camera-frame rays
     /// [[x, y, z] | null, ...], past 90° too.
     Undistort {
         /// Camera file (JSON, OpenCV FileStorage YAML/XML/JSON, or ROS camera_info YAML).

@@ -182,9 +182,8 @@ pub struct Plan {
 /// 36 → 129 ns from 5 to 20 iterations on `prism_tilt`); Newton ~70 (radial) to ~100.
 pub fn inverse_candidates_for(terms: crate::model::Terms) -> Vec<(InverseMethod, f64)> {
     if terms.is_ray_model() {
-        // One inverse for the ray models: their own (closed form, or Newton on one
-        // variable), cheaper than the standard model's 2D Newton.
-        return vec![(InverseMethod::Newton, 70.0)];
+        // One inverse for the ray models: their own (closed form, or Newton).
+        return vec![(InverseMethod::Newton, ray_model_inverse_ns(terms.model))];
     }
     let complex = terms.rational || terms.prism || terms.tilt;
     let per_iteration = if complex { 6.0 } else { 1.2 };
@@ -198,6 +197,27 @@ pub fn inverse_candidates_for(terms: crate::model::Terms) -> Vec<(InverseMethod,
     v.push((InverseMethod::Newton, if complex { 100.0 } else { 70.0 }));
     v.sort_by(|a, b| a.1.total_cmp(&b.1));
     v
+}
+
+/// GPU cost per pixel (ns, f32, lavapipe) of a ray model's inverse: the fisheye's 70 (Newton
+/// on θ, as `bench inverse` measured it) scaled by each model's 1080p inverse time relative to
+/// the fisheye's in one `vklens bench models` run (docs/benchmarks.md): closed forms about
+/// 0.6–0.8 of it, the omni model (the standard model's Newton on its radial-tangential part)
+/// 2.7×, the thin-prism fisheyes (Newton on their plane) about 5.4×.
+pub fn ray_model_inverse_ns(model: crate::model::ModelKind) -> f64 {
+    use crate::model::ModelKind as M;
+    const FISHEYE_NS: f64 = 70.0;
+    let relative = match model {
+        M::Standard | M::Fisheye => 1.0,
+        M::Omni => 2.7,
+        M::Ucm | M::Eucm | M::DoubleSphere => 0.65,
+        M::Fov | M::Division => 0.8,
+        M::Equirectangular => 0.7,
+        M::FTheta => 2.2,
+        M::Ocam => 1.0,
+        M::ThinPrismFisheye => 5.4,
+    };
+    FISHEYE_NS * relative
 }
 
 /// [`inverse_candidates_for`] a lens with every term.

@@ -711,3 +711,23 @@ def test_omni_undistort_matches_cv2_omnidir(tmp_path):
     both = inner & ~np.isnan(ox)
     assert np.abs(ox - mx)[both].max() <= 1e-3 and np.abs(oy - my)[both].max() <= 1e-3
     assert inner.sum() > 0.5 * w * h and d.max() <= 1 and d.mean() < 0.05
+
+
+# --------------------------------------------------------------------------------------------
+# Building a camera of any model from Python keywords (its vklens JSON keys).
+
+
+def test_camera_from_keywords_equals_the_file(tmp_path):
+    keys = {"fx": 460.8, "fy": 459.7, "cx": 365.9, "cy": 249.8, "alpha": 0.63, "beta": 1.04}
+    built = vklens.Camera(752, 480, model="eucm", **keys)
+    loaded = load(tmp_path, {"model": "eucm", "width": 752, "height": 480, **keys})
+    assert built.model == "eucm" and "beta=1.04" in repr(built)
+    P = np.array([[0.3, -0.2, 1.0], [1.0, 0.5, -0.1]])
+    np.testing.assert_array_equal(built.project_points(P), loaded.project_points(P))
+    # A COLMAP camera by name and parameters, and a bad parameter named in the error.
+    colmap = vklens.Camera(752, 480, model="colmap", colmap_model="FOV", params=[300.0, 302.0, 371.0, 240.7, 0.93])
+    assert colmap.model == "fov"
+    with pytest.raises(vklens.InputError, match="alpha"):
+        vklens.Camera(752, 480, model="ucm", fx=400.0, fy=400.0, cx=375.5, cy=239.5, alpha=1.5)
+    with pytest.raises(vklens.InputError, match="fx"):
+        vklens.Camera(752, 480)

@@ -506,11 +506,18 @@ bool vkl_standard_undistort(VKL_VEC2 d, out VKL_VEC2 x) {
     return true;
 }
 
+// One include per model of the table (and what they share).
+#include "models/common.glsl"
 #include "models/omni.glsl"
-#include "models/unified.glsl"
-#include "models/fov_equirect.glsl"
-#include "models/polynomial.glsl"
-#include "models/thin_prism.glsl"
+#include "models/ucm.glsl"
+#include "models/eucm.glsl"
+#include "models/double_sphere.glsl"
+#include "models/fov.glsl"
+#include "models/equirectangular.glsl"
+#include "models/ftheta.glsl"
+#include "models/ocam.glsl"
+#include "models/division.glsl"
+#include "models/thin_prism_fisheye.glsl"
 
 // A ray model's forward map: camera-frame point (any length, any hemisphere) -> distorted
 // normalized point. False outside the model's domain.

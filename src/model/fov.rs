@@ -108,7 +108,7 @@ impl RayModel for Fov {
         FRAC_PI_2
     }
 
-    /// `glsl/include/models/fov_equirect.glsl`: ω and 2 tan(ω/2).
+    /// `glsl/include/models/fov.glsl`: ω and 2 tan(ω/2).
     fn gpu_params(&self) -> Vec<f64> {
         vec![self.omega, self.a()]
     }

@@ -258,6 +258,14 @@ mod tests {
             };
             let define = format!("#define VKL_MODEL_{name} {i}u");
             assert!(glsl.contains(&define), "camera_model.glsl lacks `{define}`");
+            // One include per model of the table (the fisheye's is the standard stages').
+            if kind.is_ray_model() && kind != ModelKind::Fisheye {
+                let include = format!("#include \"models/{}.glsl\"", kind.name());
+                assert!(
+                    glsl.contains(&include),
+                    "camera_model.glsl lacks `{include}`"
+                );
+            }
         }
     }
 }

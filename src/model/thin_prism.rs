@@ -132,7 +132,13 @@ impl ThinPrismFisheye {
         if !self.domain.contains_distorted(target) {
             return None;
         }
-        if let Some(q) = self.newton(target, target) {
+        // Start where the radial factor alone would put it: one fixed-point step from the
+        // target (the tangential and prism terms are small beside it).
+        let s = target.length_squared();
+        let factor = self.radial.iter().rev().fold(0.0, |f, &c| (f + c) * s);
+        let start = target / (1.0 + factor);
+        let start = if start.is_finite() { start } else { target };
+        if let Some(q) = self.newton(start, target) {
             return Some(q);
         }
         let mut q = DVec2::ZERO;
@@ -252,7 +258,7 @@ impl RayModel for ThinPrismFisheye {
         reach.min(FRAC_PI_2)
     }
 
-    /// `glsl/include/models/thin_prism.glsl`: (flag radial-first, count, −, −), the radial
+    /// `glsl/include/models/thin_prism_fisheye.glsl`: (flag radial-first, count, −, −), the radial
     /// coefficients (6), p1 p2, s1..s4. The plane's domain table goes where the standard
     /// model's does.
     fn gpu_params(&self) -> Vec<f64> {

@@ -1,4 +1,4 @@
-// thin_prism.glsl — COLMAP's thin-prism fisheyes (model::thin_prism): the equidistant point
+// thin_prism_fisheye.glsl — COLMAP's thin-prism fisheyes (model::thin_prism): the equidistant point
 // q = θ (x, y)/r distorted on its plane, inverted by damped Newton (closed-form Jacobian)
 // inside the plane's domain table (which sits where the standard model's does). model[0] = (radial first, radial
 // coefficient count, -, -); then the radial coefficients (6), p1 p2, s1..s4.
@@ -81,7 +81,11 @@ bool vkl_tp_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
     ray = VKL_VEC3(0.0, 0.0, 1.0);
     if (length(m) == 0.0) return true;
     if (!vkl_contains_distorted(m)) return false;
-    VKL_VEC2 q = m;
+    // Start where the radial factor alone would put it (model::thin_prism, the same start).
+    VKL_FLOAT s2 = dot(m, m), f = 0.0;
+    for (int i = int(vkl_cam.model[0].y) - 1; i >= 0; --i) f = (f + vkl_coef(4 + i)) * s2;
+    VKL_VEC2 q = m / (1.0 + f);
+    if (any(isnan(q)) || any(isinf(q))) q = m;
     bool ok = vkl_tp_newton(m, q);
     // Continuation from the centre where the first start lies in another basin.
     for (int k = 1; k <= VKL_CONTINUATION_STEPS && !ok; ++k) {

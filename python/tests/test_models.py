@@ -624,7 +624,14 @@ def test_ocam(tmp_path):
 # COLMAP's models, through vklens's `colmap` model and cameras.txt, against pycolmap itself.
 
 COLMAP_CASES = [
+    ("SIMPLE_PINHOLE", [420.0, 376.0, 240.5]),
+    ("PINHOLE", [420.0, 421.5, 376.0, 240.5]),
     ("SIMPLE_RADIAL", [420.0, 376.0, 240.5, -0.08]),
+    ("RADIAL", [420.0, 376.0, 240.5, -0.08, 0.01]),
+    ("FULL_OPENCV", [458.7, 457.3, 367.7, 248.9, -0.28, 0.074, 2e-4, 1.8e-5, 0.01, 0.02, -0.003, 0.001]),
+    ("SIMPLE_RADIAL_FISHEYE", [190.9, 255.4, 257.4, -0.013]),
+    ("RADIAL_FISHEYE", [190.9, 255.4, 257.4, -0.013, 0.017]),
+    ("EQUIRECTANGULAR", [752.0, 480.0]),
     ("OPENCV", [458.7, 457.3, 367.7, 248.9, -0.28, 0.074, 2e-4, 1.8e-5]),
     ("OPENCV_FISHEYE", [190.9, 190.9, 255.4, 257.4, -0.013, 0.017, -0.012, 0.003]),
     ("FOV", [300.0, 302.0, 370.5, 240.2, 0.93]),
@@ -674,7 +681,8 @@ def test_colmap_models_match_pycolmap(tmp_path, name, params):
     # rescale there): compare where the ray is in front, as COLMAP defines it.
     both = valid_rows(rays) & valid_rows(ref_rays) & (ref_rays[:, 2] > 0)
     both[both] &= rays[both][:, 2] > 1e-9
-    assert both.sum() > 0.5 * len(uv), f"{name}: only {both.sum()} rays to compare"
+    # (The panorama's rays in front are fewer than half its pixels.)
+    assert both.sum() > 0.4 * len(uv), f"{name}: only {both.sum()} rays to compare"
     # COLMAP stops its Newton on the step size (|step|² < 1e-10), not the residual.
     tol = 1e-7 if "FISHEYE" in name and name not in ("SIMPLE_FISHEYE", "FISHEYE") else RAD_TOL
     err = ray_angle(rays[both], ref_rays[both]).max()

@@ -383,3 +383,78 @@ fn bad_input_is_one_line_exit_2_and_leaves_no_file() {
         .collect();
     assert!(leftovers.is_empty());
 }
+
+/// The models of the table through the pinhole warp: a FOV lens distorted from its overscanned
+/// pinhole source on the GPU agrees with the f64 reference warp within a grey level, and a
+/// model without a pinhole focal length asks for the source camera.
+#[test]
+fn a_fov_lens_warps_on_the_gpu_as_the_f64_reference_and_ftheta_asks_for_a_source() {
+    let lens = tmp("fov.json");
+    std::fs::write(
+        &lens,
+        r#"{"model": "fov", "width": 320, "height": 240, "fx": 150, "fy": 151, "cx": 160.5, "cy": 120.2, "omega": 0.93}"#,
+    )
+    .unwrap();
+    let r = vklens(&["overscan", "--camera", s(&lens)]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    let (w, h) = (
+        json["width"].as_u64().unwrap() as u32,
+        json["height"].as_u64().unwrap() as u32,
+    );
+    let src = tmp("fov_src.json");
+    std::fs::write(&src, &r.stdout).unwrap();
+    let input = tmp("fov_in.png");
+    write_png(&input, w, h, false);
+    let mut outs = Vec::new();
+    for backend in ["gpu", "cpu"] {
+        let out = tmp(&format!("fov_{backend}.png"));
+        let r = vklens(&[
+            "distort",
+            "--camera",
+            s(&lens),
+            "--source-camera",
+            s(&src),
+            "--input",
+            s(&input),
+            "--output",
+            s(&out),
+            "--backend",
+            backend,
+        ]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        outs.push(image::open(&out).unwrap().to_rgba8());
+    }
+    let worst = outs[0]
+        .pixels()
+        .zip(outs[1].pixels())
+        .flat_map(|(a, b)| (0..4).map(move |c| (a[c] as i32 - b[c] as i32).abs()))
+        .max()
+        .unwrap();
+    assert!(
+        worst <= 1,
+        "GPU and f64 warps differ by {worst} grey levels"
+    );
+    let ftheta = tmp("ftheta.json");
+    std::fs::write(
+        &ftheta,
+        r#"{"model": "ftheta", "width": 320, "height": 240, "cx": 160, "cy": 120, "reference_poly": "ANGLE_TO_PIXELDIST", "angle_to_pixeldist_poly": [0, 150], "max_angle": 1.2}"#,
+    )
+    .unwrap();
+    let r = vklens(&[
+        "undistort",
+        "--camera",
+        s(&ftheta),
+        "--input",
+        s(&tmp("fov_cpu.png")),
+        "--output",
+        s(&tmp("never_ft.png")),
+    ]);
+    assert_eq!(r.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("ftheta") && err.contains("--source-camera"),
+        "{err}"
+    );
+    assert!(!tmp("never_ft.png").exists());
+}

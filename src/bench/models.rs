@@ -4,7 +4,8 @@
 //! GPU's points pass in f32 (ns per point, error against the f64 model), and the GPU time of
 //! the inverse over a 1920×1080 grid of pixels (the per-pixel work a warp does), as ratios to
 //! the standard model. Where a file carries a fit of the inverse (f-theta's non-reference
-//! polynomial), the fit's error against the exact inverse is measured too.
+//! polynomial, OCamCalib's `inverse_poly`), the fit's error against the exact inverse is
+//! measured too.
 
 use std::time::Instant;
 
@@ -96,9 +97,23 @@ fn cpu_ns<T>(items: &[T], mut f: impl FnMut(&T)) -> f64 {
     start.elapsed().as_nanos() as f64 / calls as f64
 }
 
-/// The f-theta fit's worst error (px of pixel distance) over the domain, against the exact
-/// inverse: the file's non-reference polynomial against the solved reference.
+/// The worst error (px of pixel distance) over the domain of the fitted inverse a file
+/// carries, against the exact inverse: f-theta's non-reference polynomial against the solved
+/// reference, OCamCalib's `inverse_poly` against the exact root of its `cam2world`.
 fn fit_error(camera: &Camera) -> Option<f64> {
+    if let Lens::Ocam(o) = camera.lens() {
+        if o.inverse_poly.is_empty() {
+            return None;
+        }
+        let max = o.max_angle_of_domain() * 0.999;
+        let worst = (1..=200)
+            .filter_map(|i| {
+                let angle = max * i as f64 / 200.0;
+                Some((o.approximate_radius(angle) - o.radius_of(angle)?).abs())
+            })
+            .fold(0.0, f64::max);
+        return Some(worst);
+    }
     let Lens::FTheta(f) = camera.lens() else {
         return None;
     };

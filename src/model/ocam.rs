@@ -122,6 +122,17 @@ impl Ocam {
         [x * e + y, x * c + y * d]
     }
 
+    /// The exact radius of a ray at `angle` off the axis (the smallest positive root), inside
+    /// the domain.
+    pub fn radius_of(&self, angle: f64) -> Option<f64> {
+        poly::solve_monotone(|r| self.angle_with_slope(r), angle, self.r_max)
+    }
+
+    /// The largest angle off the axis in the domain.
+    pub fn max_angle_of_domain(&self) -> f64 {
+        self.angle_with_slope(self.r_max).0
+    }
+
     /// The largest radius in the domain.
     pub fn r_max(&self) -> f64 {
         self.r_max

@@ -39,7 +39,20 @@ pub fn sample_cameras() -> Result<Vec<(&'static str, Camera)>, ModelError> {
     let ocam_k = k(1.0, 1.0, 512.8, 384.3);
     let ocam = Ocam::new(
         vec![-253.9, 0.0, 1.4397e-3, -1.6047e-6, 4.1137e-9],
-        Vec::new(),
+        // OCamCalib's fit of the inverse (degree 10, by least squares over the image).
+        vec![
+            414.1073028,
+            269.7229014,
+            1.222095034,
+            22.37142009,
+            30.32282083,
+            1.24705787,
+            -4.417058826,
+            7.448917923,
+            5.617789858,
+            0.2968915098,
+            -0.3088680792,
+        ],
         [1.0003, 0.0002, -0.0001],
         640.0,
     )?;

@@ -1,29 +1,32 @@
-// thin_prism_fisheye.glsl — COLMAP's thin-prism fisheyes (model::thin_prism): the equidistant point
-// q = θ (x, y)/r distorted on its plane, inverted by damped Newton (closed-form Jacobian)
-// inside the plane's domain table (which sits where the standard model's does). model[0] = (radial first, radial
-// coefficient count, -, -); then the radial coefficients (6), p1 p2, s1..s4.
+// thin_prism_fisheye.glsl — COLMAP's thin-prism fisheyes (model::thin_prism): the
+// equidistant point q = θ (x, y)/r distorted on its plane, inverted by damped Newton
+// (closed-form Jacobian) inside the plane's domain table (which sits where the standard
+// model's does). model[0] = (radial first, radial coefficient count, -, -), model[1] =
+// k1..k4, model[2] = (k5, k6, p1, p2), model[3] = s1..s4.
 
 // The plane's distortion and its Jacobian J (column-major: J[0] = d/dq.x), in closed form:
 // Newton needs it at every step, and differences would cost four more evaluations.
 VKL_VEC2 vkl_tp_distort_jacobian(VKL_VEC2 q, out VKL_MAT2 J) {
+    // Fixed reads of the block, no loop: on lavapipe a dynamically indexed uniform array is
+    // a chain of selects per read. Unused coefficients are zero.
+    VKL_VEC4 ka = vkl_cam.model[1];          // k1 k2 k3 k4
+    VKL_VEC2 kb = vkl_cam.model[2].xy;       // k5 k6
+    VKL_FLOAT p1 = vkl_cam.model[2].z, p2 = vkl_cam.model[2].w;
+    VKL_VEC4 sp = vkl_cam.model[3];          // s1 s2 s3 s4
     VKL_FLOAT s2 = dot(q, q);
-    int n = int(vkl_cam.model[0].y);
-    // f(s) = Σ k_i s^(i+1), and f'(s) = Σ (i+1) k_i s^i, both by Horner.
-    VKL_FLOAT f = 0.0, df = 0.0;
-    for (int i = n - 1; i >= 0; --i) f = (f + vkl_coef(4 + i)) * s2;
-    for (int i = n - 1; i >= 0; --i) df = df * s2 + VKL_FLOAT(i + 1) * vkl_coef(4 + i);
+    // f(s) = Σ k_i s^i (i = 1..6) and f'(s), by Horner.
+    VKL_FLOAT f = s2 * (ka.x + s2 * (ka.y + s2 * (ka.z + s2 * (ka.w + s2 * (kb.x + s2 * kb.y)))));
+    VKL_FLOAT df = ka.x + s2 * (2.0 * ka.y + s2 * (3.0 * ka.z + s2 * (4.0 * ka.w + s2 * (5.0 * kb.x + s2 * 6.0 * kb.y))));
     VKL_VEC2 x = q * (1.0 + f);
     VKL_MAT2 dx = VKL_MAT2(1.0 + f) + VKL_MAT2(q * q.x, q * q.y) * (2.0 * df);
     bool first = vkl_cam.model[0].x > 0.5;
     VKL_VEC2 v = first ? x : q;
     VKL_FLOAT r2 = dot(v, v);
-    VKL_FLOAT p1 = vkl_coef(10), p2 = vkl_coef(11);
-    VKL_FLOAT sa = vkl_coef(12), sb = vkl_coef(13), sc = vkl_coef(14), sd = vkl_coef(15);
     VKL_FLOAT txy = 2.0 * v.x * v.y;
-    VKL_VEC2 d = VKL_VEC2(x.x + txy * p1 + (r2 + 2.0 * v.x * v.x) * p2 + r2 * sa + r2 * r2 * sb,
-                          x.y + (r2 + 2.0 * v.y * v.y) * p1 + txy * p2 + r2 * sc + r2 * r2 * sd);
+    VKL_VEC2 d = VKL_VEC2(x.x + txy * p1 + (r2 + 2.0 * v.x * v.x) * p2 + r2 * sp.x + r2 * r2 * sp.y,
+                          x.y + (r2 + 2.0 * v.y * v.y) * p1 + txy * p2 + r2 * sp.z + r2 * r2 * sp.w);
     // Tangential and thin prism terms' Jacobian in v.
-    VKL_FLOAT px = sa + 2.0 * sb * r2, py = sc + 2.0 * sd * r2;
+    VKL_FLOAT px = sp.x + 2.0 * sp.y * r2, py = sp.z + 2.0 * sp.w * r2;
     VKL_MAT2 jt = VKL_MAT2(
         VKL_VEC2(2.0 * p1 * v.y + 6.0 * p2 * v.x + 2.0 * v.x * px, 2.0 * p1 * v.x + 2.0 * p2 * v.y + 2.0 * v.x * py),
         VKL_VEC2(2.0 * p1 * v.x + 2.0 * p2 * v.y + 2.0 * v.y * px, 6.0 * p1 * v.y + 2.0 * p2 * v.x + 2.0 * v.y * py));
@@ -82,8 +85,10 @@ bool vkl_tp_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
     if (length(m) == 0.0) return true;
     if (!vkl_contains_distorted(m)) return false;
     // Start where the radial factor alone would put it (model::thin_prism, the same start).
-    VKL_FLOAT s2 = dot(m, m), f = 0.0;
-    for (int i = int(vkl_cam.model[0].y) - 1; i >= 0; --i) f = (f + vkl_coef(4 + i)) * s2;
+    VKL_VEC4 ka = vkl_cam.model[1];
+    VKL_VEC2 kb = vkl_cam.model[2].xy;
+    VKL_FLOAT s2 = dot(m, m);
+    VKL_FLOAT f = s2 * (ka.x + s2 * (ka.y + s2 * (ka.z + s2 * (ka.w + s2 * (kb.x + s2 * kb.y)))));
     VKL_VEC2 q = m / (1.0 + f);
     if (any(isnan(q)) || any(isinf(q))) q = m;
     bool ok = vkl_tp_newton(m, q);

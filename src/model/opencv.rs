@@ -30,17 +30,10 @@ pub const COEFFICIENT_NAMES: [&str; 14] = [
     "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "tau_x", "tau_y",
 ];
 
-/// Newton: most iterations before giving up. Quadratic convergence from the radial start
-/// needs 3-6; the rest is headroom for damped steps near the boundary.
-pub const NEWTON_MAX_ITERATIONS: usize = 50;
-/// Newton: a solution is accepted when it reproduces the distorted point to this (normalized
-/// units; ~1e-9 px at fx = 1000).
-pub const NEWTON_ACCEPT_RESIDUAL: f64 = 1e-12;
-/// Newton: most step halvings per iteration (damping near the domain boundary).
-pub const NEWTON_MAX_HALVINGS: usize = 40;
-/// Steps of the continuation Newton falls back to when its radial start fails (see
-/// `Camera::newton`). Only points next to a fold at wide angles ever need it.
-pub const CONTINUATION_STEPS: usize = 8;
+/// The constants of the 2D Newton every plane distortion shares (`super::solve::invert_2d`).
+pub use super::solve::{
+    CONTINUATION_STEPS, NEWTON_ACCEPT_RESIDUAL, NEWTON_MAX_HALVINGS, NEWTON_MAX_ITERATIONS,
+};
 
 /// Pinhole intrinsics in pixels (no skew).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -721,68 +714,13 @@ impl Camera {
     /// inside the domain whenever the segment is inside the domain's image, which the distorted
     /// table (star-shaped by construction) has already checked.
     fn newton(&self, target: DVec2) -> Option<DVec2> {
-        let rho = target.length();
-        if rho == 0.0 {
-            // Every term (radial, tangential, prism) vanishes at the principal point, and the
-            // Jacobian there is the identity: the answer is exactly the principal point.
-            return Some(DVec2::ZERO);
-        }
-        if let Some(x) = self.newton_from(self.radial_start(target), target) {
-            return Some(x);
-        }
-        let mut x = DVec2::ZERO;
-        for step in 1..=CONTINUATION_STEPS {
-            let along = target * (step as f64 / CONTINUATION_STEPS as f64);
-            x = self.newton_from(x, along)?;
-        }
-        Some(x)
-    }
-
-    /// The damped Newton iteration from `start`; `None` unless it ends in the domain with a
-    /// vanishing residual and a positive Jacobian determinant.
-    fn newton_from(&self, start: DVec2, target: DVec2) -> Option<DVec2> {
-        let d = &self.distortion();
-        let rho = target.length();
-        let mut x = start;
-        let (mut f, mut jac) = d.distort_pre_tilt(x)?;
-        for _ in 0..NEWTON_MAX_ITERATIONS {
-            let residual = (f - target).length();
-            if residual <= f64::EPSILON * (1.0 + rho) {
-                break;
-            }
-            if !(jac.determinant() > 0.0) {
-                return None;
-            }
-            let step = jac.inverse() * (f - target);
-            if x - step == x {
-                // Converged to rounding: the step no longer changes x.
-                break;
-            }
-            // Damp: halve the step until the new point stays in the domain and reduces the
-            // residual by at least a (1 - 1e-4 t) fraction (Armijo) — a simple trust region.
-            let mut t = 1.0;
-            let mut accepted = false;
-            for _ in 0..NEWTON_MAX_HALVINGS {
-                let candidate = x - step * t;
-                if self.domain.contains_ideal(candidate) {
-                    if let Some((fc, jc)) = d.distort_pre_tilt(candidate) {
-                        if (fc - target).length() < residual * (1.0 - 1e-4 * t) {
-                            (x, f, jac) = (candidate, fc, jc);
-                            accepted = true;
-                            break;
-                        }
-                    }
-                }
-                t *= 0.5;
-            }
-            if !accepted {
-                break;
-            }
-        }
-        let ok = (f - target).length() <= NEWTON_ACCEPT_RESIDUAL * (1.0 + rho)
-            && jac.determinant() > 0.0
-            && self.domain.contains_ideal(x);
-        ok.then_some(x)
+        let d = self.distortion();
+        super::solve::invert_2d(
+            |x| d.distort_pre_tilt(x),
+            |x| self.domain.contains_ideal(x),
+            self.radial_start(target),
+            target,
+        )
     }
 
     /// Start for Newton: solve the radial part r·R(r²) = |target| along the target's direction

@@ -123,64 +123,24 @@ impl ThinPrismFisheye {
         &self.domain
     }
 
-    /// Damped Newton for the plane: q with distort(q) = m inside the domain, started at m and
-    /// falling back to continuation from the centre (as the standard model's inverse).
+    /// The plane's inverse: q with distort(q) = m inside the domain, by the 2D Newton the
+    /// standard model uses (`super::solve::invert_2d`), started where the radial factor alone
+    /// would put it (one fixed-point step from the target: the tangential and prism terms are
+    /// small beside it).
     fn invert(&self, target: DVec2) -> Option<DVec2> {
-        if target == DVec2::ZERO {
-            return Some(DVec2::ZERO);
-        }
-        if !self.domain.contains_distorted(target) {
+        if target != DVec2::ZERO && !self.domain.contains_distorted(target) {
             return None;
         }
-        // Start where the radial factor alone would put it: one fixed-point step from the
-        // target (the tangential and prism terms are small beside it).
         let s = target.length_squared();
         let factor = self.radial.iter().rev().fold(0.0, |f, &c| (f + c) * s);
         let start = target / (1.0 + factor);
         let start = if start.is_finite() { start } else { target };
-        if let Some(q) = self.newton(start, target) {
-            return Some(q);
-        }
-        let mut q = DVec2::ZERO;
-        for step in 1..=8 {
-            q = self.newton(q, target * (step as f64 / 8.0))?;
-        }
-        Some(q)
-    }
-
-    fn newton(&self, start: DVec2, target: DVec2) -> Option<DVec2> {
-        let rho = target.length();
-        let mut q = start;
-        let (mut f, mut j) = self.plane(q)?;
-        for _ in 0..50 {
-            let residual = (f - target).length();
-            if residual <= f64::EPSILON * (1.0 + rho) || !(j.determinant() > 0.0) {
-                break;
-            }
-            let step = j.inverse() * (f - target);
-            let mut t = 1.0;
-            let mut accepted = false;
-            for _ in 0..40 {
-                let c = q - step * t;
-                if self.domain.contains_ideal(c) {
-                    if let Some((fc, jc)) = self.plane(c) {
-                        if (fc - target).length() < residual * (1.0 - 1e-4 * t) {
-                            (q, f, j) = (c, fc, jc);
-                            accepted = true;
-                            break;
-                        }
-                    }
-                }
-                t *= 0.5;
-            }
-            if !accepted {
-                break;
-            }
-        }
-        let ok = (f - target).length() <= 1e-12 * (1.0 + rho)
-            && j.determinant() > 0.0
-            && self.domain.contains_ideal(q);
-        ok.then_some(q)
+        super::solve::invert_2d(
+            |q| self.plane(q),
+            |q| self.domain.contains_ideal(q),
+            start,
+            target,
+        )
     }
 }
 

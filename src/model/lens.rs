@@ -4,7 +4,7 @@
 //! point with its own inverses ([`super::opencv`]); every other model maps camera-frame rays
 //! ([`super::table::RayModel`]), past 90° off the axis where it sees there. Adding a model is
 //! one file with its `RayModel` implementation, one variant here, one arm in each `match` of
-//! [`for_each_ray_model`], and its GLSL include (see `docs/how-it-works.md`).
+//! `for_each_ray_model!`, and its GLSL include (see `docs/how-it-works.md`).
 
 use glam::{DMat2, DVec2, DVec3};
 

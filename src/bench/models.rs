@@ -15,6 +15,7 @@ use serde::Serialize;
 use crate::bench::inverse::time_points;
 use crate::gpu::Context;
 use crate::model::samples::sample_cameras;
+use crate::model::table::RayModel;
 use crate::model::{Camera, Lens};
 use crate::pass::{PointsMode, Precision};
 use crate::Result;
@@ -105,7 +106,7 @@ fn fit_error(camera: &Camera) -> Option<f64> {
         if o.inverse_poly.is_empty() {
             return None;
         }
-        let max = o.max_angle_of_domain() * 0.999;
+        let max = o.max_angle() * 0.999;
         let worst = (1..=200)
             .filter_map(|i| {
                 let angle = max * i as f64 / 200.0;
@@ -117,7 +118,7 @@ fn fit_error(camera: &Camera) -> Option<f64> {
     let Lens::FTheta(f) = camera.lens() else {
         return None;
     };
-    let max = f.theta_max() * 0.999;
+    let max = f.max_angle() * 0.999;
     let mut worst = 0.0f64;
     for i in 1..=200 {
         let theta = max * i as f64 / 200.0;

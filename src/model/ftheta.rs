@@ -217,11 +217,6 @@ impl FTheta {
     pub fn approximate_distance(&self, theta: f64) -> f64 {
         poly::eval(&self.angle_to_pixeldist, theta)
     }
-
-    /// The largest angle off the axis in the domain.
-    pub fn theta_max(&self) -> f64 {
-        self.theta_max
-    }
 }
 
 impl RayModel for FTheta {

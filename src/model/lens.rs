@@ -219,11 +219,6 @@ impl Lens {
         for_each_ray_model!(self, l => l.unproject(m), standard => None)
     }
 
-    /// Whether a ray model's domain holds the ray (false for the standard model).
-    pub fn contains_ray(&self, p: DVec3) -> bool {
-        for_each_ray_model!(self, m => m.contains_ray(p), standard => false)
-    }
-
     /// A ray model's `model[8]` block for the shaders (all zero for the standard model).
     pub fn gpu_params(&self) -> [f64; table::GPU_PARAMS] {
         let v = for_each_ray_model!(self, m => m.gpu_params(), standard => Vec::new());

@@ -127,28 +127,6 @@ impl Ocam {
     pub fn radius_of(&self, angle: f64) -> Option<f64> {
         poly::solve_monotone(|r| self.angle_with_slope(r), angle, self.r_max)
     }
-
-    /// The largest angle off the axis in the domain.
-    pub fn max_angle_of_domain(&self) -> f64 {
-        self.angle_with_slope(self.r_max).0
-    }
-
-    /// The largest radius in the domain.
-    pub fn r_max(&self) -> f64 {
-        self.r_max
-    }
-
-    /// m for a ray from OCamCalib's inverse fit (`world2cam` as OCamCalib computes it).
-    pub fn approximate_project(&self, p: DVec3) -> Option<DVec2> {
-        let (xo, yo) = (p.y, p.x);
-        let rho = xo.hypot(yo);
-        if rho == 0.0 {
-            return (p.z > 0.0).then_some(DVec2::ZERO);
-        }
-        let r = self.approximate_radius(rho.atan2(p.z));
-        let [u, v] = self.to_m(xo / rho * r, yo / rho * r);
-        Some(DVec2::new(u, v))
-    }
 }
 
 impl RayModel for Ocam {

@@ -184,3 +184,42 @@ fn every_colmap_model_reads_from_cameras_txt_as_from_colmap_json() {
     );
     assert!(e.contains("PINHOLE_X"), "{e}");
 }
+
+/// `fitted_inverse: true` in a camera's JSON selects the file's fit of the inverse (the
+/// sample cameras' fitted twins project the same), is written back, and is refused where the
+/// file carries no fit or the key is not a boolean.
+#[test]
+fn fitted_inverse_reads_and_writes_in_vklens_json() {
+    use vklens::internal::io::models::camera_to_json;
+    use vklens::internal::model::samples::{fitted_inverse_cameras, sample_cameras};
+    let exact: Vec<_> = sample_cameras().expect("samples");
+    for (name, fitted) in fitted_inverse_cameras().expect("fitted") {
+        let (_, plain) = exact
+            .iter()
+            .find(|(n, _)| format!("{n}_fitted") == name)
+            .expect("its exact twin");
+        let mut json = camera_to_json(plain).expect("json");
+        assert!(
+            json.get("fitted_inverse").is_none(),
+            "{name}: the default is not written"
+        );
+        json["fitted_inverse"] = true.into();
+        let text = json.to_string();
+        let loaded = load(&text, "fitted.json", None);
+        same(&loaded, &fitted, name);
+        assert_eq!(
+            camera_to_json(&loaded).expect("json")["fitted_inverse"],
+            true
+        );
+        json["fitted_inverse"] = "yes".into();
+        let err = refused(&json.to_string(), "fitted.json");
+        assert!(
+            err.contains("fitted_inverse") && err.contains("fitted.json"),
+            "{err}"
+        );
+    }
+    let no_fit = r#"{"model": "ocam", "width": 640, "height": 480, "cx": 320, "cy": 240,
+        "poly": [-250.0, 0.0, 0.001], "c": 1, "d": 0, "e": 0, "fitted_inverse": true}"#;
+    let err = refused(no_fit, "ocam.json");
+    assert!(err.contains("inverse_poly"), "{err}");
+}

@@ -115,7 +115,7 @@ layout(set = VKL_CAMERA_SET, binding = VKL_CAMERA_BINDING, std140) uniform VKL_P
     VKL_VEC4 untilt[3];         // rows of its inverse
     VKL_VEC4 domain_info;       // x: smallest ideal boundary radius, y: smallest distorted one,
                                 // z: cos of Alg. 1's vertex limit for a ray model (-2: none)
-    VKL_VEC4 model[8];          // the ray model's own parameters (model::table::RayModel::gpu_params)
+    VKL_VEC4 model[16];         // the ray model's own parameters (model::table::RayModel::gpu_params)
     VKL_VEC4 domain[VKL_DOMAIN_SAMPLES]; // x: ideal boundary radius, y: distorted, at angle TAU*i/N
 } vkl_cam;
 

@@ -250,7 +250,10 @@ impl PyCamera {
             }
             for (key, value) in params.into_iter().flat_map(|p| p.iter()) {
                 let key: String = key.extract()?;
-                let v = if let Ok(s) = value.extract::<String>() {
+                // A bool first: Python's True is also an int, which would read as 1.0.
+                let v = if value.is_instance_of::<pyo3::types::PyBool>() {
+                    serde_json::Value::from(value.extract::<bool>()?)
+                } else if let Ok(s) = value.extract::<String>() {
                     serde_json::Value::from(s)
                 } else if let Ok(x) = value.extract::<f64>() {
                     serde_json::Value::from(x)

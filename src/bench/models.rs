@@ -5,7 +5,8 @@
 //! the inverse over a 1920×1080 grid of pixels (the per-pixel work a warp does), as ratios to
 //! the standard model. Where a file carries a fit of the inverse (f-theta's non-reference
 //! polynomial, OCamCalib's `inverse_poly`), the fit's error against the exact inverse is
-//! measured too.
+//! measured too, and the same camera evaluating that fit (`fitted_inverse`) has its own row:
+//! what the fit saves in time beside what it costs in pixels.
 
 use std::time::Instant;
 
@@ -14,7 +15,7 @@ use serde::Serialize;
 
 use crate::bench::inverse::time_points;
 use crate::gpu::Context;
-use crate::model::samples::sample_cameras;
+use crate::model::samples::{fitted_inverse_cameras, sample_cameras};
 use crate::model::table::RayModel;
 use crate::model::{Camera, Lens};
 use crate::pass::{PointsMode, Precision};
@@ -145,7 +146,8 @@ fn fit_error(camera: &Camera) -> Option<f64> {
 
 /// Measures every sample camera (the GPU columns where `ctx` is given).
 pub fn run(ctx: Option<&Context>, progress: impl Fn(&str)) -> Result<Vec<ModelRow>> {
-    let cameras = sample_cameras()?;
+    let mut cameras = sample_cameras()?;
+    cameras.extend(fitted_inverse_cameras()?);
     let total = cameras.len();
     let mut rows = Vec::new();
     for (k, (name, camera)) in cameras.into_iter().enumerate() {
@@ -219,8 +221,13 @@ pub fn run(ctx: Option<&Context>, progress: impl Fn(&str)) -> Result<Vec<ModelRo
             let mut worst = 0.0f64;
             for (px, r) in pixels.iter().zip(&raw) {
                 if r[2] > 0.5 {
-                    if let Some(back) = camera.project(DVec3::new(r[0], r[1], r[3])) {
-                        worst = worst.max((back - *px).length());
+                    // Against the f64 ray's pixel: the pixel itself, but where the camera
+                    // evaluates a fit of its inverse (whose own error is the last column).
+                    let want = camera.unproject(*px).and_then(|ray| camera.project(ray));
+                    if let (Some(back), Some(want)) =
+                        (camera.project(DVec3::new(r[0], r[1], r[3])), want)
+                    {
+                        worst = worst.max((back - want).length());
                     }
                 }
             }

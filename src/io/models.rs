@@ -88,15 +88,7 @@ pub fn camera_from_json(model: &str, obj: &Map<String, Value>) -> Result<Camera>
             let radial = number_list(required(obj, "radial")?, "radial")?;
             let p = list("p", 2)?;
             let s = list("s", 4)?;
-            let radial_first = match obj.get("radial_first") {
-                None => false,
-                Some(Value::Bool(b)) => *b,
-                Some(other) => {
-                    return Err(Error::input(format!(
-                        "`radial_first` must be true or false, got {other}"
-                    )))
-                }
-            };
+            let radial_first = flag(obj, "radial_first")?;
             let lens = ThinPrismFisheye::new(
                 radial,
                 [p[0], p[1]],
@@ -139,7 +131,8 @@ pub fn camera_from_json(model: &str, obj: &Map<String, Value>) -> Result<Camera>
                 inverse,
                 [num("c")?, num("d")?, num("e")?],
                 corner_radius(width, height, &k),
-            )?;
+            )?
+            .with_fitted_inverse(flag(obj, "fitted_inverse")?)?;
             (Lens::Ocam(lens), k)
         }
         other => {
@@ -149,6 +142,17 @@ pub fn camera_from_json(model: &str, obj: &Map<String, Value>) -> Result<Camera>
         }
     };
     Camera::with_lens(width, height, intrinsics, lens).map_err(Error::from)
+}
+
+/// An optional true/false key (absent: false).
+fn flag(obj: &Map<String, Value>, key: &str) -> Result<bool> {
+    match obj.get(key) {
+        None => Ok(false),
+        Some(Value::Bool(b)) => Ok(*b),
+        Some(other) => Err(Error::input(format!(
+            "`{key}` must be true or false, got {other}"
+        ))),
+    }
 }
 
 fn required<'a>(obj: &'a Map<String, Value>, key: &str) -> Result<&'a Value> {
@@ -226,7 +230,8 @@ fn ftheta_from(obj: &Map<String, Value>) -> Result<FTheta> {
         poly("angle_to_pixeldist_poly")?,
         cde,
         number_field(obj, "max_angle")?,
-    )?;
+    )?
+    .with_fitted_inverse(flag(obj, "fitted_inverse")?)?;
     lens.shutter_type = match obj.get("shutter_type") {
         None | Some(Value::Null) => None,
         Some(Value::String(s)) if SHUTTER_TYPES.contains(&s.as_str()) => Some(s.clone()),
@@ -381,6 +386,9 @@ pub fn camera_to_json(camera: &Camera) -> Option<Value> {
             if let Some(s) = &m.shutter_type {
                 v["shutter_type"] = s.as_str().into();
             }
+            if m.fitted_inverse() {
+                v["fitted_inverse"] = true.into();
+            }
         }
         Lens::ThinPrismFisheye(m) => {
             pinhole(&mut v);
@@ -396,6 +404,9 @@ pub fn camera_to_json(camera: &Camera) -> Option<Value> {
             v["inverse_poly"] = json!(m.inverse_poly);
             for (name, c) in ["c", "d", "e"].into_iter().zip(m.cde) {
                 v[name] = c.into();
+            }
+            if m.fitted_inverse() {
+                v["fitted_inverse"] = true.into();
             }
         }
         lens => {

@@ -50,13 +50,24 @@ impl ValidDomain {
         forward: impl Fn(DVec2) -> Option<DVec2>,
         valid_at: impl Fn(DVec2, DVec2) -> bool,
     ) -> Self {
+        Self::compute_within(Self::RADIUS_CAP, forward, valid_at)
+    }
+
+    /// [`ValidDomain::compute`] with another bound than [`ValidDomain::RADIUS_CAP`] on the
+    /// ideal radius: a plane that is not a perspective image's (Mei's unit-sphere plane, which
+    /// reaches infinity at the edge of the omnidirectional model's domain) goes further out.
+    pub fn compute_within(
+        cap: f64,
+        forward: impl Fn(DVec2) -> Option<DVec2>,
+        valid_at: impl Fn(DVec2, DVec2) -> bool,
+    ) -> Self {
         let n = Self::SAMPLES;
         let mut ideal = Vec::with_capacity(n);
         let mut folds = false;
         for i in 0..n {
             let angle = TAU * i as f64 / n as f64;
             let dir = DVec2::new(angle.cos(), angle.sin());
-            let (radius, folded) = march(&valid_at, dir);
+            let (radius, folded) = march(&valid_at, dir, cap);
             folds |= folded;
             ideal.push(radius);
         }
@@ -116,11 +127,12 @@ impl ValidDomain {
 
     /// A domain without any boundary but the radius cap (no distortion).
     pub fn unbounded() -> Self {
-        Self::from_tables(
-            vec![Self::RADIUS_CAP; Self::SAMPLES],
-            vec![Self::RADIUS_CAP; Self::SAMPLES],
-            false,
-        )
+        Self::unbounded_within(Self::RADIUS_CAP)
+    }
+
+    /// A domain without any boundary but `cap` (see [`ValidDomain::compute_within`]).
+    pub fn unbounded_within(cap: f64) -> Self {
+        Self::from_tables(vec![cap; Self::SAMPLES], vec![cap; Self::SAMPLES], false)
     }
 
     /// True when the model folds over (or hits a pole) somewhere before the radius cap.
@@ -250,12 +262,14 @@ fn fold_check(table: &mut [f64], t: f64, valid_at: &impl Fn(DVec2, DVec2) -> boo
     let dir = DVec2::new(angle.cos(), angle.sin());
     let (a, b) = (table[i], table[j]);
     let r = a * (1.0 - f) + b * f;
+    // Marching past the table's largest radius could not lower it: that bound is the cap.
+    let cap = table.iter().copied().fold(0.0, f64::max);
     let fold = if a.max(b) > SMOOTH_INTERVAL * a.min(b) {
-        march(valid_at, dir).0
+        march(valid_at, dir, cap).0
     } else if valid_at(dir * r, dir) {
         return false;
     } else {
-        fold_between(valid_at, dir, 0.9 * a.min(b), r)
+        fold_between(valid_at, dir, 0.9 * a.min(b), r, cap)
     };
     if fold >= r {
         return false;
@@ -379,9 +393,10 @@ fn fold_between(
     dir: DVec2,
     inside: f64,
     outside: f64,
+    cap: f64,
 ) -> f64 {
     if !(inside < outside) || !valid_at(dir * inside, dir) {
-        return march(valid_at, dir).0;
+        return march(valid_at, dir, cap).0;
     }
     last_true(inside, outside, |r| valid_at(dir * r, dir)) * (1.0 - BOUNDARY_MARGIN)
 }
@@ -402,10 +417,10 @@ fn last_true(mut inside: f64, mut outside: f64, holds: impl Fn(f64) -> bool) -> 
 
 /// Walks outward along `dir` until `valid_at` fails; returns the last valid radius (refined by
 /// bisection) and whether a failure was found before the cap.
-fn march(valid_at: &impl Fn(DVec2, DVec2) -> bool, dir: DVec2) -> (f64, bool) {
+fn march(valid_at: &impl Fn(DVec2, DVec2) -> bool, dir: DVec2, cap: f64) -> (f64, bool) {
     let mut inside = 0.0_f64;
     let mut r = 1e-6_f64;
-    while r < ValidDomain::RADIUS_CAP {
+    while r < cap {
         if !valid_at(dir * r, dir) {
             let mut outside = r;
             for _ in 0..64 {
@@ -425,8 +440,8 @@ fn march(valid_at: &impl Fn(DVec2, DVec2) -> bool, dir: DVec2) -> (f64, bool) {
         // Steps grow with r: fine near the centre where lenses are tuned, coarser far out.
         r += 0.002 + 0.01 * r;
     }
-    if valid_at(dir * ValidDomain::RADIUS_CAP, dir) {
-        (ValidDomain::RADIUS_CAP, false)
+    if valid_at(dir * cap, dir) {
+        (cap, false)
     } else {
         (inside * (1.0 - BOUNDARY_MARGIN), true)
     }

@@ -73,6 +73,10 @@ pub struct FTheta {
     pub max_angle: f64,
     /// NCore's `shutter_type` (how the sensor reads its lines), kept as the file wrote it.
     pub shutter_type: Option<String>,
+    /// Evaluate the direction the reference does not define with the file's other polynomial
+    /// (what NCore evaluates before its Newton steps: cheaper, off by its fit's error) instead
+    /// of solving the reference exactly ([`FTheta::with_fitted_inverse`]).
+    fitted_inverse: bool,
     /// Largest angle in the domain: max_angle, or less where the reference polynomial folds.
     theta_max: f64,
     /// The reference polynomial's increasing branch ends here (its own argument).
@@ -141,6 +145,7 @@ impl FTheta {
             linear_cde,
             max_angle,
             shutter_type: None,
+            fitted_inverse: false,
             theta_max: max_angle,
             branch_end: 0.0,
         };
@@ -174,6 +179,28 @@ impl FTheta {
             )));
         }
         Ok(lens)
+    }
+
+    /// The same lens evaluating the direction its reference does not define with the file's
+    /// other polynomial (`true`), or solving the reference exactly (`false`, the default).
+    /// `vklens bench models` measures what the fit costs in pixels and saves in time.
+    pub fn with_fitted_inverse(mut self, fitted: bool) -> Result<Self, ModelError> {
+        let (name, fit) = match self.reference {
+            Reference::PixeldistToAngle => ("angle_to_pixeldist_poly", &self.angle_to_pixeldist),
+            Reference::AngleToPixeldist => ("pixeldist_to_angle_poly", &self.pixeldist_to_angle),
+        };
+        if fitted && fit.iter().all(|&c| c == 0.0) {
+            return Err(ModelError::Other(format!(
+                "`fitted_inverse` needs the file's fit of the inverse, but `{name}` is empty or all zeros"
+            )));
+        }
+        self.fitted_inverse = fitted;
+        Ok(self)
+    }
+
+    /// Whether the non-reference direction is the file's fit ([`FTheta::with_fitted_inverse`]).
+    pub fn fitted_inverse(&self) -> bool {
+        self.fitted_inverse
     }
 
     fn linear(&self) -> DMat2 {
@@ -240,6 +267,12 @@ impl RayModel for FTheta {
         let theta = rho.atan2(p[2]);
         let delta = match self.reference {
             Reference::AngleToPixeldist => poly::eval(&self.angle_to_pixeldist, theta),
+            Reference::PixeldistToAngle if self.fitted_inverse => {
+                if !(theta.value() < self.theta_max) {
+                    return None;
+                }
+                poly::eval(&self.angle_to_pixeldist, theta)
+            }
             Reference::PixeldistToAngle => {
                 // δ solves bw(δ) = θ: its value by the solver, its derivatives by the implicit
                 // function theorem (dδ = dθ / bw'(δ)).
@@ -267,7 +300,11 @@ impl RayModel for FTheta {
         if r == 0.0 {
             return Some(DVec3::Z);
         }
-        let theta = self.angle(r)?;
+        let theta = if self.fitted_inverse && self.reference == Reference::AngleToPixeldist {
+            poly::eval(&self.pixeldist_to_angle, r)
+        } else {
+            self.angle(r)?
+        };
         if !(theta >= 0.0 && theta < self.theta_max) {
             return None;
         }
@@ -282,8 +319,8 @@ impl RayModel for FTheta {
         self.theta_max
     }
 
-    /// `glsl/include/models/ftheta.glsl`: (reference, θ_max, branch end, −), (c, d, e, −),
-    /// then fw's and bw's 8 coefficients each.
+    /// `glsl/include/models/ftheta.glsl`: (reference, θ_max, branch end, fitted inverse),
+    /// (c, d, e, −), then fw's and bw's 8 coefficients each.
     fn gpu_params(&self) -> Vec<f64> {
         let reference = match self.reference {
             Reference::PixeldistToAngle => 0.0,
@@ -294,7 +331,7 @@ impl RayModel for FTheta {
             reference,
             self.theta_max,
             self.branch_end,
-            0.0,
+            if self.fitted_inverse { 1.0 } else { 0.0 },
             c,
             d,
             e,

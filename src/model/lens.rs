@@ -219,7 +219,7 @@ impl Lens {
         for_each_ray_model!(self, l => l.unproject(m), standard => None)
     }
 
-    /// A ray model's `model[8]` block for the shaders (all zero for the standard model).
+    /// A ray model's `model[16]` block for the shaders (all zero for the standard model).
     pub fn gpu_params(&self) -> [f64; table::GPU_PARAMS] {
         let v = for_each_ray_model!(self, m => m.gpu_params(), standard => Vec::new());
         let mut out = [0.0; table::GPU_PARAMS];

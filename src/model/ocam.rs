@@ -32,6 +32,10 @@ use super::{check_finite, ModelError, ABSURD_MAGNITUDE};
 /// Most coefficients of `poly` (the shaders hold 24; OCamCalib fits 5 by default).
 pub const MAX_POLY: usize = 24;
 
+/// Most coefficients of `inverse_poly` the shaders hold, for [`Ocam::with_fitted_inverse`]
+/// (OCamCalib's fits have about 10 to 20).
+pub const MAX_INVERSE_POLY: usize = 32;
+
 /// Steps of the march that finds where the angle stops growing.
 const FOLD_STEPS: usize = 4096;
 
@@ -46,6 +50,11 @@ pub struct Ocam {
     pub cde: [f64; 3],
     /// Largest radius in the domain.
     r_max: f64,
+    /// The angle off the axis of `r_max`'s ray: the domain's edge.
+    angle_max: f64,
+    /// `world2cam` by `inverse_poly`, as OCamCalib does, instead of the exact root
+    /// ([`Ocam::with_fitted_inverse`]).
+    fitted_inverse: bool,
 }
 
 impl Ocam {
@@ -90,9 +99,12 @@ impl Ocam {
             inverse_poly,
             cde,
             r_max: 0.0,
+            angle_max: 0.0,
+            fitted_inverse: false,
         };
         let hi = max_radius.max(1.0);
         lens.r_max = poly::increasing_until(|r| lens.angle_with_slope(r), hi, FOLD_STEPS);
+        lens.angle_max = lens.angle_with_slope(lens.r_max).0;
         Ok(lens)
     }
 
@@ -102,6 +114,25 @@ impl Ocam {
         let q = r * r + z * z;
         // d/dr atan2(r, −z) = (−z + r z') / (r² + z²).
         (r.atan2(-z), (-z + r * dz) / q)
+    }
+
+    /// The same lens projecting (`world2cam`) by OCamCalib's own fit `inverse_poly`
+    /// (`true`), or by the exact root of `poly` (`false`, the default). The fit is cheaper and
+    /// a few hundredths of a pixel off; `vklens bench models` measures both.
+    pub fn with_fitted_inverse(mut self, fitted: bool) -> Result<Self, ModelError> {
+        if fitted && !(1..=MAX_INVERSE_POLY).contains(&self.inverse_poly.len()) {
+            return Err(ModelError::Other(format!(
+                "`fitted_inverse` needs OCamCalib's `inverse_poly` with 1 to {MAX_INVERSE_POLY} coefficients, got {}",
+                self.inverse_poly.len()
+            )));
+        }
+        self.fitted_inverse = fitted;
+        Ok(self)
+    }
+
+    /// Whether `world2cam` is OCamCalib's fit ([`Ocam::with_fitted_inverse`]).
+    pub fn fitted_inverse(&self) -> bool {
+        self.fitted_inverse
     }
 
     fn affine(&self) -> DMat2 {
@@ -149,6 +180,15 @@ impl RayModel for Ocam {
         }
         let rho = rho2.sqrt();
         let angle = rho.atan2(p[2]);
+        if self.fitted_inverse {
+            // OCamCalib's world2cam: its θ is measured from the image plane.
+            if !(angle.value() <= self.max_angle()) {
+                return None;
+            }
+            let r = poly::eval(&self.inverse_poly, angle - std::f64::consts::FRAC_PI_2);
+            let s = r / rho;
+            return Some(self.to_m(xo * s, yo * s));
+        }
         // The radius whose ray makes this angle: its value by the solver, its derivatives by
         // the implicit function theorem (dr = dangle / angle'(r)).
         let r0 = poly::solve_monotone(|r| self.angle_with_slope(r), angle.value(), self.r_max)?;
@@ -159,7 +199,7 @@ impl RayModel for Ocam {
     }
 
     fn contains_ray(&self, p: DVec3) -> bool {
-        p.is_finite() && p != DVec3::ZERO && off_axis(p) <= self.angle_with_slope(self.r_max).0
+        p.is_finite() && p != DVec3::ZERO && off_axis(p) <= self.angle_max
     }
 
     fn unproject(&self, m: DVec2) -> Option<DVec3> {
@@ -178,11 +218,12 @@ impl RayModel for Ocam {
     }
 
     fn max_angle(&self) -> f64 {
-        self.angle_with_slope(self.r_max).0
+        self.angle_max
     }
 
-    /// `glsl/include/models/ocam.glsl`: (r_max, max angle, c, d), (e, coefficients, −, −),
-    /// then `poly` (24, zero-padded).
+    /// `glsl/include/models/ocam.glsl`: (r_max, max angle, c, d), (e, coefficients, fitted
+    /// coefficients or 0, −), then `poly` (24, zero-padded), then `inverse_poly` where it is
+    /// used (32, zero-padded).
     fn gpu_params(&self) -> Vec<f64> {
         let [c, d, e] = self.cde;
         let mut v = vec![
@@ -192,12 +233,21 @@ impl RayModel for Ocam {
             d,
             e,
             self.poly.len() as f64,
-            0.0,
+            if self.fitted_inverse {
+                self.inverse_poly.len() as f64
+            } else {
+                0.0
+            },
             0.0,
         ];
         let mut padded = [0.0; MAX_POLY];
         padded[..self.poly.len()].copy_from_slice(&self.poly);
         v.extend(padded);
+        if self.fitted_inverse {
+            let mut padded = [0.0; MAX_INVERSE_POLY];
+            padded[..self.inverse_poly.len()].copy_from_slice(&self.inverse_poly);
+            v.extend(padded);
+        }
         v
     }
 }

@@ -16,6 +16,7 @@
 
 use glam::{DVec2, DVec3};
 
+use super::domain::ValidDomain;
 use super::jet::Scalar;
 use super::opencv::{Camera, Intrinsics, OpenCvDistortion};
 use super::table::{norm3, unit, RayModel};
@@ -52,11 +53,26 @@ impl Omni {
             cx: 0.0,
             cy: 0.0,
         };
-        let radtan = Camera::new(1, 1, unit_k, OpenCvDistortion::from_coeffs(&dist_coeffs)?)?;
+        let radtan = Camera::new(1, 1, unit_k, OpenCvDistortion::from_coeffs(&dist_coeffs)?)?
+            .with_radius_cap(Self::plane_radius_cap(xi));
         Ok(Omni {
             xi,
             radtan: Box::new(radtan),
         })
+    }
+
+    /// How far out Mei's plane point m reaches inside the domain. At its edge, z = −w·|P|,
+    /// |m| = sin θ / (cos θ + ξ) is 1/√(ξ² − 1) for ξ > 1, and unbounded for ξ ≤ 1 (the edge
+    /// ray meets the plane at infinity). There the table stops at 1e6, which gives up the
+    /// last 1e-6 rad before the edge (|m| ≈ 1/Δθ there), far below what a pixel resolves.
+    fn plane_radius_cap(xi: f64) -> f64 {
+        const FAR: f64 = 1e6;
+        let edge = if xi > 1.0 {
+            1.0 / (xi * xi - 1.0).sqrt()
+        } else {
+            f64::INFINITY
+        };
+        (edge * 1.01).clamp(ValidDomain::RADIUS_CAP, FAR)
     }
 
     /// The radial-tangential part as a standard-model camera (fx = fy = 1, cx = cy = 0): the

@@ -315,13 +315,27 @@ impl Camera {
             domain: ValidDomain::unbounded(),
         };
         if distortion.terms() != Terms::default() {
-            let d = distortion;
-            camera.domain = ValidDomain::compute(
-                |x| d.distort_pre_tilt(x).map(|(y, _)| y),
-                |x, dir| locally_invertible(&d, x, dir),
-            );
+            camera = camera.with_radius_cap(ValidDomain::RADIUS_CAP);
         }
         Ok(camera)
+    }
+
+    /// The same camera with its domain bounded at `cap` instead of
+    /// [`ValidDomain::RADIUS_CAP`] ([`ValidDomain::compute_within`]): for a standard-model
+    /// camera that evaluates a plane other than a perspective image's.
+    pub(crate) fn with_radius_cap(mut self, cap: f64) -> Self {
+        if let Lens::Standard { distortion: d, .. } = self.lens {
+            self.domain = if d.terms() == Terms::default() {
+                ValidDomain::unbounded_within(cap)
+            } else {
+                ValidDomain::compute_within(
+                    cap,
+                    |x| d.distort_pre_tilt(x).map(|(y, _)| y),
+                    |x, dir| locally_invertible(&d, x, dir),
+                )
+            };
+        }
+        self
     }
 
     /// A camera of OpenCV's fisheye model. Its pinhole-side domain (what a perspective image

@@ -206,3 +206,28 @@ pub fn sample_cameras() -> Result<Vec<(&'static str, Camera)>, ModelError> {
         ),
     ])
 }
+
+/// The samples that carry a fit of their inverse (f-theta's non-reference polynomial,
+/// OCamCalib's `inverse_poly`), evaluating it instead of the exact solution: the GPU checks,
+/// the Jacobian check and `vklens bench models` run them; the round trips do not (a fit is
+/// not the model's exact inverse, by its measured error).
+pub fn fitted_inverse_cameras() -> Result<Vec<(&'static str, Camera)>, ModelError> {
+    let mut out = Vec::new();
+    for (name, camera) in sample_cameras()? {
+        let lens = match camera.lens() {
+            Lens::FTheta(f) => Lens::FTheta(f.clone().with_fitted_inverse(true)?),
+            Lens::Ocam(o) => Lens::Ocam(o.clone().with_fitted_inverse(true)?),
+            _ => continue,
+        };
+        let fitted = match name {
+            "ftheta" => "ftheta_fitted",
+            "ftheta_fw" => "ftheta_fw_fitted",
+            _ => "ocam_fitted",
+        };
+        out.push((
+            fitted,
+            Camera::with_lens(camera.width, camera.height, camera.intrinsics, lens)?,
+        ));
+    }
+    Ok(out)
+}

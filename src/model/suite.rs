@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 
 use glam::{DVec2, DVec3};
 
-use super::samples::sample_cameras;
+use super::samples::{fitted_inverse_cameras, sample_cameras};
 use super::{Camera, ModelKind};
 
 fn ray(theta: f64, phi: f64) -> DVec3 {
@@ -119,7 +119,9 @@ fn inverse_then_forward_returns_the_pixel_within_1e_9_px() {
 
 #[test]
 fn jacobian_matches_finite_differences() {
-    for (name, camera) in sample_cameras().expect("samples") {
+    let cameras = sample_cameras().expect("samples");
+    let fitted = fitted_inverse_cameras().expect("fitted samples");
+    for (name, camera) in cameras.into_iter().chain(fitted) {
         if !camera.model().is_ray_model() {
             continue;
         }
@@ -265,4 +267,111 @@ fn hostile_parameters_are_refused_with_their_name() {
         msg(Ocam::new(vec![-250.0, f64::NAN], vec![], [1.0, 0.0, 0.0], 500.0).unwrap_err())
             .contains("poly")
     );
+}
+
+/// A camera that evaluates its file's fit of the inverse gives exactly that polynomial's
+/// answer (each written out here as NCore and OCamCalib evaluate it), stays within the fit's
+/// error of the exact model.
+#[test]
+fn fitted_inverses_evaluate_the_files_polynomial() {
+    use super::ftheta::Reference;
+    use super::Lens;
+    let horner = |c: &[f64], t: f64| c.iter().rev().fold(0.0, |a, &ci| a * t + ci);
+    for (name, camera) in fitted_inverse_cameras().expect("fitted samples") {
+        let exact = sample_cameras()
+            .expect("samples")
+            .into_iter()
+            .find(|(n, _)| name.starts_with(n) && name[n.len()..] == *"_fitted")
+            .map(|(_, c)| c)
+            .expect("the exact sample");
+        let max = camera.lens().max_angle();
+        let mut worst_fit = 0.0f64;
+        for i in 1..60 {
+            let theta = 0.98 * max * i as f64 / 60.0;
+            let p = ray(theta, 0.7);
+            let rho = p.x.hypot(p.y);
+            match camera.lens() {
+                Lens::Ocam(o) => {
+                    // ocam_functions.cpp world2cam: rho = Σ invpol[i] θⁱ, θ = atan(z/norm) in
+                    // OCamCalib's frame (z = −Z), then (x, y) / norm · rho and the affine term.
+                    let t = (-p.z / rho).atan();
+                    let r = horner(&o.inverse_poly, t);
+                    let (xo, yo) = (p.y / rho * r, p.x / rho * r);
+                    let [c, d, e] = o.cde;
+                    let want = DVec2::new(xo * e + yo, xo * c + yo * d)
+                        + DVec2::new(camera.intrinsics.cx, camera.intrinsics.cy);
+                    let got = camera.project(p).expect("inside");
+                    assert!(
+                        (got - want).length() < 1e-9,
+                        "{name} θ = {theta}: {got} vs {want}"
+                    );
+                    let back = exact
+                        .project(camera.unproject(got).expect("ray"))
+                        .expect("px");
+                    assert!(
+                        (back - got).length() < 1e-9,
+                        "{name}: the inverse stays exact"
+                    );
+                    worst_fit = worst_fit.max((got - exact.project(p).expect("px")).length());
+                }
+                Lens::FTheta(f) if f.reference == Reference::PixeldistToAngle => {
+                    // NCore's forward before its Newton steps: δ = fw(θ).
+                    let delta = horner(&f.angle_to_pixeldist, theta);
+                    let [c, d, e] = f.linear_cde;
+                    let (x, y) = (p.x / rho * delta, p.y / rho * delta);
+                    let want = DVec2::new(c * x + d * y, e * x + y)
+                        + DVec2::new(camera.intrinsics.cx, camera.intrinsics.cy);
+                    let got = camera.project(p).expect("inside");
+                    assert!(
+                        (got - want).length() < 1e-9,
+                        "{name} θ = {theta}: {got} vs {want}"
+                    );
+                    worst_fit = worst_fit.max((got - exact.project(p).expect("px")).length());
+                }
+                Lens::FTheta(f) => {
+                    // The reference is fw: the pixel is exact, its ray is bw's.
+                    let px = camera.project(p).expect("inside");
+                    let got = camera.unproject(px).expect("ray");
+                    let delta = horner(&f.angle_to_pixeldist, theta);
+                    let want_theta = horner(&f.pixeldist_to_angle, delta);
+                    let got_theta = got.x.hypot(got.y).atan2(got.z);
+                    assert!((got_theta - want_theta).abs() < 1e-12, "{name} θ = {theta}");
+                    let back = exact.project(got).expect("px");
+                    worst_fit = worst_fit.max((back - px).length());
+                }
+                _ => unreachable!("{name}"),
+            }
+        }
+        // The fit differs from the model (else there would be nothing to choose), by less
+        // than a pixel on these lenses.
+        assert!(
+            worst_fit > 1e-9 && worst_fit < 1.0,
+            "{name}: fit error {worst_fit} px"
+        );
+    }
+}
+
+#[test]
+fn a_fitted_inverse_needs_the_fit() {
+    use super::ftheta::{FTheta, Reference};
+    let lens = FTheta::new(
+        Reference::PixeldistToAngle,
+        vec![0.0, 1e-3],
+        vec![],
+        [1.0, 0.0, 0.0],
+        1.0,
+    )
+    .expect("lens");
+    let err = lens
+        .with_fitted_inverse(true)
+        .expect_err("no fit")
+        .to_string();
+    assert!(err.contains("angle_to_pixeldist_poly"), "{err}");
+    let ocam = super::ocam::Ocam::new(vec![-250.0, 0.0, 1e-3], vec![], [1.0, 0.0, 0.0], 500.0)
+        .expect("lens");
+    let err = ocam
+        .with_fitted_inverse(true)
+        .expect_err("no fit")
+        .to_string();
+    assert!(err.contains("inverse_poly"), "{err}");
 }

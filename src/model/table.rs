@@ -40,7 +40,7 @@ pub trait RayModel {
     fn unproject(&self, m: DVec2) -> Option<DVec3>;
     /// The largest angle off the optical axis that the domain reaches (radians, ≤ π).
     fn max_angle(&self) -> f64;
-    /// What the model's GLSL include reads from the camera block's `model[8]` array, in
+    /// What the model's GLSL include reads from the camera block's `model[16]` array, in
     /// order (at most [`GPU_PARAMS`]): the parameters, and whatever the domain needs.
     fn gpu_params(&self) -> Vec<f64> {
         self.params()
@@ -48,7 +48,7 @@ pub trait RayModel {
 }
 
 /// Scalars in the camera block's `model` array (`glsl/include/camera_model.glsl`).
-pub const GPU_PARAMS: usize = 32;
+pub const GPU_PARAMS: usize = 64;
 
 /// The forward map with its domain check: `None` outside the valid domain.
 pub fn project<M: RayModel>(model: &M, p: DVec3) -> Option<DVec2> {

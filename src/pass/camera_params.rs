@@ -38,7 +38,7 @@ macro_rules! camera_params {
             /// the cosine of Alg. 1's vertex limit for a ray model (-2 where the domain decides).
             pub domain_info: [$t; 4],
             /// The ray model's own parameters (`model::table::RayModel::gpu_params`).
-            pub model: [[$t; 4]; 8],
+            pub model: [[$t; 4]; 16],
             /// x: ideal boundary radius, y: distorted boundary radius, at angle TAU·i/N.
             pub domain: [[$t; 4]; DOMAIN_SAMPLES],
         }
@@ -93,7 +93,7 @@ macro_rules! camera_params {
                     ],
                     model: {
                         let p = camera.lens().gpu_params();
-                        [0, 1, 2, 3, 4, 5, 6, 7].map(|i| [0, 1, 2, 3].map(|j| f(p[4 * i + j])))
+                        std::array::from_fn(|i| [0, 1, 2, 3].map(|j| f(p[4 * i + j])))
                     },
                     domain: table,
                 }
@@ -115,8 +115,8 @@ camera_params!(
     f64
 );
 
-const _: () = assert!(std::mem::size_of::<CameraParams>() == 320 + 16 * DOMAIN_SAMPLES);
-const _: () = assert!(std::mem::size_of::<CameraParams64>() == 640 + 32 * DOMAIN_SAMPLES);
+const _: () = assert!(std::mem::size_of::<CameraParams>() == 448 + 16 * DOMAIN_SAMPLES);
+const _: () = assert!(std::mem::size_of::<CameraParams64>() == 896 + 32 * DOMAIN_SAMPLES);
 
 impl CameraParams {
     /// Specialization constants that compile out every term group the camera does not use.

@@ -1,7 +1,8 @@
 // ftheta.glsl — NVIDIA's f-theta model (model::ftheta), mirroring the f64 code: the
 // reference polynomial is the definition, the other direction is solved on its increasing
-// branch. model[0] = (reference: 0 PIXELDIST_TO_ANGLE, 1 ANGLE_TO_PIXELDIST; θ_max; branch
-// end; -), model[1] = (c, d, e, -), model[2..3] = fw's 8 coefficients, model[4..5] = bw's.
+// branch, or evaluated by the file's other polynomial where the camera says `fitted_inverse`.
+// model[0] = (reference: 0 PIXELDIST_TO_ANGLE, 1 ANGLE_TO_PIXELDIST; θ_max; branch end; fitted
+// inverse: 1), model[1] = (c, d, e, -), model[2..3] = fw's 8 coefficients, model[4..5] = bw's.
 
 bool vkl_ftheta_project(VKL_VEC3 p, out VKL_VEC2 m) {
     m = VKL_VEC2(0.0);
@@ -10,7 +11,7 @@ bool vkl_ftheta_project(VKL_VEC3 p, out VKL_VEC2 m) {
     VKL_FLOAT theta = vkl_atan2(rho, p.z);
     if (!(theta < vkl_cam.model[0].y)) return false;
     VKL_FLOAT delta, slope;
-    if (vkl_cam.model[0].x == 1.0) {
+    if (vkl_cam.model[0].x == 1.0 || vkl_cam.model[0].w == 1.0) {
         vkl_poly8(8, theta, delta, slope);
     } else if (!vkl_poly8_solve(16, theta, vkl_cam.model[0].z, delta)) {
         return false;
@@ -28,8 +29,8 @@ bool vkl_ftheta_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
     VKL_FLOAT r = length(q);
     if (r == 0.0) return true;
     VKL_FLOAT theta, slope;
-    if (vkl_cam.model[0].x == 0.0) {
-        if (!(r <= vkl_cam.model[0].z)) return false;
+    if (vkl_cam.model[0].x == 0.0 || vkl_cam.model[0].w == 1.0) {
+        if (vkl_cam.model[0].x == 0.0 && !(r <= vkl_cam.model[0].z)) return false;
         vkl_poly8(16, r, theta, slope);
     } else if (!vkl_poly8_solve(8, r, vkl_cam.model[0].z, theta)) {
         return false;

@@ -1,7 +1,8 @@
 // ocam.glsl — Scaramuzza's OCamCalib model (model::ocam), mirroring the f64 code: cam2world
-// is the definition, world2cam its exact inverse on the branch where the angle grows.
-// model[0] = (r_max, max angle, c, d), model[1] = (e, coefficient count, -, -),
-// model[2..7] = poly's 24 coefficients.
+// is the definition, world2cam its exact inverse on the branch where the angle grows, or
+// OCamCalib's own fit `inverse_poly` where the camera says `fitted_inverse`.
+// model[0] = (r_max, max angle, c, d), model[1] = (e, coefficient count, fitted inverse's
+// coefficient count or 0, -), model[2..7] = poly's 24 coefficients, model[8..15] = the fit's.
 
 // OCamCalib's angle off the axis of radius r's ray, atan2(r, −poly(r)), and its slope.
 void vkl_ocam_angle(VKL_FLOAT r, out VKL_FLOAT angle, out VKL_FLOAT slope) {
@@ -23,6 +24,16 @@ bool vkl_ocam_project(VKL_VEC3 p, out VKL_VEC2 m) {
     if (rho == 0.0) return p.z > 0.0;
     VKL_FLOAT target = vkl_atan2(rho, p.z);
     if (!(target <= vkl_cam.model[0].y)) return false;
+    int fitted = int(vkl_cam.model[1].z);
+    if (fitted > 0) {
+        // OCamCalib's world2cam: θ from the image plane.
+        VKL_FLOAT t = target - 1.57079632679489661923, rf = 0.0;
+        for (int i = fitted - 1; i >= 0; --i) rf = rf * t + vkl_coef(32 + i);
+        VKL_VEC2 xy = o * (rf / rho);
+        VKL_FLOAT c = vkl_cam.model[0].z, d = vkl_cam.model[0].w, e = vkl_cam.model[1].x;
+        m = VKL_VEC2(e * xy.x + xy.y, c * xy.x + d * xy.y);
+        return true;
+    }
     VKL_FLOAT lo = 0.0, hi = vkl_cam.model[0].x;
     VKL_FLOAT r = hi * target / vkl_cam.model[0].y;
     for (int i = 0; i < 60; ++i) {

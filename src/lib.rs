@@ -44,6 +44,8 @@ pub use facade::{
 pub use gpu::{EnabledFeatures, Gpu};
 pub use imaging::cpu_warp::Sampling;
 pub use imaging::{BitDepth, Pixels, Raster};
+pub use io::catalog::{Found, Listing, LoadOptions};
+pub use io::writers::Format as CameraFormat;
 pub use model::{Camera, Intrinsics, InverseMethod};
 pub use pass::warp::PixelFormat;
 

@@ -107,7 +107,7 @@ fn a_kalibr_camchain_gives_the_camera_asked_for() {
     assert_eq!(cam1.fisheye_lens().unwrap().k[3], f(&other["k"][3]));
     let e = load_camera_at(&path, Some(2)).unwrap_err().to_string();
     assert!(
-        e.contains("camera index 2") && e.contains("cam0..cam1"),
+        e.contains("camera index 2") && e.contains("0: cam0, 1: cam1"),
         "{e}"
     );
     assert!(e.contains("camchain-imucam.yaml"), "{e}");

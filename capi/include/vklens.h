@@ -117,6 +117,32 @@ typedef vkl_error_s *vkl_error;
 typedef vkl_camera_s *vkl_camera;
 
 /*
+ Which camera of a file to load, and the image size for a file that gives none (what the
+ command line's --camera-index, --camera-name and --size say).
+ */
+typedef struct {
+  /*
+   VKL_API_VERSION.
+   */
+  uint32_t version;
+  /*
+   0-based position in the file; -1 = not given (the first, unless `camera_name` says).
+   */
+  int64_t camera_index;
+  /*
+   NULL = not given; else the camera's name as the file writes it ("cam1", "M2", "LEFT",
+   a COLMAP camera id).
+   */
+  const char *camera_name;
+  /*
+   0 = not given; else the image size of a file that has none (where the file gives one,
+   they must agree).
+   */
+  uint32_t width;
+  uint32_t height;
+} vkl_load_options;
+
+/*
  The caller's Vulkan objects. vklens creates no instance and no device here and never
  destroys these; they must outlive the vkl_gpu and every warper made from it.
 
@@ -235,6 +261,17 @@ void vkl_error_free(vkl_error *e);
  `path` is NULL or a NUL-terminated string; `out` is NULL or writable.
  */
 vkl_error vkl_camera_load(const char *path, vkl_camera *out);
+
+/*
+ vkl_camera_load with options: a camera of a file that holds several, by index or name, and
+ the image size of a file that has none. `options` NULL is vkl_camera_load. Errors as
+ vkl_camera_load's; an unknown name or index is VKL_ERROR_INPUT and lists the file's cameras.
+
+ # Safety
+ `path` is NULL or a NUL-terminated string; `options` is NULL or points to a
+ vkl_load_options whose `camera_name` is NULL or NUL-terminated; `out` is NULL or writable.
+ */
+vkl_error vkl_camera_load_ex(const char *path, const vkl_load_options *options, vkl_camera *out);
 
 /*
  Builds a camera from OpenCV's camera matrix `K` (9 doubles, row-major as OpenCV stores

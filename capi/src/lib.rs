@@ -258,6 +258,85 @@ pub unsafe extern "C" fn vkl_camera_load(path: *const c_char, out: *mut vkl_came
     })
 }
 
+/// Which camera of a file to load, and the image size for a file that gives none (what the
+/// command line's --camera-index, --camera-name and --size say).
+#[repr(C)]
+pub struct vkl_load_options {
+    /// VKL_API_VERSION.
+    pub version: u32,
+    /// 0-based position in the file; -1 = not given (the first, unless `camera_name` says).
+    pub camera_index: i64,
+    /// NULL = not given; else the camera's name as the file writes it ("cam1", "M2", "LEFT",
+    /// a COLMAP camera id).
+    pub camera_name: *const c_char,
+    /// 0 = not given; else the image size of a file that has none (where the file gives one,
+    /// they must agree).
+    pub width: u32,
+    pub height: u32,
+}
+
+/// vkl_camera_load with options: a camera of a file that holds several, by index or name, and
+/// the image size of a file that has none. `options` NULL is vkl_camera_load. Errors as
+/// vkl_camera_load's; an unknown name or index is VKL_ERROR_INPUT and lists the file's cameras.
+///
+/// # Safety
+/// `path` is NULL or a NUL-terminated string; `options` is NULL or points to a
+/// vkl_load_options whose `camera_name` is NULL or NUL-terminated; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_camera_load_ex(
+    path: *const c_char,
+    options: *const vkl_load_options,
+    out: *mut vkl_camera,
+) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        if path.is_null() {
+            return Err(input("path: NULL pointer"));
+        }
+        // SAFETY: non-null and NUL-terminated (the caller's contract).
+        let path = unsafe { CStr::from_ptr(path) }
+            .to_str()
+            .map_err(|_| input("path: not UTF-8"))?;
+        let mut load = vklens_core::LoadOptions::default();
+        // SAFETY: NULL or a readable vkl_load_options (the caller's contract).
+        if let Some(o) = unsafe { options.as_ref() } {
+            if o.version != VKL_API_VERSION {
+                return Err(input(format!(
+                    "options.version: {} (expected VKL_API_VERSION = {VKL_API_VERSION})",
+                    o.version
+                )));
+            }
+            load.index = match o.camera_index {
+                -1 => None,
+                i => Some(usize::try_from(i).map_err(|_| {
+                    input(format!(
+                        "options.camera_index: {i} (a camera's 0-based position, or -1)"
+                    ))
+                })?),
+            };
+            if !o.camera_name.is_null() {
+                // SAFETY: non-null and NUL-terminated (the caller's contract).
+                let name = unsafe { CStr::from_ptr(o.camera_name) }
+                    .to_str()
+                    .map_err(|_| input("options.camera_name: not UTF-8"))?;
+                load.name = Some(name.to_string());
+            }
+            load.size = match (o.width, o.height) {
+                (0, 0) => None,
+                (w, h) if w > 0 && h > 0 => Some((w, h)),
+                (w, h) => {
+                    return Err(input(format!(
+                        "options.width, options.height: {w}×{h} (both 0 for none, or both positive)"
+                    )))
+                }
+            };
+        }
+        new_camera(out, Camera::load_with(path, &load)?)
+    })
+}
+
 /// Builds a camera from OpenCV's camera matrix `K` (9 doubles, row-major as OpenCV stores
 /// it: fx 0 cx / 0 fy cy / 0 0 1), its distortion vector (`count` = 4, 5, 8, 12 or 14
 /// coefficients in OpenCV's order; `dist_coeffs` may be NULL with `count` 0 for none) and the

@@ -284,15 +284,66 @@ impl PyCamera {
         Ok(PyCamera { inner })
     }
 
-    /// Reads any camera file the command line reads (vklens JSON of every model, OpenCV
-    /// YAML/XML/JSON, ROS ``camera_info``, a Kalibr camchain, a COLMAP ``cameras.txt``, a
-    /// Brown lens). ``camera_index`` picks a camera of a file that holds several.
+    /// Reads any camera file the command line reads (``vklens cameras FILE`` says what a file
+    /// holds). ``camera_index`` or ``camera_name`` (as the file writes it: ``cam1``, ``M2``,
+    /// ``LEFT``, a COLMAP id) picks a camera of a file that holds several; ``size=(w, h)``
+    /// gives the image size to a file that has none.
     #[staticmethod]
-    #[pyo3(signature = (path, camera_index = 0))]
-    fn load(py: Python<'_>, path: PathBuf, camera_index: usize) -> PyResult<Self> {
+    #[pyo3(signature = (path, camera_index = None, camera_name = None, size = None))]
+    fn load(
+        py: Python<'_>,
+        path: PathBuf,
+        camera_index: Option<usize>,
+        camera_name: Option<String>,
+        size: Option<(i64, i64)>,
+    ) -> PyResult<Self> {
+        let options = vklens::LoadOptions {
+            index: camera_index,
+            name: camera_name,
+            size: size
+                .map(|s| Ok::<_, PyErr>((side(py, s.0, "size")?, side(py, s.1, "size")?)))
+                .transpose()?,
+        };
         Ok(PyCamera {
-            inner: Camera::load_index(&path, camera_index).py(py)?,
+            inner: Camera::load_with(&path, &options).py(py)?,
         })
+    }
+
+    /// The cameras a calibration file holds, as ``vklens cameras --json`` lists them: one
+    /// dict per camera with ``index``, ``name``, ``format`` and ``model``, ``width``,
+    /// ``height`` (or ``error``, why it cannot load). ``size=(w, h)`` for a file without one.
+    #[staticmethod]
+    #[pyo3(signature = (path, size = None))]
+    fn list(py: Python<'_>, path: PathBuf, size: Option<(i64, i64)>) -> PyResult<Vec<PyObject>> {
+        let size = size
+            .map(|s| Ok::<_, PyErr>((side(py, s.0, "size")?, side(py, s.1, "size")?)))
+            .transpose()?;
+        let listing = Camera::list(&path, size).py(py)?;
+        let mut out = Vec::new();
+        for (index, found) in listing.cameras.iter().enumerate() {
+            let d = PyDict::new(py);
+            d.set_item("index", index)?;
+            d.set_item("name", &found.name)?;
+            d.set_item("format", listing.format)?;
+            match &found.camera {
+                Ok(c) => {
+                    d.set_item("model", c.model_name())?;
+                    d.set_item("width", c.width)?;
+                    d.set_item("height", c.height)?;
+                }
+                Err(e) => d.set_item("error", e.to_string())?,
+            }
+            out.push(d.into_any().unbind());
+        }
+        Ok(out)
+    }
+
+    /// The camera in another tool's format, as text: ``"vklens"``, ``"opencv"``, ``"ros"``,
+    /// ``"kalibr"``, ``"colmap"``, ``"basalt"`` (``vklens convert``). Raises
+    /// ``UnsupportedError`` where the format cannot hold the camera exactly.
+    fn to_format(&self, py: Python<'_>, format: &str) -> PyResult<String> {
+        let format: vklens::CameraFormat = format.parse().py(py)?;
+        self.inner.to_format(format).py(py)
     }
 
     /// From OpenCV's ``K`` (3×3, row-major) and ``D`` (any OpenCV length, shaped ``(n,)``,

@@ -1,7 +1,7 @@
 """Type stubs of the compiled module; the classes are re-exported by ``vklens``."""
 
 import os
-from typing import Any, Optional, Sequence, Tuple, Union, overload
+from typing import Any, List, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -23,11 +23,22 @@ class Camera:
         4, 5, 8, 12 or 14 of them; None is 5 zeros. Raises ``InputError`` naming the argument
         for a NaN, a non-positive focal length or another count."""
     @staticmethod
-    def load(path: PathLike, camera_index: int = 0) -> "Camera":
-        """Any camera file the command line reads: vklens JSON (``"model": "opencv_fisheye"``
-        too), OpenCV FileStorage (YAML, XML, JSON), ROS ``camera_info`` YAML (``equidistant``
-        too), a Kalibr camchain, a COLMAP ``cameras.txt``, ``{"model": "brown", ...}``.
-        ``camera_index`` picks a camera of a file that holds several."""
+    def load(path: PathLike, camera_index: Optional[int] = None, camera_name: Optional[str] = None,
+             size: Optional[Tuple[int, int]] = None) -> "Camera":
+        """Any camera file the command line reads (docs/camera-files.md lists the formats:
+        vklens JSON, OpenCV FileStorage, ROS ``camera_info``, Kalibr, Basalt, COLMAP, VINS,
+        ORB-SLAM, OKVIS, EuRoC, SVO, DSO, stella_vslam, Kimera, Gyroflow, OCamCalib, NCore…).
+        ``camera_index`` or ``camera_name`` (as the file writes it: ``cam1``, ``M2``, ``LEFT``,
+        a COLMAP id) picks a camera of a file that holds several; ``size=(w, h)`` gives the
+        image size to a file that has none. Raises ``InputError`` naming the file and key."""
+    @staticmethod
+    def list(path: PathLike, size: Optional[Tuple[int, int]] = None) -> List[dict]:
+        """The cameras a file holds, one dict each: ``index``, ``name``, ``format`` and
+        ``model``, ``width``, ``height``, or ``error`` (why it cannot load)."""
+    def to_format(self, format: str) -> str:
+        """The camera as another tool's file: ``"vklens"``, ``"opencv"``, ``"ros"``,
+        ``"kalibr"``, ``"colmap"``, ``"basalt"``. Raises ``UnsupportedError`` where the format
+        cannot hold the camera exactly."""
     @staticmethod
     def from_opencv(K: ArrayLike, D: ArrayLike, size: Tuple[int, int]) -> "Camera":
         """From OpenCV's ``K`` (3×3, row-major, no skew), ``D`` shaped ``(n,)``, ``(1, n)`` or

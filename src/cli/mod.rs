@@ -24,6 +24,7 @@ macro_rules! outln {
 
 mod bench;
 mod calibration;
+mod cameras;
 mod demo;
 mod lens;
 mod output;
@@ -91,6 +92,8 @@ Examples:
   vklens render --camera cam.yml --scene checkerboard:9x6 --output board.png --ids ids.png
   vklens render --camera cam.yml --scene boxes --output boxes.png --flow flow.exr --tessellate 8
   vklens calibration-set --camera cam.yml --out set/ && python3 tests/calibrate.py set/
+  vklens cameras camchain.yaml
+  vklens convert --camera EuRoC.yaml --size 752x480 --to kalibr --output camchain.yaml
   vklens lens info --lens lenses/dgauss.50mm.dat
   vklens lens fit-opencv --lens lenses/dgauss.50mm.dat --sensor 36x24 --pixels 1800x1200 --out dgauss.json
   vklens bench inverse --json";
@@ -101,13 +104,32 @@ pub struct Cli {
     #[command(subcommand)]
     command: Command,
     /// Which camera of a --camera file that holds several (a Kalibr camchain's camN, a COLMAP
-    /// cameras.txt's Nth line), counting from 0. Default: the first.
+    /// cameras.txt's Nth line), counting from 0. Default: the first. `vklens cameras FILE`
+    /// lists them.
     #[arg(long, global = true, value_name = "N")]
     camera_index: Option<usize>,
+    /// Which camera of a --camera file, by the name the file gives it: cam1 (Kalibr), M2
+    /// (OpenCV stereo), LEFT (ORB-SLAM), a COLMAP camera id as written.
+    #[arg(long, global = true, value_name = "NAME")]
+    camera_name: Option<String>,
+    /// The image size of a --camera file that gives none (ORB-SLAM2 settings, DSO without a
+    /// size line, an OpenCV file without image_width), as WIDTHxHEIGHT.
+    #[arg(long, global = true, value_name = "WxH", value_parser = parse_size)]
+    size: Option<(u32, u32)>,
 }
 
-/// The `--camera-index` of this run (read by every camera load).
-static CAMERA_INDEX: std::sync::OnceLock<Option<usize>> = std::sync::OnceLock::new();
+/// The `--camera-index`, `--camera-name` and `--size` of this run (read by every camera load).
+static CAMERA_OPTIONS: std::sync::OnceLock<crate::io::catalog::LoadOptions> =
+    std::sync::OnceLock::new();
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    crate::io::catalog::parse_size(s).map_err(|e| e.to_string())
+}
+
+/// The camera-selection options of this run.
+pub(crate) fn camera_options() -> crate::io::catalog::LoadOptions {
+    CAMERA_OPTIONS.get().cloned().unwrap_or_default()
+}
 
 #[derive(Subcommand, Debug)]
 enum Command {
@@ -141,6 +163,12 @@ enum Command {
     /// Real lens systems (Heidrich et al.): lens files of spherical surfaces and glasses.
     #[command(subcommand)]
     Lens(lens::LensCommand),
+    /// List the cameras a calibration file holds: index, name, model, size, and the format
+    /// it was read as (or why a camera cannot load).
+    Cameras(cameras::CamerasArgs),
+    /// Write a camera in another tool's format: vklens, opencv, ros, kalibr, colmap, basalt
+    /// (refused, with the reason, where the format cannot hold the camera exactly).
+    Convert(cameras::ConvertArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -257,7 +285,7 @@ pub fn parse_point_rows(text: &str, three: bool) -> Result<Vec<Vec<f64>>, CliErr
 
 /// Loads a camera file, as a one-line input error.
 pub(crate) fn load_camera(path: &std::path::Path) -> Result<Camera, CliError> {
-    crate::io::camera::load_camera_at(path, CAMERA_INDEX.get().copied().flatten())
+    crate::io::camera::load_camera_with(path, &camera_options())
 }
 
 /// A headless context from the environment; validation messages are checked by `finish`.
@@ -351,8 +379,12 @@ pub(crate) fn progress_done(what: &str) {
 
 /// Runs the command line.
 pub fn run(cli: Cli) -> Result<(), CliError> {
-    // Set once per process; a second `run` in one process keeps the first index.
-    let _ = CAMERA_INDEX.set(cli.camera_index);
+    // Set once per process; a second `run` in one process keeps the first options.
+    let _ = CAMERA_OPTIONS.set(cameras::options(
+        cli.camera_index,
+        cli.camera_name,
+        cli.size,
+    ));
     match cli.command {
         Command::Points(PointsCommand::Distort {
             camera,
@@ -382,5 +414,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Render(args) => render::run(args),
         Command::CalibrationSet(args) => calibration::run(args),
         Command::Lens(command) => lens::run(command),
+        Command::Cameras(args) => cameras::list(args),
+        Command::Convert(args) => cameras::convert(args),
     }
 }

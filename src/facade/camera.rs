@@ -28,6 +28,32 @@ impl Camera {
         crate::io::camera::load_camera_at(path.as_ref(), Some(index))
     }
 
+    /// Reads the camera of a file that `options` pick: by name as the file writes it (`cam1`,
+    /// `M2`, `LEFT`, a COLMAP id), by index, and with the image size for a file that gives
+    /// none.
+    ///
+    /// ```no_run
+    /// use vklens::LoadOptions;
+    /// let options = LoadOptions { name: Some("cam1".into()), ..LoadOptions::default() };
+    /// let right = vklens::Camera::load_with("camchain.yaml", &options)?;
+    /// # Ok::<(), vklens::Error>(())
+    /// ```
+    pub fn load_with(
+        path: impl AsRef<Path>,
+        options: &crate::io::catalog::LoadOptions,
+    ) -> Result<Camera> {
+        crate::io::camera::load_camera_with(path.as_ref(), options)
+    }
+
+    /// Every camera a file holds, each loaded or with why it cannot be, and the format the
+    /// file was read as; `size` is the image size for a file that gives none.
+    pub fn list(
+        path: impl AsRef<Path>,
+        size: Option<(u32, u32)>,
+    ) -> Result<crate::io::catalog::Listing> {
+        crate::io::camera::list_camera_file(path.as_ref(), size)
+    }
+
     /// Parses the text of a camera file; `origin` names it in error messages.
     pub fn parse(text: &str, origin: &str) -> Result<Camera> {
         crate::io::parse_camera(text, origin)
@@ -219,6 +245,12 @@ impl Camera {
             list(&coeffs),
             list(&[k.fx, skew, k.cx, 0.0, 0.0, k.fy, k.cy, 0.0, 0.0, 0.0, 1.0, 0.0]),
         ))
+    }
+
+    /// The camera in another tool's format (`vklens convert`): an `Unsupported` error, with
+    /// the reason, where the format cannot hold it exactly.
+    pub fn to_format(&self, format: crate::io::writers::Format) -> Result<String> {
+        crate::io::writers::write_camera(self, format)
     }
 
     /// Writes the camera as vklens JSON (atomically: a failure leaves no partial file).

@@ -26,6 +26,7 @@ use std::path::Path;
 
 use serde_json::{Map, Value};
 
+use super::catalog::{self, Found, Listing, LoadOptions};
 use crate::model::double_sphere::DoubleSphere;
 use crate::model::eucm::Eucm;
 use crate::model::fov::Fov;
@@ -36,36 +37,78 @@ use crate::{Error, Result};
 /// Reads a camera file (format detected from its content). A Brown lens file gives a camera
 /// that remembers it ([`Camera::brown`]).
 pub fn load_camera(path: &Path) -> Result<Camera> {
-    load_camera_at(path, None)
+    load_camera_with(path, &LoadOptions::default())
 }
 
 /// Reads camera `index` (0-based) of a file that holds several (a Kalibr camchain, a COLMAP
 /// `cameras.txt`); `None` is the first. A file of one camera accepts only `None` or 0.
 pub fn load_camera_at(path: &Path, index: Option<usize>) -> Result<Camera> {
+    load_camera_with(
+        path,
+        &LoadOptions {
+            index,
+            ..LoadOptions::default()
+        },
+    )
+}
+
+/// Reads the camera of a file that `options` ask for (index, name, size).
+pub fn load_camera_with(path: &Path, options: &LoadOptions) -> Result<Camera> {
     let text =
         super::read_text(path).map_err(|e| Error::io(path, "cannot read camera file", &e))?;
-    parse_camera_at(&text, &path.display().to_string(), index)
+    parse_camera_with(&text, &path.display().to_string(), options)
+}
+
+/// Every camera of a file, each loaded or with why it cannot be; `size` is the image size for
+/// a file that gives none.
+pub fn list_camera_file(path: &Path, size: Option<(u32, u32)>) -> Result<Listing> {
+    let text =
+        super::read_text(path).map_err(|e| Error::io(path, "cannot read camera file", &e))?;
+    list_cameras(&text, &path.display().to_string(), size)
 }
 
 /// Parses the text of a camera file; `origin` names it in errors.
 pub fn parse_camera(text: &str, origin: &str) -> Result<Camera> {
-    parse_camera_at(text, origin, None)
+    parse_camera_with(text, origin, &LoadOptions::default())
 }
 
 /// [`parse_camera`] for camera `index` of a file that holds several.
 pub fn parse_camera_at(text: &str, origin: &str, index: Option<usize>) -> Result<Camera> {
+    parse_camera_with(
+        text,
+        origin,
+        &LoadOptions {
+            index,
+            ..LoadOptions::default()
+        },
+    )
+}
+
+/// [`parse_camera`] for the camera `options` ask for.
+pub fn parse_camera_with(text: &str, origin: &str, options: &LoadOptions) -> Result<Camera> {
+    let listing = list_cameras(text, origin, options.size)?;
+    catalog::select(listing, options).map_err(|e| e.context(origin))
+}
+
+/// Every camera of a file's text (format detected from the content); `origin` names the file
+/// in errors.
+pub fn list_cameras(text: &str, origin: &str, size: Option<(u32, u32)>) -> Result<Listing> {
     let err = |e: Error| e.context(origin);
+    // Real files mix line ends (CRLF, and a lone CR from old Mac editors): one kind from here.
+    let text = text.replace("\r\n", "\n").replace('\r', "\n");
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
     if super::models::looks_like_ocam(trimmed) {
-        if let Some(i) = index.filter(|&i| i > 0) {
-            return Err(err(Error::input(format!(
-                "camera index {i} asked, but an OCamCalib file holds one camera (index 0)"
-            ))));
-        }
-        return super::models::ocam_camera(trimmed).map_err(err);
+        return Ok(Listing::one(
+            "OCamCalib calib_results.txt",
+            "",
+            super::models::ocam_camera(trimmed),
+        ));
     }
     if looks_like_colmap(trimmed) {
-        return colmap_camera(trimmed, index).map_err(err);
+        return Ok(colmap_listing(trimmed));
+    }
+    if let Some(listing) = super::dso::listing_from_text(trimmed, size) {
+        return Ok(listing);
     }
     // A `.json` file is JSON even when broken: its error must say JSON, not YAML.
     let json = trimmed.starts_with('{') || origin.to_ascii_lowercase().ends_with(".json");
@@ -78,28 +121,92 @@ pub fn parse_camera_at(text: &str, origin: &str, index: Option<usize>) -> Result
     } else {
         yaml_to_tree(trimmed).map_err(err)?
     };
-    camera_from_any_tree(&tree, index).map_err(err)
+    Ok(listing_from_tree(&tree, size))
 }
 
-/// Any camera layout's tree (Kalibr, vklens JSON of every model, FileStorage, ROS) → camera.
-fn camera_from_any_tree(tree: &Value, index: Option<usize>) -> Result<Camera> {
+/// Any camera layout's tree (Kalibr, vklens JSON of every model, FileStorage, ROS, the SLAM
+/// systems' configs) → its cameras.
+fn listing_from_tree(tree: &Value, size: Option<(u32, u32)>) -> Listing {
     if let Some(cams) = kalibr_cameras(tree) {
-        return kalibr_camera(&cams, index);
+        return Listing {
+            format: "Kalibr camchain",
+            cameras: cams
+                .into_iter()
+                .map(|(name, cam)| {
+                    let camera = kalibr_camera(&name, &cam);
+                    Found::new(name, camera)
+                })
+                .collect(),
+        };
     }
     if let Some(camera) = super::models::ncore_camera(tree) {
-        return camera;
+        return Listing::one("NCore camera JSON", "", camera);
     }
-    if let Some(camera) = super::models::basalt_camera(tree, index) {
-        return camera;
+    if let Some(count) = super::models::basalt_camera_count(tree) {
+        return Listing {
+            format: "Basalt calibration",
+            cameras: (0..count)
+                .filter_map(|i| {
+                    let camera = super::models::basalt_camera(tree, Some(i))?;
+                    Some(Found::new(format!("cam{i}"), camera))
+                })
+                .collect(),
+        };
     }
-    if let Some(i) = index.filter(|&i| i > 0) {
-        return Err(Error::input(format!(
-            "camera index {i} asked, but this file holds one camera (index 0)"
-        )));
+    for reader in [
+        super::slam::listing_from_tree,
+        super::stereo::listing_from_tree,
+        super::gyroflow::listing_from_tree,
+    ] {
+        if let Some(listing) = reader(tree, size) {
+            return listing;
+        }
     }
     if let Some(camera) = super::models::camodocal_camera(tree) {
-        return camera;
+        let name = tree
+            .get("camera_name")
+            .and_then(Value::as_str)
+            .unwrap_or("");
+        return Listing::one("camodocal/VINS camera YAML", name, camera);
     }
+    let format = if tree.get("distortion_model").is_some() || tree.get("camera_name").is_some() {
+        "ROS camera_info"
+    } else if tree.get("camera_matrix").is_some() {
+        "OpenCV FileStorage file"
+    } else {
+        "vklens camera file"
+    };
+    let name = tree
+        .get("camera_name")
+        .or_else(|| tree.get("name"))
+        .and_then(Value::as_str)
+        .unwrap_or("");
+    Listing::one(
+        format,
+        name,
+        with_size(tree, size).and_then(|t| camera_from_single_tree(&t)),
+    )
+}
+
+/// The tree, with `size` as its width and height where it gives none (an OpenCV file written
+/// without `image_width`); without either, the error asks for `--size`.
+fn with_size(tree: &Value, size: Option<(u32, u32)>) -> Result<std::borrow::Cow<'_, Value>> {
+    let Some(obj) = tree.as_object() else {
+        return Ok(std::borrow::Cow::Borrowed(tree));
+    };
+    let has = |keys: [&str; 2]| keys.iter().any(|k| obj.contains_key(*k));
+    if has(["width", "image_width"]) || has(["height", "image_height"]) {
+        return Ok(std::borrow::Cow::Borrowed(tree));
+    }
+    let (w, h) = catalog::size_or(None, size)?;
+    let mut obj = obj.clone();
+    obj.insert("width".into(), w.into());
+    obj.insert("height".into(), h.into());
+    Ok(std::borrow::Cow::Owned(Value::Object(obj)))
+}
+
+/// The camera of a file that holds one (vklens JSON of every model, FileStorage, ROS).
+fn camera_from_single_tree(tree: &Value) -> Result<Camera> {
     match tree.get("model") {
         Some(Value::String(m)) if m == "brown" => {
             let brown = brown_from_tree(tree)?;
@@ -154,7 +261,7 @@ fn brown_from_tree(tree: &Value) -> Result<BrownRadial> {
 
 /// Reads a camera from a parsed JSON object (any of the layouts above, every model).
 pub fn camera_from_value(value: &Value) -> Result<Camera> {
-    camera_from_any_tree(value, None)
+    catalog::select(listing_from_tree(value, None), &LoadOptions::default())
 }
 
 fn camera_from_tree(tree: &Value) -> Result<Camera> {
@@ -311,30 +418,22 @@ fn fisheye_from_tree(tree: &Value) -> Result<Camera> {
     Camera::fisheye(width, height, intrinsics, lens).map_err(Error::from)
 }
 
-/// The cameras of a Kalibr camchain (`cam0`, `cam1`, … in order), if the tree is one.
+/// The cameras of a Kalibr camchain (`cam0`, `cam1`, … by their number), if the tree is one.
 fn kalibr_cameras(tree: &Value) -> Option<Vec<(String, Map<String, Value>)>> {
     let obj = tree.as_object()?;
-    let mut cams = Vec::new();
-    for i in 0.. {
-        let key = format!("cam{i}");
-        match obj.get(&key).and_then(Value::as_object) {
-            Some(c) => cams.push((key, c.clone())),
-            None => break,
-        }
-    }
-    (!cams.is_empty()).then_some(cams)
+    let mut cams: Vec<(u64, String, Map<String, Value>)> = obj
+        .iter()
+        .filter_map(|(key, v)| {
+            let n = key.strip_prefix("cam")?.parse::<u64>().ok()?;
+            Some((n, key.clone(), v.as_object()?.clone()))
+        })
+        .collect();
+    cams.sort_by_key(|(n, _, _)| *n);
+    (!cams.is_empty()).then(|| cams.into_iter().map(|(_, k, c)| (k, c)).collect())
 }
 
-/// Camera `index` of a Kalibr camchain.
-fn kalibr_camera(cams: &[(String, Map<String, Value>)], index: Option<usize>) -> Result<Camera> {
-    let i = index.unwrap_or(0);
-    let (name, cam) = cams.get(i).ok_or_else(|| {
-        Error::input(format!(
-            "camera index {i} asked, but this Kalibr camchain holds {} camera(s) (cam0..cam{})",
-            cams.len(),
-            cams.len() - 1
-        ))
-    })?;
+/// One camera of a Kalibr camchain (`name` its key: `cam0`, …).
+fn kalibr_camera(name: &str, cam: &Map<String, Value>) -> Result<Camera> {
     let field = |key: &str| format!("`{name}.{key}`");
     let text = |key: &str| -> Result<String> {
         match cam.get(key) {
@@ -454,21 +553,26 @@ fn looks_like_colmap(text: &str) -> bool {
             .all(|c| c.is_ascii_uppercase() || c == '_' || c.is_ascii_digit())
 }
 
-/// Camera `index` (the index-th line, 0-based) of a COLMAP `cameras.txt`.
-fn colmap_camera(text: &str, index: Option<usize>) -> Result<Camera> {
-    let lines: Vec<(usize, &str)> = text
+/// Every camera of a COLMAP `cameras.txt`, one per line, named by its camera id as written.
+fn colmap_listing(text: &str) -> Listing {
+    let cameras = text
         .lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
+        .map(|(line_no, line)| {
+            let id = line.split_whitespace().next().unwrap_or("");
+            Found::new(id, colmap_line(line_no, line))
+        })
         .collect();
-    let i = index.unwrap_or(0);
-    let &(line_no, line) = lines.get(i).ok_or_else(|| {
-        Error::input(format!(
-            "camera index {i} asked, but this COLMAP cameras.txt holds {} camera(s)",
-            lines.len()
-        ))
-    })?;
+    Listing {
+        format: "COLMAP cameras.txt",
+        cameras,
+    }
+}
+
+/// The camera of one line of a COLMAP `cameras.txt`.
+fn colmap_line(line_no: usize, line: &str) -> Result<Camera> {
     let at = |msg: String| Error::input(format!("line {line_no}: {msg}"));
     let t: Vec<&str> = line.split_whitespace().collect();
     let model = t.get(1).copied().unwrap_or("");
@@ -676,13 +780,54 @@ fn yaml_expanded_nodes(text: &str) -> Result<u64> {
     Ok(count.total)
 }
 
-fn yaml_to_tree(text: &str) -> Result<Value> {
+/// OpenCV's FileStorage and the SLAM systems that read their settings through it accept what
+/// strict YAML refuses, and their users' files do all of it: a `%YAML:1.0` directive (not YAML
+/// 1.1/1.2 syntax: dropped, as every `%` directive line), `key:value` and `data:[` without the
+/// space after the colon (a space goes in where a line starts with a plain key), and tabs
+/// (indentation tabs become four spaces, others one).
+fn yaml_as_opencv_writes_it(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 64);
+    for line in text.lines() {
+        if line.starts_with('%') {
+            continue;
+        }
+        let indent = line.len() - line.trim_start_matches([' ', '\t']).len();
+        for c in line[..indent].chars() {
+            out.push_str(if c == '\t' { "    " } else { " " });
+        }
+        let rest = line[indent..].replace('\t', " ");
+        out.push_str(&space_after_key(&rest));
+        out.push('\n');
+    }
+    out
+}
+
+/// `key:value` → `key: value` for a line that starts with a plain key (letters, digits, `_`,
+/// `.`, `-`; after an optional `- `), the rest untouched.
+fn space_after_key(line: &str) -> std::borrow::Cow<'_, str> {
+    let body = line.strip_prefix("- ").unwrap_or(line);
+    let offset = line.len() - body.len();
+    let key_len = body
+        .find(|c: char| !(c.is_ascii_alphanumeric() || "_.-".contains(c)))
+        .unwrap_or(body.len());
+    let after = &body[key_len..];
+    let glued = key_len > 0
+        && after.starts_with(':')
+        && after[1..]
+            .chars()
+            .next()
+            .is_some_and(|c| !c.is_whitespace() && c != ':');
+    if glued {
+        let at = offset + key_len + 1;
+        std::borrow::Cow::Owned(format!("{} {}", &line[..at], &line[at..]))
+    } else {
+        std::borrow::Cow::Borrowed(line)
+    }
+}
+
+pub(crate) fn yaml_to_tree(text: &str) -> Result<Value> {
     use yaml_rust2::{Yaml, YamlLoader};
-    let cleaned: String = text
-        .lines()
-        .filter(|l| !l.starts_with('%'))
-        .collect::<Vec<_>>()
-        .join("\n");
+    let cleaned = yaml_as_opencv_writes_it(text);
     let nodes = yaml_expanded_nodes(&cleaned)?;
     if nodes > MAX_YAML_NODES {
         return Err(Error::input(format!(

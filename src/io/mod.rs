@@ -1,8 +1,14 @@
 //! Reading what users bring: camera files, the shared reference data.
 
 pub mod camera;
+pub mod catalog;
+pub mod dso;
+pub mod gyroflow;
 pub mod models;
 pub mod reference;
+pub mod slam;
+pub mod stereo;
+pub mod writers;
 
 pub use camera::{load_camera, parse_camera};
 

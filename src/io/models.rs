@@ -472,9 +472,77 @@ pub fn camodocal_camera(tree: &Value) -> Option<Result<Camera>> {
                 let c = [num(p, "k2")?, num(p, "k3")?, num(p, "k4")?, num(p, "k5")?];
                 (k, Lens::Fisheye(crate::model::Fisheye::new(c, 0.0, None)?))
             }
+            // camodocal's OCAMCamera (`ScaramuzzaCamera.cc`, which writes `scaramuzza` and
+            // compares the name without case). `poly_parameters` and `inv_poly_parameters` are
+            // `p0, p1, …`, ascending, OCamCalib's `pol` and `invpol`. Unlike OCamCalib, its
+            // image point is x (column) first: `cx` is subtracted from the column, `cy` from
+            // the row, and its `spaceToPlane` applies the affine term to (column, row):
+            //   (u − cx, v − cy) = [[ac, ad], [ae, 1]] · (X, Y)/|(X, Y)| · ρ.
+            // In OCamCalib's row-first order that is
+            //   (v − cy, u − cx) = ac · [[1/ac, ae/ac], [ad/ac, 1]] · (Y, X)/|(X, Y)| · ρ:
+            // OCamCalib's model with c = 1/ac, d = ae/ac, e = ad/ac, centre (row cy, column
+            // cx) and every radius ac·ρ, so pol_i becomes ac^(1−i)·p_i and invpol_i ac·p_i.
+            // With ac = 1, ad = ae = 0 (the usual file) the parameters carry over unchanged,
+            // the same `Ocam` as the calib_results.txt they came from.
+            s if s.eq_ignore_ascii_case("SCARAMUZZA") => {
+                let series = |key: &str| -> Result<Vec<f64>> {
+                    let g = group(key)?;
+                    let mut p = Vec::new();
+                    while let Some(v) = g.get(&format!("p{}", p.len())) {
+                        p.push(super::camera::as_number(v).ok_or_else(|| {
+                            Error::input(format!(
+                                "`{key}.p{}` must be a number, got {v}",
+                                p.len()
+                            ))
+                        })?);
+                    }
+                    if p.is_empty() {
+                        return Err(Error::input(format!("missing `{key}.p0`")));
+                    }
+                    if let Some(extra) = g.keys().find(|k| {
+                        k.strip_prefix('p')
+                            .and_then(|i| i.parse::<usize>().ok())
+                            .is_none_or(|i| i >= p.len())
+                    }) {
+                        return Err(Error::input(format!(
+                            "`{key}` has `{extra}` beside p0..p{}: camodocal's are p0, p1, … with none missing",
+                            p.len() - 1
+                        )));
+                    }
+                    Ok(p)
+                };
+                let a = group("affine_parameters")?;
+                let [ac, ad, ae] = [num(a, "ac")?, num(a, "ad")?, num(a, "ae")?];
+                if !(ac.is_finite() && ac > 0.0) {
+                    return Err(Error::input(format!(
+                        "`affine_parameters.ac` is {ac}: it scales the image radius, and must be a positive number"
+                    )));
+                }
+                let poly: Vec<f64> = series("poly_parameters")?
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, p)| p * ac.powi(1 - i as i32))
+                    .collect();
+                let inverse: Vec<f64> = series("inv_poly_parameters")?
+                    .into_iter()
+                    .map(|p| p * ac)
+                    .collect();
+                let mut o = Map::new();
+                o.insert("model".into(), json!("ocam"));
+                o.insert("width".into(), json!(width));
+                o.insert("height".into(), json!(height));
+                o.insert("cx".into(), json!(num(a, "cx")?));
+                o.insert("cy".into(), json!(num(a, "cy")?));
+                o.insert("poly".into(), json!(poly));
+                o.insert("inverse_poly".into(), json!(inverse));
+                o.insert("c".into(), json!(1.0 / ac));
+                o.insert("d".into(), json!(ae / ac));
+                o.insert("e".into(), json!(ad / ac));
+                return camera_from_json("ocam", &o);
+            }
             other => {
                 return Err(Error::input(format!(
-                    "`model_type` is `{other}`; vklens reads camodocal's MEI, PINHOLE and KANNALA_BRANDT"
+                    "`model_type` is `{other}`; vklens reads camodocal's MEI, PINHOLE, KANNALA_BRANDT and SCARAMUZZA"
                 )))
             }
         };
@@ -484,6 +552,11 @@ pub fn camodocal_camera(tree: &Value) -> Option<Result<Camera>> {
 
 /// Basalt's calibration JSON (`value0.intrinsics[i].camera_type`, `value0.resolution[i]`):
 /// camera `index` (default 0).
+/// How many cameras a Basalt calibration holds, if the tree is one.
+pub fn basalt_camera_count(tree: &Value) -> Option<usize> {
+    Some(tree.get("value0")?.get("intrinsics")?.as_array()?.len())
+}
+
 pub fn basalt_camera(tree: &Value, index: Option<usize>) -> Option<Result<Camera>> {
     let root = tree.get("value0")?;
     let cams = root.get("intrinsics")?.as_array()?;
@@ -707,4 +780,121 @@ pub fn colmap_camera(model: &str, width: u32, height: u32, p: &[f64]) -> Result<
         }
     };
     Camera::with_lens(width, height, k, lens).map_err(named)
+}
+
+#[cfg(test)]
+mod scaramuzza_tests {
+    use glam::DVec3;
+    use serde_json::{json, Value};
+
+    use super::*;
+
+    const POL: [f64; 5] = [-250.0, 0.0, 1.2e-3, -1.0e-6, 2.0e-9];
+    const INVPOL: [f64; 6] = [300.0, 200.0, 10.0, 5.0, 1.0, 0.5];
+
+    fn camodocal(name: &str, affine: [f64; 3]) -> Value {
+        let series = |p: &[f64]| -> Value {
+            Value::Object(
+                p.iter()
+                    .enumerate()
+                    // camodocal's YAML numbers arrive as text.
+                    .map(|(i, v)| (format!("p{i}"), json!(format!("{v:e}"))))
+                    .collect(),
+            )
+        };
+        json!({
+            "model_type": name,
+            "camera_name": "cam0",
+            "image_width": 1280,
+            "image_height": 960,
+            "poly_parameters": series(&POL),
+            "inv_poly_parameters": series(&INVPOL),
+            "affine_parameters": {
+                "ac": affine[0], "ad": affine[1], "ae": affine[2],
+                "cx": "640.5", "cy": "480.25"
+            }
+        })
+    }
+
+    const RAYS: [DVec3; 4] = [
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(0.3, -0.2, 1.0),
+        DVec3::new(-0.6, 0.5, 1.0),
+        DVec3::new(1.0, 0.4, 0.7),
+    ];
+
+    #[test]
+    fn identity_affine_is_the_calib_results_camera() {
+        // The same calibration as OCamCalib writes it: rows first (xc = row, yc = column).
+        let text = "#polynomial coefficients for the DIRECT mapping function\n5 -250 0 1.2e-3 -1e-6 2e-9\n\n#polynomial coefficients for the inverse mapping function\n6 300 200 10 5 1 0.5\n\n#center: \"row\" and \"column\", starting from 0 (C convention)\n480.25 640.5\n\n#affine parameters \"c\", \"d\", \"e\"\n1 0 0\n\n#image size: \"height\" and \"width\"\n960 1280\n";
+        let want = ocam_camera(text).expect("calib_results");
+        for name in ["SCARAMUZZA", "scaramuzza"] {
+            let got = camodocal_camera(&camodocal(name, [1.0, 0.0, 0.0]))
+                .expect("detected")
+                .expect("loads");
+            assert_eq!((got.width, got.height), (1280, 960));
+            assert_eq!(got.intrinsics, want.intrinsics);
+            assert_eq!(got.lens(), want.lens());
+            for p in RAYS {
+                let (a, b) = (got.project(p), want.project(p));
+                assert!(a.is_some());
+                assert_eq!(a, b, "{p}");
+            }
+        }
+    }
+
+    #[test]
+    fn affine_term_is_applied_to_column_then_row() {
+        // camodocal's spaceToPlane: (u − cx, v − cy) = A·(X, Y)/|(X, Y)|·φ, A = [[ac, ad],
+        // [ae, 1]], with φ the radius whose ray (φ, −pol(φ)) makes the point's angle.
+        let (ac, ad, ae) = (1.002, 0.003, -0.004);
+        let c = camodocal_camera(&camodocal("SCARAMUZZA", [ac, ad, ae]))
+            .expect("detected")
+            .expect("loads");
+        let pol = |r: f64| POL.iter().rev().fold(0.0, |acc, p| acc * r + p);
+        for p in RAYS {
+            let px = c.project(p).expect("in the domain");
+            let (du, dv) = (px.x - 640.5, px.y - 480.25);
+            let det = ac - ad * ae;
+            let (x, y) = ((du - ad * dv) / det, (-ae * du + ac * dv) / det);
+            let phi = x.hypot(y);
+            let angle = phi.atan2(-pol(phi));
+            let want = p.x.hypot(p.y).atan2(p.z);
+            assert!((angle - want).abs() < 1e-9, "{p}: {angle} vs {want}");
+            if phi > 0.0 {
+                let dir = p.x.hypot(p.y);
+                assert!((x / phi - p.x / dir).abs() < 1e-9, "{p}");
+                assert!((y / phi - p.y / dir).abs() < 1e-9, "{p}");
+            }
+        }
+    }
+
+    #[test]
+    fn missing_and_bad_parameters_are_named() {
+        let mut t = camodocal("SCARAMUZZA", [1.0, 0.0, 0.0]);
+        t["poly_parameters"]
+            .as_object_mut()
+            .expect("object")
+            .remove("p0");
+        let e = camodocal_camera(&t).expect("detected").expect_err("no p0");
+        assert!(e.to_string().contains("poly_parameters.p0"), "{e}");
+        let mut t = camodocal("SCARAMUZZA", [1.0, 0.0, 0.0]);
+        t["inv_poly_parameters"]
+            .as_object_mut()
+            .expect("object")
+            .remove("p2");
+        let e = camodocal_camera(&t).expect("detected").expect_err("gap");
+        assert!(e.to_string().contains("inv_poly_parameters"), "{e}");
+        let t = camodocal("SCARAMUZZA", [0.0, 0.0, 0.0]);
+        let e = camodocal_camera(&t).expect("detected").expect_err("ac = 0");
+        assert!(e.to_string().contains("ac"), "{e}");
+        let mut t = camodocal("SCARAMUZZA", [1.0, 0.0, 0.0]);
+        t.as_object_mut()
+            .expect("object")
+            .remove("affine_parameters");
+        let e = camodocal_camera(&t)
+            .expect("detected")
+            .expect_err("no affine");
+        assert!(e.to_string().contains("affine_parameters"), "{e}");
+    }
 }

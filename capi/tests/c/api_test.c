@@ -123,6 +123,43 @@ static void cameras(void) {
         vkl_camera_free(&ds);
     }
 
+    /* A camera of a file that holds several, by name and by index; a size for a file without. */
+    const char *chain_path = "vkl_api_test_chain.yaml";
+    f = fopen(chain_path, "w");
+    expect("temporary camchain", f != NULL);
+    if (f) {
+        fputs("cam0:\n  camera_model: pinhole\n  intrinsics: [460, 459, 366, 249]\n"
+              "  distortion_model: radtan\n  distortion_coeffs: [-0.27, 0.06, 0.0001, 0.00002]\n"
+              "  resolution: [752, 480]\n"
+              "cam1:\n  camera_model: ds\n  intrinsics: [-0.2, 0.57, 349.7, 348.9, 365.8, 249.9]\n"
+              "  distortion_model: none\n  resolution: [752, 480]\n", f);
+        fclose(f);
+        vkl_load_options o = {VKL_API_VERSION, -1, "cam1", 0, 0};
+        vkl_camera c1 = NULL;
+        expect_ok("load_ex by name", vkl_camera_load_ex(chain_path, &o, &c1));
+        expect("cam1 is the double sphere", c1 && strcmp(vkl_camera_model(c1), "double_sphere") == 0);
+        vkl_camera_free(&c1);
+        o.camera_name = NULL;
+        o.camera_index = 0;
+        expect_ok("load_ex by index", vkl_camera_load_ex(chain_path, &o, &c1));
+        expect("cam0 is the standard model", c1 && strcmp(vkl_camera_model(c1), "opencv") == 0);
+        vkl_camera_free(&c1);
+        expect_ok("load_ex without options", vkl_camera_load_ex(chain_path, NULL, &c1));
+        vkl_camera_free(&c1);
+        o.camera_name = "cam7";
+        expect_error("unknown name", vkl_camera_load_ex(chain_path, &o, &c1), VKL_ERROR_INPUT, "cam7");
+        o.camera_name = NULL;
+        o.camera_index = 0;
+        o.width = 640;
+        o.height = 480;
+        expect_error("a size that disagrees", vkl_camera_load_ex(chain_path, &o, &c1), VKL_ERROR_INPUT, "752");
+        o.width = 0;
+        expect_error("half a size", vkl_camera_load_ex(chain_path, &o, &c1), VKL_ERROR_INPUT, "options.width");
+        o.version = 99;
+        expect_error("wrong version", vkl_camera_load_ex(chain_path, &o, &c1), VKL_ERROR_INPUT, "version");
+        remove(chain_path);
+    }
+
     /* Frees: NULL, and twice through the nulled handle. */
     vkl_camera_free(&c);
     expect("free nulls the handle", c == NULL);

@@ -1,0 +1,453 @@
+//! OpenCV stereo calibration files (format name "OpenCV stereo calibration"): `FileStorage`
+//! YAML, XML or JSON holding the intrinsics of both cameras of a pair, read from the parsed
+//! tree (`!!opencv-matrix` tags dropped, so a matrix is `{rows, cols, dt, data}`; a plain list
+//! is accepted too).
+//!
+//! The layouts, each a camera matrix and its distortion vector per camera:
+//!
+//! | camera matrix                    | distortion                   | written by                                    |
+//! |----------------------------------|------------------------------|-----------------------------------------------|
+//! | `M1`, `M2`                       | `D1`, `D2`                   | OpenCV's `samples/cpp/stereo_calib.cpp` (`intrinsics.yml`) |
+//! | `K1`, `K2`                       | `D1`, `D2`                   | `stereoCalibrate` scripts naming them so      |
+//! | `cameraMatrix1`, `cameraMatrix2` | `distCoeffs1`, `distCoeffs2` | `stereoCalibrate`'s own argument names        |
+//! | `cameraMatrixL`, `cameraMatrixR` | `distCoeffsL`, `distCoeffsR` | MATLAB-to-OpenCV exports                      |
+//!
+//! Each camera matrix present is one camera, named by its key as the file writes it (`M1`,
+//! `M2`, `K1`, `cameraMatrixL`, …), in the order of the table; a file may hold one camera of a
+//! pair. A camera matrix is `[fx 0 cx; 0 fy cy; 0 0 1]` (a skew is refused: the standard
+//! model has none), and the distortion vector of 4, 5, 8, 12 or 14 coefficients is OpenCV's
+//! standard model in OpenCV's order.
+//!
+//! The image size, shared by both cameras, is `image_width`/`image_height`, `imageSize` or
+//! `image_size` (OpenCV writes a `cv::Size` as `[w, h]` in YAML and JSON, `w h` in XML), or
+//! `width`/`height`; `stereo_calib.cpp` writes none, and the caller gives it ([`size_or`]).
+//!
+//! The extrinsics (`R`, `T`, `E`, `F`, `R1`, `R2`, `P1`, `P2`, `Q`) are not a camera: a file
+//! holding only them (`stereo_calib.cpp`'s `extrinsics.yml`) is not taken for this format.
+
+use serde_json::{Map, Value};
+
+use super::camera::{as_number, image_side_of, number_list};
+use super::catalog::{size_or, Found, Listing};
+use crate::model::{Camera, Intrinsics, ModelError};
+use crate::{Error, Result};
+
+/// The format name of an OpenCV stereo calibration file.
+pub const FORMAT: &str = "OpenCV stereo calibration";
+
+/// Camera matrix and distortion keys of each layout, in listing order.
+const CAMERAS: [(&str, &str); 8] = [
+    ("M1", "D1"),
+    ("M2", "D2"),
+    ("K1", "D1"),
+    ("K2", "D2"),
+    ("cameraMatrix1", "distCoeffs1"),
+    ("cameraMatrix2", "distCoeffs2"),
+    ("cameraMatrixL", "distCoeffsL"),
+    ("cameraMatrixR", "distCoeffsR"),
+];
+
+/// The cameras of the file, if the tree is in this format.
+pub fn listing_from_tree(tree: &Value, size: Option<(u32, u32)>) -> Option<Listing> {
+    let obj = tree.as_object()?;
+    // A camera matrix key whose value is a matrix (a mapping with `data`, or a list): a key
+    // that merely shares a name (a scalar `K1` coefficient) does not make the file a stereo
+    // calibration.
+    let present: Vec<(&str, &str)> = CAMERAS
+        .iter()
+        .copied()
+        .filter(|(m, _)| obj.get(*m).is_some_and(is_matrix))
+        .collect();
+    if present.is_empty() {
+        return None;
+    }
+    let file_size = image_size(obj);
+    let cameras = present
+        .into_iter()
+        .map(|(m, d)| {
+            let camera = match &file_size {
+                Ok(s) => size_or(*s, size),
+                Err(e) => Err(Error::input(e.to_string())),
+            }
+            .and_then(|(w, h)| camera(obj, m, d, w, h));
+            Found::new(m, camera)
+        })
+        .collect();
+    Some(Listing {
+        format: FORMAT,
+        cameras,
+    })
+}
+
+fn is_matrix(v: &Value) -> bool {
+    match v {
+        Value::Object(m) => m.contains_key("data"),
+        Value::Array(_) => true,
+        _ => false,
+    }
+}
+
+/// The values of a matrix (`{rows, cols, data}` or a plain list) under `key`.
+fn matrix_values(obj: &Map<String, Value>, key: &str) -> Result<Vec<f64>> {
+    let v = obj
+        .get(key)
+        .ok_or_else(|| Error::input(format!("missing `{key}`")))?;
+    let Value::Object(m) = v else {
+        return number_list(v, key);
+    };
+    let data = m
+        .get("data")
+        .ok_or_else(|| Error::input(format!("`{key}` has no `data`")))?;
+    let values = number_list(data, &format!("{key}.data"))?;
+    let dim = |d: &str| m.get(d).and_then(as_number);
+    if let (Some(r), Some(c)) = (dim("rows"), dim("cols")) {
+        if r * c != values.len() as f64 {
+            return Err(Error::input(format!(
+                "`{key}` says {r}×{c} but its data has {} values",
+                values.len()
+            )));
+        }
+    }
+    Ok(values)
+}
+
+/// The camera of camera matrix `m` and distortion vector `d`.
+fn camera(obj: &Map<String, Value>, m: &str, d: &str, width: u32, height: u32) -> Result<Camera> {
+    let k = matrix_values(obj, m)?;
+    if k.len() != 9 {
+        return Err(Error::input(format!(
+            "`{m}` must have 9 entries (3×3), got {}",
+            k.len()
+        )));
+    }
+    for (i, what, want) in [
+        (1, "[0][1] (skew)", 0.0),
+        (3, "[1][0]", 0.0),
+        (6, "[2][0]", 0.0),
+        (7, "[2][1]", 0.0),
+        (8, "[2][2]", 1.0),
+    ] {
+        if k[i] != want {
+            return Err(Error::input(format!(
+                "`{m}` entry {what} is {}; OpenCV's standard model reads camera matrices [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]",
+                k[i]
+            )));
+        }
+    }
+    let intrinsics = Intrinsics {
+        fx: k[0],
+        fy: k[4],
+        cx: k[2],
+        cy: k[5],
+    };
+    if !obj.contains_key(d) {
+        return Err(Error::input(format!(
+            "missing `{d}`, the distortion coefficients of `{m}`"
+        )));
+    }
+    let coeffs = matrix_values(obj, d)?;
+    Camera::from_coeffs(width, height, intrinsics, &coeffs).map_err(|e| match e {
+        ModelError::CoefficientCount(n) => Error::input(format!(
+            "`{d}`: OpenCV's distortion vectors have 4, 5, 8, 12 or 14 coefficients, this one has {n}"
+        )),
+        other => Error::input(format!("`{m}`, `{d}`: {other}")),
+    })
+}
+
+/// The image size the file gives, if any (`Ok(None)`: none), or why the one it gives is
+/// unusable. Every spelling present must agree.
+fn image_size(obj: &Map<String, Value>) -> Result<Option<(u32, u32)>> {
+    let mut found: Vec<(String, (u32, u32))> = Vec::new();
+    let side = |v: &Value, key: &str| -> Result<u32> {
+        let n = as_number(v)
+            .ok_or_else(|| Error::input(format!("`{key}` must be a number, got {v}")))?;
+        image_side_of(n, &format!("`{key}`"))
+    };
+    for (wk, hk) in [("image_width", "image_height"), ("width", "height")] {
+        match (obj.get(wk), obj.get(hk)) {
+            (Some(w), Some(h)) => {
+                found.push((format!("`{wk}`/`{hk}`"), (side(w, wk)?, side(h, hk)?)))
+            }
+            (None, None) => {}
+            (Some(_), None) => return Err(Error::input(format!("`{wk}` without `{hk}`"))),
+            (None, Some(_)) => return Err(Error::input(format!("`{hk}` without `{wk}`"))),
+        }
+    }
+    for key in ["imageSize", "image_size"] {
+        let Some(v) = obj.get(key) else { continue };
+        let pair: Vec<Value> = match v {
+            Value::Array(a) => a.clone(),
+            // XML FileStorage writes a size as the text `w h`.
+            Value::String(s) => s
+                .split_whitespace()
+                .map(|t| Value::String(t.to_string()))
+                .collect(),
+            _ => Vec::new(),
+        };
+        let [w, h] = pair.as_slice() else {
+            return Err(Error::input(format!(
+                "`{key}` must be the image's [width, height], got {v}"
+            )));
+        };
+        found.push((format!("`{key}`"), (side(w, key)?, side(h, key)?)));
+    }
+    let Some((first_key, first)) = found.first().cloned() else {
+        return Ok(None);
+    };
+    if let Some((key, s)) = found.iter().find(|(_, s)| *s != first) {
+        return Err(Error::input(format!(
+            "{first_key} gives an image size of {}×{}, {key} {}×{}",
+            first.0, first.1, s.0, s.1
+        )));
+    }
+    Ok(Some(first))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+    use serde_json::json;
+
+    use super::*;
+
+    const RAYS: [DVec3; 3] = [
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(0.3, -0.2, 1.0),
+        DVec3::new(-0.4, 0.3, 1.0),
+    ];
+
+    /// YAML → tree as the loader builds it (directives dropped, reals kept as text).
+    fn yaml(text: &str) -> Value {
+        use yaml_rust2::{Yaml, YamlLoader};
+        let cleaned: String = text
+            .lines()
+            .filter(|l| !l.starts_with('%'))
+            .collect::<Vec<_>>()
+            .join("\n");
+        fn convert(y: &Yaml) -> Value {
+            match y {
+                Yaml::Real(s) | Yaml::String(s) => Value::String(s.clone()),
+                Yaml::Integer(i) => Value::from(*i),
+                Yaml::Boolean(b) => Value::Bool(*b),
+                Yaml::Array(a) => Value::Array(a.iter().map(convert).collect()),
+                Yaml::Hash(h) => Value::Object(
+                    h.iter()
+                        .filter_map(|(k, v)| k.as_str().map(|k| (k.to_string(), convert(v))))
+                        .collect(),
+                ),
+                _ => Value::Null,
+            }
+        }
+        let docs = YamlLoader::load_from_str(&cleaned).expect("yaml");
+        convert(&docs[0])
+    }
+
+    const INTRINSICS: &str = "%YAML:1.0
+---
+M1: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 5.348125e+02, 0., 3.4125e+02, 0.,
+       5.3628125e+02, 2.35375e+02, 0., 0., 1. ]
+D1: !!opencv-matrix
+   rows: 1
+   cols: 5
+   dt: d
+   data: [ -2.7500e-01, 1.0500e-01, 1.5e-003, -6.5e-004, -1.5e-002 ]
+M2: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 5.348125e+02, 0., 3.344375e+02, 0.,
+       5.3628125e+02, 2.41875e+02, 0., 0., 1. ]
+D2: !!opencv-matrix
+   rows: 1
+   cols: 8
+   dt: d
+   data: [ -2.8e-01, 9.3e-02, -5.5e-04, 1.1e-04, 0., 0., 0., 1.5e-02 ]
+";
+
+    fn standard(k: [f64; 4], d: &[f64], w: u32, h: u32) -> Camera {
+        let k = Intrinsics {
+            fx: k[0],
+            fy: k[1],
+            cx: k[2],
+            cy: k[3],
+        };
+        Camera::from_coeffs(w, h, k, d).expect("camera")
+    }
+
+    fn same(a: &Camera, b: &Camera) {
+        assert_eq!((a.width, a.height), (b.width, b.height));
+        assert_eq!(a.intrinsics, b.intrinsics);
+        assert_eq!(a.dist_coeffs(), b.dist_coeffs());
+        for p in RAYS {
+            assert_eq!(a.project(p), b.project(p), "{p}");
+        }
+    }
+
+    #[test]
+    fn stereo_calib_intrinsics_yml() {
+        let tree = yaml(INTRINSICS);
+        let l = listing_from_tree(&tree, Some((640, 480))).expect("detected");
+        assert_eq!(l.format, FORMAT);
+        let names: Vec<&str> = l.cameras.iter().map(|f| f.name.as_str()).collect();
+        assert_eq!(names, ["M1", "M2"]);
+        let mut cams = l.cameras.into_iter().map(|f| f.camera.expect("loads"));
+        let m1 = cams.next().expect("M1");
+        let m2 = cams.next().expect("M2");
+        same(
+            &m1,
+            &standard(
+                [5.348125e+02, 5.3628125e+02, 3.4125e+02, 2.35375e+02],
+                &[-2.75e-01, 1.05e-01, 1.5e-3, -6.5e-4, -1.5e-2],
+                640,
+                480,
+            ),
+        );
+        same(
+            &m2,
+            &standard(
+                [5.348125e+02, 5.3628125e+02, 3.344375e+02, 2.41875e+02],
+                &[-2.8e-01, 9.3e-02, -5.5e-04, 1.1e-04, 0., 0., 0., 1.5e-02],
+                640,
+                480,
+            ),
+        );
+        // stereo_calib.cpp writes no size: without one from the caller, each camera says so.
+        let l = listing_from_tree(&tree, None).expect("detected");
+        for f in l.cameras {
+            let e = f.camera.expect_err("no size").to_string();
+            assert!(e.contains("--size"), "{e}");
+        }
+    }
+
+    #[test]
+    fn camera_matrix_names_and_sizes() {
+        let k = json!({"rows": 3, "cols": 3, "dt": "d",
+            "data": [500.5, 0, 320.25, 0, 501.5, 240.75, 0, 0, 1]});
+        let d = json!({"rows": 1, "cols": 4, "dt": "d", "data": [-0.1, 0.01, 0.001, -0.002]});
+        for (names, size) in [
+            (
+                [
+                    "cameraMatrix1",
+                    "distCoeffs1",
+                    "cameraMatrix2",
+                    "distCoeffs2",
+                ],
+                json!({"imageSize": [752, 480]}),
+            ),
+            (
+                ["K1", "D1", "K2", "D2"],
+                json!({"image_width": 752, "image_height": 480}),
+            ),
+            (
+                [
+                    "cameraMatrixL",
+                    "distCoeffsL",
+                    "cameraMatrixR",
+                    "distCoeffsR",
+                ],
+                json!({"image_size": "752 480", "width": "752", "height": 480}),
+            ),
+        ] {
+            let mut tree = size.clone();
+            for (i, key) in names.iter().enumerate() {
+                tree[*key] = if i % 2 == 0 { k.clone() } else { d.clone() };
+            }
+            let l = listing_from_tree(&tree, None).expect("detected");
+            let got: Vec<&str> = l.cameras.iter().map(|f| f.name.as_str()).collect();
+            assert_eq!(got, [names[0], names[2]]);
+            let want = standard(
+                [500.5, 501.5, 320.25, 240.75],
+                &[-0.1, 0.01, 0.001, -0.002],
+                752,
+                480,
+            );
+            for f in l.cameras {
+                same(&f.camera.expect("loads"), &want);
+            }
+        }
+    }
+
+    #[test]
+    fn xml_tree_with_text_values() {
+        // XML FileStorage arrives with `data` as a list of strings and scalars as text.
+        let tree = json!({
+            "M1": {"rows": "3", "cols": "3", "dt": "d",
+                "data": ["500.", "0.", "320.", "0.", "500.", "240.", "0.", "0.", "1."]},
+            "D1": {"rows": "1", "cols": "5", "dt": "d",
+                "data": ["-1.0e-01", "0.", "0.", "0.", "0."]},
+            "imageSize": "640 480",
+        });
+        let l = listing_from_tree(&tree, None).expect("detected");
+        assert_eq!(l.cameras.len(), 1);
+        let c = l
+            .cameras
+            .into_iter()
+            .next()
+            .expect("M1")
+            .camera
+            .expect("loads");
+        same(
+            &c,
+            &standard(
+                [500.0, 500.0, 320.0, 240.0],
+                &[-0.1, 0., 0., 0., 0.],
+                640,
+                480,
+            ),
+        );
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        let k = json!({"rows": 3, "cols": 3, "data": [500, 0, 320, 0, 500, 240, 0, 0, 1]});
+        let error = |tree: Value| -> String {
+            let l = listing_from_tree(&tree, Some((640, 480))).expect("detected");
+            let f = l.cameras.into_iter().next().expect("one");
+            f.camera.expect_err("refused").to_string()
+        };
+        let e = error(json!({"M1": k}));
+        assert!(e.contains("`D1`") && e.contains("M1"), "{e}");
+        let e = error(json!({"M1": k, "D1": {"rows": 1, "cols": 3, "data": [0.1, 0.2, 0.3]}}));
+        assert!(e.contains("`D1`") && e.contains('3'), "{e}");
+        let e = error(
+            json!({"M1": {"rows": 3, "cols": 3, "data": [500, 1, 320, 0, 500, 240, 0, 0, 1]}, "D1": [0, 0, 0, 0]}),
+        );
+        assert!(e.contains("`M1`") && e.contains("skew"), "{e}");
+        let e = error(
+            json!({"M1": {"rows": 2, "cols": 3, "data": [500, 0, 320, 0, 500, 240]}, "D1": [0, 0, 0, 0]}),
+        );
+        assert!(e.contains("`M1`") && e.contains("9 entries"), "{e}");
+        let e = error(
+            json!({"M1": {"rows": 3, "cols": 3, "data": [500, 0, 320, 0, 500, 240, 0, 0]}, "D1": [0, 0, 0, 0]}),
+        );
+        assert!(e.contains("`M1`") && e.contains("3×3"), "{e}");
+        let e = error(json!({"M1": k, "D1": [0, 0, 0, 0], "image_width": 640}));
+        assert!(e.contains("image_height"), "{e}");
+        let e = error(
+            json!({"M1": k, "D1": [0, 0, 0, 0], "imageSize": [640, 480], "width": 800, "height": 600}),
+        );
+        assert!(e.contains("imageSize") && e.contains("800×600"), "{e}");
+    }
+
+    #[test]
+    fn other_trees_are_left_alone() {
+        let m = json!({"rows": 3, "cols": 3, "data": [1, 0, 0, 0, 1, 0, 0, 0, 1]});
+        for tree in [
+            // stereo_calib.cpp's extrinsics.yml.
+            json!({"R": m, "T": {"rows": 3, "cols": 1, "data": [0.1, 0, 0]},
+                "R1": m, "R2": m, "P1": m, "P2": m, "Q": m}),
+            json!({"camera_matrix": m, "distortion_coefficients": [0, 0, 0, 0, 0],
+                "image_width": 640, "image_height": 480}),
+            json!({"width": 640, "height": 480, "fx": 500, "fy": 500, "cx": 320, "cy": 240}),
+            json!({"cam0": {"camera_model": "pinhole"}}),
+            json!({"model_type": "PINHOLE", "K1": 0.1}),
+            json!({"value0": {}}),
+        ] {
+            assert!(listing_from_tree(&tree, None).is_none(), "{tree}");
+        }
+    }
+}

@@ -1,0 +1,377 @@
+//! Which camera of a file, and in which format: cameras picked by index or by the name the
+//! file gives them, image sizes for files without one, what real files do to their text
+//! (CRLF, tabs, `key:value`, `%YAML:1.0` and comments, `e-002`, wrapped and aligned lists),
+//! `vklens cameras`, and `vklens convert` into every format that can hold a camera, read back
+//! to the same pixels. The files are small ones written here in each tool's layout.
+
+use std::io::Write;
+use std::process::{Command, Output, Stdio};
+
+use glam::DVec3;
+use vklens::internal::io::camera::{list_cameras, parse_camera_with};
+use vklens::internal::io::catalog::LoadOptions;
+use vklens::internal::io::writers::{write_camera, Format};
+use vklens::internal::model::samples::sample_cameras;
+use vklens::internal::model::Camera;
+
+fn load(text: &str, options: &LoadOptions) -> Camera {
+    parse_camera_with(text, "test.yaml", options).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn refused(text: &str, options: &LoadOptions) -> String {
+    match parse_camera_with(text, "test.yaml", options) {
+        Ok(c) => panic!("loaded as {} {}×{}", c.model_name(), c.width, c.height),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn by_name(name: &str) -> LoadOptions {
+    LoadOptions {
+        name: Some(name.into()),
+        ..LoadOptions::default()
+    }
+}
+
+fn by_index(i: usize) -> LoadOptions {
+    LoadOptions {
+        index: Some(i),
+        ..LoadOptions::default()
+    }
+}
+
+fn sized(w: u32, h: u32) -> LoadOptions {
+    LoadOptions {
+        size: Some((w, h)),
+        ..LoadOptions::default()
+    }
+}
+
+/// Points all around, past 90° too: the same pixel to 1e-9 px (a file's numbers round-trip
+/// exactly; a solver's bracket may move its last bit) or the same "not seen" for both.
+fn same_pixels(a: &Camera, b: &Camera, what: &str) {
+    assert_eq!(a.model_name(), b.model_name(), "{what}");
+    assert_eq!((a.width, a.height), (b.width, b.height), "{what}");
+    for i in 0..200 {
+        let t = std::f64::consts::PI * (i as f64 + 0.5) / 200.0;
+        let phi = 2.399963 * i as f64;
+        let p = DVec3::new(t.sin() * phi.cos(), t.sin() * phi.sin(), t.cos());
+        match (a.project(p), b.project(p)) {
+            (Some(x), Some(y)) => assert!(
+                (x - y).length() <= 1e-9 * (1.0 + x.length()),
+                "{what} at {p:?}: {x} vs {y}"
+            ),
+            (x, y) => assert_eq!(x, y, "{what} at {p:?}"),
+        }
+    }
+}
+
+const KALIBR: &str = "cam2:
+  camera_model: pinhole
+  intrinsics: [461.6, 460.3, 366.3, 249.3]
+  distortion_model: radtan
+  distortion_coeffs: [-0.27, 0.06, 1.2e-4, 2.2e-5]
+  resolution: [752, 480]
+cam10:
+  camera_model: pinhole
+  intrinsics: [458.7, 457.3, 367.2, 248.4]
+  distortion_model: equidistant
+  distortion_coeffs: [-0.013, 0.017, -0.012, 0.003]
+  resolution: [752, 480]
+";
+
+#[test]
+fn cameras_are_picked_by_index_or_by_the_name_the_file_gives() {
+    // Kalibr: by their number (cam2 before cam10), named as written.
+    let listing = list_cameras(KALIBR, "camchain.yaml", None).expect("listing");
+    assert_eq!(listing.format, "Kalibr camchain");
+    let names: Vec<_> = listing.cameras.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["cam2", "cam10"]);
+    let first = load(KALIBR, &LoadOptions::default());
+    assert_eq!(first.model_name(), "opencv");
+    let fisheye = load(KALIBR, &by_name("cam10"));
+    assert_eq!(fisheye.model_name(), "opencv_fisheye");
+    same_pixels(&fisheye, &load(KALIBR, &by_index(1)), "cam10 = index 1");
+    let e = refused(KALIBR, &by_name("cam1"));
+    assert!(
+        e.contains("no camera named `cam1`") && e.contains("cam2") && e.contains("cam10"),
+        "{e}"
+    );
+    let e = refused(KALIBR, &by_index(2));
+    assert!(
+        e.contains("camera index 2") && e.contains("test.yaml"),
+        "{e}"
+    );
+    let e = refused(
+        KALIBR,
+        &LoadOptions {
+            index: Some(0),
+            name: Some("cam10".into()),
+            size: None,
+        },
+    );
+    assert!(e.contains("index 1") && e.contains("index 0"), "{e}");
+
+    // COLMAP: ids as written (starting at 2, unsorted), the position in the file as index.
+    let colmap = "# Camera list with one line of data per camera:\n\
+                  7 PINHOLE 640 480 500 500 320 240\n\
+                  2 SIMPLE_RADIAL 800 600 700 400 300 -0.1\n";
+    let c = load(colmap, &by_name("2"));
+    assert_eq!((c.width, c.height), (800, 600));
+    assert_eq!(load(colmap, &by_index(0)).width, 640);
+    let e = refused(colmap, &by_name("3"));
+    assert!(e.contains("0: 7") && e.contains("1: 2"), "{e}");
+    // A malformed line is refused (naming its line), not loaded with made-up values, and
+    // only when it is the camera asked for.
+    let bad = format!("{colmap}9 OPENCV 640 480 500 500 320 240 0.1\n");
+    let e = refused(&bad, &by_name("9"));
+    assert!(
+        e.contains("line 4") && e.contains("OPENCV has 8 parameters"),
+        "{e}"
+    );
+    assert_eq!(load(&bad, &by_name("7")).width, 640);
+    let listing = list_cameras(&bad, "cameras.txt", None).expect("listing");
+    assert!(listing.cameras[2].camera.is_err() && listing.cameras[0].camera.is_ok());
+}
+
+#[test]
+fn a_file_without_an_image_size_loads_only_with_one() {
+    let no_size =
+        "%YAML:1.0\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   \
+                   data: [ 500., 0., 320., 0., 500., 240., 0., 0., 1. ]\n\
+                   distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   \
+                   data: [ -0.1, 0.01, 0., 0., 0. ]\n";
+    let e = refused(no_size, &LoadOptions::default());
+    assert!(e.contains("no image size") && e.contains("--size"), "{e}");
+    let c = load(no_size, &sized(640, 480));
+    assert_eq!((c.width, c.height), (640, 480));
+    // A file with a size keeps it; a different --size is refused, not rescaled.
+    let e = refused(KALIBR, &sized(640, 480));
+    assert!(e.contains("752×480") && e.contains("640×480"), "{e}");
+    assert_eq!(load(KALIBR, &sized(752, 480)).width, 752);
+}
+
+/// The same OpenCV calibration as real files write it, quirk by quirk: every one loads to
+/// the same camera.
+#[test]
+fn what_real_files_do_to_their_text_changes_nothing() {
+    let plain = "%YAML:1.0\n---\nimage_width: 752\nimage_height: 480\n\
+                 camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   \
+                 data: [ 458.654, 0., 367.215, 0., 457.296, 248.375, 0., 0., 1. ]\n\
+                 distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   \
+                 data: [ -0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0. ]\n";
+    let want = load(plain, &LoadOptions::default());
+    let quirks: Vec<(&str, String)> = vec![
+        ("CRLF line ends", plain.replace('\n', "\r\n")),
+        ("lone CR line ends", plain.replace('\n', "\r")),
+        ("no final newline", plain.trim_end().to_string()),
+        (
+            "a directive, comments and a blank line before the document",
+            plain.replace("%YAML:1.0\n---\n", "%YAML:1.0\n# calibrated 2019-03-01\n\n---\n# camera 0\n"),
+        ),
+        ("key:value without a space", plain.replace("image_width: ", "image_width:").replace("data: [", "data:[")),
+        ("tabs", plain.replace("   rows", "\trows").replace("   cols", "\tcols").replace("   dt", "\tdt").replace("   data", "\tdata").replace(", ", ",\t")),
+        ("e-002 exponents", plain.replace("0.07395907", "7.395907e-002").replace("1.76187114e-05", "1.76187114e-005")),
+        (
+            "a wrapped, column-aligned matrix",
+            plain.replace(
+                "data: [ 458.654, 0., 367.215, 0., 457.296, 248.375, 0., 0., 1. ]",
+                "data: [ 458.654,   0.,      367.215,\n       0.,        457.296, 248.375,\n       0.,        0.,      1. ]",
+            ),
+        ),
+    ];
+    for (what, text) in quirks {
+        let got = parse_camera_with(&text, "quirk.yml", &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        same_pixels(&got, &want, what);
+    }
+    // Flow mappings with comments inside, as Kalibr-style configs write them.
+    let flow = "cam0: {camera_model: pinhole, # the left camera\n  \
+                intrinsics: [458.654, 457.296, 367.215, 248.375], # fu fv pu pv\n  \
+                distortion_model: radtan,\n  \
+                distortion_coeffs: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05],\n  \
+                resolution: [752, 480]}\n";
+    same_pixels(
+        &load(flow, &LoadOptions::default()),
+        &want,
+        "flow mapping with comments",
+    );
+}
+
+#[test]
+fn convert_writes_every_format_that_holds_the_camera_and_reads_back_the_same_pixels() {
+    let mut held = 0;
+    for (name, camera) in sample_cameras().expect("samples") {
+        for format in Format::ALL {
+            match write_camera(&camera, format) {
+                Ok(text) => {
+                    let origin = if matches!(format, Format::Vklens | Format::Basalt) {
+                        "out.json"
+                    } else {
+                        "out.yaml"
+                    };
+                    let back = parse_camera_with(&text, origin, &LoadOptions::default())
+                        .unwrap_or_else(|e| panic!("{name} → {}: {e}\n{text}", format.name()));
+                    same_pixels(&back, &camera, &format!("{name} → {}", format.name()));
+                    held += 1;
+                }
+                Err(e) => {
+                    let m = e.to_string();
+                    assert!(
+                        m.contains("cannot hold this camera") && m.contains("--to vklens"),
+                        "{name} → {}: {m}",
+                        format.name()
+                    );
+                    assert_eq!(e.kind(), vklens::ErrorKind::Unsupported, "{m}");
+                    assert_ne!(
+                        format,
+                        Format::Vklens,
+                        "vklens JSON holds every camera: {m}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(held >= 30, "only {held} conversions held");
+    // ROS cannot hold a double sphere, and says so.
+    let ds = sample_cameras()
+        .expect("samples")
+        .into_iter()
+        .find(|(n, _)| *n == "double_sphere")
+        .map(|(_, c)| c)
+        .expect("ds");
+    let e = write_camera(&ds, Format::Ros).expect_err("ros").to_string();
+    assert!(e.contains("double_sphere"), "{e}");
+}
+
+fn vklens(args: &[&str], stdin: &str) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run vklens");
+    if let Some(mut s) = child.stdin.take() {
+        s.write_all(stdin.as_bytes()).ok();
+    }
+    child.wait_with_output().expect("vklens output")
+}
+
+#[test]
+fn the_command_line_lists_picks_and_converts() {
+    let dir = std::env::temp_dir().join(format!("vklens-catalog-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let chain = dir.join("camchain.yaml");
+    std::fs::write(&chain, KALIBR).expect("write");
+    let chain = chain.to_str().expect("utf-8");
+
+    let out = vklens(&["cameras", chain], "");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("a Kalibr camchain (2 cameras)"), "{text}");
+    assert!(
+        text.contains("cam10") && text.contains("opencv_fisheye") && text.contains("752x480"),
+        "{text}"
+    );
+    let out = vklens(&["cameras", chain, "--json"], "");
+    let rows: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("json line"))
+        .collect();
+    assert_eq!(rows.len(), 2);
+    assert_eq!(rows[1]["name"], "cam10");
+    assert_eq!(rows[1]["model"], "opencv_fisheye");
+    assert_eq!(rows[0]["format"], "Kalibr camchain");
+
+    // --camera-name picks the camera for any command.
+    let out = vklens(
+        &[
+            "points",
+            "distort",
+            "--camera",
+            chain,
+            "--camera-name",
+            "cam10",
+        ],
+        "[[0.1, 0.2]]",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let got: Vec<[f64; 2]> = serde_json::from_slice(&out.stdout).expect("json");
+    let want = load(KALIBR, &by_name("cam10"))
+        .project(DVec3::new(0.1, 0.2, 1.0))
+        .expect("px");
+    assert_eq!(got[0], want.to_array());
+
+    // convert: to Kalibr and back; refused where the format cannot hold it, file untouched.
+    let out_path = dir.join("cam10.txt");
+    let out = vklens(
+        &[
+            "convert",
+            "--camera",
+            chain,
+            "--camera-name",
+            "cam10",
+            "--to",
+            "colmap",
+            "--output",
+            out_path.to_str().expect("utf-8"),
+        ],
+        "",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let back = vklens::internal::io::load_camera(&out_path).expect("colmap back");
+    same_pixels(&back, &load(KALIBR, &by_name("cam10")), "cam10 → colmap");
+    let out = vklens(
+        &[
+            "convert",
+            "--camera",
+            chain,
+            "--camera-name",
+            "cam10",
+            "--to",
+            "opencv",
+            "--output",
+            out_path.to_str().expect("utf-8"),
+        ],
+        "",
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("OpenCV FileStorage YAML cannot hold this camera"),
+        "{err}"
+    );
+    assert!(std::fs::read_to_string(&out_path)
+        .expect("kept")
+        .contains("OPENCV_FISHEYE"));
+
+    // A file without a size: exit 2 naming the missing size; --size loads it.
+    let no_size = dir.join("orb.yaml");
+    std::fs::write(&no_size, "%YAML:1.0\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 500., 0., 320., 0., 500., 240., 0., 0., 1. ]\n").expect("write");
+    let path = no_size.to_str().expect("utf-8");
+    let out = vklens(&["points", "distort", "--camera", path], "[[0, 0]]");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--size"));
+    let out = vklens(
+        &["points", "distort", "--camera", path, "--size", "640x480"],
+        "[[0, 0]]",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -375,3 +375,31 @@ fn the_command_line_lists_picks_and_converts() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Basalt's pinhole-radtan8 carries `rpmax`: its projection accepts undistorted normalized
+/// radii up to it, and vklens's valid domain (what the inverse, the warps and the renderers
+/// keep) ends there too. (Its forward map, like cv2.projectPoints, evaluates any point.)
+#[test]
+fn basalt_rpmax_bounds_the_domain() {
+    let file = |rpmax: &str| {
+        format!(
+            r#"{{"value0": {{"intrinsics": [{{"camera_type": "pinhole-radtan8", "intrinsics": {{
+            "fx": 380.0, "fy": 380.0, "cx": 320.0, "cy": 240.0, "k1": -0.05, "k2": 0.01,
+            "p1": 0.0, "p2": 0.0, "k3": 0.0, "k4": 0.0, "k5": 0.0, "k6": 0.0{rpmax}}}}}],
+            "resolution": [[640, 480]]}}}}"#
+        )
+    };
+    let open = parse_camera_with(&file(""), "calib.json", &LoadOptions::default()).expect("no rpmax");
+    let capped =
+        parse_camera_with(&file(r#", "rpmax": 1.5"#), "calib.json", &LoadOptions::default()).expect("rpmax");
+    for (r, inside) in [(1.0, true), (1.49, true), (1.51, false), (2.5, false)] {
+        let p = DVec3::new(r * 0.6, r * 0.8, 1.0);
+        let px = open.project(p).expect("px");
+        assert_eq!(capped.project(p), Some(px));
+        assert_eq!(capped.unproject(px).is_some(), inside, "r = {r}");
+        assert!(open.unproject(px).is_some(), "without rpmax, r = {r} is seen");
+    }
+    let e = parse_camera_with(&file(r#", "rpmax": -1"#), "calib.json", &LoadOptions::default())
+        .expect_err("negative");
+    assert!(e.to_string().contains("rpmax"), "{e}");
+}

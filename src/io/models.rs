@@ -613,21 +613,41 @@ pub fn basalt_camera(tree: &Value, index: Option<usize>) -> Option<Result<Camera
                         None,
                     )
                     .and_then(|f| Camera::fisheye(w, h, k, f)),
-                    _ => Camera::from_coeffs(
-                        w,
-                        h,
-                        k,
-                        &[
-                            n("k1")?,
-                            n("k2")?,
-                            n("p1")?,
-                            n("p2")?,
-                            n("k3")?,
-                            n("k4")?,
-                            n("k5")?,
-                            n("k6")?,
-                        ],
-                    ),
+                    // Basalt's rpmax bounds the radius of the undistorted normalized
+                    // point its projection accepts (0: none); vklens's domain ends there too.
+                    _ => {
+                        let rpmax = match p.get("rpmax") {
+                            None => 0.0,
+                            Some(_) => n("rpmax")?,
+                        };
+                        if !(rpmax >= 0.0 && rpmax.is_finite()) {
+                            return Err(Error::input(format!(
+                                "`value0.intrinsics[{i}].intrinsics.rpmax` must be ≥ 0 (0: no limit), got {rpmax}"
+                            )));
+                        }
+                        Camera::from_coeffs(
+                            w,
+                            h,
+                            k,
+                            &[
+                                n("k1")?,
+                                n("k2")?,
+                                n("p1")?,
+                                n("p2")?,
+                                n("k3")?,
+                                n("k4")?,
+                                n("k5")?,
+                                n("k6")?,
+                            ],
+                        )
+                        .map(|c| {
+                            if rpmax > 0.0 {
+                                c.with_radius_cap(rpmax.min(crate::model::ValidDomain::RADIUS_CAP))
+                            } else {
+                                c
+                            }
+                        })
+                    }
                 }
                 .map_err(Error::from);
             }

@@ -389,17 +389,29 @@ fn basalt_rpmax_bounds_the_domain() {
             "resolution": [[640, 480]]}}}}"#
         )
     };
-    let open = parse_camera_with(&file(""), "calib.json", &LoadOptions::default()).expect("no rpmax");
-    let capped =
-        parse_camera_with(&file(r#", "rpmax": 1.5"#), "calib.json", &LoadOptions::default()).expect("rpmax");
+    let open =
+        parse_camera_with(&file(""), "calib.json", &LoadOptions::default()).expect("no rpmax");
+    let capped = parse_camera_with(
+        &file(r#", "rpmax": 1.5"#),
+        "calib.json",
+        &LoadOptions::default(),
+    )
+    .expect("rpmax");
     for (r, inside) in [(1.0, true), (1.49, true), (1.51, false), (2.5, false)] {
         let p = DVec3::new(r * 0.6, r * 0.8, 1.0);
         let px = open.project(p).expect("px");
         assert_eq!(capped.project(p), Some(px));
         assert_eq!(capped.unproject(px).is_some(), inside, "r = {r}");
-        assert!(open.unproject(px).is_some(), "without rpmax, r = {r} is seen");
+        assert!(
+            open.unproject(px).is_some(),
+            "without rpmax, r = {r} is seen"
+        );
     }
-    let e = parse_camera_with(&file(r#", "rpmax": -1"#), "calib.json", &LoadOptions::default())
-        .expect_err("negative");
+    let e = parse_camera_with(
+        &file(r#", "rpmax": -1"#),
+        "calib.json",
+        &LoadOptions::default(),
+    )
+    .expect_err("negative");
     assert!(e.to_string().contains("rpmax"), "{e}");
 }

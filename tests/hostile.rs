@@ -134,7 +134,19 @@ fn camera_cases(dir: &Path) -> Vec<(String, PathBuf)> {
     ];
     // A file past the read limit (16 MiB by default).
     cases.push(("too large".into(), vec![b' '; 17 << 20]));
-    cases
+    // The SLAM systems' and tools' own layouts, damaged, under the names they go by.
+    let named: Vec<(&str, &str, &str)> = vec![
+        ("dso, NaN focal length", "camera.txt", "RadTan nan 457.3 367.2 248.4 -0.28 0.07 0.0002 0.00002\n752 480\ncrop\n640 480\n"),
+        ("dso, short line", "camera.txt", "EquiDistant 190.9 190.9 254.9\n512 512\nnone\n512 512\n"),
+        ("orb-slam3, missing fy", "orb.yaml", "%YAML:1.0\nFile.version: \"1.0\"\nCamera.type: \"PinHole\"\nCamera1.fx: 458.6\nCamera1.cx: 367.2\nCamera1.cy: 248.4\nCamera.width: 752\nCamera.height: 480\n"),
+        ("orb-slam2, no size", "orb2.yaml", "%YAML:1.0\nCamera.fx: 458.6\nCamera.fy: 457.3\nCamera.cx: 367.2\nCamera.cy: 248.4\nCamera.k1: -0.28\nCamera.k2: 0.07\nCamera.p1: 0.0002\nCamera.p2: 0.00002\n"),
+        ("okvis, huge focal length", "okvis.yaml", "cameras:\n  - {image_dimension: [752, 480], focal_length: [1e308, 1e308], principal_point: [367, 248], distortion_type: radialtangential, distortion_coefficients: [0, 0, 0, 0]}\n"),
+        ("gyroflow, digital lens", "lens.json", r#"{"calib_dimension": {"w": 3840, "h": 2160}, "fisheye_params": {"camera_matrix": [[1800, 0, 1920], [0, 1800, 1080], [0, 0, 1]], "distortion_coeffs": [0.1, 0.01, 0, 0]}, "digital_lens": "gopro_superview"}"#),
+        ("opencv stereo, 2x2 matrix", "intrinsics.yml", "%YAML:1.0\nM1: !!opencv-matrix\n   rows: 2\n   cols: 2\n   dt: d\n   data: [ 1., 0., 0., 1. ]\nD1: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., 0., 0., 0., 0. ]\n"),
+        ("svo, unknown distortion", "svo.yaml", "cameras:\n- camera:\n    label: cam0\n    image_width: 752\n    image_height: 480\n    type: pinhole\n    intrinsics: {rows: 4, cols: 1, data: [458.6, 457.3, 367.2, 248.4]}\n    distortion: {type: kb9, parameters: {rows: 4, cols: 1, data: [0, 0, 0, 0]}}\n"),
+        ("basalt, negative rpmax", "calib.json", r#"{"value0": {"intrinsics": [{"camera_type": "pinhole-radtan8", "intrinsics": {"fx": 380, "fy": 380, "cx": 320, "cy": 240, "k1": 0, "k2": 0, "p1": 0, "p2": 0, "k3": 0, "k4": 0, "k5": 0, "k6": 0, "rpmax": -2}}], "resolution": [[640, 480]]}}"#),
+    ];
+    let mut paths: Vec<(String, PathBuf)> = cases
         .into_iter()
         .enumerate()
         .map(|(i, (name, bytes))| {
@@ -142,7 +154,15 @@ fn camera_cases(dir: &Path) -> Vec<(String, PathBuf)> {
             std::fs::write(&path, bytes).unwrap();
             (name, path)
         })
-        .collect()
+        .collect();
+    for (i, (name, file, text)) in named.into_iter().enumerate() {
+        let sub = dir.join(format!("named{i}"));
+        std::fs::create_dir_all(&sub).unwrap();
+        let path = sub.join(file);
+        std::fs::write(&path, text).unwrap();
+        paths.push((name.into(), path));
+    }
+    paths
 }
 
 #[test]

@@ -314,7 +314,7 @@ impl PyCamera {
     /// ``height`` (or ``error``, why it cannot load). ``size=(w, h)`` for a file without one.
     #[staticmethod]
     #[pyo3(signature = (path, size = None))]
-    fn list(py: Python<'_>, path: PathBuf, size: Option<(i64, i64)>) -> PyResult<Vec<PyObject>> {
+    fn list(py: Python<'_>, path: PathBuf, size: Option<(i64, i64)>) -> PyResult<Vec<Py<PyAny>>> {
         let size = size
             .map(|s| Ok::<_, PyErr>((side(py, s.0, "size")?, side(py, s.1, "size")?)))
             .transpose()?;

@@ -124,6 +124,50 @@ pub fn list_cameras(text: &str, origin: &str, size: Option<(u32, u32)>) -> Resul
     Ok(listing_from_tree(&tree, size))
 }
 
+/// Everything a reader of untrusted text must survive, in one place for the fuzz target and
+/// its corpus replay: every detection (as a `.json`, a `.yaml` and a `.txt`), every camera of
+/// the listing with and without a size, picked by index and by name, its model evaluated and
+/// written back in every format. Errors are fine; a panic is the bug.
+pub fn exercise(text: &str) {
+    for origin in ["fuzz.json", "fuzz.yaml", "camera.txt"] {
+        for size in [None, Some((640, 480))] {
+            let Ok(listing) = list_cameras(text, origin, size) else {
+                continue;
+            };
+            let names: Vec<String> = listing.cameras.iter().map(|f| f.name.clone()).collect();
+            for camera in listing
+                .cameras
+                .iter()
+                .filter_map(|f| f.camera.as_ref().ok())
+            {
+                let _ = camera.to_json();
+                let _ = camera.unproject_points(&[[1.0, 2.0], [f64::MAX, -0.0]]);
+                let _ = camera.project_points(&[[0.1, -0.2, 1.0], [0.0, 0.0, -1.0]]);
+                for format in super::writers::Format::ALL {
+                    let _ = super::writers::write_camera(camera, format);
+                }
+            }
+            for name in names.iter().take(4) {
+                let options = LoadOptions {
+                    name: Some(name.clone()),
+                    size,
+                    ..LoadOptions::default()
+                };
+                let _ = parse_camera_with(text, origin, &options);
+            }
+            let _ = parse_camera_with(
+                text,
+                origin,
+                &LoadOptions {
+                    index: Some(1),
+                    size,
+                    name: None,
+                },
+            );
+        }
+    }
+}
+
 /// Any camera layout's tree (Kalibr, vklens JSON of every model, FileStorage, ROS, the SLAM
 /// systems' configs) → its cameras.
 fn listing_from_tree(tree: &Value, size: Option<(u32, u32)>) -> Listing {

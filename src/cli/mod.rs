@@ -73,9 +73,13 @@ Every other model the field calibrates, exact to its tool: vklens JSON with \"mo
 (xi, dist_coeffs k1 k2 p1 p2), \"ucm\" (alpha), \"eucm\" (alpha, beta), \"double_sphere\" (xi,
 alpha), \"fov\" (omega), \"equirectangular\", \"ftheta\" (NCore's keys), \"ocam\" (poly,
 inverse_poly, c, d, e), \"division\" (k), \"thin_prism_fisheye\", or \"colmap\" (colmap_model,
-params: all 18 of COLMAP's models); and the tools' own files: Kalibr omni/eucm/ds/pinhole-fov,
-Basalt calibration JSON, camodocal/VINS YAML (MEI, PINHOLE, KANNALA_BRANDT), NCore camera JSON,
-OCamCalib calib_results.txt, COLMAP cameras.txt. docs/how-it-works.md defines each model.
+params: all 18 of COLMAP's models); and the tools' own files as they write them: Kalibr, Basalt,
+COLMAP cameras.txt, camodocal/VINS (MEI, PINHOLE, KANNALA_BRANDT, SCARAMUZZA), ORB-SLAM2/3,
+OKVIS, EuRoC sensor.yaml, SVO, DSO/DM-VIO camera.txt, LSD-SLAM/PTAM, stella_vslam, Kimera,
+Gyroflow lens profiles, OpenCV stereo files (M1 D1 M2 D2 ...), OCamCalib calib_results.txt,
+NCore camera JSON (docs/camera-files.md). `vklens cameras FILE` lists a file's cameras;
+--camera-index or --camera-name picks one, --size gives a file without one its image size.
+docs/how-it-works.md defines each model.
 
 Environment: VKLENS_DEVICE picks the Vulkan device (cpu, gpu, an index, or part of its name);
 VKLENS_VALIDATION=1 turns the Khronos validation layer on (any message fails the command).

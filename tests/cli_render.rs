@@ -167,3 +167,77 @@ fn bad_meshes_and_arguments_are_one_line_exit_2_with_no_output() {
         assert!(!out.exists());
     }
 }
+
+/// A scene file and the flags that say the same render the same image, pixel for pixel, with
+/// supersampling and jittered passes too (a jittered pass used to draw with the previous
+/// pass's projection, which shifted the scene route's average by the last offset).
+#[test]
+fn flags_and_a_scene_file_render_the_same_jittered_image() {
+    let cam = tmp("jitter_cam.json");
+    std::fs::write(
+        &cam,
+        r#"{"width": 320, "height": 240, "fx": 280, "fy": 280, "cx": 159.5, "cy": 119.5, "dist_coeffs": [-0.2, 0.05, 0.001, -0.0005]}"#,
+    )
+    .unwrap();
+    for (s, j) in [(1, 4), (2, 3)] {
+        let scene = tmp(&format!("jitter_{s}_{j}.toml"));
+        std::fs::write(
+            &scene,
+            format!(
+                "[geometry]\nscene = \"checkerboard:9x6:0.04\"\n[optics]\ncamera = \"{}\"\n\
+                 [render]\nsupersample = {s}\njitter = {j}\n\
+                 [[poses]]\nrvec = [0.25, -0.35, 0.08]\ntvec = [-0.17, -0.09, 0.50]\n",
+                cam.display()
+            ),
+        )
+        .unwrap();
+        let out = tmp(&format!("jitter_{s}_{j}"));
+        let o = vklens(&[
+            "render",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let plan: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("plan.json")).unwrap()).unwrap();
+        // The flags take the route the planner took (the vertex path, its tessellation).
+        let route = plan["route"].to_string();
+        let tessellate = plan["route"]["Vertex"]["tessellate"].as_f64();
+        assert!(route.contains("Vertex"), "{route}");
+        let flag_png = tmp(&format!("jitter_flags_{s}_{j}.png"));
+        let (ss, jj) = (s.to_string(), j.to_string());
+        let t = tessellate.map(|t| t.to_string());
+        let mut args = vec![
+            "render",
+            "--camera",
+            cam.to_str().unwrap(),
+            "--scene",
+            "checkerboard:9x6:0.04",
+            "--pose",
+            "0.25,-0.35,0.08,-0.17,-0.09,0.50",
+            "--supersample",
+            &ss,
+            "--jitter",
+            &jj,
+            "--output",
+            flag_png.to_str().unwrap(),
+        ];
+        if let Some(t) = &t {
+            args.extend(["--tessellate", t.as_str()]);
+        }
+        let o = vklens(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let a = image_io::load(&flag_png).unwrap();
+        let b = image_io::load(&out.join("color_0000.png")).unwrap();
+        let (Pixels::Rgba8(a), Pixels::Rgba8(b)) = (&a.pixels, &b.pixels) else {
+            panic!("8-bit colour expected");
+        };
+        let differ = a.iter().zip(b).filter(|(x, y)| x != y).count();
+        assert_eq!(
+            differ, 0,
+            "supersample {s}, jitter {j}: {differ} pixels differ"
+        );
+    }
+}

@@ -41,3 +41,35 @@ def test_render_scene_bad_input():
         vklens.render_scene(42)
     with pytest.raises(vklens.Error):
         vklens.render_scene({"geometry": {"scene": "no-such-scene"}})
+
+
+def test_jittered_scene_corners_sit_where_opencv_projects_them(device, tmp_path):
+    """The corners of a supersampled, jittered scene render against cv2.projectPoints: the
+    mean offset is the detector's floor (a jittered pass once drew with the previous pass's
+    projection, which moved the whole image by the last offset, 0.3 px here)."""
+    cv2 = pytest.importorskip("cv2")
+    cam = {"width": 800, "height": 600, "fx": 700.0, "fy": 700.0, "cx": 399.5, "cy": 299.5,
+           "dist_coeffs": [-0.2, 0.05, 0.001, -0.0005]}
+    (tmp_path / "cam.json").write_text(__import__("json").dumps(cam))
+    rvec, tvec = [0.25, -0.35, 0.08], [-0.17, -0.09, 0.50]
+    K = np.array([[700.0, 0, 399.5], [0, 700.0, 299.5], [0, 0, 1]])
+    for s, j in ((1, 4), (2, 4)):
+        frames = vklens.render_scene({
+            "geometry": {"scene": "checkerboard:9x6:0.04"}, "optics": {"camera": "cam.json"},
+            "render": {"supersample": s, "jitter": j}, "poses": [{"rvec": rvec, "tvec": tvec}],
+        }, device=device, base=tmp_path)
+        rgba = frames[0]["color"].astype(np.float64)
+        a = rgba[:, :, 3:4] / 255.0
+        grey = (rgba[:, :, :3].mean(axis=2, keepdims=True) * a + 128 * (1 - a))[:, :, 0].astype(np.uint8)
+        ok, corners = cv2.findChessboardCorners(grey, (9, 6))
+        assert ok, f"supersample {s}, jitter {j}: no corners found"
+        corners = cv2.cornerSubPix(grey, corners, (5, 5), (-1, -1),
+                                   (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 100, 1e-4)).reshape(-1, 2)
+        # The board's inner corners, wherever vklens puts its origin: the nearest projection
+        # of a grid wide enough to hold every placement.
+        grid = np.array([[x * 0.04, y * 0.04, 0.0] for y in range(-8, 9) for x in range(-10, 11)])
+        proj, _ = cv2.projectPoints(grid, np.array(rvec), np.array(tvec), K, np.array(cam["dist_coeffs"]))
+        proj = proj.reshape(-1, 2)
+        nearest = proj[np.linalg.norm(corners[:, None] - proj[None], axis=2).argmin(axis=1)]
+        offset = (corners - nearest).mean(axis=0)
+        assert np.abs(offset).max() < 0.05, f"supersample {s}, jitter {j}: corners off by {offset} px"

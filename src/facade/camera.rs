@@ -182,11 +182,17 @@ impl Camera {
                 "model": "brown", "width": self.width, "height": self.height,
                 "c1": b.c1, "c2": b.c2,
             }),
-            None => serde_json::json!({
-                "width": self.width, "height": self.height,
-                "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy,
-                "dist_coeffs": self.dist_coeffs(),
-            }),
+            None => {
+                let mut v = serde_json::json!({
+                    "width": self.width, "height": self.height,
+                    "fx": k.fx, "fy": k.fy, "cx": k.cx, "cy": k.cy,
+                    "dist_coeffs": self.dist_coeffs(),
+                });
+                if let Some(r) = self.max_radius() {
+                    v["max_radius"] = r.into();
+                }
+                v
+            }
         }
     }
 

@@ -330,12 +330,19 @@ fn camera_from_tree(tree: &Value) -> Result<Camera> {
     } else {
         coeffs
     };
-    Camera::from_coeffs(width, height, intrinsics, &coeffs).map_err(|e| match e {
+    let camera = Camera::from_coeffs(width, height, intrinsics, &coeffs).map_err(|e| match e {
         ModelError::CoefficientCount(n) => Error::input(format!(
             "distortion coefficients: OpenCV accepts 4, 5, 8, 12 or 14 values, this file has {n}"
         )),
         other => Error::from(other),
-    })
+    })?;
+    // vklens JSON keeps Basalt's rpmax as `max_radius`.
+    match obj.get("max_radius") {
+        None => Ok(camera),
+        Some(_) => camera
+            .with_max_radius(number_field(obj, "max_radius")?)
+            .map_err(|e| Error::input(format!("`max_radius`: {e}"))),
+    }
 }
 
 /// `fx fy cx cy` from the keys or from a camera matrix `K`; with `allow_skew`, `K[0][1]` is

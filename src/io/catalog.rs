@@ -166,10 +166,17 @@ pub fn select(listing: Listing, options: &LoadOptions) -> Result<Camera> {
 
 /// "a Kalibr camchain", "an OpenCV FileStorage file".
 pub fn article(format: &str) -> String {
-    let vowel = format
-        .chars()
-        .next()
-        .is_some_and(|c| "AEIOUaeiou".contains(c));
+    // By sound: initialisms read letter by letter ("an NCore", "an SVO", "an LSD-SLAM").
+    let first_word = format.split([' ', '/', '-']).next().unwrap_or("");
+    let initialism =
+        first_word.len() > 1 && first_word.chars().take(2).all(|c| c.is_ascii_uppercase());
+    let vowel = if initialism {
+        first_word.starts_with(['A', 'E', 'F', 'H', 'I', 'L', 'M', 'N', 'O', 'R', 'S', 'X'])
+    } else {
+        // "Eu" sounds like "you" (a EuRoC file).
+        first_word.starts_with(['A', 'E', 'I', 'O', 'U', 'a', 'e', 'i', 'o', 'u'])
+            && !first_word.starts_with("Eu")
+    };
     format!("{} {format}", if vowel { "an" } else { "a" })
 }
 
@@ -189,5 +196,23 @@ mod tests {
         assert!(size_or(Some((4, 3)), Some((8, 6))).is_err());
         let e = size_or(None, None).expect_err("none").to_string();
         assert!(e.contains("--size"), "{e}");
+    }
+
+    #[test]
+    fn articles_go_by_sound() {
+        for (format, want) in [
+            ("Kalibr camchain", "a Kalibr camchain"),
+            ("NCore camera JSON", "an NCore camera JSON"),
+            ("SVO camera file", "an SVO camera file"),
+            ("LSD-SLAM/PTAM camera file", "an LSD-SLAM/PTAM camera file"),
+            ("OpenCV FileStorage file", "an OpenCV FileStorage file"),
+            ("ORB-SLAM3 settings file", "an ORB-SLAM3 settings file"),
+            ("DSO camera.txt", "a DSO camera.txt"),
+            ("COLMAP cameras.txt", "a COLMAP cameras.txt"),
+            ("EuRoC sensor.yaml", "a EuRoC sensor.yaml"),
+            ("vklens camera file", "a vklens camera file"),
+        ] {
+            assert_eq!(article(format), want);
+        }
     }
 }

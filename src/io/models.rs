@@ -640,11 +640,11 @@ pub fn basalt_camera(tree: &Value, index: Option<usize>) -> Option<Result<Camera
                                 n("k6")?,
                             ],
                         )
-                        .map(|c| {
+                        .and_then(|c| {
                             if rpmax > 0.0 {
-                                c.with_radius_cap(rpmax.min(crate::model::ValidDomain::RADIUS_CAP))
+                                c.with_max_radius(rpmax)
                             } else {
-                                c
+                                Ok(c)
                             }
                         })
                     }

@@ -121,6 +121,9 @@ pub enum Lens {
         coeff_count: usize,
         /// `Some((c1, c2))` for a Brown radial lens (the Durham radial-correction paper).
         brown: Option<(f64, f64)>,
+        /// A bound on the ideal normalized radius the file gives (Basalt's `rpmax`): the
+        /// valid domain ends there, or earlier where the lens folds.
+        max_radius: Option<f64>,
     },
     /// OpenCV's fisheye model.
     Fisheye(Fisheye),

@@ -310,6 +310,7 @@ impl Camera {
                 distortion,
                 coeff_count,
                 brown: None,
+                max_radius: None,
             },
             tilt,
             domain: ValidDomain::unbounded(),
@@ -336,6 +337,36 @@ impl Camera {
             };
         }
         self
+    }
+
+    /// The same standard-model camera with its valid domain ending at ideal normalized radius
+    /// `r` (Basalt's `rpmax`), or earlier where the lens folds; kept through
+    /// [`Camera::with_intrinsics`] and written back by the camera files.
+    pub fn with_max_radius(self, r: f64) -> Result<Self, ModelError> {
+        if !(r > 0.0 && r.is_finite()) {
+            return Err(ModelError::Other(format!(
+                "the largest radius (Basalt's rpmax) must be a positive number, got {r}"
+            )));
+        }
+        if !matches!(self.lens, Lens::Standard { .. }) {
+            return Err(ModelError::Other(
+                "a largest radius (Basalt's rpmax) bounds OpenCV's standard model only".into(),
+            ));
+        }
+        let mut camera = self.with_radius_cap(r.min(ValidDomain::RADIUS_CAP));
+        if let Lens::Standard { max_radius, .. } = &mut camera.lens {
+            *max_radius = Some(r);
+        }
+        Ok(camera)
+    }
+
+    /// The bound on the ideal normalized radius the camera was given
+    /// ([`Camera::with_max_radius`]).
+    pub fn max_radius(&self) -> Option<f64> {
+        match self.lens {
+            Lens::Standard { max_radius, .. } => max_radius,
+            _ => None,
+        }
     }
 
     /// A camera of OpenCV's fisheye model. Its pinhole-side domain (what a perspective image
@@ -375,6 +406,7 @@ impl Camera {
                 distortion,
                 coeff_count,
                 brown,
+                max_radius,
             } => {
                 let mut camera = Self::new(width, height, intrinsics, distortion)?;
                 if let Lens::Standard {
@@ -385,7 +417,10 @@ impl Camera {
                 {
                     (*c, *b) = (coeff_count, brown);
                 }
-                Ok(camera)
+                match max_radius {
+                    Some(r) => camera.with_max_radius(r),
+                    None => Ok(camera),
+                }
             }
             Lens::Fisheye(f) => Self::fisheye(width, height, intrinsics, f),
             lens => {
@@ -521,6 +556,7 @@ impl Camera {
                 distortion: OpenCvDistortion::from_coeffs(coeffs)?,
                 coeff_count: coeffs.len(),
                 brown: None,
+                max_radius: None,
             },
         )
     }

@@ -510,6 +510,10 @@ pub struct GeometryPass {
     frame: Buffer,
     sampler: Sampler,
     discard_bound: f64,
+    /// The pose and previous pose of the last [`GeometryPass::set_frame`]: the frame block
+    /// is a function of the camera too (its projection, its viewport), so a new camera
+    /// rewrites it for them.
+    last_frame: std::cell::Cell<(Pose, Pose)>,
     /// Whether the compute discard was built with the valid domain's table
     /// ([`discard_needs_domain_table`]).
     domain_table: bool,
@@ -657,6 +661,7 @@ impl GeometryPass {
             camera,
             frame,
             discard_bound,
+            last_frame: std::cell::Cell::new((Pose::IDENTITY, Pose::IDENTITY)),
             domain_table,
         };
         // SAFETY: no submission using it is pending (`submit` waits on its fence).
@@ -732,7 +737,12 @@ impl GeometryPass {
         self.camera
             .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))?;
         self.desc.camera = camera.clone();
-        Ok(())
+        // The frame block holds the old camera's projection: a jittered pass (a moved
+        // principal point) drew with the previous pass's projection, and the average of the
+        // passes was shifted by the last pass's offset.
+        let (pose, previous) = self.last_frame.get();
+        // SAFETY: the caller upholds this function's contract, which is set_frame's.
+        unsafe { self.set_frame(&pose, &previous) }
     }
 
     /// Sets the pose to render from and the pose flow is measured from. Host write: call it
@@ -743,6 +753,7 @@ impl GeometryPass {
     /// this object may be pending on the GPU (wait for its fence first), as Vulkan
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn set_frame(&self, pose: &Pose, previous: &Pose) -> Result<()> {
+        self.last_frame.set((*pose, *previous));
         let frame = self.frame_data(&self.desc.camera, self.discard_bound, pose, previous);
         self.frame.write(0, bytemuck::bytes_of(&frame))
     }

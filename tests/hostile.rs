@@ -496,6 +496,38 @@ fn a_calibration_set_never_looks_complete_unless_it_is() {
     let left = names(&set);
     assert!(!left.iter().any(|n| n == "poses.json"), "{left:?}");
     assert!(!left.iter().any(|n| n.contains("vklens-tmp")), "{left:?}");
+    // All or nothing: the views this run had written went with it.
+    assert!(!left.iter().any(|n| n.starts_with("view_")), "{left:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `render --scene … --explain` whose standard output is closed fails after its first frame
+/// (the plan is printed once that frame has timed its passes): the frames it wrote go too.
+#[test]
+fn a_failed_scene_render_leaves_none_of_its_frames() {
+    let dir = temp_dir("scene-explain");
+    let out = dir.join("frames");
+    let scene = root().join("examples/scenes/ids_and_flow.toml");
+    let mut child = Command::new(bin())
+        .args(["render", "--explain", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_ne!(o.status.code(), Some(0), "{stderr}");
+    assert_ne!(o.status.code(), Some(101), "panicked: {stderr}");
+    let left: Vec<PathBuf> = if out.is_dir() {
+        listing(&out)
+    } else {
+        Vec::new()
+    };
+    assert!(left.is_empty(), "left behind: {left:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -93,6 +93,9 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     let ctx = context()?;
     let mut renderer = SceneRenderer::new(&ctx);
     let mut views = Vec::new();
+    // The views written so far: removed again if the run fails or is interrupted before
+    // poses.json (a set is all or nothing).
+    let mut written = image_io::RunOutputs::new();
     for (i, pose) in poses.iter().enumerate() {
         let file = format!("view_{i:02}.png");
         progress_line(&format!("view {}/{}: {file}", i + 1, poses.len()));
@@ -122,7 +125,9 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
         let color = rendered
             .color
             .ok_or_else(|| CliError::internal("the render produced no colour image"))?;
-        image_io::save(&color, &args.out.join(&file))?;
+        let view_path = args.out.join(&file);
+        image_io::save(&color, &view_path)?;
+        written.add(&view_path);
         let r = pose.rvec();
         let t = pose.translation;
         views.push(serde_json::json!({
@@ -155,6 +160,7 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     image_io::write_atomically(&poses_path, |tmp| {
         std::fs::write(tmp, format!("{json:#}\n"))
     })?;
+    written.keep();
     progress_done(&format!(
         "wrote {} views and poses.json to {}",
         poses.len(),

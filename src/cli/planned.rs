@@ -165,6 +165,9 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     let color_ext = if o.exr { "exr" } else { "png" };
     let total = frames.len();
     let done: std::cell::RefCell<Vec<(usize, f64)>> = Default::default();
+    // Frames written so far: removed again if anything after them fails (a closed stdout for
+    // --explain, a full disk for plan.json) or the run is interrupted.
+    let written = std::cell::RefCell::new(crate::imaging::file::RunOutputs::new());
     let mut write = |f: crate::plan::Frame| -> Result<(), crate::Error> {
         let name = |kind: &str, ext: &str| out.join(format!("{kind}_{:04}.{ext}", f.index));
         let (c, i, fl, d) = (
@@ -173,16 +176,19 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
             name("flow", "exr"),
             name("depth", "exr"),
         );
-        write_outputs(
-            &Targets {
-                color: o.color.then_some(c.as_path()),
-                ids: o.ids.then_some(i.as_path()),
-                flow: o.flow.then_some(fl.as_path()),
-                depth: o.depth.then_some(d.as_path()),
-            },
-            &f.rendered,
-            Some("png"),
-        )?;
+        let targets = Targets {
+            color: o.color.then_some(c.as_path()),
+            ids: o.ids.then_some(i.as_path()),
+            flow: o.flow.then_some(fl.as_path()),
+            depth: o.depth.then_some(d.as_path()),
+        };
+        write_outputs(&targets, &f.rendered, Some("png"))?;
+        for path in [targets.color, targets.ids, targets.flow, targets.depth]
+            .into_iter()
+            .flatten()
+        {
+            written.borrow_mut().add(path);
+        }
         done.borrow_mut().push((f.index, f.ms));
         if args.explain && done.borrow().len() == 1 {
             // On stdout, as soon as the first frame has measured the plan's passes.
@@ -199,22 +205,26 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     execute(&ctx, &plan, &scene, frames, &mut write)?;
     finish(&ctx)?;
     let done = done.into_inner();
+    let mut written = written.into_inner();
     let json = format!("{:#}\n", plan_json(&plan, &done));
-    crate::imaging::file::write_atomically(&out.join("plan.json"), |tmp| {
-        std::fs::write(tmp, &json)
-    })?;
+    let plan_path = out.join("plan.json");
+    crate::imaging::file::write_atomically(&plan_path, |tmp| std::fs::write(tmp, &json))?;
+    written.add(&plan_path);
     // The camera the frames were rendered through, for the user's own pipeline.
     if let Some(camera) = &plan.camera {
-        camera.save(out.join("camera.json"))?;
+        let json_path = out.join("camera.json");
+        camera.save(&json_path)?;
+        written.add(&json_path);
         match camera.to_ros_camera_info() {
             Ok(text) => {
-                crate::imaging::file::write_atomically(&out.join("camera_info.yaml"), |tmp| {
-                    std::fs::write(tmp, &text)
-                })?
+                let info = out.join("camera_info.yaml");
+                crate::imaging::file::write_atomically(&info, |tmp| std::fs::write(tmp, &text))?;
+                written.add(&info);
             }
             Err(e) => progress_done(&format!("camera_info.yaml not written: {e}")),
         }
     }
+    written.keep();
     progress_done(&format!("{} frame(s) in {}", done.len(), out.display()));
     Ok(())
 }

@@ -207,23 +207,18 @@ pub(crate) fn texels_to_host(texels: &[u8], output: &mut HostImageMut<'_>) -> Re
         }
         HostPixelsMut::U16(dst) => narrow(texels, c, dst, |v| {
             (v * 65535.0).round().clamp(0.0, 65535.0) as u16
-        })
-        .map_err(internal)?,
-        HostPixelsMut::F32(dst) => narrow(texels, c, dst, |v| v).map_err(internal)?,
+        })?,
+        HostPixelsMut::F32(dst) => narrow(texels, c, dst, |v| v)?,
     }
     Ok(())
 }
 
 /// RGBA32F texels into `c` samples a pixel through `f` (grey takes G).
-fn narrow<T>(
-    texels: &[u8],
-    c: usize,
-    dst: &mut [T],
-    f: impl Fn(f32) -> T,
-) -> std::result::Result<(), String> {
-    let texels: &[[f32; 4]] = bytemuck::try_cast_slice(texels).map_err(|e| e.to_string())?;
+fn narrow<T>(texels: &[u8], c: usize, dst: &mut [T], f: impl Fn(f32) -> T) -> Result<()> {
+    let texels: &[[f32; 4]] = bytemuck::try_cast_slice(texels)
+        .map_err(|e| crate::Error::internal(format!("float texels: {e}")))?;
     if texels.len() * c != dst.len() {
-        return Err("float texel count".into());
+        return Err(crate::Error::internal("float texel count"));
     }
     for (d, t) in dst.chunks_exact_mut(c).zip(texels) {
         if c == 1 {

@@ -418,6 +418,51 @@ impl Drop for PendingTemp {
     }
 }
 
+/// The files a command has written so far, removed again if it fails (dropped without
+/// [`RunOutputs::keep`]) or is interrupted (listed with the temporary files that
+/// [`remove_pending_temps`] removes): a command that fails leaves no output of its own, and a
+/// set of files (a calibration set, a scene's frames) is all or nothing.
+#[derive(Default)]
+pub struct RunOutputs {
+    files: Vec<std::path::PathBuf>,
+}
+
+impl RunOutputs {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A file this run has just written in full.
+    pub fn add(&mut self, path: &Path) {
+        if let Ok(mut p) = PENDING.lock() {
+            p.push(path.to_path_buf());
+        }
+        self.files.push(path.to_path_buf());
+    }
+
+    /// The run succeeded: its files stay.
+    pub fn keep(mut self) {
+        let files = std::mem::take(&mut self.files);
+        if let Ok(mut p) = PENDING.lock() {
+            p.retain(|t| !files.contains(t));
+        }
+    }
+}
+
+impl Drop for RunOutputs {
+    fn drop(&mut self) {
+        if self.files.is_empty() {
+            return;
+        }
+        if let Ok(mut p) = PENDING.lock() {
+            p.retain(|t| !self.files.contains(t));
+        }
+        for f in &self.files {
+            let _ = std::fs::remove_file(f);
+        }
+    }
+}
+
 /// Removes every temporary file a write in progress has made: what the command line's
 /// SIGINT/SIGTERM handler runs before it exits (the handler runs on its own thread, not in
 /// signal context, so taking the lock is safe; a writer holding it only pushes or retains).

@@ -1,6 +1,6 @@
 //! The camera calibrations of SLAM systems' configuration files, read as the systems read them:
 //! every parameter, the model included. The caller has already turned the YAML (or JSON) into a
-//! tree; numbers arrive as JSON numbers or as text ([`as_number`]), an `!!opencv-matrix` as a
+//! tree; numbers arrive as JSON numbers or as text (`as_number`), an `!!opencv-matrix` as a
 //! mapping `{rows, cols, dt, data}`, and ORB-SLAM's dotted keys (`Camera.fx`) as top-level keys
 //! of that name. A file is recognised by keys no other camera format has; once recognised, every
 //! camera it holds is listed, each with its camera or the reason it cannot load (the exact key).

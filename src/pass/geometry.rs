@@ -363,7 +363,7 @@ impl Texture {
 }
 
 /// A mesh on the GPU: vertex and index buffers and its texture (white if it has none), and
-/// what the compute discard keeps per mesh ([`DiscardBuffers`]).
+/// what the compute discard keeps per mesh (`DiscardBuffers`).
 pub struct MeshBuffers {
     discard: DiscardBuffers,
     pub vertices: Buffer,

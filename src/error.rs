@@ -34,6 +34,19 @@ pub enum Error {
     /// Bad input. The message names the file, key or value and what was expected.
     #[error("{0}")]
     Input(String),
+    /// Bad input in one argument of a call. `argument` names it in the library's words (the
+    /// field of the options struct, the parameter); each front end says it in its own
+    /// (`--method` on the command line, `method=` in Python, `options.method` in C), so
+    /// `message` never names a flag.
+    #[error("{message} (`{argument}`)")]
+    Argument {
+        /// The argument, as the library's options name it: `method`, `source_camera`,
+        /// `chromatic`, `channel_cameras`, `size`, `camera_name`, `camera_index`, `format`,
+        /// `density`, `path`, `fstop`.
+        argument: &'static str,
+        /// What is wrong with it.
+        message: String,
+    },
     /// The device lacks a feature or limit (named in the message).
     #[error("{0}")]
     Unsupported(String),
@@ -76,7 +89,7 @@ impl Error {
     /// What kind of failure this is.
     pub fn kind(&self) -> ErrorKind {
         match self {
-            Error::Input(_) => ErrorKind::Input,
+            Error::Input(_) | Error::Argument { .. } => ErrorKind::Input,
             Error::Unsupported(_) => ErrorKind::Unsupported,
             Error::Vulkan { .. }
             | Error::NoVulkan(_)
@@ -90,6 +103,31 @@ impl Error {
     /// Bad input, described by `message` (which names the file, key or value).
     pub fn input(message: impl Into<String>) -> Self {
         Error::Input(message.into())
+    }
+
+    /// Bad input in the argument `argument` (see [`Error::Argument`]).
+    pub fn argument(argument: &'static str, message: impl Into<String>) -> Self {
+        Error::Argument {
+            argument,
+            message: message.into(),
+        }
+    }
+
+    /// The argument an [`Error::Argument`] is about, in the library's words.
+    pub fn argument_name(&self) -> Option<&'static str> {
+        match self {
+            Error::Argument { argument, .. } => Some(argument),
+            _ => None,
+        }
+    }
+
+    /// The message without the argument's name, for a front end that says it in its own
+    /// words; the whole message for every other error.
+    pub fn message_only(&self) -> String {
+        match self {
+            Error::Argument { message, .. } => message.clone(),
+            other => other.to_string(),
+        }
     }
 
     /// Work the device cannot do, described by `message` (which names the feature or limit).
@@ -136,6 +174,10 @@ impl Error {
     pub fn context(self, context: impl std::fmt::Display) -> Self {
         match self {
             Error::Input(m) => Error::Input(format!("{context}: {m}")),
+            Error::Argument { argument, message } => Error::Argument {
+                argument,
+                message: format!("{context}: {message}"),
+            },
             Error::Unsupported(m) => Error::Unsupported(format!("{context}: {m}")),
             Error::Internal(m) => Error::Internal(format!("{context}: {m}")),
             Error::NoVulkan(m) => Error::NoVulkan(format!("{context}: {m}")),

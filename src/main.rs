@@ -18,7 +18,7 @@ fn main() {
     let cli = vklens::internal::cli::Cli::parse();
     if let Err(e) = vklens::internal::cli::run(cli) {
         vklens::internal::cli::progress_clear();
-        eprintln!("vklens: {e}");
+        eprintln!("vklens: {}", vklens::internal::cli::describe(&e));
         std::process::exit(vklens::internal::cli::exit_code(&e));
     }
 }

@@ -141,7 +141,7 @@ fn a_file_without_an_image_size_loads_only_with_one() {
                    distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   \
                    data: [ -0.1, 0.01, 0., 0., 0. ]\n";
     let e = refused(no_size, &LoadOptions::default());
-    assert!(e.contains("no image size") && e.contains("--size"), "{e}");
+    assert!(e.contains("no image size") && e.contains("`size`"), "{e}");
     let c = load(no_size, &sized(640, 480));
     assert_eq!((c.width, c.height), (640, 480));
     // A file with a size keeps it; a different --size is refused, not rescaled.
@@ -217,7 +217,8 @@ fn convert_writes_every_format_that_holds_the_camera_and_reads_back_the_same_pix
                 Err(e) => {
                     let m = e.to_string();
                     assert!(
-                        m.contains("cannot hold this camera") && m.contains("--to vklens"),
+                        m.contains("cannot hold this camera")
+                            && m.contains("vklens JSON holds every camera"),
                         "{name} → {}: {m}",
                         format.name()
                     );

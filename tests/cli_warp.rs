@@ -366,7 +366,7 @@ fn bad_input_is_one_line_exit_2_and_leaves_no_file() {
                 "--channel-cameras",
                 &three_bad,
             ],
-            "--method lut",
+            "the method must be lut (--method)",
         ),
     ];
     for (args, needle) in cases {

@@ -177,10 +177,9 @@ fn the_warp_path_turns_to_a_cube_map_where_no_pinhole_source_fits_and_says_why()
     // IDs cannot go through a cube: refused with the way out named.
     let mut r = request(&camera, warp);
     r.outputs.ids = true;
-    let e = render_scene(&ctx, &checker_room(), &r, &mut |_| {})
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("--path vertex"), "{e}");
+    let e = render_scene(&ctx, &checker_room(), &r, &mut |_| {}).unwrap_err();
+    assert_eq!(e.argument_name(), Some("path"), "{e}");
+    assert!(e.to_string().contains("the vertex path renders"), "{e}");
     // A standard lens whose overscanned source would pass the device limit: refused for the
     // pinhole source, with the size.
     let wide = Camera::from_coeffs(

@@ -92,7 +92,7 @@ typedef enum {
 typedef struct vkl_camera_s vkl_camera_s;
 
 /*
- An error: its kind and message.
+ An error: its kind, message, and the argument it is about (if one).
  */
 typedef struct vkl_error_s vkl_error_s;
 
@@ -243,6 +243,16 @@ vkl_error_kind vkl_error_kind_of(vkl_error e);
  `e` is NULL or an error this library returned and that was not freed.
  */
 const char *vkl_error_message(vkl_error e);
+
+/*
+ The argument an VKL_ERROR_INPUT error is about, in the library's words ("method",
+ "source_camera", "chromatic", "size", "camera_name", …), or NULL when it is not about one
+ argument (or `e` is NULL). Valid until the error is freed.
+
+ # Safety
+ `e` is NULL or an error this library returned and has not freed.
+ */
+const char *vkl_error_argument(vkl_error e);
 
 /*
  Frees an error and sets `*e` to NULL. `e == NULL` and `*e == NULL` are harmless.

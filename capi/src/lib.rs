@@ -58,10 +58,11 @@ pub enum vkl_error_kind {
     VKL_ERROR_INTERNAL,
 }
 
-/// An error: its kind and message.
+/// An error: its kind, message, and the argument it is about (if one).
 pub struct vkl_error_s {
     kind: vkl_error_kind,
     message: CString,
+    argument: Option<CString>,
 }
 
 /// An error handle; NULL means success.
@@ -69,7 +70,11 @@ pub type vkl_error = *mut vkl_error_s;
 
 fn error(kind: vkl_error_kind, message: String) -> vkl_error {
     let message = CString::new(message.replace('\0', " ")).unwrap_or_default();
-    Box::into_raw(Box::new(vkl_error_s { kind, message }))
+    Box::into_raw(Box::new(vkl_error_s {
+        kind,
+        message,
+        argument: None,
+    }))
 }
 
 fn from_error(e: Error) -> vkl_error {
@@ -80,7 +85,23 @@ fn from_error(e: Error) -> vkl_error {
         ErrorKind::Io => vkl_error_kind::VKL_ERROR_IO,
         _ => vkl_error_kind::VKL_ERROR_INTERNAL,
     };
-    error(kind, e.to_string())
+    let Some(argument) = e.argument_name() else {
+        return error(kind, e.to_string());
+    };
+    // The C names: the options struct's fields.
+    let c_name = match argument {
+        "size" => "options.width, options.height",
+        "camera_name" => "options.camera_name",
+        "camera_index" => "options.camera_index",
+        "method" => "options.method",
+        "chromatic" => "options.chromatic",
+        "source_camera" => "options.source_camera",
+        other => other,
+    };
+    let handle = error(kind, format!("{}: {}", c_name, e.message_only()));
+    // SAFETY: `error` returned a fresh, non-null box that nothing else holds yet.
+    unsafe { (*handle).argument = CString::new(argument).ok() };
+    handle
 }
 
 fn input(message: impl Into<String>) -> Error {
@@ -203,6 +224,21 @@ pub unsafe extern "C" fn vkl_error_message(e: vkl_error) -> *const c_char {
     match unsafe { e.as_ref() } {
         Some(e) => e.message.as_ptr(),
         None => c"".as_ptr(),
+    }
+}
+
+/// The argument an VKL_ERROR_INPUT error is about, in the library's words ("method",
+/// "source_camera", "chromatic", "size", "camera_name", …), or NULL when it is not about one
+/// argument (or `e` is NULL). Valid until the error is freed.
+///
+/// # Safety
+/// `e` is NULL or an error this library returned and has not freed.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_error_argument(e: vkl_error) -> *const c_char {
+    // SAFETY: the caller's contract: NULL or a live error.
+    match unsafe { e.as_ref() }.and_then(|e| e.argument.as_ref()) {
+        Some(a) => a.as_ptr(),
+        None => ptr::null(),
     }
 }
 

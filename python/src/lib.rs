@@ -41,9 +41,18 @@ fn raise(py: Python<'_>, kind: ErrorKind, message: String) -> PyErr {
     }
 }
 
-/// A `vklens::Error` as the Python exception of its kind.
+/// A `vklens::Error` as the Python exception of its kind. An error about one argument leads
+/// with its keyword (the library's argument names are the Python keywords) and carries it as
+/// the exception's `argument` attribute.
 fn to_py(py: Python<'_>, e: vklens::Error) -> PyErr {
-    raise(py, e.kind(), e.to_string())
+    match e.argument_name() {
+        Some(argument) => {
+            let err = raise(py, e.kind(), format!("{argument}: {}", e.message_only()));
+            let _ = err.value(py).setattr("argument", argument);
+            err
+        }
+        None => raise(py, e.kind(), e.to_string()),
+    }
 }
 
 /// `InputError(message)`.
@@ -64,13 +73,15 @@ impl<T> OrPy<T> for vklens::Result<T> {
     }
     fn arg(self, py: Python<'_>, name: &str) -> PyResult<T> {
         self.map_err(|e| {
-            let text = e.to_string();
+            let text = e.message_only();
             let text = if text.starts_with(name) {
                 text
             } else {
                 format!("{name}: {text}")
             };
-            raise(py, e.kind(), text)
+            let err = raise(py, e.kind(), text);
+            let _ = err.value(py).setattr("argument", name);
+            err
         })
     }
 }
@@ -799,26 +810,7 @@ impl PyWarper {
         let camera = camera.inner.clone();
         let warper = py
             .detach(|| Warper::new(device.gpu(), &camera, &options))
-            .map_err(|e| {
-                let text = e.to_string();
-                let lead = if text.contains("--chromatic") {
-                    "chromatic"
-                } else if text.contains("source camera") {
-                    "source_camera"
-                } else if text.contains("--method") {
-                    "method"
-                } else {
-                    ""
-                };
-                let text = text
-                    .replace("--chromatic: ", "")
-                    .replace("--method", "method");
-                if lead.is_empty() {
-                    raise(py, e.kind(), text)
-                } else {
-                    raise(py, e.kind(), format!("{lead}: {text}"))
-                }
-            })?;
+            .py(py)?;
         Ok(PyWarper {
             source_camera: warper.source_camera().clone(),
             input_size: warper.input_size(),

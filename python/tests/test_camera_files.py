@@ -43,10 +43,15 @@ def test_cameras_by_name_index_and_listing(tmp_path):
     P = directions()
     assert np.array_equal(by_name.project_points(P), by_index.project_points(P))
     assert vklens.Camera.load(str(path)).model == "opencv"
-    with pytest.raises(vklens.InputError, match="cam7"):
+    with pytest.raises(vklens.InputError, match="cam7") as e:
         vklens.Camera.load(str(path), camera_name="cam7")
-    with pytest.raises(vklens.InputError, match="752"):
+    assert e.value.argument == "camera_name" and str(e.value).startswith("camera_name: ")
+    with pytest.raises(vklens.InputError, match="752") as e:
         vklens.Camera.load(str(path), size=(640, 480))
+    assert e.value.argument == "size"
+    with pytest.raises(vklens.InputError) as e:
+        vklens.Camera.load(str(path), camera_index=0, camera_name="cam1")
+    assert e.value.argument is None
 
 
 def test_opencv_stereo_file_written_by_cv2(tmp_path):

@@ -176,8 +176,12 @@ def test_bad_warper_options_raise_input_error(reference, device, kwargs, name):
 
 def test_source_camera_with_distortion_is_refused(reference, device):
     cam = camera_of(reference["seed_fig2"])
-    with pytest.raises(vklens.InputError, match="source_camera"):
+    with pytest.raises(vklens.InputError, match="source_camera") as e:
         vklens.Warper(cam, source_camera=cam, device=device)
+    assert e.value.argument == "source_camera"
+    with pytest.raises(vklens.InputError, match="method") as e:
+        vklens.Warper(cam, direction="undistort", method="heikkila", device=device)
+    assert e.value.argument == "method" and "--" not in str(e.value)
 
 
 def test_repr_is_informative(reference, device):

@@ -2,7 +2,11 @@
 
 
 class Error(Exception):
-    """Base class of every vklens error."""
+    """Base class of every vklens error. ``argument`` is the keyword the error is about
+    (``"method"``, ``"source_camera"``, ``"size"``, ``"camera_name"`` …) where it is about
+    one, else ``None``."""
+
+    argument = None
 
 
 class InputError(Error, ValueError):

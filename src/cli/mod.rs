@@ -43,6 +43,24 @@ use crate::pass::Precision;
 /// Errors of the command line are the library's: the kind decides the exit code.
 pub type CliError = crate::Error;
 
+/// The command-line flag of a library argument ([`crate::Error::Argument`]).
+pub fn flag_of(argument: &str) -> String {
+    match argument {
+        "size" => "--size WxH".into(),
+        "format" => "--to".into(),
+        "fstop" => "--fstop, or f_number in a scene's [optics]".into(),
+        a => format!("--{}", a.replace('_', "-")),
+    }
+}
+
+/// An error as the command line says it: an argument by its flag.
+pub fn describe(e: &crate::Error) -> String {
+    match e.argument_name() {
+        Some(a) => format!("{} ({})", e.message_only(), flag_of(a)),
+        None => e.to_string(),
+    }
+}
+
 /// The exit code of a failure, decided here and nowhere else: 2 when the user can fix it (bad
 /// input, a path that does not exist or may not be opened, work the device cannot do), 1 for
 /// everything else (a failure of the machine, the driver, or of vklens itself).

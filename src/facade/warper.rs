@@ -144,14 +144,15 @@ pub fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeome
             InverseMethod::Newton
         }
         (WarpMethod::PerPixel(m), _) => {
-            return Err(Error::input(format!(
-                "--method {m}: undistort and precorrect use the forward model; choose newton (per pixel) or lut (a map)"
-            )))
+            return Err(Error::argument(
+                "method",
+                format!("`{m}`: undistort and precorrect use the forward model; choose newton (per pixel) or lut (a map)"),
+            ))
         }
     };
     camera
         .check_method(method)
-        .map_err(|e| Error::input(format!("--method {method}: {e}")))?;
+        .map_err(|e| Error::argument("method", format!("`{method}`: {e}")))?;
     let mut geometry = match options.direction {
         WarpDirection::Distort => WarpGeometry::distort(camera.clone(), method),
         WarpDirection::Undistort | WarpDirection::Precorrect => {
@@ -159,14 +160,18 @@ pub fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeome
         }
     };
     if options.source_camera.is_none() && !camera.model().has_focal_length() {
-        return Err(Error::input(format!(
-            "the `{}` model has no pinhole focal length for the pinhole side of the warp: give that side's camera (--source-camera; Python `source_camera=`)",
-            camera.model_name()
-        )));
+        return Err(Error::argument(
+            "source_camera",
+            format!(
+                "the `{}` model has no pinhole focal length for the pinhole side of the warp: give that side's camera",
+                camera.model_name()
+            ),
+        ));
     }
     if let Some(p) = &options.source_camera {
         if !p.is_pinhole() {
-            return Err(Error::input(
+            return Err(Error::argument(
+                "source_camera",
                 "the source camera is the pinhole side of the warp and must have no distortion",
             ));
         }
@@ -175,12 +180,13 @@ pub fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeome
     if let Some(c) = options.chromatic {
         geometry = geometry
             .with_chromatic(c)
-            .map_err(|e| Error::input(format!("--chromatic: {e}")))?;
+            .map_err(|e| Error::argument("chromatic", e.to_string()))?;
     }
     if let Some(cams) = &options.channel_cameras {
         if options.method != WarpMethod::Lut {
-            return Err(Error::input(
-                "--channel-cameras runs through a map: add --method lut",
+            return Err(Error::argument(
+                "method",
+                "per-channel cameras run through a map: the method must be lut",
             ));
         }
         for c in cams.iter() {

@@ -61,13 +61,17 @@ impl Listing {
 /// one. Both given must agree: vklens does not rescale a calibration silently.
 pub fn size_or(file: Option<(u32, u32)>, given: Option<(u32, u32)>) -> Result<(u32, u32)> {
     match (file, given) {
-        (Some(f), Some(g)) if f != g => Err(Error::input(format!(
-            "the file gives an image size of {}×{}, but {}×{} was asked (--size): a calibration holds for the size it was made at",
-            f.0, f.1, g.0, g.1
-        ))),
+        (Some(f), Some(g)) if f != g => Err(Error::argument(
+            "size",
+            format!(
+                "the file gives an image size of {}×{}, but {}×{} was asked: a calibration holds for the size it was made at",
+                f.0, f.1, g.0, g.1
+            ),
+        )),
         (Some(s), _) | (None, Some(s)) => Ok(s),
-        (None, None) => Err(Error::input(
-            "the file gives no image size: pass it with --size WxH (Python: size=(w, h); C: options.width and options.height)",
+        (None, None) => Err(Error::argument(
+            "size",
+            "the file gives no image size: give the size of its images",
         )),
     }
 }
@@ -75,9 +79,10 @@ pub fn size_or(file: Option<(u32, u32)>, given: Option<(u32, u32)>) -> Result<(u
 /// Parses `--size` / `size=` text: `WxH` (or `W×H`).
 pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     let bad = || {
-        Error::input(format!(
-            "--size must be WIDTHxHEIGHT in pixels (e.g. 752x480), got `{s}`"
-        ))
+        Error::argument(
+            "size",
+            format!("expected WIDTHxHEIGHT in pixels (e.g. 752x480), got `{s}`"),
+        )
     };
     let (w, h) = s.split_once(['x', 'X', '×']).ok_or_else(bad)?;
     let side = |t: &str| {
@@ -113,10 +118,13 @@ pub fn select(listing: Listing, options: &LoadOptions) -> Result<Camera> {
                 .iter()
                 .position(|f| f.name == *name)
                 .ok_or_else(|| {
-                    Error::input(format!(
-                        "no camera named `{name}` in this {format} (it holds {})",
-                        names()
-                    ))
+                    Error::argument(
+                        "camera_name",
+                        format!(
+                            "no camera named `{name}` in this {format} (it holds {})",
+                            names()
+                        ),
+                    )
                 })?;
             if let Some(index) = index.filter(|&x| x != i) {
                 return Err(Error::input(format!(
@@ -128,15 +136,20 @@ pub fn select(listing: Listing, options: &LoadOptions) -> Result<Camera> {
         (None, index) => {
             let i = index.unwrap_or(0);
             if i >= cameras.len() {
-                return Err(Error::input(if cameras.len() == 1 {
-                    format!("camera index {i} asked, but this {format} holds one camera (index 0)")
-                } else {
-                    format!(
-                        "camera index {i} asked, but this {format} holds {} cameras ({})",
-                        cameras.len(),
-                        names()
-                    )
-                }));
+                return Err(Error::argument(
+                    "camera_index",
+                    if cameras.len() == 1 {
+                        format!(
+                            "camera index {i} asked, but this {format} holds one camera (index 0)"
+                        )
+                    } else {
+                        format!(
+                            "camera index {i} asked, but this {format} holds {} cameras ({})",
+                            cameras.len(),
+                            names()
+                        )
+                    },
+                ));
             }
             i
         }
@@ -195,7 +208,7 @@ mod tests {
         assert_eq!(size_or(Some((4, 3)), None).expect("file"), (4, 3));
         assert!(size_or(Some((4, 3)), Some((8, 6))).is_err());
         let e = size_or(None, None).expect_err("none").to_string();
-        assert!(e.contains("--size"), "{e}");
+        assert!(e.contains("`size`"), "{e}");
     }
 
     #[test]

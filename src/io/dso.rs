@@ -475,7 +475,7 @@ mod tests {
         same(&c, &want);
         // No size in the file: the caller must give one.
         let e = error(text, None);
-        assert!(e.contains("--size"), "{e}");
+        assert!(e.contains("`size`"), "{e}");
         let e = error(
             "Camera.Parameters = [ 0.5 0.75 0.5 0.5 ]\n",
             Some((640, 480)),
@@ -491,7 +491,7 @@ mod tests {
     #[test]
     fn size_comes_from_the_caller_when_missing() {
         let e = error("RadTan 460 458 367 248 -0.28 0.07 0 0\n", None);
-        assert!(e.contains("--size"), "{e}");
+        assert!(e.contains("`size`"), "{e}");
         let (_, c) = camera("RadTan 460 458 367 248 -0.28 0.07 0 0\n", Some((752, 480)));
         assert_eq!((c.width, c.height), (752, 480));
     }

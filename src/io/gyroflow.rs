@@ -283,9 +283,10 @@ fn recorded_size(
         None => {
             let (w, h) = (f64::from(calib.0) / hs, f64::from(calib.1) / vs);
             if w.fract() != 0.0 || h.fract() != 0.0 {
-                return Err(Error::input(format!(
-                    "{what}, and {w}×{h} is not a whole number of pixels: pass the recorded frames' size with --size WxH"
-                )));
+                return Err(Error::argument(
+                    "size",
+                    format!("{what}, and {w}×{h} is not a whole number of pixels: give the recorded frames' size"),
+                ));
             }
             Ok((
                 image_side_of(w, "width (calib_dimension.w / input_horizontal_stretch)")?,
@@ -406,7 +407,7 @@ mod tests {
         t["calib_dimension"] = json!({"w": 1921, "h": 1080});
         let e = load(&t, None).expect_err("size not in file").to_string();
         assert!(
-            e.contains("--size") && e.contains("input_horizontal_stretch"),
+            e.contains("`size`") && e.contains("input_horizontal_stretch"),
             "{e}"
         );
         let c = load(&t, Some((1444, 1080))).expect("loads");

@@ -912,7 +912,7 @@ ORBextractor.nFeatures: 1000
         assert_eq!(l.format, "ORB-SLAM2 settings file");
         assert_eq!(names(&l), ["Camera"]);
         let e = error(&l, 0);
-        assert!(e.contains("--size"), "{e}");
+        assert!(e.contains("`size`"), "{e}");
 
         let l = listing(ORB2_MONO, Some((640, 480)));
         let want = standard(
@@ -1335,7 +1335,7 @@ distortion_coefficients: [-0.28, 0.07, 0.0002, 1.7e-05]
             &listing(&KIMERA.replace("resolution: [752, 480]\n", ""), None),
             0,
         );
-        assert!(e.contains("--size"), "{e}");
+        assert!(e.contains("`size`"), "{e}");
     }
 
     const SVO: &str = r#"cameras:

@@ -319,7 +319,7 @@ D2: !!opencv-matrix
         let l = listing_from_tree(&tree, None).expect("detected");
         for f in l.cameras {
             let e = f.camera.expect_err("no size").to_string();
-            assert!(e.contains("--size"), "{e}");
+            assert!(e.contains("`size`"), "{e}");
         }
     }
 

@@ -83,7 +83,7 @@ fn list(v: &[f64]) -> String {
 
 fn cannot(format: Format, why: String) -> Error {
     Error::Unsupported(format!(
-        "{} cannot hold this camera: {why} (vklens JSON holds every camera: --to vklens)",
+        "{} cannot hold this camera: {why} (vklens JSON holds every camera)",
         format.describe()
     ))
 }
@@ -165,8 +165,13 @@ fn opencv(camera: &Camera) -> Result<String> {
         return Err(cannot(
             f,
             format!(
-                "calibrateCamera's file holds OpenCV's standard model, not `{}` (for a fisheye: --to ros or kalibr)",
-                camera.model_name()
+                "calibrateCamera's file holds OpenCV's standard model, not `{}`{}",
+                camera.model_name(),
+                if camera.fisheye_lens().is_some() {
+                    " (a fisheye converts to ros, kalibr, colmap or basalt)"
+                } else {
+                    ""
+                }
             ),
         ));
     }

@@ -123,9 +123,10 @@ impl Optics {
                 )))
             }
             Some(n) if n > MAX_F_NUMBER => {
-                return Err(Error::input(format!(
-                    "f/{n}: the f-number (--fstop, or f_number in a scene's [optics]) must be at most f/{MAX_F_NUMBER}; past it the pupil is too small for the cells' projections (a pinhole needs no lens: use a camera file)"
-                )))
+                return Err(Error::argument(
+                    "fstop",
+                    format!("f/{n}: the f-number must be at most f/{MAX_F_NUMBER}; past it the pupil is too small for the cells' projections (a pinhole needs no lens: use a camera file)"),
+                ))
             }
             Some(n) if n < own_n * 0.999 => {
                 return Err(Error::input(format!(

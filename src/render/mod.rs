@@ -416,9 +416,10 @@ fn render_with(
         }
         RenderPath::Cube { side } => {
             if side < 2 {
-                return Err(Error::input(format!(
-                    "cube faces of {side} px: give a positive --density (faces are 2·f·density px)"
-                )));
+                return Err(Error::argument(
+                    "density",
+                    format!("cube faces of {side} px: the density must be positive (faces are 2·f·density px)"),
+                ));
             }
             render_cube_path(renderer, scene, request, side, s, progress)
         }
@@ -514,8 +515,9 @@ fn render_cube_path(
     use crate::pass::sphere_warp::SphereWarpOptions;
     let o = request.outputs;
     if o.flow || o.ids || o.depth {
-        return Err(Error::input(
-            "IDs, flow and depth through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); use --path vertex for them",
+        return Err(Error::argument(
+            "path",
+            "IDs, flow and depth through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); the vertex path renders them",
         ));
     }
     let cam = &request.camera;
@@ -595,23 +597,26 @@ fn render_warp_path(
 ) -> Result<Rendered> {
     let o = request.outputs;
     if o.flow {
-        return Err(Error::input(
-            "flow needs the vertex path: its vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1); use --path vertex",
+        return Err(Error::argument(
+            "path",
+            "flow needs the vertex path: its vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1)",
         ));
     }
     let cam = &request.camera;
     if !(density.is_finite() && density > 0.0 && density <= 16.0) {
-        return Err(Error::input(format!(
-            "--density {density}: source pixels per output pixel must be in (0, 16]"
-        )));
+        return Err(Error::argument(
+            "density",
+            format!("{density}: source pixels per output pixel must be in (0, 16]"),
+        ));
     }
     // At s× (supersampling), as the source is rendered.
     let max_side = renderer.ctx.gpu().max_image_side();
     if let Some(why) = pinhole_source_refusal(&scaled_camera(cam, s)?, density, max_side) {
         if o.ids || o.depth {
-            return Err(Error::input(format!(
-                "{why}: the warp path would need a cube map, which carries colour only; use --path vertex for IDs and depth"
-            )));
+            return Err(Error::argument(
+                "path",
+                format!("{why}: the warp path would need a cube map, which carries colour only; the vertex path renders IDs and depth"),
+            ));
         }
         let side = crate::model::overscan::cube_face_side(cam, density);
         progress(&format!(

@@ -147,7 +147,14 @@ static void cameras(void) {
         expect_ok("load_ex without options", vkl_camera_load_ex(chain_path, NULL, &c1));
         vkl_camera_free(&c1);
         o.camera_name = "cam7";
-        expect_error("unknown name", vkl_camera_load_ex(chain_path, &o, &c1), VKL_ERROR_INPUT, "cam7");
+        vkl_error named = vkl_camera_load_ex(chain_path, &o, &c1);
+        expect("unknown name: an input error naming its argument",
+               vkl_error_kind_of(named) == VKL_ERROR_INPUT && vkl_error_argument(named)
+               && strcmp(vkl_error_argument(named), "camera_name") == 0
+               && strstr(vkl_error_message(named), "options.camera_name") != NULL
+               && strstr(vkl_error_message(named), "cam7") != NULL);
+        vkl_error_free(&named);
+        expect("no argument of NULL", vkl_error_argument(NULL) == NULL);
         o.camera_name = NULL;
         o.camera_index = 0;
         o.width = 640;

@@ -279,19 +279,8 @@ fn new_camera(out: *mut vkl_camera, camera: Camera) -> Result<(), Error> {
 /// `path` is NULL or a NUL-terminated string; `out` is NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn vkl_camera_load(path: *const c_char, out: *mut vkl_camera) -> vkl_error {
-    guard(|| {
-        if out.is_null() {
-            return Err(input("out: NULL pointer"));
-        }
-        if path.is_null() {
-            return Err(input("path: NULL pointer"));
-        }
-        // SAFETY: non-null and NUL-terminated (the caller's contract).
-        let path = unsafe { CStr::from_ptr(path) }
-            .to_str()
-            .map_err(|_| input("path: not UTF-8"))?;
-        new_camera(out, Camera::load(path)?)
-    })
+    // SAFETY: the caller's contract is vkl_camera_load_ex's with NULL options.
+    unsafe { vkl_camera_load_ex(path, ptr::null(), out) }
 }
 
 /// Which camera of a file to load, and the image size for a file that gives none (what the

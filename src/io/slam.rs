@@ -811,31 +811,10 @@ mod tests {
 
     use super::*;
 
-    /// YAML text → tree, as the caller converts it (`%` directives dropped, floats as text).
+    /// The tree the caller hands the reader: the text through the YAML reader camera files
+    /// go through (OpenCV's quirks included).
     fn tree(text: &str) -> Value {
-        use yaml_rust2::{Yaml, YamlLoader};
-        let cleaned: String = text
-            .lines()
-            .filter(|l| !l.starts_with('%'))
-            .collect::<Vec<_>>()
-            .join("\n");
-        let docs = YamlLoader::load_from_str(&cleaned).expect("valid YAML");
-        fn convert(y: &Yaml) -> Value {
-            match y {
-                Yaml::Real(s) => Value::String(s.clone()),
-                Yaml::Integer(i) => Value::from(*i),
-                Yaml::String(s) => Value::String(s.clone()),
-                Yaml::Boolean(b) => Value::Bool(*b),
-                Yaml::Array(a) => Value::Array(a.iter().map(convert).collect()),
-                Yaml::Hash(h) => Value::Object(
-                    h.iter()
-                        .filter_map(|(k, v)| k.as_str().map(|k| (k.to_string(), convert(v))))
-                        .collect(),
-                ),
-                _ => Value::Null,
-            }
-        }
-        convert(&docs[0])
+        crate::io::camera::yaml_to_tree(text).expect("valid YAML")
     }
 
     fn listing(text: &str, size: Option<(u32, u32)>) -> Listing {

@@ -216,30 +216,10 @@ mod tests {
         DVec3::new(-0.4, 0.3, 1.0),
     ];
 
-    /// YAML → tree as the loader builds it (directives dropped, reals kept as text).
+    /// The tree the caller hands the reader: the text through the YAML reader camera files
+    /// go through (OpenCV's quirks included).
     fn yaml(text: &str) -> Value {
-        use yaml_rust2::{Yaml, YamlLoader};
-        let cleaned: String = text
-            .lines()
-            .filter(|l| !l.starts_with('%'))
-            .collect::<Vec<_>>()
-            .join("\n");
-        fn convert(y: &Yaml) -> Value {
-            match y {
-                Yaml::Real(s) | Yaml::String(s) => Value::String(s.clone()),
-                Yaml::Integer(i) => Value::from(*i),
-                Yaml::Boolean(b) => Value::Bool(*b),
-                Yaml::Array(a) => Value::Array(a.iter().map(convert).collect()),
-                Yaml::Hash(h) => Value::Object(
-                    h.iter()
-                        .filter_map(|(k, v)| k.as_str().map(|k| (k.to_string(), convert(v))))
-                        .collect(),
-                ),
-                _ => Value::Null,
-            }
-        }
-        let docs = YamlLoader::load_from_str(&cleaned).expect("yaml");
-        convert(&docs[0])
+        crate::io::camera::yaml_to_tree(text).expect("valid YAML")
     }
 
     const INTRINSICS: &str = "%YAML:1.0

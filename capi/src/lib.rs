@@ -393,23 +393,13 @@ pub unsafe extern "C" fn vkl_camera_from_opencv(
         let d = unsafe { slice(dist_coeffs, count, "dist_coeffs")? };
         let d: &[f64] = if d.is_empty() { &[0.0; 5] } else { d };
         let km = [[k[0], k[1], k[2]], [k[3], k[4], k[5]], [k[6], k[7], k[8]]];
-        let camera = Camera::from_opencv(km, d, (width, height)).map_err(|e| {
-            let text = e.to_string();
-            if text.starts_with("K:") {
-                e
-            } else if text.contains("coefficients")
-                || text.contains("parameter `k")
-                || text.contains("parameter `p")
-                || text.contains("parameter `s")
-                || text.contains("parameter `tau")
-            {
-                input(format!("dist_coeffs: {text}"))
-            } else if text.contains("image size") {
-                input(format!("width, height: {text}"))
-            } else {
-                input(format!("K: {text}"))
-            }
-        })?;
+        // The library names the argument (`K`, `dist_coeffs`, `size`); the size is this
+        // function's `width, height`.
+        let camera =
+            Camera::from_opencv(km, d, (width, height)).map_err(|e| match e.argument_name() {
+                Some("size") => Error::argument("width, height", e.message_only()),
+                _ => e,
+            })?;
         new_camera(out, camera)
     })
 }

@@ -291,7 +291,7 @@ impl PyCamera {
         let k = [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]];
         let size = (side(py, width, "width")?, side(py, height, "height")?);
         let inner = Camera::from_opencv(k, &d, size)
-            .map_err(|e| named(py, e, "dist_coeffs", "width, height"))?;
+            .map_err(|e| named(py, e, "fx, fy, cx, cy", "dist_coeffs", "width, height"))?;
         Ok(PyCamera { inner })
     }
 
@@ -381,7 +381,8 @@ impl PyCamera {
         ];
         let dv = vector(py, d, "D", None)?;
         let size = (side(py, size.0, "size")?, side(py, size.1, "size")?);
-        let inner = Camera::from_opencv(km, &dv, size).map_err(|e| named(py, e, "D", "size"))?;
+        let inner =
+            Camera::from_opencv(km, &dv, size).map_err(|e| named(py, e, "K", "D", "size"))?;
         Ok(PyCamera { inner })
     }
 
@@ -605,21 +606,21 @@ impl PyCamera {
 
 /// A model error from `Camera::from_opencv`, led by the argument it is about: `coeffs` (the
 /// distortion vector's name) for a coefficient or their count, `size` for the image size.
-fn named(py: Python<'_>, e: vklens::Error, coeffs: &str, size: &str) -> PyErr {
-    const COEFFS: [&str; 14] = [
-        "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "tau_x", "tau_y",
-    ];
-    let text = e.to_string();
-    let lead = if text.contains("distortion vectors")
-        || COEFFS.iter().any(|c| text.contains(&format!("`{c}`")))
-    {
-        coeffs
-    } else if text.contains("image size") {
-        size
-    } else {
+/// An error of `Camera::from_opencv` in the words of the Python call that made it: the
+/// library's `K`, `dist_coeffs` and `size` arguments under the names this call gives them.
+fn named(py: Python<'_>, e: vklens::Error, k: &str, coeffs: &str, size: &str) -> PyErr {
+    let Some(argument) = e.argument_name() else {
         return to_py(py, e);
     };
-    raise(py, e.kind(), format!("{lead}: {text}"))
+    let name = match argument {
+        "K" => k,
+        "dist_coeffs" => coeffs,
+        "size" => size,
+        other => other,
+    };
+    let err = raise(py, e.kind(), format!("{name}: {}", e.message_only()));
+    let _ = err.value(py).setattr("argument", name);
+    err
 }
 
 /// OpenCV's Rodrigues rotation: the axis `r / |r|` turned by `|r|` radians.

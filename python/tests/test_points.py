@@ -171,6 +171,17 @@ def test_bad_points_and_k_name_the_argument(reference):
         vklens.Camera.from_opencv(np.eye(2), np.zeros(5), (800, 600))
     with pytest.raises(vklens.InputError, match="K"):
         vklens.Camera.from_opencv(np.array([[400, 0, 1], [0, 400, 1], [0, 0, np.nan]]), np.zeros(5), (8, 6))
+    # The argument each refusal is about, as this call names it.
+    K = np.array([[400.0, 0, 399.5], [0, 400.0, 299.5], [0, 0, 1]])
+    for args, argument in (((K, np.zeros(7), (800, 600)), "D"), ((K, [np.nan, 0, 0, 0], (800, 600)), "D"),
+                           ((K, np.zeros(5), (0, 600)), "size"),
+                           ((np.array([[400.0, 1, 399.5], [0, 400, 299.5], [0, 0, 1]]), np.zeros(5), (8, 6)), "K")):
+        with pytest.raises(vklens.InputError) as e:
+            vklens.Camera.from_opencv(*args)
+        assert e.value.argument == argument and str(e.value).startswith(argument + ": "), str(e.value)
+    with pytest.raises(vklens.InputError) as e:
+        vklens.Camera(800, 600, 400.0, 400.0, 399.5, 299.5, dist_coeffs=np.zeros(7))
+    assert e.value.argument == "dist_coeffs"
     with pytest.raises(vklens.InputError, match="D"):
         vklens.Camera.from_opencv(np.eye(3), np.zeros((2, 5)), (800, 600))
     with pytest.raises(vklens.IoError, match="nowhere.yml"):

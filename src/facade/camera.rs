@@ -72,9 +72,10 @@ impl Camera {
     /// ```
     pub fn from_opencv(k: [[f64; 3]; 3], dist_coeffs: &[f64], size: (u32, u32)) -> Result<Camera> {
         let bad = |what: &str| {
-            Error::input(format!(
-                "K: {what} (expected [fx, 0, cx; 0, fy, cy; 0, 0, 1])"
-            ))
+            Error::argument(
+                "K",
+                format!("{what} (expected [fx, 0, cx; 0, fy, cy; 0, 0, 1])"),
+            )
         };
         if k.iter().flatten().any(|v| !v.is_finite()) {
             return Err(bad("every entry must be a finite number"));
@@ -94,7 +95,26 @@ impl Camera {
             cx: k[0][2],
             cy: k[1][2],
         };
-        Camera::from_coeffs(size.0, size.1, intrinsics, dist_coeffs).map_err(Error::from)
+        // Each refusal names the argument it is about, for the front ends to say in their words.
+        Camera::from_coeffs(size.0, size.1, intrinsics, dist_coeffs).map_err(|e| {
+            use crate::model::ModelError as M;
+            let argument = match &e {
+                M::BadSize { .. } => "size",
+                M::CoefficientCount(_) => "dist_coeffs",
+                M::NotFinite { name, .. }
+                | M::NotPositive { name, .. }
+                | M::TooSmall { name, .. }
+                | M::Absurd { name, .. } => {
+                    if ["fx", "fy", "cx", "cy"].contains(name) {
+                        "K"
+                    } else {
+                        "dist_coeffs"
+                    }
+                }
+                _ => return Error::from(e),
+            };
+            Error::argument(argument, e.to_string())
+        })
     }
 
     /// OpenCV's camera matrix `K`, row-major (a fisheye's skew as `K[0][1] = α fx`).

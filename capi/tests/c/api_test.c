@@ -59,6 +59,16 @@ static void cameras(void) {
     expect_error("load(missing)", vkl_camera_load("/no/such/camera.yml", &c), VKL_ERROR_IO, "/no/such/camera.yml");
     expect_error("load(out NULL)", vkl_camera_load("x.yml", NULL), VKL_ERROR_INPUT, "out");
     expect_error("7 coefficients", vkl_camera_from_opencv(800, 600, K, d, 7, &c), VKL_ERROR_INPUT, "dist_coeffs");
+    {
+        vkl_error seven = vkl_camera_from_opencv(800, 600, K, d, 7, &c);
+        expect("7 coefficients: the argument is dist_coeffs",
+               vkl_error_argument(seven) && strcmp(vkl_error_argument(seven), "dist_coeffs") == 0);
+        vkl_error_free(&seven);
+        vkl_error small = vkl_camera_from_opencv(0, 600, K, d, 4, &c);
+        expect("width 0: the argument is width, height",
+               vkl_error_argument(small) && strcmp(vkl_error_argument(small), "width, height") == 0);
+        vkl_error_free(&small);
+    }
     double nan_k[9] = {400, 0, 399.5, 0, NAN, 299.5, 0, 0, 1};
     expect_error("NaN in K", vkl_camera_from_opencv(800, 600, nan_k, d, 4, &c), VKL_ERROR_INPUT, "K");
     expect_error("K NULL", vkl_camera_from_opencv(800, 600, NULL, d, 4, &c), VKL_ERROR_INPUT, "K");

@@ -204,15 +204,6 @@ impl Error {
     }
 }
 
-impl From<vk::Result> for Error {
-    fn from(result: vk::Result) -> Self {
-        Error::Vulkan {
-            call: "a Vulkan call",
-            result,
-        }
-    }
-}
-
 impl From<crate::model::ModelError> for Error {
     fn from(e: crate::model::ModelError) -> Self {
         Error::Input(e.to_string())

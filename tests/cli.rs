@@ -239,7 +239,10 @@ fn exit_codes_follow_the_error_kind() {
     assert_eq!(exit_code(&Error::io(p, "cannot write", &full)), 1);
     assert_eq!(exit_code(&Error::internal("bug")), 1);
     assert_eq!(
-        exit_code(&Error::from(ash::vk::Result::ERROR_DEVICE_LOST)),
+        exit_code(&Error::Vulkan {
+            call: "vkQueueSubmit",
+            result: ash::vk::Result::ERROR_DEVICE_LOST,
+        }),
         1
     );
 

@@ -194,7 +194,10 @@ impl Context {
                     // SAFETY: nothing was created from the instance (the messenger failed), and
                     // it is not used again.
                     unsafe { instance.destroy_instance(None) };
-                    return Err(e.into());
+                    return Err(Error::Vulkan {
+                        call: "vkCreateDebugUtilsMessengerEXT",
+                        result: e,
+                    });
                 }
             }
         } else {
@@ -260,7 +263,15 @@ impl Context {
         // `device_info` and what it points at outlive the call.
         let device = match unsafe { instance.create_device(physical, &device_info, None) } {
             Ok(d) => d,
-            Err(e) => return Err(fail(&mut owned, e.into())),
+            Err(e) => {
+                return Err(fail(
+                    &mut owned,
+                    Error::Vulkan {
+                        call: "vkCreateDevice",
+                        result: e,
+                    },
+                ))
+            }
         };
         // SAFETY: the device was created with one queue in `family`, so index 0 exists.
         let queue = unsafe { device.get_device_queue(family, 0) };
@@ -355,7 +366,10 @@ impl Context {
             Err(e) => {
                 // SAFETY: `cmd` was just allocated from this pool and never submitted.
                 unsafe { device.free_command_buffers(self.command_pool, &[cmd]) };
-                return Err(e.into());
+                return Err(Error::Vulkan {
+                    call: "vkCreateFence",
+                    result: e,
+                });
             }
         };
         let result = (|| {

@@ -253,10 +253,12 @@ pub(crate) fn set_layout(
     // SAFETY: the create info points at `layout_bindings` (binding i of type `bindings[i]`,
     // one descriptor each, distinct binding numbers), alive across the call.
     Ok(unsafe {
-        gpu.device().create_descriptor_set_layout(
-            &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
-            None,
-        )?
+        gpu.device()
+            .create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
+                None,
+            )
+            .call("vkCreateDescriptorSetLayout")?
     })
 }
 

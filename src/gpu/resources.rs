@@ -38,7 +38,9 @@ impl Buffer {
         // SAFETY: `raw` has no memory bound yet, and the allocation was made for its memory
         // requirements, so memory type, size and offset alignment fit.
         let allocation = allocate(gpu, name, requirements, location, true, |a| unsafe {
-            device.bind_buffer_memory(raw, a.memory(), a.offset())
+            device
+                .bind_buffer_memory(raw, a.memory(), a.offset())
+                .call("vkBindBufferMemory")
         })
         // SAFETY: on error `raw` has no memory bound and was never handed out or used.
         .inspect_err(|_| unsafe { device.destroy_buffer(raw, None) })?;
@@ -146,7 +148,7 @@ fn allocate(
     requirements: vk::MemoryRequirements,
     location: MemoryLocation,
     linear: bool,
-    bind: impl FnOnce(&Allocation) -> std::result::Result<(), vk::Result>,
+    bind: impl FnOnce(&Allocation) -> Result<()>,
 ) -> Result<Allocation> {
     let mut allocator = gpu
         .allocator()
@@ -161,7 +163,7 @@ fn allocate(
     })?;
     if let Err(e) = bind(&allocation) {
         let _ = allocator.free(allocation);
-        return Err(e.into());
+        return Err(e);
     }
     Ok(allocation)
 }
@@ -268,7 +270,11 @@ impl Image {
             false,
             // SAFETY: `raw` has no memory bound yet, and the allocation was made for its memory
             // requirements (optimal tiling: `linear` is false), so type, size and alignment fit.
-            |a| unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) },
+            |a| unsafe {
+                device
+                    .bind_image_memory(raw, a.memory(), a.offset())
+                    .call("vkBindImageMemory")
+            },
         )
         // SAFETY: on error `raw` has no memory bound and was never handed out or used.
         .inspect_err(|_| unsafe { device.destroy_image(raw, None) })?;
@@ -429,12 +435,15 @@ impl QueryPool {
         // TYPE_64 and the whole query range. WAIT blocks until the queries are written (callers
         // read after the submission that wrote them completed).
         unsafe {
-            self.gpu.device().get_query_pool_results(
-                self.raw,
-                0,
-                &mut ticks,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )?
+            self.gpu
+                .device()
+                .get_query_pool_results(
+                    self.raw,
+                    0,
+                    &mut ticks,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+                .call("vkGetQueryPoolResults")?
         };
         let period = self.gpu.timestamp_period_ns().unwrap_or(1.0);
         Ok(ticks.iter().map(|&t| t as f64 * period).collect())

@@ -32,6 +32,9 @@
 // check (the answer is an explicit invalid, never silent garbage). `partial_cmp` would hide that.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 #![warn(missing_docs)]
+// An `unsafe fn` states its contract; the operations inside still each need a block that says
+// why they are sound.
+#![deny(unsafe_op_in_unsafe_fn)]
 
 mod error;
 mod facade;

@@ -9,6 +9,7 @@
 //! instance and device.
 
 #![allow(non_camel_case_types)]
+#![deny(unsafe_op_in_unsafe_fn)]
 // Every pointer argument is checked for NULL before use; the remaining contract (pointers
 // to as many elements as the count says, live handles) is the C caller's, stated per function.
 #![allow(clippy::missing_safety_doc)]

@@ -219,7 +219,8 @@ impl LensRenderer {
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn prepare(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<()> {
         for b in &self.buckets {
-            b.pass.bind_slots_mesh(&b.slots, mesh);
+            // SAFETY: this function's contract: no recorded work of this renderer is pending.
+            unsafe { b.pass.bind_slots_mesh(&b.slots, mesh) };
         }
         for draw in &self.draws {
             let b = &self.buckets[draw.bucket];
@@ -228,8 +229,11 @@ impl LensRenderer {
                 rotation: pose.rotation,
                 translation: pose.translation - draw.cop,
             };
-            b.pass
-                .set_slot(&b.slots, draw.slot, &draw.camera, &cell_pose, &cell_pose)?;
+            // SAFETY: this function's contract: no recorded work of this renderer is pending.
+            unsafe {
+                b.pass
+                    .set_slot(&b.slots, draw.slot, &draw.camera, &cell_pose, &cell_pose)
+            }?;
         }
         Ok(())
     }

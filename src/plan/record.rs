@@ -348,19 +348,21 @@ impl PlanRecorder {
         } else {
             pose
         };
+        // SAFETY (every block below): this function's contract: no recorded frame of this
+        // recorder, whose passes these are, is pending.
         if let Some((pass, _)) = &mut self.geometry {
-            pass.bind_mesh(&self.mesh);
-            pass.set_frame(&pose, &previous)?;
+            unsafe { pass.bind_mesh(&self.mesh) };
+            unsafe { pass.set_frame(&pose, &previous) }?;
         }
         if let Some(st) = &mut self.warp {
-            st.pass.bind_mesh(&self.mesh);
-            st.pass.set_frame(&pose, &pose)?;
+            unsafe { st.pass.bind_mesh(&self.mesh) };
+            unsafe { st.pass.set_frame(&pose, &pose) }?;
         }
         if let Some(c) = &self.cube {
-            c.prepare(&self.mesh, &pose)?;
+            unsafe { c.prepare(&self.mesh, &pose) }?;
         }
         if let Some(l) = &mut self.lens {
-            l.prepare(&self.mesh, &pose)?;
+            unsafe { l.prepare(&self.mesh, &pose) }?;
         }
         Ok(())
     }

@@ -726,6 +726,7 @@ fn a_device_without_geometry_shaders_renders_the_vertex_path_through_the_compute
             .ok()
             .filter(|s| !s.is_empty()),
         geometry_shader: false,
+        geometry_shader_discard: false,
     })
     .unwrap();
     assert!(!ctx.gpu().supports_geometry_shader());

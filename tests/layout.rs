@@ -215,6 +215,7 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
         validation: true,
         device: None,
         geometry_shader: true,
+        geometry_shader_discard: false,
     })
     .unwrap();
     let camera = vklens::internal::model::Camera::from_coeffs(
@@ -305,6 +306,7 @@ fn the_discard_leaves_the_domain_table_out_only_where_its_bound_needs_none() {
         validation: true,
         device: None,
         geometry_shader: true,
+        geometry_shader_discard: false,
     })
     .unwrap();
     let k = Intrinsics {

@@ -24,6 +24,9 @@ pub struct ContextOptions {
     /// Enable `geometryShader` where the device has it. `false` makes a device report as
     /// one without (MoltenVK, many mobile GPUs) would, for testing the paths that need none.
     pub geometry_shader: bool,
+    /// Drop the vertex path's triangles in a geometry shader (Lambers et al.'s own discard)
+    /// where the device has one, instead of the faster compute discard: for comparisons.
+    pub geometry_shader_discard: bool,
 }
 
 impl ContextOptions {
@@ -39,8 +42,15 @@ impl ContextOptions {
                 .ok()
                 .filter(|s| !s.is_empty()),
             geometry_shader: geometry_shader_from_env(),
+            geometry_shader_discard: geometry_shader_discard_from_env(),
         }
     }
+}
+
+/// `VKLENS_DISCARD=geometry-shader` asks for the geometry-shader discard (the device must
+/// have `geometryShader`); anything else leaves the compute discard.
+pub fn geometry_shader_discard_from_env() -> bool {
+    std::env::var("VKLENS_DISCARD").as_deref() == Ok("geometry-shader")
 }
 
 /// `VKLENS_GEOMETRY_SHADER=0` (or `false`, `no`) turns the geometry-shader feature off.
@@ -306,6 +316,7 @@ impl Context {
             driver: super::driver_name(&instance, physical, &props),
             float64,
             geometry_shader,
+            geometry_shader_discard: options.geometry_shader_discard && geometry_shader,
             max_image_side: props.limits.max_image_dimension2_d,
             max_cube_side: props.limits.max_image_dimension_cube,
             float_linear: super::float_linear(&instance, physical),

@@ -26,7 +26,9 @@ pub use barriers::{
     host_read_barrier, image_barrier, memory_barrier, record_compute_download,
     record_compute_readback, record_discard_for_compute_write, record_download,
 };
-pub use context::{geometry_shader_from_env, Context, ContextOptions};
+pub use context::{
+    geometry_shader_discard_from_env, geometry_shader_from_env, Context, ContextOptions,
+};
 pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,
     VertexBinding,
@@ -69,6 +71,9 @@ pub(crate) struct GpuInner {
     pub(crate) float64: bool,
     /// Whether `geometryShader` is enabled (the geometry path's triangle discard).
     pub(crate) geometry_shader: bool,
+    /// Whether the vertex path's discard runs in a geometry shader where a pass leaves it to
+    /// the device ([`ContextOptions::geometry_shader_discard`]).
+    pub(crate) geometry_shader_discard: bool,
     /// `maxImageDimension2D`.
     pub(crate) max_image_side: u32,
     /// `maxImageDimensionCube`.
@@ -121,6 +126,7 @@ impl Gpu {
                 driver: driver_name(instance, physical_device, &props),
                 float64: features.shader_float64,
                 geometry_shader: features.geometry_shader,
+                geometry_shader_discard: false,
                 max_image_side: props.limits.max_image_dimension2_d,
                 max_cube_side: props.limits.max_image_dimension_cube,
                 float_linear: float_linear(instance, physical_device),
@@ -133,6 +139,12 @@ impl Gpu {
         Gpu {
             inner: Arc::new(inner),
         }
+    }
+
+    /// Whether the vertex path drops triangles in a geometry shader where a pass does not
+    /// say ([`ContextOptions::geometry_shader_discard`]); the compute discard otherwise.
+    pub fn prefers_geometry_shader_discard(&self) -> bool {
+        self.inner.geometry_shader_discard
     }
 
     /// The ash device.

@@ -107,16 +107,17 @@ pub enum Discard {
 }
 
 impl Discard {
-    /// `VKLENS_DISCARD=compute` or `geometry-shader` (for comparisons); otherwise `Auto`.
-    pub fn from_env() -> Self {
-        match std::env::var("VKLENS_DISCARD").as_deref() {
-            Ok("compute") => Discard::Compute,
-            Ok("geometry-shader") => Discard::GeometryShader,
-            _ => Discard::Auto,
+    /// The stage `Auto` stands for on `gpu`: the geometry shader where its context asks for it
+    /// (`VKLENS_DISCARD=geometry-shader`, read with the device's other settings), else the
+    /// compute discard.
+    pub fn resolve_for(self, gpu: &Gpu) -> Discard {
+        match self {
+            Discard::Auto if gpu.prefers_geometry_shader_discard() => Discard::GeometryShader,
+            d => d.resolve(),
         }
     }
 
-    /// The stage `Auto` stands for.
+    /// The stage `Auto` stands for by default (the compute discard).
     pub fn resolve(self) -> Discard {
         match self {
             Discard::Auto => Discard::Compute,
@@ -162,7 +163,7 @@ impl GeometryDesc {
             far: 1000.0,
             background: [0.0; 4],
             final_layout: vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            discard: Discard::from_env(),
+            discard: Discard::Auto,
         }
     }
 }
@@ -576,7 +577,7 @@ impl GeometryPass {
             .bool(spec::WRITE_IDS, o.ids)
             .bool(spec::WRITE_FLOW, o.flow)
             .bool(spec::WRITE_DEPTH, o.depth);
-        let geometry_stage = lens && desc.discard.resolve() == Discard::GeometryShader;
+        let geometry_stage = lens && desc.discard.resolve_for(gpu) == Discard::GeometryShader;
         // With the compute discard, Alg. 1 runs there once per vertex and pose, and the draw
         // reads its positions and flow as vertex attributes.
         let pulled = lens && !geometry_stage;

@@ -11,6 +11,7 @@ pub fn validated_context() -> Context {
             .ok()
             .filter(|s| !s.is_empty()),
         geometry_shader: vklens::internal::gpu::geometry_shader_from_env(),
+        geometry_shader_discard: vklens::internal::gpu::geometry_shader_discard_from_env(),
     })
     .expect("a Vulkan device with the validation layer (README: the test command installs both)")
 }

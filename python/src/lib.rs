@@ -60,6 +60,14 @@ fn input(py: Python<'_>, message: impl Into<String>) -> PyErr {
     raise(py, ErrorKind::Input, message.into())
 }
 
+/// `InputError("argument: message")` with the exception's `argument` set, as for the
+/// library's own argument errors.
+fn input_arg(py: Python<'_>, argument: &str, message: impl std::fmt::Display) -> PyErr {
+    let err = raise(py, ErrorKind::Input, format!("{argument}: {message}"));
+    let _ = err.value(py).setattr("argument", argument);
+    err
+}
+
 trait OrPy<T> {
     /// The error as its Python exception.
     fn py(self, py: Python<'_>) -> PyResult<T>;
@@ -107,10 +115,10 @@ fn numbers(
     kwargs.set_item("dtype", "float64")?;
     let array = np
         .call_method("asarray", (value,), Some(&kwargs))
-        .map_err(|e| input(py, format!("{name}: expected an array of numbers ({e})")))?;
+        .map_err(|e| input_arg(py, name, format!("expected an array of numbers ({e})")))?;
     let array = array
         .cast_into::<PyArrayDyn<f64>>()
-        .map_err(|_| input(py, format!("{name}: expected an array of numbers")))?;
+        .map_err(|_| input_arg(py, name, "expected an array of numbers"))?;
     let shape = array.shape().to_vec();
     let data = array.readonly().as_array().iter().copied().collect();
     Ok((data, shape))
@@ -145,10 +153,11 @@ fn rows<const D: usize>(
         _ => false,
     };
     if !ok {
-        return Err(input(
+        return Err(input_arg(
             py,
+            name,
             format!(
-                "{name}: shape {}; expected (N, {D}) (or (N, 1, {D}) as OpenCV hands them out)",
+                "shape {}; expected (N, {D}) (or (N, 1, {D}) as OpenCV hands them out)",
                 tuple(&shape)
             ),
         ));
@@ -170,10 +179,11 @@ fn vector(
     let flat = matches!(shape.as_slice(), [_] | [1, _] | [_, 1]);
     if !flat || n.is_some_and(|n| data.len() != n) {
         let want = n.map_or("n".to_string(), |n| n.to_string());
-        return Err(input(
+        return Err(input_arg(
             py,
+            name,
             format!(
-                "{name}: shape {}; expected ({want},), (1, {want}) or ({want}, 1)",
+                "shape {}; expected ({want},), (1, {want}) or ({want}, 1)",
                 tuple(&shape)
             ),
         ));
@@ -196,15 +206,16 @@ fn nan_rows<'py, const N: usize>(
 
 fn method(py: Python<'_>, name: &str) -> PyResult<InverseMethod> {
     name.parse::<InverseMethod>()
-        .map_err(|e| input(py, format!("method: {e}")))
+        .map_err(|e| input_arg(py, "method", e))
 }
 
 /// A whole, non-negative pixel count.
 fn side(py: Python<'_>, v: i64, name: &str) -> PyResult<u32> {
     u32::try_from(v).map_err(|_| {
-        input(
+        input_arg(
             py,
-            format!("{name}: {v} is not a pixel count (1..=4294967295)"),
+            name,
+            format!("{v} is not a pixel count (1..=4294967295)"),
         )
     })
 }
@@ -481,7 +492,7 @@ impl PyCamera {
         let m = self::method(py, method)?;
         self.inner
             .check_method(m)
-            .map_err(|e| input(py, format!("method: {e}")))?;
+            .map_err(|e| input_arg(py, "method", e))?;
         let uv = rows::<2>(py, uv, "uv")?;
         let xy = py.detach(|| self.inner.undistort_points(&uv, m));
         nan_rows(py, xy)

@@ -163,8 +163,9 @@ def test_bad_points_and_k_name_the_argument(reference):
     cam = camera_of(reference["seed_fig2"])
     with pytest.raises(vklens.InputError, match="xy"):
         cam.distort_points(np.zeros((4, 3)))
-    with pytest.raises(vklens.InputError, match="points_3d"):
+    with pytest.raises(vklens.InputError, match="points_3d") as e:
         cam.project_points(np.zeros((4, 2)))
+    assert e.value.argument == "points_3d"
     with pytest.raises(vklens.InputError, match="rvec"):
         cam.project_points(np.zeros((4, 3)), rvec=np.zeros(4))
     with pytest.raises(vklens.InputError, match="K"):

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use super::CliError;
-use crate::io::catalog::{self, LoadOptions};
+use crate::io::catalog;
 use crate::io::writers::{self, Format};
 
 #[derive(Args, Debug)]
@@ -109,13 +109,4 @@ pub fn convert(args: ConvertArgs) -> Result<(), CliError> {
         camera.model_name()
     );
     Ok(())
-}
-
-/// The `--camera-index`, `--camera-name` and `--size` of this run as load options.
-pub(crate) fn options(
-    index: Option<usize>,
-    name: Option<String>,
-    size: Option<(u32, u32)>,
-) -> LoadOptions {
-    LoadOptions { index, name, size }
 }

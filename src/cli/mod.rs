@@ -402,11 +402,11 @@ pub(crate) fn progress_done(what: &str) {
 /// Runs the command line.
 pub fn run(cli: Cli) -> Result<(), CliError> {
     // Set once per process; a second `run` in one process keeps the first options.
-    let _ = CAMERA_OPTIONS.set(cameras::options(
-        cli.camera_index,
-        cli.camera_name,
-        cli.size,
-    ));
+    let _ = CAMERA_OPTIONS.set(crate::io::catalog::LoadOptions {
+        index: cli.camera_index,
+        name: cli.camera_name,
+        size: cli.size,
+    });
     match cli.command {
         Command::Points(PointsCommand::Distort {
             camera,

@@ -142,7 +142,7 @@ impl Ocam {
 
     /// OCamCalib's `world2cam` radius from `inverse_poly`, for a ray at `angle` off the axis:
     /// its θ is measured from the image plane (θ = angle − π/2).
-    pub fn approximate_radius(&self, angle: f64) -> f64 {
+    pub fn approximate_radius<T: Scalar>(&self, angle: T) -> T {
         poly::eval(&self.inverse_poly, angle - std::f64::consts::FRAC_PI_2)
     }
 
@@ -185,7 +185,7 @@ impl RayModel for Ocam {
             if !(angle.value() <= self.max_angle()) {
                 return None;
             }
-            let r = poly::eval(&self.inverse_poly, angle - std::f64::consts::FRAC_PI_2);
+            let r = self.approximate_radius(angle);
             let s = r / rho;
             return Some(self.to_m(xo * s, yo * s));
         }

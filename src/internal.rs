@@ -19,7 +19,5 @@ pub mod model;
 pub mod pass;
 #[path = "plan/mod.rs"]
 pub mod plan;
-#[path = "render/mod.rs"]
-pub mod render;
 #[path = "scene/mod.rs"]
 pub mod scene;

@@ -54,11 +54,11 @@ pub use pass::warp::PixelFormat;
 
 /// The layers behind the public surface, bottom first: `model`, `lens`, `io`, `imaging` and
 /// `scene` (no Vulkan), `gpu` (one owning type per Vulkan object), `pass` (record-only GPU
-/// passes), `render` and `plan` (what to record for a scene), then `bench` and `cli` on top.
+/// passes), `plan` (what to record for a scene, and its recorder), then `bench` and `cli` on top.
 /// See `docs/architecture.md`. Public for the tests, the benches and the command line; not
 /// kept stable.
 #[allow(missing_docs)]
 #[doc(hidden)]
 pub mod internal;
 // Inside the crate every layer keeps its short path (`crate::model`, `crate::gpu`, ...).
-use internal::{bench, gpu, headless, imaging, io, lens, model, pass, plan, render, scene};
+use internal::{bench, gpu, headless, imaging, io, lens, model, pass, plan, scene};

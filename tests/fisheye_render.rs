@@ -8,7 +8,8 @@ use glam::DVec3;
 use vklens::internal::imaging::Pixels;
 use vklens::internal::model::InverseMethod;
 use vklens::internal::model::{Camera, Fisheye, Intrinsics};
-use vklens::internal::render::{pinhole_source_refusal, render_scene, RenderPath, RenderRequest};
+use vklens::internal::plan::limits::pinhole_source_refusal;
+use vklens::internal::plan::{render_request as render_scene, PathChoice, RenderRequest};
 use vklens::internal::scene::{Mesh, Scene, Vertex};
 
 fn fisheye_200() -> Camera {
@@ -83,7 +84,7 @@ fn checker_room() -> Scene {
     }
 }
 
-fn request(camera: &Camera, path: RenderPath) -> RenderRequest {
+fn request(camera: &Camera, path: PathChoice) -> RenderRequest {
     RenderRequest::color(camera, path)
 }
 
@@ -102,7 +103,13 @@ fn the_vertex_path_and_the_cube_warp_agree_on_a_200_degree_fisheye() {
     let vertex = render_scene(
         &ctx,
         &scene,
-        &request(&camera, RenderPath::Vertex { delta: 0.05 }),
+        &request(
+            &camera,
+            PathChoice::Vertex {
+                delta: 0.05,
+                tessellate: None,
+            },
+        ),
         &mut |_| {},
     )
     .expect("vertex path");
@@ -110,7 +117,7 @@ fn the_vertex_path_and_the_cube_warp_agree_on_a_200_degree_fisheye() {
     let cube = render_scene(
         &ctx,
         &scene,
-        &request(&camera, RenderPath::Cube { side }),
+        &request(&camera, PathChoice::Cube { side }),
         &mut |_| {},
     )
     .expect("cube path");
@@ -160,7 +167,7 @@ fn the_warp_path_turns_to_a_cube_map_where_no_pinhole_source_fits_and_says_why()
     let why = pinhole_source_refusal(&camera, 1.0, 16384).expect("a 200° lens needs the cube");
     assert!(why.contains("90°"), "{why}");
     let mut said = Vec::new();
-    let warp = RenderPath::Warp {
+    let warp = PathChoice::Warp {
         method: InverseMethod::Newton,
         density: 1.0,
     };
@@ -227,11 +234,17 @@ fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
     };
     let camera = Camera::fisheye(400, 400, k, lens).expect("camera");
     let scene = checker_room();
-    let mut cube_request = request(&camera, RenderPath::Vertex { delta: 0.05 });
+    let mut cube_request = request(
+        &camera,
+        PathChoice::Vertex {
+            delta: 0.05,
+            tessellate: None,
+        },
+    );
     cube_request.pose.translation = DVec3::new(0.07, -0.05, 0.03);
     let pose = cube_request.pose;
     let side = vklens::internal::model::overscan::cube_face_side(&camera, 2.0);
-    cube_request.path = RenderPath::Cube { side };
+    cube_request.path = PathChoice::Cube { side };
     let cube = render_scene(&ctx, &scene, &cube_request, &mut |_| {}).expect("cube path");
     let b = rgba8(&cube);
     // The image circle: θ_d(π) f = 60π px.

@@ -11,7 +11,17 @@ use vklens::internal::model::{Camera, InverseMethod};
 use vklens::internal::pass::geometry::{
     ColorFormat, GeometryDesc, Outputs, Projection, Rendered, DEFAULT_DELTA,
 };
-use vklens::internal::render::{render_scene, RenderPath, RenderRequest};
+use vklens::internal::plan::scene_file::{Antialias, OutputSpec};
+
+/// 8-bit colour alone.
+const COLOR: OutputSpec = OutputSpec {
+    color: true,
+    ids: false,
+    flow: false,
+    depth: false,
+    exr: false,
+};
+use vklens::internal::plan::{render_request as render_scene, PathChoice, RenderRequest};
 use vklens::internal::scene::builtin::{self, Board};
 use vklens::internal::scene::tessellate::tessellate;
 use vklens::internal::scene::{Mesh, Pose, Vertex};
@@ -208,13 +218,15 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             camera: camera.clone(),
             pose: Pose::IDENTITY,
             previous_pose: Pose::IDENTITY,
-            path: RenderPath::Vertex {
+            path: PathChoice::Vertex {
                 delta: DEFAULT_DELTA,
+                tessellate: None,
             },
-            outputs: Outputs::color_only(Some(ColorFormat::Rgba8)),
-            supersample: 4,
-            jitter: 4,
-            tessellate: None,
+            outputs: COLOR,
+            antialias: Antialias {
+                supersample: 4,
+                jitter: 4,
+            },
             background: [0.0, 0.0, 0.0, 1.0],
             chromatic: None,
         };
@@ -361,19 +373,15 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         camera: camera.clone(),
         pose,
         previous_pose: pose,
-        path: RenderPath::Warp {
+        path: PathChoice::Warp {
             method: InverseMethod::Newton,
             density: 1.0,
         },
-        outputs: Outputs {
-            color: None,
+        outputs: OutputSpec {
             ids: true,
-            flow: false,
-            depth: false,
+            ..OutputSpec::default()
         },
-        supersample: 1,
-        jitter: 1,
-        tessellate: None,
+        antialias: Antialias::default(),
         background: [0.0; 4],
         chromatic: None,
     };
@@ -381,7 +389,16 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
     assert!(warped.ids.unwrap().iter().all(|i| valid.contains(i)));
     let pinhole = render(
         &ctx,
-        GeometryDesc::new(camera.clone(), Projection::Pinhole, request.outputs),
+        GeometryDesc::new(
+            camera.clone(),
+            Projection::Pinhole,
+            Outputs {
+                color: None,
+                ids: true,
+                flow: false,
+                depth: false,
+            },
+        ),
         &scene.mesh,
         None,
         &pose,
@@ -436,18 +453,20 @@ fn vertex_and_warp_paths_agree_on_a_finely_tessellated_scene() {
         camera: camera.clone(),
         pose,
         previous_pose: pose,
-        path: RenderPath::Vertex {
+        path: PathChoice::Vertex {
             delta: DEFAULT_DELTA,
+            tessellate: Some(2.0),
         },
-        outputs: Outputs::color_only(Some(ColorFormat::Rgba8)),
-        supersample: 2,
-        jitter: 1,
-        tessellate: Some(2.0),
+        outputs: COLOR,
+        antialias: Antialias {
+            supersample: 2,
+            jitter: 1,
+        },
         background: [0.0; 4],
         chromatic: None,
     };
     let vertex = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
-    request.path = RenderPath::Warp {
+    request.path = PathChoice::Warp {
         method: InverseMethod::Newton,
         density: 1.0,
     };
@@ -487,24 +506,21 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
     let camera = reference_camera("seed_fig1_barrel");
     let scene = builtin::boxes();
     let pose = scene.default_pose(&camera);
-    let data = Outputs {
-        color: None,
+    let data = OutputSpec {
         ids: true,
-        flow: false,
         depth: true,
+        ..OutputSpec::default()
     };
     let request = RenderRequest {
         camera: camera.clone(),
         pose,
         previous_pose: pose,
-        path: RenderPath::Warp {
+        path: PathChoice::Warp {
             method: InverseMethod::Newton,
             density: 1.0,
         },
         outputs: data,
-        supersample: 1,
-        jitter: 1,
-        tessellate: None,
+        antialias: Antialias::default(),
         background: [0.0; 4],
         chromatic: None,
     };
@@ -516,7 +532,7 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
         &scene,
         &RenderRequest {
             camera: ov.clone(),
-            path: RenderPath::Pinhole,
+            path: PathChoice::Pinhole,
             ..request.clone()
         },
         &mut |_| {},

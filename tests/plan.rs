@@ -717,13 +717,13 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
     );
     let planned = planned.expect("the cube route renders colour");
     let camera = p.camera.clone().unwrap();
-    let mut request = vklens::internal::render::RenderRequest::color(
+    let mut request = vklens::internal::plan::RenderRequest::color(
         &camera,
-        vklens::internal::render::RenderPath::Cube { side },
+        vklens::internal::plan::PathChoice::Cube { side },
     );
     request.pose = p.poses[0];
     request.chromatic = Some(scales);
-    let flag = vklens::internal::render::render_scene(&ctx, &scene, &request, &mut |_| {})
+    let flag = vklens::internal::plan::render_request(&ctx, &scene, &request, &mut |_| {})
         .unwrap()
         .color
         .unwrap();

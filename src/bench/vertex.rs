@@ -31,7 +31,7 @@ use crate::pass::geometry::{
 };
 use crate::pass::mesh_warp::{MeshWarpOutput, MeshWarpPass, MeshWarpTarget};
 use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
-use crate::render::WarpStage;
+use crate::pass::warp_stage::WarpStage;
 pub use crate::scene::tessellate::straight_line_error;
 use crate::scene::tessellate::tessellate;
 use crate::scene::{builtin, Mesh, Pose, Scene};

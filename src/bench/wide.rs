@@ -16,8 +16,6 @@
 //! (warp, converted from source pixels by the density), the pixel the GPU's ray reprojects to
 //! (cube). Bilinear sampling of the source, the same for warp and cube, is not in it.
 
-use std::time::Instant;
-
 use glam::{DVec2, DVec3};
 use serde_json::{json, Value};
 
@@ -29,7 +27,8 @@ use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, Fisheye, Intrinsics, InverseMethod};
 use crate::pass::geometry::DEFAULT_DELTA;
 use crate::pass::Precision;
-use crate::render::{pinhole_source_refusal, RenderPath, RenderRequest, SceneRenderer};
+use crate::plan::limits::pinhole_source_refusal;
+use crate::plan::{execute, PathChoice, Plan, RenderRequest};
 use crate::scene::{builtin, Scene};
 
 /// The output size of every row.
@@ -61,22 +60,21 @@ pub fn cameras() -> Vec<(&'static str, Camera)> {
     ]
 }
 
-fn request(camera: &Camera, path: RenderPath) -> RenderRequest {
-    RenderRequest::color(camera, path)
-}
-
-/// Median wall-clock ms of three renders after a warm-up.
-fn frame_ms(renderer: &mut SceneRenderer, scene: &Scene, request: &RenderRequest) -> Result<f64> {
+/// Median wall-clock ms of three frames (GPU work and readback) after a warm-up, rendered by
+/// the plan of `path` on `camera` (the passes built once).
+fn frame_ms(ctx: &Context, scene: &Scene, camera: &Camera, path: PathChoice) -> Result<f64> {
+    let request = RenderRequest::color(camera, path);
+    let plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
     let mut times = Vec::new();
-    for i in 0..4 {
-        let start = Instant::now();
-        renderer.render(scene, request, &mut |_| {})?;
-        if i > 0 {
-            times.push(start.elapsed().as_secs_f64() * 1e3);
-        }
-    }
+    execute(ctx, &plan, scene, [0, 0, 0], &mut |frame| {
+        times.push(frame.ms);
+        Ok(())
+    })?;
     times.sort_by(f64::total_cmp);
-    Ok(times[1])
+    times
+        .get(1)
+        .copied()
+        .ok_or_else(|| crate::Error::internal("three frames expected"))
 }
 
 /// Largest distance between the GPU's projection of the scene's vertices and the f64 model's,
@@ -146,7 +144,7 @@ fn cube_pass_ms(ctx: &Context, camera: &Camera, scene: &Scene, side: u32) -> Res
     };
     let stage = CubeStage::new(gpu, camera, side, ColorFormat::Rgba8, &options)?;
     let mesh = MeshBuffers::new(gpu, &scene.mesh, scene.texture.as_ref())?;
-    crate::render::render_cube_faces(ctx, &stage, &mesh, &crate::scene::Pose::IDENTITY)?;
+    render_cube_faces(ctx, &stage, &mesh)?;
     let gpu_ms = |(wall, gpu): (f64, Option<f64>)| gpu.unwrap_or(wall);
     // SAFETY (both): `time_batch` records only into buffers `ctx.submit` is recording, outside
     // any render pass, and waits for each; the mesh is uploaded and the stage prepared, and
@@ -160,26 +158,47 @@ fn cube_pass_ms(ctx: &Context, camera: &Camera, scene: &Scene, side: u32) -> Res
     Ok((faces, warp))
 }
 
+/// Uploads `mesh` and renders `stage`'s faces of it (identity pose) into its cube, once: the
+/// warps timed after it sample them.
+fn render_cube_faces(
+    ctx: &Context,
+    stage: &crate::pass::cube_stage::CubeStage,
+    mesh: &crate::pass::geometry::MeshBuffers,
+) -> Result<()> {
+    // SAFETY: every submission `ctx` made has completed (`submit` waits on its fence), so
+    // nothing using the stage is pending.
+    unsafe { stage.prepare(mesh, &crate::scene::Pose::IDENTITY) }?;
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // the context's graphics and compute queue; the mesh upload precedes the faces that
+        // draw it, `record_prepare` the faces and warp; everything outlives the submission,
+        // which `submit` waits for.
+        unsafe {
+            mesh.record_upload(cmd);
+            stage.record_prepare(cmd);
+            stage.record_faces(cmd, mesh);
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
 /// Runs every row; `progress` hears what is being measured.
 pub fn run(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
     let scene = builtin::room();
-    let mut renderer = SceneRenderer::new(ctx);
     let mut rows = Vec::new();
     let max_side = ctx.gpu().max_image_side();
     for (name, camera) in cameras() {
         progress(&format!("{name}: pinhole render (the peer)"));
-        let pinhole = frame_ms(
-            &mut renderer,
-            &scene,
-            &request(&camera, RenderPath::Pinhole),
-        )?;
+        let pinhole = frame_ms(ctx, &scene, &camera, PathChoice::Pinhole)?;
         rows.push(json!({"camera": name, "path": "pinhole (peer)", "frame_ms": pinhole, "x_pinhole": 1.0}));
 
         progress(&format!("{name}: vertex path"));
-        let vertex = RenderPath::Vertex {
+        let vertex = PathChoice::Vertex {
             delta: DEFAULT_DELTA,
+            tessellate: None,
         };
-        let ms = frame_ms(&mut renderer, &scene, &request(&camera, vertex))?;
+        let ms = frame_ms(ctx, &scene, &camera, vertex)?;
         let err = vertex_error(ctx, &camera, &scene)?;
         rows.push(
             json!({"camera": name, "path": "vertex", "frame_ms": ms, "x_pinhole": ms / pinhole,
@@ -190,11 +209,11 @@ pub fn run(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> 
             Some(why) => rows.push(json!({"camera": name, "path": "warp", "refused": why})),
             None => {
                 progress(&format!("{name}: pinhole overscan + warp"));
-                let warp = RenderPath::Warp {
+                let warp = PathChoice::Warp {
                     method: InverseMethod::Newton,
                     density: 1.0,
                 };
-                let ms = frame_ms(&mut renderer, &scene, &request(&camera, warp))?;
+                let ms = frame_ms(ctx, &scene, &camera, warp)?;
                 let (_, geometry) = WarpGeometry::overscanned(&camera, InverseMethod::Newton, 1.0)
                     .map_err(|e| crate::gpu::Error::Input(e.to_string()))?;
                 let (err, _) = super::warp::coordinate_error(
@@ -212,11 +231,7 @@ pub fn run(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> 
 
         let side = cube_face_side(&camera, 1.0);
         progress(&format!("{name}: cube map ({side}² faces) + sphere warp"));
-        let ms = frame_ms(
-            &mut renderer,
-            &scene,
-            &request(&camera, RenderPath::Cube { side }),
-        )?;
+        let ms = frame_ms(ctx, &scene, &camera, PathChoice::Cube { side })?;
         let err = ray_error(ctx, &camera)?;
         let (faces_ms, warp_ms) = cube_pass_ms(ctx, &camera, &scene, side)?;
         rows.push(

@@ -8,8 +8,9 @@ use clap::Args;
 use super::render::PathArg;
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
 use crate::imaging::file as image_io;
-use crate::pass::geometry::{Outputs, DEFAULT_DELTA};
-use crate::render::{RenderRequest, SceneRenderer};
+use crate::pass::geometry::DEFAULT_DELTA;
+use crate::plan::scene_file::{Antialias, OutputSpec};
+use crate::plan::{execute_untimed, Plan, RenderRequest};
 use crate::scene::builtin::{self, parse_board_size, Board};
 use crate::scene::calibration::board_poses;
 
@@ -39,14 +40,14 @@ pub struct CalibrationSetArgs {
     square: f64,
     /// Anti-aliasing: colour rendered at S× per axis and box-filtered, so corners are
     /// located to a small fraction of a pixel.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SUPERSAMPLE as i64))]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=crate::plan::MAX_SUPERSAMPLE as i64))]
     supersample: u32,
     /// Warp path: source pixels per output pixel of the overscanned pinhole render.
     #[arg(long, default_value_t = 2.0)]
     density: f64,
     /// Anti-aliasing: this many jittered passes averaged (sub-sample offsets), so edge
     /// positions are not quantized to the 1/S grid (which calibration would mistake for lens distortion).
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_JITTER as i64))]
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=crate::plan::MAX_JITTER as i64))]
     jitter: u32,
     /// Vertex path: split board edges longer than L pixels (Alg. 1 needs fine geometry).
     #[arg(long, default_value_t = 4.0)]
@@ -91,40 +92,53 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     }
     let scene = builtin::checkerboard(board, 4);
     let ctx = context()?;
-    let mut renderer = SceneRenderer::new(&ctx);
+    // One plan for every view: the recorder is built once and renders each pose in turn.
+    let first = *poses
+        .first()
+        .ok_or_else(|| CliError::internal("a calibration set without views"))?;
+    let request = RenderRequest {
+        camera: camera.clone(),
+        pose: first,
+        previous_pose: first,
+        path: args.path.choice(
+            &camera,
+            DEFAULT_DELTA,
+            Some(args.tessellate),
+            crate::model::InverseMethod::Newton,
+            args.density,
+        ),
+        outputs: OutputSpec {
+            color: true,
+            ..OutputSpec::default()
+        },
+        antialias: Antialias {
+            supersample: args.supersample,
+            jitter: args.jitter,
+        },
+        background: [0.5, 0.5, 0.5, 1.0],
+        chromatic: None,
+    };
+    let mut plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
+    plan.poses = poses.clone();
+    // A path the set did not ask for (a cube map where no pinhole source fits) is said.
+    if let (PathArg::Warp, crate::plan::Route::Cube { .. }) = (args.path, &plan.route) {
+        if let Some(step) = plan.steps.first() {
+            progress_done(&step.why);
+        }
+    }
     let mut views = Vec::new();
     // The views written so far: removed again if the run fails or is interrupted before
     // poses.json (a set is all or nothing).
     let mut written = image_io::RunOutputs::new();
-    for (i, pose) in poses.iter().enumerate() {
+    execute_untimed(&ctx, &plan, &scene, 0..poses.len(), &mut |frame| {
+        let i = frame.index;
+        let pose = poses[i];
         let file = format!("view_{i:02}.png");
         progress_line(&format!("view {}/{}: {file}", i + 1, poses.len()));
-        let request = RenderRequest {
-            camera: camera.clone(),
-            pose: *pose,
-            previous_pose: *pose,
-            path: args.path.render_path(
-                &camera,
-                DEFAULT_DELTA,
-                crate::model::InverseMethod::Newton,
-                args.density,
-            ),
-            outputs: Outputs::COLOR,
-            supersample: args.supersample,
-            jitter: args.jitter,
-            tessellate: (args.path == PathArg::Vertex).then_some(args.tessellate),
-            background: [0.5, 0.5, 0.5, 1.0],
-            chromatic: None,
-        };
-        // Path changes (a cube map where no pinhole source fits) are said once, for the first view.
-        let rendered = renderer.render(&scene, &request, &mut |m| {
-            if i == 0 && m.contains("instead") {
-                super::progress_done(m);
-            }
-        })?;
-        let color = rendered
+        let color = frame
+            .rendered
             .color
-            .ok_or_else(|| CliError::internal("the render produced no colour image"))?;
+            .ok_or_else(|| crate::Error::internal("the render produced no colour image"))?;
         let view_path = args.out.join(&file);
         image_io::save(&color, &view_path)?;
         written.add(&view_path);
@@ -135,7 +149,8 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
             "rvec": [r.x, r.y, r.z],
             "tvec": [t.x, t.y, t.z],
         }));
-    }
+        Ok(())
+    })?;
     finish(&ctx)?;
     let json = serde_json::json!({
         "board": {"columns": columns, "rows": rows, "square_m": args.square},

@@ -7,8 +7,9 @@ use clap::{Args, ValueEnum};
 use super::output::{check_output, write_outputs, Targets};
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
 use crate::model::InverseMethod;
-use crate::pass::geometry::{ColorFormat, Outputs, DEFAULT_DELTA};
-use crate::render::{render_scene, RenderPath, RenderRequest};
+use crate::pass::geometry::DEFAULT_DELTA;
+use crate::plan::scene_file::{Antialias, OutputSpec};
+use crate::plan::{render_request, PathChoice, RenderRequest};
 use crate::scene::{builtin, Pose, Scene};
 
 /// Which of Lambers et al.'s two paths renders the lens.
@@ -28,20 +29,20 @@ pub enum PathArg {
 }
 
 impl PathArg {
-    /// The render path for the camera, with the warp's density (source pixels per output pixel).
-    pub fn render_path(
+    /// The path for the camera: Alg. 1's δ and tessellation, the warp's method and density
+    /// (source pixels per output pixel, or face pixels per output pixel for the cube).
+    pub fn choice(
         self,
         camera: &crate::model::Camera,
         delta: f64,
+        tessellate: Option<f64>,
         method: crate::model::InverseMethod,
         density: f64,
-    ) -> RenderPath {
+    ) -> PathChoice {
         match self {
-            PathArg::Vertex => RenderPath::Vertex { delta },
-            PathArg::Warp => RenderPath::Warp { method, density },
-            PathArg::Cube => RenderPath::Cube {
-                side: crate::model::overscan::cube_face_side(camera, density),
-            },
+            PathArg::Vertex => PathChoice::Vertex { delta, tessellate },
+            PathArg::Warp => PathChoice::Warp { method, density },
+            PathArg::Cube => PathChoice::cube(camera, density),
         }
     }
 }
@@ -113,7 +114,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "newton", value_parser = super::parse_method)]
     method: InverseMethod,
     /// Render colour at S× per axis and box-filter down (anti-aliasing; 1 = off, max 8).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_SUPERSAMPLE as i64))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::plan::MAX_SUPERSAMPLE as i64))]
     supersample: u32,
     /// Warp path: source pixels per output pixel of the overscanned pinhole render. Above 1
     /// the bilinear warp minifies and aliases; for sharper output raise --supersample, which
@@ -122,7 +123,7 @@ pub struct RenderArgs {
     density: f64,
     /// Anti-aliasing: this many jittered passes averaged (sub-sample offsets), so edge
     /// positions are not quantized to the 1/S grid.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::render::MAX_JITTER as i64))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=crate::plan::MAX_JITTER as i64))]
     jitter: u32,
     /// Background colour R,G,B,A in 0..1.
     #[arg(long, default_value = "0,0,0,0", value_parser = parse_background)]
@@ -238,28 +239,30 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         Some(p) => Pose::parse(p)?,
         None => nudged(&pose, &scene),
     };
-    let outputs = Outputs {
-        color: Some(if color_ext == "exr" {
-            ColorFormat::Rgba16F
-        } else {
-            ColorFormat::Rgba8
-        }),
+    let outputs = OutputSpec {
+        color: true,
         ids: args.ids.is_some(),
         flow: args.flow.is_some(),
         depth: args.depth.is_some(),
+        exr: color_ext == "exr",
     };
-    let path = args
-        .path
-        .render_path(&camera, args.delta, args.method, args.density);
+    let path = args.path.choice(
+        &camera,
+        args.delta,
+        args.tessellate,
+        args.method,
+        args.density,
+    );
     let request = RenderRequest {
         camera,
         pose,
         previous_pose,
         path,
         outputs,
-        supersample: args.supersample,
-        jitter: args.jitter,
-        tessellate: args.tessellate,
+        antialias: Antialias {
+            supersample: args.supersample,
+            jitter: args.jitter,
+        },
         background: args.background.0,
         chromatic: None,
     };
@@ -270,11 +273,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         scene.mesh.triangle_count(),
         ctx.gpu().device_name()
     ));
-    let rendered =
-        render_scene(&ctx, &scene, &request, &mut |s| progress_line(s)).map_err(|e| match e {
-            crate::Error::Input(m) => CliError::input(m),
-            other => CliError::from(other),
-        })?;
+    let rendered = render_request(&ctx, &scene, &request, &mut |s| progress_line(s))?;
     finish(&ctx)?;
     write_outputs(
         &Targets {

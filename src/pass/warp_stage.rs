@@ -1,6 +1,7 @@
 //! The warp path on the GPU as one record-only stage: a pinhole render of the overscanned
 //! source (colour left in `GENERAL`, its writes visible to compute), the warp reading it in
-//! place, and optionally depth through a second, nearest warp (Lambers et al., Sec. 3.3).
+//! place, and optionally object IDs and depth through nearest warps of their own (Lambers et
+//! al., Sec. 3.3: nearest, since IDs and depths must not be blended across an edge).
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -28,37 +29,50 @@ pub struct WarpStage {
     pub mask: Image,
     download: Buffer,
     format: PixelFormat,
-    /// The depth through the same warp (nearest, +inf fill), when asked for.
-    pub depth: Option<DepthWarp>,
+    /// The object IDs through the same lens (nearest, 0 fill), when asked for.
+    pub ids: Option<DataWarp>,
+    /// The depth through the same lens (nearest, +inf fill), when asked for.
+    pub depth: Option<DataWarp>,
 }
 
-/// The second, nearest warp of a [`WarpStage`] that carries the pinhole render's depth.
-pub struct DepthWarp {
+/// Which data outputs a [`WarpStage`] carries beside its colour.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct DataOutputs {
+    /// Object IDs (R32 uint, 0 where there is no source).
+    pub ids: bool,
+    /// Camera depth (R32F metres, +inf where there is no source).
+    pub depth: bool,
+}
+
+/// A nearest warp of a [`WarpStage`] that carries one of the pinhole render's data images
+/// (IDs or depth) to the output.
+pub struct DataWarp {
     pub warp: WarpPass,
-    /// R32F, the warp's output size, `GENERAL` after the warp.
+    /// The warp's output size, `GENERAL` after the warp.
     pub output: Image,
     /// Host copy of `output` for headless readback.
     download: Buffer,
 }
 
-impl DepthWarp {
-    /// Records the copy of the warped depth to the host (after the warp).
+impl DataWarp {
+    /// Records the copy of the warped image to the host (after the warp).
     ///
     /// # Safety
-    /// `cmd` must be recording outside a render pass, after the depth warp was recorded.
+    /// `cmd` must be recording outside a render pass, after the warp was recorded.
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
         // SAFETY: the caller upholds the contract above; `download` was sized for `output`
-        // (R32F, the warp's output size) and `output` has TRANSFER_SRC usage.
+        // (four bytes a pixel, the warp's output size) and `output` has TRANSFER_SRC usage.
         unsafe {
             crate::gpu::record_compute_readback(self.warp.gpu(), cmd, &self.output, &self.download)
         };
     }
 
-    /// The warped depth (after the submission completed): metres, +inf without a source.
-    pub fn read(&self) -> Result<Vec<f32>> {
+    /// The warped image (after the submission completed): depths in metres (+inf without a
+    /// source) or IDs (0 without one), by the type asked for.
+    pub fn read<T: bytemuck::Pod>(&self) -> Result<Vec<T>> {
         let e = self.output.extent;
         self.download
-            .read_pod::<f32>(e.width as usize * e.height as usize)
+            .read_pod::<T>(e.width as usize * e.height as usize)
     }
 }
 
@@ -73,27 +87,27 @@ impl WarpStage {
         format: ColorFormat,
         background: [f32; 4],
     ) -> Result<Self> {
-        Self::with_depth(
+        Self::with_data(
             gpu,
             source,
             geometry,
             coordinates,
             format,
             background,
-            false,
+            DataOutputs::default(),
         )
     }
 
-    /// As [`Self::new`]; with `depth`, the pinhole render also writes camera depth and a
-    /// second warp (nearest, +inf where there is no source) carries it to the output.
-    pub fn with_depth(
+    /// As [`Self::new`]; the pinhole render also writes the `data` outputs, and a nearest
+    /// warp of each carries it to the output.
+    pub fn with_data(
         gpu: &crate::gpu::Gpu,
         source: Camera,
         geometry: WarpGeometry,
         coordinates: Coordinates,
         format: ColorFormat,
         background: [f32; 4],
-        depth: bool,
+        data: DataOutputs,
     ) -> Result<Self> {
         let pixel_format = match format {
             ColorFormat::Rgba8 => PixelFormat::Rgba8,
@@ -106,7 +120,8 @@ impl WarpStage {
             source,
             Projection::Pinhole,
             Outputs {
-                depth,
+                ids: data.ids,
+                depth: data.depth,
                 ..Outputs::color_only(Some(format))
             },
         );
@@ -141,46 +156,61 @@ impl WarpStage {
             .ok_or_else(|| Error::internal("the warp stage's render has no colour target"))?;
         // SAFETY: no submission using it is pending (`submit` waits on its fence).
         unsafe { warp.bind(color.view, output.view, mask.view) };
-        let depth = match targets.depth() {
-            Some(source) => {
-                // Depth follows the lens itself (the green channel's reference geometry,
-                // unit scale), as the headless warp path does: one coordinate, nearest.
-                let mut plain = warp.desc().geometry.clone();
-                plain.chromatic = None;
-                if let Some(cams) = plain.channel_cameras.take() {
-                    let [_, green, _] = *cams;
-                    plain.camera = green;
-                }
-                let mut depth_warp = WarpPass::new(
-                    gpu,
-                    WarpDesc {
-                        geometry: plain,
-                        sampling: Sampling::Nearest,
-                        format: PixelFormat::R32Float,
-                        fill: [f32::INFINITY; 4],
-                        ..warp.desc().clone()
-                    },
-                )?;
-                let r32f = PixelFormat::R32Float.vk();
-                let output = Image::new_2d(gpu, "warp_path.depth", r32f, ow, oh, usage)?;
-                // Neither warp writes its mask (write_mask is off): they can share one.
-                // SAFETY: no submission using it is pending (`submit` waits on its fence).
-                unsafe { depth_warp.bind(source.view, output.view, mask.view) };
-                let download = Buffer::new(
-                    gpu,
-                    "warp_path.depth.download",
-                    ow as u64 * oh as u64 * 4,
-                    vk::BufferUsageFlags::TRANSFER_DST,
-                    MemoryLocation::GpuToCpu,
-                )?;
-                Some(DepthWarp {
-                    warp: depth_warp,
-                    output,
-                    download,
-                })
-            }
-            None => None,
+        // IDs and depth follow the lens itself (the green channel's reference geometry, unit
+        // scale): one coordinate, nearest.
+        let mut plain = warp.desc().geometry.clone();
+        plain.chromatic = None;
+        if let Some(cams) = plain.channel_cameras.take() {
+            let [_, green, _] = *cams;
+            plain.camera = green;
+        }
+        let data_warp = |source: Option<&Image>,
+                         format: PixelFormat,
+                         fill: [f32; 4],
+                         name: &str|
+         -> Result<Option<DataWarp>> {
+            let Some(source) = source else {
+                return Ok(None);
+            };
+            let mut data_warp = WarpPass::new(
+                gpu,
+                WarpDesc {
+                    geometry: plain.clone(),
+                    sampling: Sampling::Nearest,
+                    format,
+                    fill,
+                    ..warp.desc().clone()
+                },
+            )?;
+            let output = Image::new_2d(gpu, name, format.vk(), ow, oh, usage)?;
+            // No warp writes its mask (write_mask is off): they can share one.
+            // SAFETY: the warp is new: nothing recorded with it exists yet.
+            unsafe { data_warp.bind(source.view, output.view, mask.view) };
+            let download = Buffer::new(
+                gpu,
+                "warp_path.data.download",
+                ow as u64 * oh as u64 * 4,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?;
+            Ok(Some(DataWarp {
+                warp: data_warp,
+                output,
+                download,
+            }))
         };
+        let ids = data_warp(
+            targets.ids(),
+            PixelFormat::R32Uint,
+            [0.0; 4],
+            "warp_path.ids",
+        )?;
+        let depth = data_warp(
+            targets.depth(),
+            PixelFormat::R32Float,
+            [f32::INFINITY; 4],
+            "warp_path.depth",
+        )?;
         Ok(WarpStage {
             gpu: gpu.clone(),
             pass,
@@ -190,8 +220,14 @@ impl WarpStage {
             mask,
             download,
             format: pixel_format,
+            ids,
             depth,
         })
+    }
+
+    /// The nearest warps of the data outputs (IDs, then depth), those asked for.
+    pub fn data_warps(&self) -> impl Iterator<Item = &DataWarp> {
+        self.ids.iter().chain(self.depth.iter())
     }
 
     /// Records the one-off work: output and mask to `GENERAL`, the warp's map builds.
@@ -205,21 +241,21 @@ impl WarpStage {
         // `record_prepare` also need a compute queue, which this contract leaves implicit:
         // every caller records on a queue with graphics and compute.
         unsafe {
-            let depth = self.depth.iter().map(|d| &d.output);
+            let data = self.data_warps().map(|d| &d.output);
             crate::gpu::record_discard_for_compute_write(
                 &self.gpu,
                 cmd,
-                [&self.output, &self.mask].into_iter().chain(depth),
+                [&self.output, &self.mask].into_iter().chain(data),
             );
             self.warp.record_prepare(cmd);
-            if let Some(d) = &self.depth {
+            for d in self.data_warps() {
                 d.warp.record_prepare(cmd);
             }
         }
     }
 
     /// Records one frame: the pinhole render of `mesh` (bound with `pass.bind_mesh`), then
-    /// the warp (and the depth warp). The render pass leaves the colour in `GENERAL`, its writes visible to compute.
+    /// the warp (and the data warps). The render pass leaves the colour in `GENERAL`, its writes visible to compute.
     ///
     /// # Safety
     /// After [`Self::record_prepare`]; `mesh` uploaded and alive until the work completes.
@@ -234,7 +270,7 @@ impl WarpStage {
         }
     }
 
-    /// Records the warps alone (colour, then depth when asked for), after the caller recorded
+    /// Records the warps alone (colour, then IDs and depth when asked for), after the caller recorded
     /// the pinhole render.
     ///
     /// # Safety
@@ -242,11 +278,11 @@ impl WarpStage {
     pub unsafe fn record_warps(&self, cmd: vk::CommandBuffer) {
         // SAFETY: the caller upholds `record_warps`'s contract: `self.pass` was recorded first,
         // so the warps' sources are in GENERAL with their writes visible to compute, and
-        // `record_prepare` put their outputs and mask in GENERAL; both warps were bound in
-        // `with_depth`.
+        // `record_prepare` put their outputs and mask in GENERAL; every warp was bound in
+        // `with_data`.
         unsafe {
             self.warp.record(cmd);
-            if let Some(d) = &self.depth {
+            for d in self.data_warps() {
                 d.warp.record(cmd);
             }
         }
@@ -258,7 +294,7 @@ impl WarpStage {
     /// As [`Self::record`].
     pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
         // SAFETY: the caller upholds `record_download`'s contract (after `record`): the warp
-        // left `output` in GENERAL, and `download` was sized for it whole in `with_depth`.
+        // left `output` in GENERAL, and `download` was sized for it whole in `with_data`.
         unsafe {
             crate::gpu::record_compute_readback(&self.gpu, cmd, &self.output, &self.download)
         };

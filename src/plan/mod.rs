@@ -19,7 +19,10 @@
 //! Cost estimates come from this README's measured lavapipe tables (`bench vertex`,
 //! `bench inverse`); `--explain` prints the times measured on the frame itself.
 
+mod antialias;
+pub mod limits;
 pub mod record;
+mod request;
 pub mod scene_file;
 
 use crate::{Error, Result};
@@ -33,9 +36,12 @@ use crate::lens::{frame_scene, Prescription, LAMBDA_D};
 use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::geometry::Rendered;
 use crate::pass::warp::{Coordinates, MapInterpolation};
-pub use crate::render::{PassKind, RecordedPipeline};
 use crate::scene::{builtin, Pose, Scene};
-pub use record::PlanRecorder;
+pub use antialias::{
+    downsample, jitter_offsets, scaled_camera, DEFAULT_BACKGROUND, MAX_JITTER, MAX_SUPERSAMPLE,
+};
+pub use record::{PassKind, PlanRecorder, RecordedPipeline};
+pub use request::{render_request, PathChoice, RenderRequest};
 pub use scene_file::{SceneFile, SceneFileError};
 
 /// How the frames are made.
@@ -168,6 +174,12 @@ pub struct Plan {
     pub expected_error_px: f64,
     pub budget_px: f64,
     pub poses: Vec<Pose>,
+    /// The pose the first frame's flow starts from (`None`: the first frame does not move).
+    pub previous_pose: Option<Pose>,
+    /// Lambers et al. Sec. 3.2's discard tolerance δ of Alg. 1 (D is added per camera).
+    pub delta: f64,
+    /// Source pixels per output pixel of the warp's overscanned pinhole render.
+    pub density: f64,
     pub outputs: scene_file::OutputSpec,
     pub background: [f32; 4],
     /// Colour anti-aliasing (`[render] supersample`, `jitter`); camera files only.
@@ -531,6 +543,9 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 expected_error_px: model_angle / px_deg,
                 budget_px: file.max_error_px,
                 poses,
+                previous_pose: None,
+                delta: crate::pass::geometry::DEFAULT_DELTA,
+                density: 1.0,
                 outputs: *o,
                 background: file.background,
                 antialias: file.antialias,
@@ -609,6 +624,9 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                     expected_error_px: 0.0,
                     budget_px: budget,
                     poses,
+                    previous_pose: None,
+                    delta: crate::pass::geometry::DEFAULT_DELTA,
+                    density: 1.0,
                     outputs: *o,
                     background: file.background,
                     antialias: file.antialias,
@@ -710,7 +728,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
             // limit): the planned warp would miss pixels, so it is not a candidate; the vertex
             // path runs the lens's own model per vertex, the cube map samples six pinhole
             // faces along each pixel's ray.
-            let no_pinhole_warp = crate::render::pinhole_source_refusal(
+            let no_pinhole_warp = limits::pinhole_source_refusal(
                 &camera,
                 1.0,
                 crate::model::MAX_IMAGE_SIDE.min(16384),
@@ -727,7 +745,7 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 .then(|| {
                     let texel = if o.exr { 16 } else { 4 };
                     let wanted = crate::model::overscan::cube_face_side(&camera, 1.0);
-                    let side = crate::render::cube_side(wanted, texel, PLANNED_CUBE_MAX_SIDE);
+                    let side = limits::cube_side(wanted, texel, PLANNED_CUBE_MAX_SIDE);
                     (
                         side,
                         estimate_ms(pixels, triangles, Cost::Cube { side, fetches }),
@@ -947,6 +965,9 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
                 expected_error_px: expected,
                 budget_px: budget,
                 poses,
+                previous_pose: None,
+                delta: crate::pass::geometry::DEFAULT_DELTA,
+                density: 1.0,
                 outputs: *o,
                 background: file.background,
                 antialias: file.antialias,
@@ -987,7 +1008,9 @@ impl Recorded {
 }
 
 /// Renders the frames `frames` (indices into the plan's poses) of `scene` as `plan` says, on
-/// the headless context; `each` receives every frame as it is done.
+/// the headless context; `each` receives every frame as it is done, with its wall time and,
+/// on the first, the GPU time of each pass (the first frame is rendered once more before, as
+/// a warm-up: caches fill on first use).
 ///
 /// This is the headless path of the one recorder: a [`PlanRecorder`] built once records each
 /// frame, and this only submits it and reads the outputs back. Anti-aliased colour
@@ -999,6 +1022,29 @@ pub fn execute(
     plan: &Plan,
     scene: &Scene,
     frames: impl IntoIterator<Item = usize>,
+    each: &mut dyn FnMut(Frame) -> Result<()>,
+) -> Result<Recorded> {
+    run_frames(ctx, plan, scene, frames, true, each)
+}
+
+/// As [`execute`], without the warm-up frame and the timestamps: for frames wanted for their
+/// pixels alone (a calibration set, a one-off render).
+pub fn execute_untimed(
+    ctx: &Context,
+    plan: &Plan,
+    scene: &Scene,
+    frames: impl IntoIterator<Item = usize>,
+    each: &mut dyn FnMut(Frame) -> Result<()>,
+) -> Result<Recorded> {
+    run_frames(ctx, plan, scene, frames, false, each)
+}
+
+fn run_frames(
+    ctx: &Context,
+    plan: &Plan,
+    scene: &Scene,
+    frames: impl IntoIterator<Item = usize>,
+    timing: bool,
     each: &mut dyn FnMut(Frame) -> Result<()>,
 ) -> Result<Recorded> {
     let frames: Vec<usize> = frames.into_iter().collect();
@@ -1031,7 +1077,7 @@ pub fn execute(
     let mut smooth = match (&camera, antialias) {
         (Some(cam), true) => {
             let mut p = plan.clone();
-            p.camera = Some(crate::render::scaled_camera(cam, s)?);
+            p.camera = Some(scaled_camera(cam, s)?);
             p.outputs = scene_file::OutputSpec {
                 ids: false,
                 flow: false,
@@ -1070,6 +1116,7 @@ pub fn execute(
     }
     let queries = main
         .as_ref()
+        .filter(|_| timing)
         .and_then(|r| QueryPool::timestamps(gpu, r.timestamp_count()).ok());
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is recording outside a render pass on the context's graphics and
@@ -1096,7 +1143,7 @@ pub fn execute(
         r.read()
     };
     // The first frame once more before timing: caches warm up on first use.
-    let warm_up = frames.first().copied();
+    let warm_up = frames.first().copied().filter(|_| timing);
     let mut first_timed = true;
     for (index, timed) in warm_up
         .map(|i| (i, false))
@@ -1121,17 +1168,17 @@ pub fn execute(
             // SAFETY: no submission using it is pending (`submit` waits on its fence).
             unsafe { r.prepare(index) }?;
             let mut images = Vec::new();
-            for offset in crate::render::jitter_offsets(plan.antialias.jitter) {
+            for offset in jitter_offsets(plan.antialias.jitter) {
                 let shift = offset / s as f64;
-                let big = crate::render::scaled_camera(&crate::render::shifted(cam, shift)?, s)?;
+                let big = scaled_camera(&antialias::shifted(cam, shift)?, s)?;
                 // SAFETY: the last pass's submission has completed (`submit` waits).
                 unsafe { r.jitter(&big, shift * s as f64) }?;
                 let colour = run(r, None)?
                     .color
                     .ok_or_else(|| Error::internal("the anti-aliased pass rendered no colour"))?;
-                images.push(crate::render::downsample(&colour, s));
+                images.push(downsample(&colour, s));
             }
-            rendered.color = Some(crate::render::average(&images));
+            rendered.color = Some(antialias::average(&images));
             rendered.width = cam.width;
             rendered.height = cam.height;
         }

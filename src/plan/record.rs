@@ -18,13 +18,11 @@ use crate::pass::cube_stage::CubeStage;
 use crate::pass::geometry::Rendered;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
-    DEFAULT_DELTA,
 };
 use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
 use crate::pass::sphere_warp::SphereWarpOptions;
 use crate::pass::warp::Coordinates;
-use crate::render::WarpStage;
-use crate::render::{PassKind, RecordedPipeline};
+use crate::pass::warp_stage::{DataOutputs, WarpStage};
 use crate::scene::{Mesh, Pose, Scene};
 
 /// A bug: a plan the planner cannot have made.
@@ -32,13 +30,14 @@ fn internal(e: impl ToString) -> Error {
     Error::Internal(e.to_string())
 }
 
-/// The mesh every pass of `plan` draws: tessellated where Alg. 1 needs it (at the first pose;
-/// the warp's pinhole render of warp + Alg. 1 does not mind the finer mesh).
+/// The mesh every pass of `plan` draws: tessellated where Alg. 1 needs it, at every pose the
+/// plan renders (each pass splits only the edges still too long at that pose, so the
+/// straight-edge bound holds in every frame; the warp's pinhole render of warp + Alg. 1 does
+/// not mind the finer mesh).
 pub(crate) fn plan_mesh(plan: &Plan, scene: &Scene) -> Result<Mesh> {
-    let first = *plan
-        .poses
-        .first()
-        .ok_or_else(|| internal("a plan without poses"))?;
+    if plan.poses.is_empty() {
+        return Err(internal("a plan without poses"));
+    }
     match (&plan.route, plan.camera.as_ref()) {
         (
             Route::Vertex {
@@ -49,8 +48,79 @@ pub(crate) fn plan_mesh(plan: &Plan, scene: &Scene) -> Result<Mesh> {
                 ..
             },
             Some(camera),
-        ) => crate::scene::tessellate::tessellate(&scene.mesh, &first, camera, *l),
+        ) => {
+            let mut mesh = scene.mesh.clone();
+            for pose in &plan.poses {
+                mesh = crate::scene::tessellate::tessellate(&mesh, pose, camera, *l)?;
+            }
+            Ok(mesh)
+        }
         _ => Ok(scene.mesh.clone()),
+    }
+}
+
+/// What a pipeline does, as recorded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PassKind {
+    /// The pinhole projection (a warp's source, or a scene without distortion).
+    PinholeRender,
+    /// Lambers et al.'s Alg. 1: the lens per vertex, triangles discarded.
+    VertexRender,
+    /// The post-processing warp of colour.
+    Warp,
+    /// A nearest warp that carries IDs or depth along the colour's.
+    DataWarp,
+    /// The warp from a cube map of six pinhole faces.
+    SphereWarp,
+    /// Heidrich et al.'s image-based lens model: cell renders accumulated on the film.
+    LensModel,
+}
+
+impl PassKind {
+    /// How `--explain` and the tables name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            PassKind::PinholeRender => "pinhole render",
+            PassKind::VertexRender => "Alg. 1 (vertex + discard)",
+            PassKind::Warp => "warp",
+            PassKind::DataWarp => "data warp (nearest)",
+            PassKind::SphereWarp => "sphere warp",
+            PassKind::LensModel => "image-based lens model",
+        }
+    }
+}
+
+/// One recorded use of a pipeline.
+#[derive(Debug, Clone)]
+pub struct RecordedPipeline {
+    /// What the pipeline does.
+    pub kind: PassKind,
+    /// The constants of each stage.
+    pub constants: Vec<(vk::ShaderStageFlags, crate::gpu::SpecConstants)>,
+}
+
+impl RecordedPipeline {
+    /// A geometry pass's pipeline (pinhole or Alg. 1, by its projection), every stage.
+    pub fn geometry(pass: &GeometryPass) -> Self {
+        RecordedPipeline {
+            kind: geometry_kind(pass),
+            constants: pass.pipeline().constants.clone(),
+        }
+    }
+
+    /// A compute pipeline doing `kind`.
+    pub fn compute(kind: PassKind, pipeline: &crate::gpu::ComputePipeline) -> Self {
+        RecordedPipeline {
+            kind,
+            constants: vec![(vk::ShaderStageFlags::COMPUTE, pipeline.constants.clone())],
+        }
+    }
+}
+
+pub(crate) fn geometry_kind(pass: &GeometryPass) -> PassKind {
+    match pass.desc().projection {
+        Projection::Lens { .. } => PassKind::VertexRender,
+        Projection::Pinhole => PassKind::PinholeRender,
     }
 }
 
@@ -58,13 +128,16 @@ pub(crate) fn plan_mesh(plan: &Plan, scene: &Scene) -> Result<Mesh> {
 pub struct PlanRecorder {
     /// Alg. 1 or the pinhole render with its targets (every output it renders).
     geometry: Option<(GeometryPass, GeometryTargets)>,
-    /// The warp path's colour.
+    /// The warp path's colour (and IDs and depth, nearest, where a request asks for them
+    /// through the warp).
     warp: Option<WarpStage>,
     /// The cube path's colour.
     cube: Option<CubeStage>,
     lens: Option<LensRenderer>,
     mesh: MeshBuffers,
     poses: Vec<Pose>,
+    /// The pose the first frame's flow starts from.
+    previous_pose: Option<Pose>,
     /// Names of the passes in recording order (for timings).
     names: Vec<&'static str>,
     /// The warp route's pinhole source camera and warp geometry as built (jittered passes
@@ -120,9 +193,9 @@ impl PlanRecorder {
                           method,
                           chromatic: Option<[f64; 3]>,
                           map: bool,
-                          depth: bool|
+                          data: DataOutputs|
          -> Result<(WarpStage, Camera, WarpGeometry)> {
-            let (source, mut g) = WarpGeometry::overscanned(camera, method, 1.0)?;
+            let (source, mut g) = WarpGeometry::overscanned(camera, method, plan.density)?;
             if let Some(s) = chromatic {
                 g = g.with_chromatic(s)?;
             }
@@ -132,7 +205,7 @@ impl PlanRecorder {
             } else {
                 ColorFormat::Rgba32F
             };
-            let stage = WarpStage::with_depth(
+            let stage = WarpStage::with_data(
                 gpu,
                 source.clone(),
                 g.clone(),
@@ -143,7 +216,7 @@ impl PlanRecorder {
                 },
                 f,
                 plan.background,
-                depth,
+                data,
             )?;
             Ok((stage, source, g))
         };
@@ -154,6 +227,7 @@ impl PlanRecorder {
             lens: None,
             mesh: MeshBuffers::new(gpu, mesh, texture)?,
             poses: plan.poses.clone(),
+            previous_pose: plan.previous_pose,
             names: Vec::new(),
             warp_source: None,
             outputs: o,
@@ -166,9 +240,7 @@ impl PlanRecorder {
             ),
             pipelines: Vec::new(),
         };
-        let lens_delta = Projection::Lens {
-            delta: DEFAULT_DELTA,
-        };
+        let lens_delta = Projection::Lens { delta: plan.delta };
         match &plan.route {
             Route::LensModel { .. } => {
                 let setting = plan
@@ -205,12 +277,16 @@ impl PlanRecorder {
                         chromatic,
                         map,
                     } => {
-                        if o.ids || o.flow {
+                        if o.flow {
                             return Err(internal(
-                                "IDs and flow take Alg. 1 (Lambers et al. Table 1): the planner never routes them through the warp",
+                                "flow takes Alg. 1 (Lambers et al. Table 1): no plan routes it through the warp",
                             ));
                         }
-                        r.set_warp(warp_stage(camera, *method, *chromatic, *map, o.depth)?);
+                        let data = DataOutputs {
+                            ids: o.ids,
+                            depth: o.depth,
+                        };
+                        r.set_warp(warp_stage(camera, *method, *chromatic, *map, data)?);
                         r.names.extend(["pinhole render (overscanned)", "warp"]);
                     }
                     Route::WarpAndVertex {
@@ -220,7 +296,8 @@ impl PlanRecorder {
                         ..
                     } => {
                         if o.color {
-                            r.set_warp(warp_stage(camera, *method, *chromatic, *map, false)?);
+                            let none = DataOutputs::default();
+                            r.set_warp(warp_stage(camera, *method, *chromatic, *map, none)?);
                             r.names.extend(["pinhole render (overscanned)", "warp"]);
                         }
                         r.geometry = Some(geometry(
@@ -240,7 +317,7 @@ impl PlanRecorder {
                             ));
                         }
                         // Within this device's limits and the cube budget.
-                        let (f, side) = crate::render::device_cube_faces(gpu, format, *side);
+                        let (f, side) = super::limits::device_cube_faces(gpu, format, *side);
                         let options = SphereWarpOptions {
                             chromatic: *chromatic,
                             fill: plan.background,
@@ -272,9 +349,9 @@ impl PlanRecorder {
             RecordedPipeline::geometry(&stage.pass),
             RecordedPipeline::compute(PassKind::Warp, stage.warp.pipeline()),
         ]);
-        if let Some(d) = &stage.depth {
+        for d in stage.data_warps() {
             self.pipelines.push(RecordedPipeline::compute(
-                PassKind::DepthWarp,
+                PassKind::DataWarp,
                 d.warp.pipeline(),
             ));
         }
@@ -343,10 +420,9 @@ impl PlanRecorder {
             .poses
             .get(index)
             .ok_or_else(|| Error::input(format!("no frame {index}")))?;
-        let previous = if index > 0 {
-            self.poses[index - 1]
-        } else {
-            pose
+        let previous = match index {
+            0 => self.previous_pose.unwrap_or(pose),
+            i => self.poses[i - 1],
         };
         // SAFETY (every block below): this function's contract: no recorded frame of this
         // recorder, whose passes these are, is pending.
@@ -480,7 +556,7 @@ impl PlanRecorder {
                 if self.outputs.color {
                     st.record_download(cmd);
                 }
-                if let Some(d) = &st.depth {
+                for d in st.data_warps() {
                     d.record_download(cmd);
                 }
             }
@@ -545,6 +621,9 @@ impl PlanRecorder {
             out.height = e.height;
             if self.outputs.color {
                 out.color = Some(st.read()?);
+            }
+            if let Some(d) = &st.ids {
+                out.ids = Some(d.read()?);
             }
             if let Some(d) = &st.depth {
                 out.depth = Some(d.read()?);

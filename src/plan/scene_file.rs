@@ -60,7 +60,7 @@ pub struct Effects {
 }
 
 /// The outputs the scene asks for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct OutputSpec {
     pub color: bool,
     pub ids: bool,
@@ -487,19 +487,14 @@ impl SceneFile {
         let render = r.table(&root, "render", &["background", "supersample", "jitter"])?;
         let background = match render.and_then(|t| t.get("background")) {
             Some(v) => r.numbers::<4>(v, "[render] background")?.map(|c| c as f32),
-            None => crate::render::DEFAULT_BACKGROUND,
+            None => super::DEFAULT_BACKGROUND,
         };
         let antialias = Antialias {
             supersample: r
-                .opt_whole(
-                    render,
-                    "render",
-                    "supersample",
-                    1..=crate::render::MAX_SUPERSAMPLE,
-                )?
+                .opt_whole(render, "render", "supersample", 1..=super::MAX_SUPERSAMPLE)?
                 .unwrap_or(1),
             jitter: r
-                .opt_whole(render, "render", "jitter", 1..=crate::render::MAX_JITTER)?
+                .opt_whole(render, "render", "jitter", 1..=super::MAX_JITTER)?
                 .unwrap_or(1),
         };
 

@@ -102,31 +102,6 @@ pub(crate) fn average(images: &[Raster]) -> Raster {
     }
 }
 
-/// Anti-aliased colour: for each jitter offset, `pass(big camera, shift)` renders `camera`
-/// scaled by `s` with its image translated by `-shift` (1× px); the results are box-filtered
-/// and averaged.
-pub(crate) fn antialiased(
-    camera: &Camera,
-    s: u32,
-    passes: u32,
-    pass: &mut dyn FnMut(Camera, DVec2) -> Result<Raster>,
-) -> Result<Raster> {
-    let mut images = Vec::new();
-    for offset in jitter_offsets(passes) {
-        let shift = offset / s as f64;
-        let big = scaled_camera(&shifted(camera, shift)?, s)?;
-        let image = pass(big, shift)?;
-        images.push(if s == 1 { image } else { downsample(&image, s) });
-    }
-    // One sample per pixel: the image is its own mean (no copy, no rounding trip).
-    match images.len() {
-        1 => images
-            .pop()
-            .ok_or_else(|| Error::internal("one image expected")),
-        _ => Ok(average(&images)),
-    }
-}
-
 /// Box-filters an image by `s` per axis (its size must be a multiple of `s`).
 pub fn downsample(image: &Raster, s: u32) -> Raster {
     if s == 1 {

@@ -1,0 +1,308 @@
+//! A render asked for directly — the flags of `vklens render --camera`, a calibration set's
+//! views, a bench's fixed path — turned into a [`Plan`], so that one recorder renders
+//! everything. A scene file leaves the route to the planner; a request names it, and the
+//! plan takes it even where the planner would not choose it (object IDs through the warp,
+//! nearest-sampled, for instance), within what the route can deliver honestly.
+
+use crate::model::overscan::{beyond_a_pinhole, cube_face_side};
+use crate::model::{Camera, InverseMethod};
+use crate::pass::geometry::DEFAULT_DELTA;
+use crate::scene::{Pose, Scene};
+use crate::{Error, Result};
+
+use super::antialias::{scaled_camera, MAX_JITTER, MAX_SUPERSAMPLE};
+use super::limits::pinhole_source_refusal;
+use super::scene_file::{Antialias, OutputSpec};
+use super::{inverse_error_px, push_antialias_step, Plan, Route, Stage, Step, CUBE_RAY_ERROR_PX};
+
+/// Which path renders the lens, as a caller names it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PathChoice {
+    /// Lambers et al.'s Alg. 1 per vertex with discard tolerance δ, the mesh tessellated to
+    /// edges of `tessellate` px first when given.
+    Vertex { delta: f64, tessellate: Option<f64> },
+    /// A pinhole render of the overscanned frustum with `density` source pixels per output
+    /// pixel, then the compute warp by `method`. Where no pinhole source holds the lens, a
+    /// cube map instead (colour only), and the plan says why.
+    Warp { method: InverseMethod, density: f64 },
+    /// The camera's pinhole projection, its distortion ignored.
+    Pinhole,
+    /// Six 90° pinhole faces of `side` px and the sphere warp (colour only).
+    Cube { side: u32 },
+}
+
+impl PathChoice {
+    /// The cube path with faces of `density` face pixels per output pixel at the centre.
+    pub fn cube(camera: &Camera, density: f64) -> Self {
+        PathChoice::Cube {
+            side: cube_face_side(camera, density),
+        }
+    }
+}
+
+/// What to render, route named: a camera, one pose (and the pose flow starts from), the
+/// outputs, anti-aliasing and background.
+#[derive(Debug, Clone)]
+pub struct RenderRequest {
+    pub camera: Camera,
+    pub pose: Pose,
+    /// The pose flow is measured from.
+    pub previous_pose: Pose,
+    pub path: PathChoice,
+    pub outputs: OutputSpec,
+    pub antialias: Antialias,
+    pub background: [f32; 4],
+    /// Lateral chromatic aberration (warp and cube paths): per-channel radial scales R, G, B.
+    pub chromatic: Option<[f64; 3]>,
+}
+
+impl RenderRequest {
+    /// One 8-bit colour image of `camera` by `path`, from the identity pose (the camera at the
+    /// world origin): no anti-aliasing or chromatic aberration, a transparent background.
+    pub fn color(camera: &Camera, path: PathChoice) -> Self {
+        RenderRequest {
+            camera: camera.clone(),
+            pose: Pose::IDENTITY,
+            previous_pose: Pose::IDENTITY,
+            path,
+            outputs: OutputSpec {
+                color: true,
+                ..OutputSpec::default()
+            },
+            antialias: Antialias::default(),
+            background: [0.0; 4],
+            chromatic: None,
+        }
+    }
+}
+
+impl Plan {
+    /// The plan that renders `request` by the path it names, on a device whose images are at
+    /// most `max_image_side` px on a side. Refuses what the path cannot deliver (flow through
+    /// a warp, data through a cube map), naming the request's field.
+    pub fn from_request(request: &RenderRequest, max_image_side: u32) -> Result<Plan> {
+        let aa = request.antialias;
+        if !(1..=MAX_SUPERSAMPLE).contains(&aa.supersample) {
+            return Err(Error::argument(
+                "supersample",
+                format!(
+                    "{}: the supersampling factor must be in 1..={MAX_SUPERSAMPLE}",
+                    aa.supersample
+                ),
+            ));
+        }
+        if !(1..=MAX_JITTER).contains(&aa.jitter) {
+            return Err(Error::argument(
+                "jitter",
+                format!(
+                    "{}: the jittered passes must be in 1..={MAX_JITTER}",
+                    aa.jitter
+                ),
+            ));
+        }
+        if !request.background.iter().all(|c| c.is_finite()) {
+            return Err(Error::argument(
+                "background",
+                format!("{:?}: expected four finite numbers", request.background),
+            ));
+        }
+        let camera = &request.camera;
+        let o = request.outputs;
+        let chromatic = request.chromatic;
+        let mut steps = Vec::new();
+        let step = |stage, why: String| Step { stage, why };
+        let mut delta = DEFAULT_DELTA;
+        let mut density = 1.0;
+        let (route, expected) = match request.path {
+            PathChoice::Vertex { .. } | PathChoice::Pinhole if chromatic.is_some() => {
+                return Err(Error::argument(
+                    "chromatic",
+                    "chromatic aberration needs the warp path (one fused pass samples each channel through its own lens)",
+                ));
+            }
+            PathChoice::Pinhole => {
+                steps.push(step(
+                    Stage::PinholeRender,
+                    "the pinhole path was asked for: the camera's distortion is not applied".into(),
+                ));
+                (Route::Pinhole, 0.0)
+            }
+            PathChoice::Vertex {
+                delta: d,
+                tessellate,
+            } => {
+                if !(d.is_finite() && d >= 0.0) {
+                    return Err(Error::argument(
+                        "delta",
+                        format!("{d}: the discard tolerance must be a number ≥ 0"),
+                    ));
+                }
+                if let Some(l) = tessellate {
+                    if !(l.is_finite() && l >= 0.25) {
+                        return Err(Error::argument(
+                            "tessellate",
+                            format!("{l}: expected an edge length in pixels ≥ 0.25"),
+                        ));
+                    }
+                    steps.push(step(
+                        Stage::Tessellation,
+                        format!("edges longer than {l} px split at every pose rendered"),
+                    ));
+                }
+                delta = d;
+                steps.push(step(
+                    Stage::VertexRender,
+                    format!("the vertex path was asked for; discard δ = {d} + D"),
+                ));
+                // Not measured without the scene: the straight edges between vertices are
+                // what the tessellation bounds.
+                (Route::Vertex { tessellate }, f64::NAN)
+            }
+            PathChoice::Warp { method, density: q } => {
+                if o.flow {
+                    return Err(Error::argument(
+                        "path",
+                        "flow needs the vertex path: its vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1)",
+                    ));
+                }
+                if !(q.is_finite() && q > 0.0 && q <= 16.0) {
+                    return Err(Error::argument(
+                        "density",
+                        format!("{q}: source pixels per output pixel must be in (0, 16]"),
+                    ));
+                }
+                density = q;
+                // At s× (supersampling), as the anti-aliased source is rendered.
+                let s = if o.color { aa.supersample } else { 1 };
+                let big = scaled_camera(camera, s)?;
+                match pinhole_source_refusal(&big, q, max_image_side) {
+                    Some(why) => {
+                        if o.ids || o.depth {
+                            return Err(Error::argument(
+                                "path",
+                                format!("{why}: the warp path would need a cube map, which carries colour only; the vertex path renders IDs and depth"),
+                            ));
+                        }
+                        let side = cube_face_side(camera, q);
+                        push_cube_steps(
+                            &mut steps,
+                            format!(
+                                "{why}{}: a cube map of six {side}×{side} faces instead",
+                                if s > 1 {
+                                    format!(" at {s}× supersampling")
+                                } else {
+                                    String::new()
+                                }
+                            ),
+                            chromatic.is_some(),
+                        );
+                        (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX)
+                    }
+                    None => {
+                        steps.push(step(
+                            Stage::OverscannedRender,
+                            format!(
+                                "the warp's source, covering every valid output pixel at {q} source px per output px (Lambers et al. Sec. 3.3)"
+                            ),
+                        ));
+                        steps.push(step(
+                            Stage::Warp {
+                                chromatic: chromatic.is_some(),
+                            },
+                            format!(
+                                "the warp path was asked for: {method} per pixel, colour bilinear{}",
+                                if o.ids || o.depth {
+                                    ", IDs and depth nearest"
+                                } else {
+                                    ""
+                                }
+                            ),
+                        ));
+                        let error = inverse_error_px(camera, method).unwrap_or(f64::NAN);
+                        (
+                            Route::Warp {
+                                method,
+                                chromatic,
+                                map: false,
+                            },
+                            error,
+                        )
+                    }
+                }
+            }
+            PathChoice::Cube { side } => {
+                if o.ids || o.flow || o.depth {
+                    return Err(Error::argument(
+                        "path",
+                        "IDs, flow and depth through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); the vertex path renders them",
+                    ));
+                }
+                if side < 2 {
+                    return Err(Error::argument(
+                        "density",
+                        format!("cube faces of {side} px: the density must be positive (faces are 2·f·density px)"),
+                    ));
+                }
+                push_cube_steps(
+                    &mut steps,
+                    if beyond_a_pinhole(camera) {
+                        "the cube path was asked for; the lens sees 90° and more off its axis"
+                            .into()
+                    } else {
+                        "the cube path was asked for".into()
+                    },
+                    chromatic.is_some(),
+                );
+                (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX)
+            }
+        };
+        push_antialias_step(&mut steps, aa, o.color);
+        Ok(Plan {
+            route,
+            steps,
+            camera: Some(camera.clone()),
+            lens: None,
+            expected_error_px: expected,
+            budget_px: f64::INFINITY,
+            poses: vec![request.pose],
+            previous_pose: Some(request.previous_pose),
+            delta,
+            density,
+            outputs: o,
+            background: request.background,
+            antialias: aa,
+            estimated_ms: f64::NAN,
+        })
+    }
+}
+
+fn push_cube_steps(steps: &mut Vec<Step>, why: String, chromatic: bool) {
+    steps.push(Step {
+        stage: Stage::CubeFaces,
+        why,
+    });
+    steps.push(Step {
+        stage: Stage::SphereWarp { chromatic },
+        why: "each output pixel samples the cube along its ray, bilinear across faces".into(),
+    });
+}
+
+/// Renders `request` once on the headless context (the plan, then [`super::execute`]);
+/// `progress` hears each step of the plan.
+pub fn render_request(
+    ctx: &crate::gpu::Context,
+    scene: &Scene,
+    request: &RenderRequest,
+    progress: &mut dyn FnMut(&str),
+) -> Result<crate::pass::geometry::Rendered> {
+    let plan = Plan::from_request(request, ctx.gpu().max_image_side())?;
+    for s in &plan.steps {
+        progress(&format!("{}: {}", s.stage.name(), s.why));
+    }
+    let mut out = None;
+    super::execute_untimed(ctx, &plan, scene, [0], &mut |f| {
+        out = Some(f.rendered);
+        Ok(())
+    })?;
+    out.ok_or_else(|| Error::internal("the plan rendered no frame"))
+}

@@ -3,7 +3,7 @@
 //! OpenCV's own `undistortPoints` errors. Set VKLENS_BENCH_JSON=1 for JSON lines.
 
 use vklens::internal::bench::inverse::{self, InverseBenchOptions};
-use vklens::internal::gpu::Context;
+use vklens::internal::host::Context;
 
 fn main() {
     let reference = match vklens::internal::io::reference::load_reference() {

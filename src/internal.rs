@@ -5,8 +5,8 @@ pub mod bench;
 pub mod cli;
 #[path = "gpu/mod.rs"]
 pub mod gpu;
-#[path = "headless/mod.rs"]
-pub mod headless;
+#[path = "host/mod.rs"]
+pub mod host;
 #[path = "imaging/mod.rs"]
 pub mod imaging;
 #[path = "io/mod.rs"]

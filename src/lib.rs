@@ -61,4 +61,4 @@ pub use pass::warp::PixelFormat;
 #[doc(hidden)]
 pub mod internal;
 // Inside the crate every layer keeps its short path (`crate::model`, `crate::gpu`, ...).
-use internal::{bench, gpu, headless, imaging, io, lens, model, pass, plan, scene};
+use internal::{bench, gpu, host, imaging, io, lens, model, pass, plan, scene};

@@ -5,7 +5,7 @@ mod common;
 
 use glam::{DVec2, DVec3};
 use serde_json::Value;
-use vklens::internal::headless::points::{run_points, run_project, run_unproject};
+use vklens::internal::host::points::{run_points, run_project, run_unproject};
 use vklens::internal::io::load_camera;
 use vklens::internal::io::reference::shared_dir;
 use vklens::internal::model::{Camera, InverseMethod};

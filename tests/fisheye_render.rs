@@ -5,11 +5,12 @@
 mod common;
 
 use glam::DVec3;
+use vklens::internal::host::plan::render_request as render_scene;
 use vklens::internal::imaging::Pixels;
 use vklens::internal::model::InverseMethod;
 use vklens::internal::model::{Camera, Fisheye, Intrinsics};
 use vklens::internal::plan::limits::pinhole_source_refusal;
-use vklens::internal::plan::{render_request as render_scene, PathChoice, RenderRequest};
+use vklens::internal::plan::{PathChoice, RenderRequest};
 use vklens::internal::scene::{Mesh, Scene, Vertex};
 
 fn fisheye_200() -> Camera {
@@ -265,15 +266,9 @@ fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
             Outputs::color_only(Some(ColorFormat::Rgba8)),
         );
         desc.discard = discard;
-        let vertex = vklens::internal::headless::geometry::render(
-            &ctx,
-            desc,
-            &scene.mesh,
-            None,
-            &pose,
-            &pose,
-        )
-        .expect("vertex path");
+        let vertex =
+            vklens::internal::host::geometry::render(&ctx, desc, &scene.mesh, None, &pose, &pose)
+                .expect("vertex path");
         let a = rgba8(&vertex);
         let far = centre
             .iter()

@@ -5,7 +5,7 @@ mod common;
 
 use common::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::{DVec2, DVec3};
-use vklens::internal::headless::geometry::render;
+use vklens::internal::host::geometry::render;
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::model::{Camera, InverseMethod};
 use vklens::internal::pass::geometry::{
@@ -21,7 +21,8 @@ const COLOR: OutputSpec = OutputSpec {
     depth: false,
     exr: false,
 };
-use vklens::internal::plan::{render_request as render_scene, PathChoice, RenderRequest};
+use vklens::internal::host::plan::render_request as render_scene;
+use vklens::internal::plan::{PathChoice, RenderRequest};
 use vklens::internal::scene::builtin::{self, Board};
 use vklens::internal::scene::tessellate::tessellate;
 use vklens::internal::scene::{Mesh, Pose, Vertex};
@@ -420,7 +421,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
     };
     let geometry =
         vklens::internal::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
-    let (bilinear, _) = vklens::internal::headless::warp::run_warp(
+    let (bilinear, _) = vklens::internal::host::warp::run_warp(
         &ctx,
         vklens::internal::pass::warp::WarpDesc {
             geometry,
@@ -498,7 +499,7 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
     // `render --path warp --ids --depth`: a pinhole render of IDs and depth warped nearest on
     // the GPU in one submission equals rendering them, reading them back and warping them
     // from the host, bit for bit.
-    use vklens::internal::headless::warp::run_warp;
+    use vklens::internal::host::warp::run_warp;
     use vklens::internal::imaging::cpu_warp::Sampling;
     use vklens::internal::model::warp::WarpGeometry;
     use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc};
@@ -598,7 +599,7 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
 /// colour within a level), and a pixel centre on an edge two triangles share can go to the
 /// other one (measured: 2 of 480,000 pixels, in the barrel scene). Returns the IDs.
 fn same_with_both_discards(
-    ctx: &vklens::internal::gpu::Context,
+    ctx: &vklens::internal::host::Context,
     desc: GeometryDesc,
     mesh: &Mesh,
     pose: &Pose,
@@ -734,7 +735,7 @@ fn the_compute_discard_renders_what_the_geometry_shader_does() {
 
 #[test]
 fn a_device_without_geometry_shaders_renders_the_vertex_path_through_the_compute_discard() {
-    use vklens::internal::gpu::{Context, ContextOptions};
+    use vklens::internal::host::{Context, ContextOptions};
     use vklens::internal::pass::geometry::Discard;
     let ctx = Context::new(ContextOptions {
         validation: true,

@@ -211,7 +211,7 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
     // flow or depth.
     use ash::vk;
     use vklens::internal::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
-    let ctx = vklens::internal::gpu::Context::new(vklens::internal::gpu::ContextOptions {
+    let ctx = vklens::internal::host::Context::new(vklens::internal::host::ContextOptions {
         validation: true,
         device: None,
         geometry_shader: true,
@@ -302,7 +302,7 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
 fn the_discard_leaves_the_domain_table_out_only_where_its_bound_needs_none() {
     use vklens::internal::model::{Camera, Intrinsics, OpenCvDistortion};
     use vklens::internal::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
-    let ctx = vklens::internal::gpu::Context::new(vklens::internal::gpu::ContextOptions {
+    let ctx = vklens::internal::host::Context::new(vklens::internal::host::ContextOptions {
         validation: true,
         device: None,
         geometry_shader: true,

@@ -5,8 +5,8 @@ mod common;
 
 use common::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::DVec2;
-use vklens::internal::headless::mesh_warp::run_mesh_warp;
-use vklens::internal::headless::warp::run_warp;
+use vklens::internal::host::mesh_warp::run_mesh_warp;
+use vklens::internal::host::warp::run_warp;
 use vklens::internal::imaging::cpu_warp::Sampling;
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::model::warp::WarpGeometry;

@@ -6,7 +6,7 @@
 mod common;
 
 use glam::{DVec2, DVec3};
-use vklens::internal::headless::points::{run_project, run_unproject};
+use vklens::internal::host::points::{run_project, run_unproject};
 use vklens::internal::model::samples::{fitted_inverse_cameras, sample_cameras};
 use vklens::internal::model::Camera;
 use vklens::internal::pass::Precision;
@@ -39,7 +39,7 @@ fn clear_of_the_edge(camera: &Camera, p: DVec3) -> bool {
         && off((n + n.cross(side) * 1e-3).normalize()) == off(n)
 }
 
-fn precisions(ctx: &vklens::internal::gpu::Context) -> Vec<Precision> {
+fn precisions(ctx: &vklens::internal::host::Context) -> Vec<Precision> {
     let mut v = vec![Precision::F32];
     if ctx.gpu().supports_float64() {
         v.push(Precision::F64);

@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 
 use ash::vk;
 use common::{assert_no_validation_messages, validated_context};
+use vklens::internal::host::plan::execute;
 use vklens::internal::pass::spec;
-use vklens::internal::plan::{execute, load_geometry, plan, PassKind, Route, SceneFile, Stage};
+use vklens::internal::plan::{load_geometry, plan, PassKind, Route, SceneFile, Stage};
 
 fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes")
@@ -26,7 +27,7 @@ fn error(text: &str) -> String {
 
 /// The recorded constants of a pipeline kind's stage.
 fn constant(
-    recorded: &vklens::internal::plan::Recorded,
+    recorded: &vklens::internal::host::plan::Recorded,
     kind: PassKind,
     stage: vk::ShaderStageFlags,
     id: vklens::internal::gpu::SpecId,
@@ -44,7 +45,7 @@ fn run(
     file: &SceneFile,
 ) -> (
     vklens::internal::plan::Plan,
-    vklens::internal::plan::Recorded,
+    vklens::internal::host::plan::Recorded,
 ) {
     let ctx = validated_context();
     let scene = load_geometry(file).unwrap();
@@ -723,7 +724,7 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
     );
     request.pose = p.poses[0];
     request.chromatic = Some(scales);
-    let flag = vklens::internal::plan::render_request(&ctx, &scene, &request, &mut |_| {})
+    let flag = vklens::internal::host::plan::render_request(&ctx, &scene, &request, &mut |_| {})
         .unwrap()
         .color
         .unwrap();

@@ -4,7 +4,7 @@
 mod common;
 
 use glam::DVec2;
-use vklens::internal::headless::points::run_points;
+use vklens::internal::host::points::run_points;
 use vklens::internal::io::reference::load_reference;
 use vklens::internal::model::{CameraModel, InverseMethod};
 use vklens::internal::pass::{PointsMode, Precision};

@@ -4,7 +4,7 @@
 mod common;
 
 use glam::{DVec2, DVec3};
-use vklens::internal::headless::sphere_warp::run_sphere_warp;
+use vklens::internal::host::sphere_warp::run_sphere_warp;
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::model::{Camera, Fisheye, Intrinsics};
 use vklens::internal::pass::sphere_warp::{

@@ -3,8 +3,8 @@
 
 mod common;
 
-use vklens::internal::headless::warp::run_warp;
-use vklens::internal::headless::warp_raster::run_raster_warp;
+use vklens::internal::host::warp::run_warp;
+use vklens::internal::host::warp_raster::run_raster_warp;
 use vklens::internal::imaging::cpu_warp::{self, Sampling};
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::io::reference::load_reference;
@@ -74,7 +74,7 @@ fn check(
     geometry: WarpGeometry,
     coordinates: Coordinates,
     format: PixelFormat,
-    ctx: &vklens::internal::gpu::Context,
+    ctx: &vklens::internal::host::Context,
 ) -> Diff {
     let (w, h) = geometry.source_size;
     let mut source = test_image(w, h);
@@ -197,7 +197,7 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
 #[test]
 fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
     use glam::DVec2;
-    use vklens::internal::headless::warp::read_maps;
+    use vklens::internal::host::warp::read_maps;
     use vklens::internal::model::CameraModel;
     let ctx = common::validated_context();
     for name in ["prism_tilt", "rational_wide"] {
@@ -326,7 +326,7 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
     // Each map is of another camera (principal point moved by a third of a pixel), so that a
     // pixel left unwritten cannot pass on what an earlier map left in reused memory.
     use glam::DVec2;
-    use vklens::internal::headless::warp::read_maps;
+    use vklens::internal::host::warp::read_maps;
     use vklens::internal::model::{Camera, Intrinsics};
     let ctx = common::validated_context();
     let mut variant = 0.0;

@@ -4,7 +4,7 @@
 mod common;
 
 use glam::DVec2;
-use vklens::internal::headless::warp::run_warp;
+use vklens::internal::host::warp::run_warp;
 use vklens::internal::imaging::cpu_warp::Sampling;
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::model::warp::WarpGeometry;

@@ -16,7 +16,8 @@ use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
-use crate::gpu::{host_read_barrier, memory_barrier, Buffer, Context, QueryPool};
+use crate::gpu::{host_read_barrier, memory_barrier, Buffer, QueryPool};
+use crate::host::Context;
 use crate::io::reference::{ReferenceCase, ReferenceFile};
 use crate::model::{Camera, CameraModel, InverseMethod};
 use crate::pass::{PointsMode, PointsPass, Precision};

@@ -20,7 +20,8 @@ use std::time::Instant;
 use super::fixed as f;
 use serde_json::{json, Value};
 
-use crate::gpu::{Context, Error, Result};
+use crate::gpu::{Error, Result};
+use crate::host::Context;
 use crate::lens::image_model::{ImageModel, ModelOptions, ALL_CHANNELS};
 use crate::lens::reference::{psnr, render_reference, Channel, ReferenceFrame};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};

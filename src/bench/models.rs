@@ -14,7 +14,7 @@ use glam::{DVec2, DVec3};
 use serde::Serialize;
 
 use crate::bench::inverse::time_points;
-use crate::gpu::Context;
+use crate::host::Context;
 use crate::model::samples::{fitted_inverse_cameras, sample_cameras};
 use crate::model::table::RayModel;
 use crate::model::{Camera, Lens};

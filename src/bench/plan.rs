@@ -16,10 +16,12 @@ use std::path::Path;
 use super::{fixed as f, sci as e};
 use serde_json::{json, Value};
 
-use crate::gpu::{Context, Error, Result};
+use crate::gpu::{Error, Result};
+use crate::host::plan::execute;
+use crate::host::Context;
 use crate::plan::scene_file::OpticsSpec;
 use crate::plan::{
-    execute, inverse_candidates, inverse_error_px, load_geometry, plan, Plan, Route, SceneFile,
+    inverse_candidates, inverse_error_px, load_geometry, plan, Plan, Route, SceneFile,
 };
 use crate::scene::Scene;
 

@@ -20,7 +20,9 @@ use glam::DVec2;
 use serde_json::{json, Value};
 
 use super::warp::{bench_camera, test_source, time_batch};
-use crate::gpu::{Context, Result};
+use crate::gpu::Result;
+use crate::host::warp_images::WarpImages;
+use crate::host::Context;
 use crate::imaging::cpu_warp::Sampling;
 use crate::model::overscan::overscan;
 use crate::model::warp::WarpGeometry;
@@ -30,7 +32,7 @@ use crate::pass::geometry::{
     Projection, Texture, DEFAULT_DELTA,
 };
 use crate::pass::mesh_warp::{MeshWarpOutput, MeshWarpPass, MeshWarpTarget};
-use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
+use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
 use crate::pass::warp_stage::WarpStage;
 pub use crate::scene::tessellate::straight_line_error;
 use crate::scene::tessellate::tessellate;
@@ -359,7 +361,7 @@ pub fn run(
         })?;
         for n in MESH_SIZES {
             progress(&format!("mesh warp: {w}×{h}, {n}×{n}"));
-            let coords = crate::headless::mesh_warp::run_mesh_warp(
+            let coords = crate::host::mesh_warp::run_mesh_warp(
                 ctx,
                 &geometry,
                 n,

@@ -13,17 +13,17 @@ use ash::vk;
 use glam::DVec2;
 use serde_json::{json, Value};
 
-use crate::gpu::{memory_barrier, Context, QueryPool, Result};
-use crate::headless::warp::read_maps;
+use crate::gpu::{memory_barrier, QueryPool, Result};
+use crate::host::warp::read_maps;
+use crate::host::warp_images::WarpImages;
+use crate::host::Context;
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, Intrinsics, InverseMethod};
 use crate::pass::copy::CopyPass;
 use crate::pass::mesh_warp::MeshWarpTarget;
-use crate::pass::warp::{
-    Coordinates, MapInterpolation, PixelFormat, WarpDesc, WarpImages, WarpPass,
-};
+use crate::pass::warp::{Coordinates, MapInterpolation, PixelFormat, WarpDesc, WarpPass};
 use crate::pass::warp_raster::RasterWarpPass;
 
 /// The sizes measured by default.

@@ -20,15 +20,17 @@ use glam::{DVec2, DVec3};
 use serde_json::{json, Value};
 
 use super::{fixed as f, sci as e};
-use crate::gpu::{Context, Result};
-use crate::headless::points::{run_project, run_unproject};
+use crate::gpu::Result;
+use crate::host::plan::execute;
+use crate::host::points::{run_project, run_unproject};
+use crate::host::Context;
 use crate::model::overscan::{cube_face_side, overscan};
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, Fisheye, Intrinsics, InverseMethod};
 use crate::pass::geometry::DEFAULT_DELTA;
 use crate::pass::Precision;
 use crate::plan::limits::pinhole_source_refusal;
-use crate::plan::{execute, PathChoice, Plan, RenderRequest};
+use crate::plan::{PathChoice, Plan, RenderRequest};
 use crate::scene::{builtin, Scene};
 
 /// The output size of every row.

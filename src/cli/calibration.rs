@@ -7,10 +7,11 @@ use clap::Args;
 
 use super::render::PathArg;
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
+use crate::host::plan::execute_untimed;
 use crate::imaging::file as image_io;
 use crate::pass::geometry::DEFAULT_DELTA;
 use crate::plan::scene_file::{Antialias, OutputSpec};
-use crate::plan::{execute_untimed, Plan, RenderRequest};
+use crate::plan::{Plan, RenderRequest};
 use crate::scene::builtin::{self, parse_board_size, Board};
 use crate::scene::calibration::board_poses;
 

@@ -50,7 +50,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
         camera.height,
         ctx.gpu().device_name()
     );
-    let pixels = crate::headless::grid_demo::render_grid(&ctx, &camera, args.grid)?;
+    let pixels = crate::host::grid_demo::render_grid(&ctx, &camera, args.grid)?;
     finish(&ctx)?;
     let image = image::RgbaImage::from_raw(camera.width, camera.height, pixels)
         .ok_or_else(|| CliError::internal("pixel count does not match the image size"))?;

@@ -403,15 +403,8 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             renderer.projection_count(),
             ctx.gpu().device_name()
         ));
-        let mesh =
-            crate::pass::geometry::MeshBuffers::new(ctx.gpu(), &scene.mesh, scene.texture.as_ref())
-                .map_err(gpu_error)?;
-        ctx.submit(|cmd| {
-            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
-            // `mesh` outlives the submission, which `submit` waits for.
-            unsafe { mesh.record_upload(cmd) };
-            Ok(())
-        })?;
+        let mesh = crate::host::geometry::upload_mesh(&ctx, &scene.mesh, scene.texture.as_ref())
+            .map_err(gpu_error)?;
         let frame = renderer.render(&ctx, &mesh, &pose).map_err(gpu_error)?;
         super::finish(&ctx)?;
         progress_done(&format!(

@@ -311,12 +311,12 @@ pub(crate) fn load_camera(path: &std::path::Path) -> Result<Camera, CliError> {
 }
 
 /// A headless context from the environment; validation messages are checked by `finish`.
-pub(crate) fn context() -> Result<crate::gpu::Context, CliError> {
-    crate::gpu::Context::from_env()
+pub(crate) fn context() -> Result<crate::host::Context, CliError> {
+    crate::host::Context::from_env()
 }
 
 /// Fails if the validation layer (when on) reported anything.
-pub(crate) fn finish(ctx: &crate::gpu::Context) -> Result<(), CliError> {
+pub(crate) fn finish(ctx: &crate::host::Context) -> Result<(), CliError> {
     ctx.check_validation()
 }
 

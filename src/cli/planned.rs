@@ -7,7 +7,8 @@ use serde_json::json;
 
 use super::output::{write_outputs, Targets};
 use super::{context, finish, progress_done, progress_line, CliError};
-use crate::plan::{execute, load_geometry, plan, Plan, Route, SceneFile};
+use crate::host::plan::execute;
+use crate::plan::{load_geometry, plan, Plan, Route, SceneFile};
 
 /// Parses `A..B` (B excluded) or `A..=B` against `count` poses.
 pub fn parse_frames(s: &str, count: usize) -> Result<std::ops::Range<usize>, String> {
@@ -168,7 +169,7 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     // Frames written so far: removed again if anything after them fails (a closed stdout for
     // --explain, a full disk for plan.json) or the run is interrupted.
     let written = std::cell::RefCell::new(crate::imaging::file::RunOutputs::new());
-    let mut write = |f: crate::plan::Frame| -> Result<(), crate::Error> {
+    let mut write = |f: crate::host::plan::Frame| -> Result<(), crate::Error> {
         let name = |kind: &str, ext: &str| out.join(format!("{kind}_{:04}.{ext}", f.index));
         let (c, i, fl, d) = (
             name("color", color_ext),

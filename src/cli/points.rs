@@ -7,7 +7,7 @@ use glam::DVec2;
 use serde_json::Value;
 
 use super::{context, finish, load_camera, Backend, CliError};
-use crate::headless::points::{run_points, run_project, run_unproject};
+use crate::host::points::{run_points, run_project, run_unproject};
 use crate::model::InverseMethod;
 use crate::pass::{PointsMode, Precision};
 
@@ -79,7 +79,7 @@ fn write_results<const N: usize>(results: &[Option<[f64; N]>]) -> Result<(), Cli
 
 /// Runs a GPU job on a headless context, checking validation messages when enabled.
 fn on_gpu<T>(
-    job: impl FnOnce(&crate::gpu::Context) -> crate::gpu::Result<T>,
+    job: impl FnOnce(&crate::host::Context) -> crate::gpu::Result<T>,
 ) -> Result<T, CliError> {
     let ctx = context()?;
     let r = job(&ctx)?;

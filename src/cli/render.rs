@@ -6,10 +6,11 @@ use clap::{Args, ValueEnum};
 
 use super::output::{check_output, write_outputs, Targets};
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
+use crate::host::plan::render_request;
 use crate::model::InverseMethod;
 use crate::pass::geometry::DEFAULT_DELTA;
 use crate::plan::scene_file::{Antialias, OutputSpec};
-use crate::plan::{render_request, PathChoice, RenderRequest};
+use crate::plan::{PathChoice, RenderRequest};
 use crate::scene::{builtin, Pose, Scene};
 
 /// Which of Lambers et al.'s two paths renders the lens.

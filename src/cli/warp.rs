@@ -283,7 +283,7 @@ fn save_outputs(
 
 /// `distort` from a cube map or a panorama: each output pixel's ray samples it.
 fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result<(), CliError> {
-    use crate::headless::sphere_warp::run_sphere_warp;
+    use crate::host::sphere_warp::run_sphere_warp;
     use crate::pass::sphere_warp::{SphereSource, SphereWarpOptions};
     let flag = if args.input_equirect.is_some() {
         "--input-equirect"

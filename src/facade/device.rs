@@ -1,7 +1,8 @@
 //! A headless device: vklens's own Vulkan instance, device and queue, for programs that have
 //! no engine of their own (the command line, scripts, the Python package).
 
-use crate::gpu::{Context, Gpu};
+use crate::gpu::Gpu;
+use crate::host::Context;
 use crate::Result;
 
 /// A headless Vulkan device. `VKLENS_DEVICE` picks it (`cpu`/`lavapipe`, `gpu`, an index or a

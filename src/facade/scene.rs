@@ -85,12 +85,12 @@ impl SceneRenderer {
                 self.frame_count()
             )));
         }
-        crate::plan::execute(
+        crate::host::plan::execute(
             device.context(),
             &self.plan,
             &self.scene,
             frames,
-            &mut |f: crate::plan::Frame| {
+            &mut |f: crate::host::plan::Frame| {
                 each(Frame {
                     index: f.index,
                     rendered: f.rendered,

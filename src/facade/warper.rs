@@ -8,12 +8,13 @@ use std::str::FromStr;
 use ash::vk;
 
 use super::image::{check_host_shape, host_to_texels, texels_to_host};
-use crate::gpu::{host_read_barrier, Gpu, Image};
+use crate::gpu::{Gpu, Image};
+use crate::host::warp_images::WarpImages;
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, InverseMethod};
-use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpImages, WarpPass};
+use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
 use crate::{Device, Error, HostImage, HostImageMut, HostPixels, Result};
 
 /// Which way an image goes through the lens.
@@ -545,23 +546,12 @@ impl Warper {
         let Some(images) = self.headless.as_ref() else {
             return Err(Error::internal("headless warp images missing"));
         };
-        let prepare = !self.prepared_headless;
-        let gpu = &self.gpu;
-        let pass = &self.pass;
-        device.context().submit(|cmd| {
-            // SAFETY: `cmd` is a fresh primary command buffer outside any render pass; every
-            // image recorded here lives in `self` until the submission has completed.
-            unsafe {
-                images.record_upload(cmd);
-                if prepare {
-                    pass.record_prepare(cmd);
-                }
-                pass.record(cmd);
-                images.record_download(cmd);
-                host_read_barrier(gpu, cmd);
-            }
-            Ok(())
-        })?;
+        crate::host::warp::run_staged(
+            device.context(),
+            images,
+            &self.pass,
+            !self.prepared_headless,
+        )?;
         self.prepared_headless = true;
         Ok(())
     }
@@ -573,7 +563,7 @@ impl Warper {
     /// the f64 coordinate rounded to f32.
     pub fn maps(&self, device: &Device) -> Result<Vec<[f32; 2]>> {
         let mut maps =
-            crate::headless::warp::read_maps(device.context(), &self.geometry, Coordinates::Map)?;
+            crate::host::warp::read_maps(device.context(), &self.geometry, Coordinates::Map)?;
         // G is the geometric map (the only one without chromatic aberration).
         let index = if maps.len() == 3 { 1 } else { 0 };
         let mut map = maps.swap_remove(index);

@@ -1,15 +1,13 @@
 //! Vulkan plumbing.
 //!
 //! * [`Gpu`] — the handles a pass needs (device, queue, allocator), built from the caller's
-//!   objects ([`Gpu::from_caller`]) or created by the headless [`Context`]. Cheap to clone; the
-//!   last clone of a [`Context`]-made `Gpu` destroys the device it created, never a caller's.
+//!   objects ([`Gpu::from_caller`]) or created by the headless `host::Context`. Cheap to
+//!   clone; the last clone of a context-made `Gpu` destroys the device it created, never a
+//!   caller's.
 //! * Owned objects: [`Buffer`], [`Image`], [`ComputePipeline`], [`GraphicsPipeline`],
 //!   [`RenderPass`], [`Framebuffer`], [`Sampler`], [`DescriptorPool`], [`QueryPool`], each destroying its handle (and freeing its allocation) in `Drop`.
-//! * [`Context`] — headless: instance (validation layer on request), device selection
-//!   (`VKLENS_DEVICE`), one queue, submission and timing for tests and the CLI.
 
 mod barriers;
-mod context;
 mod graphics;
 mod pipeline;
 pub mod reflect;
@@ -25,9 +23,6 @@ use gpu_allocator::vulkan::Allocator;
 pub use barriers::{
     host_read_barrier, image_barrier, memory_barrier, record_compute_download,
     record_compute_readback, record_discard_for_compute_write, record_download,
-};
-pub use context::{
-    geometry_shader_discard_from_env, geometry_shader_from_env, Context, ContextOptions,
 };
 pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,
@@ -51,7 +46,7 @@ pub struct EnabledFeatures {
 }
 
 /// The handles every pass needs: a device, a queue it may use for one-off uploads, and a
-/// `gpu-allocator` allocator. Built from the caller's objects or by [`Context`].
+/// `gpu-allocator` allocator. Built from the caller's objects or by the headless `host::Context`.
 #[derive(Clone)]
 pub struct Gpu {
     inner: Arc<GpuInner>,
@@ -72,7 +67,7 @@ pub(crate) struct GpuInner {
     /// Whether `geometryShader` is enabled (the geometry path's triangle discard).
     pub(crate) geometry_shader: bool,
     /// Whether the vertex path's discard runs in a geometry shader where a pass leaves it to
-    /// the device ([`ContextOptions::geometry_shader_discard`]).
+    /// the device (`host::ContextOptions::geometry_shader_discard`).
     pub(crate) geometry_shader_discard: bool,
     /// `maxImageDimension2D`.
     pub(crate) max_image_side: u32,
@@ -80,8 +75,8 @@ pub(crate) struct GpuInner {
     pub(crate) max_cube_side: u32,
     /// Whether RGBA32F images can be sampled with linear filtering (optimal tiling).
     pub(crate) float_linear: bool,
-    /// Present when vklens created the device (headless [`Context`]); destroys it last.
-    pub(crate) owner: Option<context::Owned>,
+    /// Present when vklens created the device (the headless `host::Context`); destroys it last.
+    pub(crate) owner: Option<Owned>,
 }
 
 impl Gpu {
@@ -142,7 +137,7 @@ impl Gpu {
     }
 
     /// Whether the vertex path drops triangles in a geometry shader where a pass does not
-    /// say ([`ContextOptions::geometry_shader_discard`]); the compute discard otherwise.
+    /// say (`host::ContextOptions::geometry_shader_discard`); the compute discard otherwise.
     pub fn prefers_geometry_shader_discard(&self) -> bool {
         self.inner.geometry_shader_discard
     }
@@ -272,4 +267,27 @@ pub(crate) fn float_linear(instance: &ash::Instance, physical: vk::PhysicalDevic
     props
         .optimal_tiling_features
         .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
+}
+
+/// What the headless context created and must destroy after the device's last user.
+pub(crate) struct Owned {
+    pub(crate) _entry: ash::Entry,
+    pub(crate) instance: ash::Instance,
+    pub(crate) debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    pub(crate) _messages: Arc<Mutex<Vec<String>>>,
+}
+
+impl Owned {
+    pub(crate) unsafe fn destroy(self, device: &ash::Device) {
+        // SAFETY: only `GpuInner::drop` calls this, once, with the last `Gpu` clone and after
+        // the allocator has gone; every object vklens makes from the device holds a `Gpu`, so
+        // none is left. The messenger goes before the instance it belongs to, the instance last.
+        unsafe {
+            device.destroy_device(None);
+            if let Some((loader, messenger)) = &self.debug {
+                loader.destroy_debug_utils_messenger(*messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
 }

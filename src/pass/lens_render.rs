@@ -83,7 +83,7 @@ pub struct LensFrame {
 }
 
 /// The GPU side of the image-based model: built once per lens setting on any device (the
-/// caller's, through [`Gpu::from_caller`], or the headless [`crate::gpu::Context`]'s), draws any number
+/// caller's, through [`Gpu::from_caller`], or the headless [`crate::host::Context`]'s), draws any number
 /// of frames (poses) of one scene.
 pub struct LensRenderer {
     film: FilmPass,

@@ -1,6 +1,6 @@
 //! GPU passes. Each is built once from a [`crate::gpu::Gpu`] (`new`) and then *records* into a
 //! command buffer the caller owns; no pass submits work by itself. What submits (upload,
-//! record, wait, read back on the headless [`crate::gpu::Context`]) is in [`crate::headless`].
+//! record, wait, read back on the headless [`crate::host::Context`]) is in [`crate::host`].
 
 pub mod camera_params;
 pub mod copy;

@@ -1,5 +1,5 @@
 //! A plan as GPU passes that record into a command buffer the caller owns (an engine's), on
-//! any [`Gpu`]: [`PlanRecorder`]. The headless [`super::execute`] submits it and reads back;
+//! any [`Gpu`]: [`PlanRecorder`]. The headless `host::plan::execute` submits it and reads back;
 //! [`PlanRecorder::record`] can write a timestamp after every pass.
 //!
 //! What it records per route: a pinhole render or Alg. 1 (every output), the warp path's

@@ -7,7 +7,7 @@
 use crate::model::overscan::{beyond_a_pinhole, cube_face_side};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::geometry::DEFAULT_DELTA;
-use crate::scene::{Pose, Scene};
+use crate::scene::Pose;
 use crate::{Error, Result};
 
 use super::antialias::{scaled_camera, MAX_JITTER, MAX_SUPERSAMPLE};
@@ -285,24 +285,4 @@ fn push_cube_steps(steps: &mut Vec<Step>, why: String, chromatic: bool) {
         stage: Stage::SphereWarp { chromatic },
         why: "each output pixel samples the cube along its ray, bilinear across faces".into(),
     });
-}
-
-/// Renders `request` once on the headless context (the plan, then [`super::execute`]);
-/// `progress` hears each step of the plan.
-pub fn render_request(
-    ctx: &crate::gpu::Context,
-    scene: &Scene,
-    request: &RenderRequest,
-    progress: &mut dyn FnMut(&str),
-) -> Result<crate::pass::geometry::Rendered> {
-    let plan = Plan::from_request(request, ctx.gpu().max_image_side())?;
-    for s in &plan.steps {
-        progress(&format!("{}: {}", s.stage.name(), s.why));
-    }
-    let mut out = None;
-    super::execute_untimed(ctx, &plan, scene, [0], &mut |f| {
-        out = Some(f.rendered);
-        Ok(())
-    })?;
-    out.ok_or_else(|| Error::internal("the plan rendered no frame"))
 }

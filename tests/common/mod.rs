@@ -1,7 +1,7 @@
 //! Shared test helpers.
 #![allow(dead_code)]
 
-use vklens::internal::gpu::{Context, ContextOptions};
+use vklens::internal::host::{Context, ContextOptions};
 
 /// A headless context with the Khronos validation layer on (tests always validate).
 pub fn validated_context() -> Context {
@@ -10,8 +10,8 @@ pub fn validated_context() -> Context {
         device: std::env::var("VKLENS_DEVICE")
             .ok()
             .filter(|s| !s.is_empty()),
-        geometry_shader: vklens::internal::gpu::geometry_shader_from_env(),
-        geometry_shader_discard: vklens::internal::gpu::geometry_shader_discard_from_env(),
+        geometry_shader: vklens::internal::host::geometry_shader_from_env(),
+        geometry_shader_discard: vklens::internal::host::geometry_shader_discard_from_env(),
     })
     .expect("a Vulkan device with the validation layer (README: the test command installs both)")
 }

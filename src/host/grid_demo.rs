@@ -1,9 +1,10 @@
 //! Headless helpers for `pass::grid_demo`: upload, record, submit, wait and read back.
 
 use crate::gpu::{
-    host_read_barrier, shaders, write_buffer_descriptors, Buffer, ComputePipeline, Context,
-    DescriptorPool, Result,
+    host_read_barrier, shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool,
+    Result,
 };
+use crate::host::Context;
 use crate::model::Camera;
 use crate::pass::camera_params::CameraParams;
 use crate::pass::spec;

@@ -3,9 +3,8 @@
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{
-    image_barrier, record_compute_download, Buffer, Context, Error, Gpu, Image, Result,
-};
+use crate::gpu::{image_barrier, record_compute_download, Buffer, Error, Gpu, Image, Result};
+use crate::host::Context;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::Camera;
 use crate::pass::sphere_warp::{CubeFace, SphereSource, SphereWarpOptions, SphereWarpPass};

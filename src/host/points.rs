@@ -1,6 +1,7 @@
 //! Headless helpers for `pass::points`: upload, record, submit, wait and read back.
 
-use crate::gpu::{host_read_barrier, Buffer, Context, Result};
+use crate::gpu::{host_read_barrier, Buffer, Result};
+use crate::host::Context;
 use crate::model::Camera;
 use crate::pass::points::*;
 use ash::vk;

@@ -1,9 +1,11 @@
 //! Headless helpers for `pass::warp_raster`: upload, record, submit, wait and read back.
 
-use crate::gpu::{memory_barrier, Context, Result};
+use crate::gpu::{memory_barrier, Result};
+use crate::host::warp_images::WarpImages;
+use crate::host::Context;
 use crate::imaging::Raster;
 use crate::pass::mesh_warp::MeshWarpTarget;
-use crate::pass::warp::{WarpDesc, WarpImages, WarpPass};
+use crate::pass::warp::{WarpDesc, WarpPass};
 use crate::pass::warp_raster::*;
 use ash::vk;
 

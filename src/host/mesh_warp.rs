@@ -1,6 +1,7 @@
 //! Headless helpers for `pass::mesh_warp`: upload, record, submit, wait and read back.
 
-use crate::gpu::{Context, Error, Result};
+use crate::gpu::{Error, Result};
+use crate::host::Context;
 use crate::imaging::Raster;
 use crate::model::warp::WarpGeometry;
 use crate::pass::geometry::Texture;

@@ -1,6 +1,7 @@
 //! The lens renderer on the headless context: render a frame and read it back.
 
-use crate::gpu::{Context, Result};
+use crate::gpu::Result;
+use crate::host::Context;
 use crate::pass::geometry::MeshBuffers;
 use crate::pass::lens_render::*;
 use crate::scene::Pose;

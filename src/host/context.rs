@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
-use super::{device_name, Error, Gpu, GpuInner, Result};
+use crate::gpu::{device_name, Error, Gpu, GpuInner, Owned, Result};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -59,29 +59,6 @@ pub fn geometry_shader_from_env() -> bool {
         std::env::var("VKLENS_GEOMETRY_SHADER").as_deref(),
         Ok("0") | Ok("false") | Ok("no")
     )
-}
-
-/// What the headless context created and must destroy after the device's last user.
-pub(crate) struct Owned {
-    _entry: ash::Entry,
-    instance: ash::Instance,
-    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
-    _messages: Arc<Mutex<Vec<String>>>,
-}
-
-impl Owned {
-    pub(crate) unsafe fn destroy(self, device: &ash::Device) {
-        // SAFETY: only `GpuInner::drop` calls this, once, with the last `Gpu` clone and after
-        // the allocator has gone; every object vklens makes from the device holds a `Gpu`, so
-        // none is left. The messenger goes before the instance it belongs to, the instance last.
-        unsafe {
-            device.destroy_device(None);
-            if let Some((loader, messenger)) = &self.debug {
-                loader.destroy_debug_utils_messenger(*messenger, None);
-            }
-            self.instance.destroy_instance(None);
-        }
-    }
 }
 
 /// A headless Vulkan context: instance, device, queue, allocator, command pool.
@@ -313,13 +290,13 @@ impl Context {
             timestamp_period_ns: props.limits.timestamp_period as f64,
             timestamps: families[family as usize].timestamp_valid_bits > 0,
             device_name: device_name(&props),
-            driver: super::driver_name(&instance, physical, &props),
+            driver: crate::gpu::driver_name(&instance, physical, &props),
             float64,
             geometry_shader,
             geometry_shader_discard: options.geometry_shader_discard && geometry_shader,
             max_image_side: props.limits.max_image_dimension2_d,
             max_cube_side: props.limits.max_image_dimension_cube,
-            float_linear: super::float_linear(&instance, physical),
+            float_linear: crate::gpu::float_linear(&instance, physical),
             owner: owned,
         });
         let pool_info = vk::CommandPoolCreateInfo::default()

@@ -1,13 +1,41 @@
 //! Headless helpers for `pass::warp`: upload, record, submit, wait and read back.
 
 use crate::gpu::record_compute_download;
-use crate::gpu::{host_read_barrier, Buffer, Context, Result};
+use crate::gpu::{host_read_barrier, Buffer, Result};
+use crate::host::warp_images::WarpImages;
+use crate::host::Context;
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::Raster;
 use crate::model::warp::WarpGeometry;
 use crate::pass::warp::*;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
+
+/// One submission of a bound warp through staged images: upload what is staged, build the
+/// maps first when `prepare` (the first run), warp, download; then waits.
+pub(crate) fn run_staged(
+    ctx: &Context,
+    images: &WarpImages,
+    pass: &WarpPass,
+    prepare: bool,
+) -> Result<()> {
+    let gpu = ctx.gpu();
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is a fresh primary command buffer outside any render pass; `pass` is
+        // bound to `images`' views by the caller, and every image recorded here outlives the
+        // submission, which `submit` waits for.
+        unsafe {
+            images.record_upload(cmd);
+            if prepare {
+                pass.record_prepare(cmd);
+            }
+            pass.record(cmd);
+            images.record_download(cmd);
+            host_read_barrier(gpu, cmd);
+        }
+        Ok(())
+    })
+}
 
 /// Runs a warp once through a headless context: upload, prepare, warp, download.
 pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raster, Vec<u8>)> {

@@ -1,6 +1,7 @@
 //! Headless helpers for `pass::geometry`: upload, record, submit, wait and read back.
 
-use crate::gpu::{Context, Result};
+use crate::gpu::Result;
+use crate::host::Context;
 use crate::imaging::Raster;
 use crate::pass::geometry::*;
 use crate::scene::{Mesh, Pose};
@@ -37,4 +38,16 @@ pub fn render(
         Ok(())
     })?;
     targets.read()
+}
+
+/// Uploads `mesh` (and its texture) for any number of draws, and waits.
+pub fn upload_mesh(ctx: &Context, mesh: &Mesh, texture: Option<&Raster>) -> Result<MeshBuffers> {
+    let buffers = MeshBuffers::new(ctx.gpu(), mesh, texture)?;
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+        // `buffers` outlives the submission, which `submit` waits for.
+        unsafe { buffers.record_upload(cmd) };
+        Ok(())
+    })?;
+    Ok(buffers)
 }

@@ -192,12 +192,12 @@ fn a_lens_without_depth_of_field_or_vignetting_does_none_of_that_work() {
         } => assert_eq!((samples, chromatic, vignetting), (1, true, false)),
         other => panic!("{other:?}"),
     }
-    let models = &p.lens.as_ref().unwrap().models;
+    let models = &p.lens().unwrap().models;
     assert_eq!(models.len(), 3, "one model per channel");
     assert!(models.iter().all(|(m, _)| m.samples.len() == 1));
     let file = SceneFile::load(&examples().join("lens_depth_of_field.toml")).unwrap();
     let p = plan(&file, &scene).unwrap();
-    let models = &p.lens.as_ref().unwrap().models;
+    let models = &p.lens().unwrap().models;
     assert_eq!(
         models.len(),
         1,
@@ -317,7 +317,8 @@ fn render_scene_cli_writes_every_output_of_every_frame() {
     let file = SceneFile::load(&scene).unwrap();
     let planned = vklens::internal::plan::plan(&file, &load_geometry(&file).unwrap())
         .unwrap()
-        .camera
+        .camera()
+        .cloned()
         .expect("a camera file scene");
     let back = vklens::Camera::load(dir.join("camera.json")).unwrap();
     assert_eq!(back.to_json(), planned.to_json());
@@ -717,7 +718,7 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
         Some(1)
     );
     let planned = planned.expect("the cube route renders colour");
-    let camera = p.camera.clone().unwrap();
+    let camera = p.camera().cloned().unwrap();
     let mut request = vklens::internal::plan::RenderRequest::color(
         &camera,
         vklens::internal::plan::PathChoice::Cube { side },

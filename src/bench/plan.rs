@@ -183,8 +183,8 @@ pub fn run(ctx: &Context, examples: &Path, progress: &mut dyn FnMut(&str)) -> Re
     let scene = load_geometry(&file)?;
     let base = plan(&file, &scene)?;
     let camera = base
-        .camera
-        .clone()
+        .camera()
+        .cloned()
         .ok_or_else(|| Error::internal("a camera plan without a camera"))?;
     for (method, _) in inverse_candidates() {
         let Some(error) = inverse_error_px(&camera, method) else {

@@ -212,7 +212,7 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     crate::imaging::file::write_atomically(&plan_path, |tmp| std::fs::write(tmp, &json))?;
     written.add(&plan_path);
     // The camera the frames were rendered through, for the user's own pipeline.
-    if let Some(camera) = &plan.camera {
+    if let Some(camera) = plan.camera() {
         let json_path = out.join("camera.json");
         camera.save(&json_path)?;
         written.add(&json_path);

@@ -9,8 +9,8 @@ use crate::plan::antialias::{average, shifted};
 use crate::plan::record::plan_mesh;
 use crate::plan::scene_file::OutputSpec;
 use crate::plan::{
-    downsample, jitter_offsets, scaled_camera, PassKind, Plan, PlanRecorder, RecordedPipeline,
-    RenderRequest, Route,
+    downsample, jitter_offsets, scaled_camera, Optics, PassKind, Plan, PlanRecorder,
+    RecordedPipeline, RenderRequest, Route,
 };
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -113,11 +113,11 @@ fn run_frames(
         None
     };
     let s = plan.antialias.supersample;
-    let camera = plan.camera.clone();
+    let camera = plan.camera().cloned();
     let mut smooth = match (&camera, antialias) {
         (Some(cam), true) => {
             let mut p = plan.clone();
-            p.camera = Some(scaled_camera(cam, s)?);
+            p.optics = Optics::Camera(scaled_camera(cam, s)?);
             p.outputs = OutputSpec {
                 ids: false,
                 flow: false,

@@ -38,7 +38,7 @@ pub(crate) fn plan_mesh(plan: &Plan, scene: &Scene) -> Result<Mesh> {
     if plan.poses.is_empty() {
         return Err(internal("a plan without poses"));
     }
-    match (&plan.route, plan.camera.as_ref()) {
+    match (&plan.route, plan.camera()) {
         (
             Route::Vertex {
                 tessellate: Some(l),
@@ -244,8 +244,7 @@ impl PlanRecorder {
         match &plan.route {
             Route::LensModel { .. } => {
                 let setting = plan
-                    .lens
-                    .as_ref()
+                    .lens()
                     .ok_or_else(|| internal("a lens plan without a lens"))?;
                 r.lens = Some(LensRenderer::new(
                     gpu,
@@ -260,8 +259,7 @@ impl PlanRecorder {
             }
             route => {
                 let camera = plan
-                    .camera
-                    .as_ref()
+                    .camera()
                     .ok_or_else(|| internal("a camera plan without a camera"))?;
                 match route {
                     Route::Pinhole => {

@@ -260,8 +260,7 @@ impl Plan {
         Ok(Plan {
             route,
             steps,
-            camera: Some(camera.clone()),
-            lens: None,
+            optics: super::Optics::Camera(camera.clone()),
             expected_error_px: expected,
             budget_px: f64::INFINITY,
             poses: vec![request.pose],

@@ -10,10 +10,9 @@ fn main() {
     // an interrupted command leaves nothing half-done behind (outputs are renamed into place
     // only when complete).
     let _ = ctrlc::set_handler(|| {
-        vklens::internal::imaging::file::remove_pending_temps();
         vklens::internal::cli::progress_clear();
         eprintln!("vklens: interrupted; no output was left half-written");
-        std::process::exit(130);
+        vklens::internal::imaging::file::remove_pending_and_exit(130);
     });
     let cli = vklens::internal::cli::Cli::parse();
     if let Err(e) = vklens::internal::cli::run(cli) {

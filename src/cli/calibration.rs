@@ -141,8 +141,8 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
             .color
             .ok_or_else(|| crate::Error::internal("the render produced no colour image"))?;
         let view_path = args.out.join(&file);
-        image_io::save(&color, &view_path)?;
-        written.add(&view_path);
+        image_io::save_staged(&color, &view_path, image_io::Channels(4))?
+            .commit_into(&mut written)?;
         let r = pose.rvec();
         let t = pose.translation;
         views.push(serde_json::json!({

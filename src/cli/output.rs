@@ -71,10 +71,14 @@ pub(crate) struct Targets<'a> {
 
 /// Writes every output of a frame, or none: each is staged (written to its temporary file),
 /// and only when all are is each put in place.
+///
+/// With `written`, the outputs join that run's list as they are put in place (a run that
+/// fails or is interrupted later removes them).
 pub(crate) fn write_outputs(
     args: &Targets,
     r: &Rendered,
     ids_ext: Option<&str>,
+    mut written: Option<&mut image_io::RunOutputs>,
 ) -> Result<(), CliError> {
     let staged = std::cell::RefCell::new(Vec::new());
     let save = |raster: &Raster, path: &Path| -> Result<(), crate::Error> {
@@ -137,7 +141,10 @@ pub(crate) fn write_outputs(
         )?;
     }
     for s in staged.into_inner() {
-        s.commit()?;
+        match written.as_deref_mut() {
+            Some(w) => s.commit_into(w)?,
+            None => s.commit()?,
+        }
     }
     Ok(())
 }

@@ -183,13 +183,12 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
             flow: o.flow.then_some(fl.as_path()),
             depth: o.depth.then_some(d.as_path()),
         };
-        write_outputs(&targets, &f.rendered, Some("png"))?;
-        for path in [targets.color, targets.ids, targets.flow, targets.depth]
-            .into_iter()
-            .flatten()
-        {
-            written.borrow_mut().add(path);
-        }
+        write_outputs(
+            &targets,
+            &f.rendered,
+            Some("png"),
+            Some(&mut written.borrow_mut()),
+        )?;
         done.borrow_mut().push((f.index, f.ms));
         if args.explain && done.borrow().len() == 1 {
             // On stdout, as soon as the first frame has measured the plan's passes.
@@ -209,8 +208,8 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     let mut written = written.into_inner();
     let json = format!("{:#}\n", plan_json(&plan, &done));
     let plan_path = out.join("plan.json");
-    crate::imaging::file::write_atomically(&plan_path, |tmp| std::fs::write(tmp, &json))?;
-    written.add(&plan_path);
+    crate::imaging::file::stage(&plan_path, |tmp| std::fs::write(tmp, &json))?
+        .commit_into(&mut written)?;
     // The camera the frames were rendered through, for the user's own pipeline.
     if let Some(camera) = plan.camera() {
         let json_path = out.join("camera.json");
@@ -219,8 +218,8 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
         match camera.to_ros_camera_info() {
             Ok(text) => {
                 let info = out.join("camera_info.yaml");
-                crate::imaging::file::write_atomically(&info, |tmp| std::fs::write(tmp, &text))?;
-                written.add(&info);
+                crate::imaging::file::stage(&info, |tmp| std::fs::write(tmp, &text))?
+                    .commit_into(&mut written)?;
             }
             Err(e) => progress_done(&format!("camera_info.yaml not written: {e}")),
         }

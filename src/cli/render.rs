@@ -285,6 +285,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         },
         &rendered,
         ids_ext.as_deref(),
+        None,
     )?;
     progress_done(&format!("wrote {}", output.display()));
     Ok(())

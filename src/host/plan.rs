@@ -6,7 +6,7 @@ use std::time::Instant;
 use crate::gpu::QueryPool;
 use crate::pass::geometry::Rendered;
 use crate::plan::antialias::{average, shifted};
-use crate::plan::record::plan_mesh;
+use crate::plan::record::{plan_mesh_at, tessellation};
 use crate::plan::scene_file::OutputSpec;
 use crate::plan::{
     downsample, jitter_offsets, scaled_camera, Optics, PassKind, Plan, PlanRecorder,
@@ -98,7 +98,12 @@ fn run_frames(
     let o = plan.outputs;
     let lens = matches!(plan.route, Route::LensModel { .. });
     let antialias = plan.antialias.is_on() && o.color && !lens;
-    let mesh = plan_mesh(plan, scene)?;
+    let first = frames.first().copied().unwrap_or(0);
+    let mesh = plan_mesh_at(plan, scene, first)?;
+    // A tessellation holds its straight-edge bound at the pose it was made for: frames of
+    // other poses get their own.
+    let per_pose = tessellation(plan).is_some();
+    let mut mesh_pose = first;
     let texture = scene.texture.as_ref();
     // The 1× recorder: every output, or the data outputs alone when the colour is
     // anti-aliased.
@@ -191,6 +196,24 @@ fn run_frames(
         .chain(frames.iter().map(|&i| (i, true)))
     {
         let start = Instant::now();
+        if per_pose && index != mesh_pose {
+            let mesh = plan_mesh_at(plan, scene, index)?;
+            for r in main.iter_mut().chain(smooth.iter_mut()) {
+                // SAFETY: every submission has completed (`submit` waits on its fence).
+                unsafe { r.set_mesh(gpu, &mesh, texture) }?;
+            }
+            ctx.submit(|cmd| {
+                // SAFETY: `cmd` is recording outside a render pass on the context's graphics
+                // queue, before the frame that draws the new mesh.
+                unsafe {
+                    for r in main.iter().chain(smooth.iter()) {
+                        r.record_mesh_upload(cmd);
+                    }
+                }
+                Ok(())
+            })?;
+            mesh_pose = index;
+        }
         let mut rendered = match &mut main {
             Some(r) => {
                 // SAFETY: no submission using it is pending (`submit` waits on its fence).

@@ -293,6 +293,35 @@ impl Staged {
     }
 }
 
+impl Staged {
+    /// Puts the output in place and lists it among `outputs`, in one step as the interrupt
+    /// handler sees it: the rename and the listing happen under the lock
+    /// [`remove_pending_and_exit`] takes, so an interrupt removes either the temporary file or
+    /// the output, never leaves the output unlisted.
+    pub fn commit_into(mut self, outputs: &mut RunOutputs) -> Result<()> {
+        let Some((tmp, target, pending)) = self.tmp.take() else {
+            return Ok(());
+        };
+        let renamed = {
+            let mut list = PENDING.lock().ok();
+            let renamed = std::fs::rename(&tmp, &target);
+            if let (Ok(()), Some(list)) = (&renamed, list.as_mut()) {
+                list.retain(|t| t != &tmp);
+                list.push(target.clone());
+            }
+            renamed
+        };
+        // After the lock is released: `PendingTemp`'s drop takes it.
+        drop(pending);
+        renamed.map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            Error::io(&self.path, "cannot write", &e)
+        })?;
+        outputs.files.push(target);
+        Ok(())
+    }
+}
+
 impl Drop for Staged {
     fn drop(&mut self) {
         if let Some((tmp, _, _)) = self.tmp.take() {
@@ -394,7 +423,7 @@ pub fn check_writable(path: &Path) -> Result<()> {
     }
 }
 
-/// Temporary files being written right now, for [`remove_pending_temps`] (a command
+/// Temporary files being written right now, for [`remove_pending_and_exit`] (a command
 /// interrupted by SIGINT or SIGTERM leaves none behind).
 static PENDING: std::sync::Mutex<Vec<std::path::PathBuf>> = std::sync::Mutex::new(Vec::new());
 
@@ -420,7 +449,7 @@ impl Drop for PendingTemp {
 
 /// The files a command has written so far, removed again if it fails (dropped without
 /// [`RunOutputs::keep`]) or is interrupted (listed with the temporary files that
-/// [`remove_pending_temps`] removes): a command that fails leaves no output of its own, and a
+/// [`remove_pending_and_exit`] removes): a command that fails leaves no output of its own, and a
 /// set of files (a calibration set, a scene's frames) is all or nothing.
 #[derive(Default)]
 pub struct RunOutputs {
@@ -463,13 +492,25 @@ impl Drop for RunOutputs {
     }
 }
 
-/// Removes every temporary file a write in progress has made: what the command line's
-/// SIGINT/SIGTERM handler runs before it exits (the handler runs on its own thread, not in
-/// signal context, so taking the lock is safe; a writer holding it only pushes or retains).
-pub fn remove_pending_temps() {
-    if let Ok(p) = PENDING.lock() {
-        for t in p.iter() {
-            let _ = std::fs::remove_file(t);
+/// Removes every temporary file a write in progress has made and every output of an
+/// unfinished run, then exits with `code`: what the command line's SIGINT/SIGTERM handler
+/// runs (on its own thread, not in signal context, so taking the lock is safe; a writer
+/// holding it only pushes or retains).
+///
+/// The lock is held until the process ends, so no write registers after the sweep; a file
+/// registered just before it may still be created a moment later (a writer registers its
+/// temporary file first, then creates it), which the second sweep removes.
+pub fn remove_pending_and_exit(code: i32) -> ! {
+    let guard = PENDING.lock();
+    let sweep = || {
+        if let Ok(p) = &guard {
+            for t in p.iter() {
+                let _ = std::fs::remove_file(t);
+            }
         }
-    }
+    };
+    sweep();
+    std::thread::sleep(std::time::Duration::from_millis(100));
+    sweep();
+    std::process::exit(code)
 }

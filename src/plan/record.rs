@@ -30,32 +30,27 @@ fn internal(e: impl ToString) -> Error {
     Error::Internal(e.to_string())
 }
 
-/// The mesh every pass of `plan` draws: tessellated where Alg. 1 needs it, at every pose the
-/// plan renders (each pass splits only the edges still too long at that pose, so the
-/// straight-edge bound holds in every frame; the warp's pinhole render of warp + Alg. 1 does
-/// not mind the finer mesh).
-pub(crate) fn plan_mesh(plan: &Plan, scene: &Scene) -> Result<Mesh> {
-    if plan.poses.is_empty() {
-        return Err(internal("a plan without poses"));
-    }
-    match (&plan.route, plan.camera()) {
-        (
-            Route::Vertex {
-                tessellate: Some(l),
-            }
-            | Route::WarpAndVertex {
-                tessellate: Some(l),
-                ..
-            },
-            Some(camera),
-        ) => {
-            let mut mesh = scene.mesh.clone();
-            for pose in &plan.poses {
-                mesh = crate::scene::tessellate::tessellate(&mesh, pose, camera, *l)?;
-            }
-            Ok(mesh)
+/// The mesh every pass of `plan` draws at pose `index`: tessellated where Alg. 1 needs it, at
+/// that pose (the straight-edge bound is a property of the pose; the warp's pinhole render of
+/// warp + Alg. 1 does not mind the finer mesh).
+pub(crate) fn plan_mesh_at(plan: &Plan, scene: &Scene, index: usize) -> Result<Mesh> {
+    let pose = plan
+        .poses
+        .get(index)
+        .ok_or_else(|| internal(format!("no pose {index} in the plan")))?;
+    match (tessellation(plan), plan.camera()) {
+        (Some(l), Some(camera)) => {
+            crate::scene::tessellate::tessellate(&scene.mesh, pose, camera, l)
         }
         _ => Ok(scene.mesh.clone()),
+    }
+}
+
+/// The edge length (px) the plan tessellates to, if it does.
+pub(crate) fn tessellation(plan: &Plan) -> Option<f64> {
+    match &plan.route {
+        Route::Vertex { tessellate } | Route::WarpAndVertex { tessellate, .. } => *tessellate,
+        _ => None,
     }
 }
 
@@ -160,7 +155,12 @@ impl PlanRecorder {
                 "the recorder draws one sample per pixel: the scene's [render] supersample / jitter are averaged on the host by execute(); an engine anti-aliases its own way (MSAA, TAA)",
             ));
         }
-        Self::build(gpu, plan, &plan_mesh(plan, scene)?, scene.texture.as_ref())
+        Self::build(
+            gpu,
+            plan,
+            &plan_mesh_at(plan, scene, 0)?,
+            scene.texture.as_ref(),
+        )
     }
 
     /// Builds the passes of `plan` (anti-aliasing ignored) drawing `mesh` as it is.
@@ -355,6 +355,33 @@ impl PlanRecorder {
         }
         self.warp = Some(stage);
         self.warp_source = Some((source, geometry));
+    }
+
+    /// Replaces the mesh every pass draws (a tessellation for another pose); the next
+    /// [`Self::prepare`] binds it, and [`Self::record_mesh_upload`] must be recorded before the
+    /// next frame.
+    ///
+    /// # Safety
+    /// The old mesh's buffers are dropped: no recorded frame of this recorder may be pending.
+    pub(crate) unsafe fn set_mesh(
+        &mut self,
+        gpu: &Gpu,
+        mesh: &Mesh,
+        texture: Option<&Raster>,
+    ) -> Result<()> {
+        self.mesh = MeshBuffers::new(gpu, mesh, texture)?;
+        Ok(())
+    }
+
+    /// Records the upload of the mesh's texture (as [`Self::record_setup`] does once).
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass on a graphics queue of this recorder's
+    /// device, before the frame that draws the mesh.
+    pub(crate) unsafe fn record_mesh_upload(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the caller upholds the contract above; the mesh's buffers live in `self`
+        // until the next `set_mesh`, which requires no pending frame.
+        unsafe { self.mesh.record_upload(cmd) };
     }
 
     /// Every pipeline this recorder records, with its specialization constants: what a plan

@@ -146,7 +146,7 @@ impl Plan {
                     }
                     steps.push(step(
                         Stage::Tessellation,
-                        format!("edges longer than {l} px split at every pose rendered"),
+                        format!("edges longer than {l} px split, at the pose of each frame"),
                     ));
                 }
                 delta = d;

@@ -41,10 +41,13 @@ mod facade;
 
 pub use error::{Error, ErrorKind, Result};
 pub use facade::{
-    overscan, warp_geometry, Device, Frame, HostImage, HostImageMut, HostPixels, HostPixelsMut,
-    ImageRef, Rendered, SceneRenderer, WarpDirection, WarpMethod, WarpOptions, Warped, Warper,
+    overscan, Device, Frame, HostImage, HostImageMut, HostPixels, HostPixelsMut, ImageRef,
+    Rendered, SceneRenderer, WarpDirection, WarpMethod, WarpOptions, Warped, Warper,
 };
 pub use gpu::{EnabledFeatures, Gpu};
+/// How [`Device::with_options`] opens a device: which one, the validation layer, the
+/// geometry-shader feature.
+pub use host::ContextOptions as DeviceOptions;
 pub use imaging::cpu_warp::Sampling;
 pub use imaging::{BitDepth, Pixels, Raster};
 pub use io::catalog::{Found, Listing, LoadOptions};

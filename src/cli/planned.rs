@@ -8,7 +8,7 @@ use serde_json::json;
 use super::output::{write_outputs, Targets};
 use super::{context, finish, progress_done, progress_line, CliError};
 use crate::host::plan::execute;
-use crate::plan::{load_geometry, plan, Plan, Route, SceneFile};
+use crate::plan::{load_geometry, plan, Plan, SceneFile};
 
 /// Parses `A..B` (B excluded) or `A..=B` against `count` poses.
 pub fn parse_frames(s: &str, count: usize) -> Result<std::ops::Range<usize>, String> {
@@ -36,85 +36,6 @@ pub fn parse_frames(s: &str, count: usize) -> Result<std::ops::Range<usize>, Str
         ));
     }
     Ok(a..b)
-}
-
-/// The plan as text (what `--explain` prints), with the frame's wall time and each pass's
-/// GPU time (timestamps) where measured.
-pub fn explain(p: &Plan, measured_ms: Option<f64>, passes: &[(&str, f64)]) -> String {
-    let mut out = format!(
-        "plan: {}\n",
-        match &p.route {
-            Route::Pinhole => "pinhole render".to_string(),
-            Route::Vertex { tessellate } => format!(
-                "vertex path (Alg. 1){}",
-                tessellate
-                    .map(|l| format!(", tessellated to {l} px"))
-                    .unwrap_or_default()
-            ),
-            Route::Warp {
-                method,
-                chromatic,
-                map,
-            } => format!(
-                "pinhole render + warp ({}{})",
-                if *map {
-                    "precomputed map".to_string()
-                } else {
-                    method.to_string()
-                },
-                if chromatic.is_some() {
-                    ", chromatic"
-                } else {
-                    ""
-                }
-            ),
-            Route::WarpAndVertex { method, map, .. } => {
-                let how = if *map {
-                    "precomputed map".to_string()
-                } else {
-                    method.to_string()
-                };
-                format!("warp ({how}, chromatic) for colour + vertex path for the data")
-            }
-            Route::Cube { side, chromatic } => format!(
-                "cube map of six {side}×{side} pinhole faces + sphere warp{}",
-                if chromatic.is_some() {
-                    " (chromatic)"
-                } else {
-                    ""
-                }
-            ),
-            Route::LensModel { samples, .. } => {
-                format!("image-based lens model, {samples} lens sample(s)")
-            }
-        }
-    );
-    for (i, s) in p.steps.iter().enumerate() {
-        out.push_str(&format!("  {}. {}: {}\n", i + 1, s.stage.name(), s.why));
-    }
-    out.push_str(&format!(
-        "  geometric error: {:.2e} px (budget {} px)\n",
-        p.expected_error_px, p.budget_px
-    ));
-    if p.estimated_ms.is_finite() {
-        out.push_str(&format!(
-            "  estimated {:.1} ms per frame (lavapipe tables)",
-            p.estimated_ms
-        ));
-        out.push_str(&match measured_ms {
-            Some(m) => format!("; measured {m:.1} ms on frame 1\n"),
-            None => "\n".into(),
-        });
-    } else if let Some(m) = measured_ms {
-        out.push_str(&format!("  measured {m:.1} ms on frame 1\n"));
-    }
-    if !passes.is_empty() {
-        out.push_str("  GPU time per pass (timestamps, frame 1):\n");
-        for (name, ms) in passes {
-            out.push_str(&format!("    {name}: {ms:.2} ms\n"));
-        }
-    }
-    out
 }
 
 fn plan_json(p: &Plan, frames: &[(usize, f64)]) -> serde_json::Value {
@@ -192,7 +113,7 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
         done.borrow_mut().push((f.index, f.ms));
         if args.explain && done.borrow().len() == 1 {
             // On stdout, as soon as the first frame has measured the plan's passes.
-            out!("{}", explain(&plan, Some(f.ms), &f.pass_ms))?;
+            out!("{}", plan.explain(Some(f.ms), &f.pass_ms))?;
         }
         progress_line(&format!(
             "frame {}/{total} ({:.1} ms)",

@@ -7,12 +7,13 @@ use glam::DVec2;
 
 use super::output::check_output;
 use super::{context, CliError};
+use crate::facade::warp_geometry;
 use crate::imaging::cpu_warp::{self, Sampling};
 use crate::imaging::{file as image_io, BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;
 use crate::model::{Camera, CameraModel, InverseMethod};
 use crate::pass::warp::PixelFormat;
-use crate::{warp_geometry, Device, WarpDirection, WarpMethod, WarpOptions, Warper};
+use crate::{Device, WarpDirection, WarpMethod, WarpOptions, Warper};
 
 fn parse_warp_method(s: &str) -> Result<WarpMethod, String> {
     s.parse().map_err(|e: crate::Error| e.to_string())

@@ -2,7 +2,7 @@
 //! no engine of their own (the command line, scripts, the Python package).
 
 use crate::gpu::Gpu;
-use crate::host::Context;
+use crate::host::{Context, ContextOptions as DeviceOptions};
 use crate::Result;
 
 /// A headless Vulkan device. `VKLENS_DEVICE` picks it (`cpu`/`lavapipe`, `gpu`, an index or a
@@ -41,15 +41,21 @@ impl Device {
         self.ctx.check_validation()
     }
 
+    /// Opens the device `options` name (see [`DeviceOptions::from_env`] for what the
+    /// environment sets).
+    pub fn with_options(options: DeviceOptions) -> Result<Self> {
+        Ok(Device {
+            ctx: Context::new(options)?,
+        })
+    }
+
     /// The headless context (submission, timing) behind the device.
-    #[doc(hidden)]
-    pub fn context(&self) -> &Context {
+    pub(crate) fn context(&self) -> &Context {
         &self.ctx
     }
 
     /// Wraps an existing headless context.
-    #[doc(hidden)]
-    pub fn from_context(ctx: Context) -> Self {
+    pub(crate) fn from_context(ctx: Context) -> Self {
         Device { ctx }
     }
 }

@@ -7,9 +7,12 @@ mod image;
 mod scene;
 mod warper;
 
+pub(crate) use warper::warp_geometry;
+
+#[cfg(test)]
+mod tests;
+
 pub use device::Device;
 pub use image::{HostImage, HostImageMut, HostPixels, HostPixelsMut};
 pub use scene::{Frame, Rendered, SceneRenderer};
-pub use warper::{
-    overscan, warp_geometry, ImageRef, WarpDirection, WarpMethod, WarpOptions, Warped, Warper,
-};
+pub use warper::{overscan, ImageRef, WarpDirection, WarpMethod, WarpOptions, Warped, Warper};

@@ -7,7 +7,7 @@ use crate::plan::{load_geometry, plan, Plan, SceneFile};
 use crate::scene::Scene;
 use crate::{Device, Error, Result};
 
-pub use crate::pass::geometry::Rendered;
+pub use crate::imaging::Rendered;
 
 /// One rendered frame of a scene.
 #[derive(Debug, Clone)]
@@ -21,7 +21,7 @@ pub struct Frame {
 }
 
 /// A scene file planned for rendering: the geometry loaded and the cheapest pipeline for what
-/// it asks chosen (see [`SceneRenderer::plan`] for the route and the reasons).
+/// it asks chosen (see [`SceneRenderer::explain`] for the route and the reasons).
 ///
 /// ```no_run
 /// let device = vklens::Device::new()?;
@@ -32,7 +32,6 @@ pub struct Frame {
 /// # Ok::<(), vklens::Error>(())
 /// ```
 pub struct SceneRenderer {
-    file: SceneFile,
     scene: Scene,
     plan: Plan,
 }
@@ -49,20 +48,22 @@ impl SceneRenderer {
     }
 
     /// Plans an already read scene description.
-    pub fn new(file: SceneFile) -> Result<Self> {
+    pub(crate) fn new(file: SceneFile) -> Result<Self> {
         let scene = load_geometry(&file)?;
         let plan = plan(&file, &scene)?;
-        Ok(SceneRenderer { file, scene, plan })
+        Ok(SceneRenderer { scene, plan })
     }
 
-    /// The plan: the route, each step with the reason it is there, the expected error.
-    pub fn plan(&self) -> &Plan {
-        &self.plan
+    /// The plan as `vklens render --explain` prints it: the route, each step with the
+    /// reason it is there, the expected error against the budget.
+    pub fn explain(&self) -> String {
+        self.plan.explain(None, &[])
     }
 
-    /// The scene description.
-    pub fn file(&self) -> &SceneFile {
-        &self.file
+    /// The largest geometric error the plan's approximations leave (output pixels), as
+    /// measured while planning.
+    pub fn expected_error_px(&self) -> f64 {
+        self.plan.expected_error_px
     }
 
     /// How many poses (frames) the scene has.

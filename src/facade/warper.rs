@@ -138,7 +138,7 @@ impl WarpOptions {
 
 /// The warp's geometry for `camera` and `options`, checked: the f64 description the GPU warp,
 /// the CPU reference warp and the maps all follow.
-pub fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeometry> {
+pub(crate) fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<WarpGeometry> {
     let method = match (options.method, options.direction) {
         (WarpMethod::PerPixel(m), WarpDirection::Distort) => m,
         (WarpMethod::PerPixel(InverseMethod::Newton), _) | (WarpMethod::Lut, _) => {
@@ -328,7 +328,8 @@ impl Warper {
     }
 
     /// The f64 geometry the warp follows.
-    pub fn geometry(&self) -> &WarpGeometry {
+    #[cfg(test)]
+    pub(crate) fn geometry(&self) -> &WarpGeometry {
         &self.geometry
     }
 

@@ -96,3 +96,21 @@ impl Raster {
         }
     }
 }
+
+/// The images of one rendered frame, on the host: colour, object IDs, flow and depth, each
+/// when asked for (row-major, `width × height`).
+#[derive(Debug, Clone, Default)]
+pub struct Rendered {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Colour (8-bit, or float for EXR output).
+    pub color: Option<Raster>,
+    /// Object IDs, 0 = background.
+    pub ids: Option<Vec<u32>>,
+    /// Pixel motion since the previous pose; NaN where unknown or background.
+    pub flow: Option<Vec<[f32; 2]>>,
+    /// Camera-frame z in metres; +inf where nothing was drawn.
+    pub depth: Option<Vec<f32>>,
+}

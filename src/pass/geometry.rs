@@ -24,6 +24,7 @@ use crate::gpu::{
     Error, Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
     SpecConstants, Stage, VertexBinding,
 };
+pub use crate::imaging::Rendered;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
 use crate::model::{vulkan_projection, Camera, Frustum};
@@ -1349,20 +1350,6 @@ fn f16_to_f32(h: u16) -> f32 {
         _ => sign | ((exp + 112) << 23) | (frac << 13),
     };
     f32::from_bits(bits)
-}
-
-/// Host copies of a geometry render.
-#[derive(Debug, Clone, Default)]
-pub struct Rendered {
-    pub width: u32,
-    pub height: u32,
-    pub color: Option<Raster>,
-    /// Object IDs, 0 = background.
-    pub ids: Option<Vec<u32>>,
-    /// Pixel motion since the previous pose; NaN where unknown or background.
-    pub flow: Option<Vec<[f32; 2]>>,
-    /// Camera-frame z in metres; +inf where nothing was drawn.
-    pub depth: Option<Vec<f32>>,
 }
 
 #[cfg(test)]

@@ -206,6 +206,12 @@ typedef struct {
    R, G, B, A in 0..1 for output pixels with no source.
    */
   float fill[4];
+  /*
+   Frames vkl_warper_record may have in flight at once, 1 to 8 (0 = 2): the warper keeps
+   one descriptor set per frame, so frame N + 1 may be recorded, with other images, while
+   frame N still executes.
+   */
+  uint32_t frames_in_flight;
 } vkl_warp_options;
 
 /*
@@ -451,9 +457,12 @@ vkl_error vkl_warper_record_prepare(vkl_warper w, VkCommandBuffer cmd);
  `output` and `mask` after. It changes the bound compute pipeline and descriptor sets.
 
  Never submits, never waits, not inside a render pass. The sizes and views are checked
- first: a call that returns an error records nothing. When the views differ from the last
- call's, the warper's descriptor set is rewritten: no earlier recorded warp of this warper
- may still be pending then.
+ first: a call that returns an error records nothing.
+
+ Frames in flight: the warper keeps one descriptor set per frame in flight (N, the options'
+ frames_in_flight) and the k-th call uses set k mod N, rewriting it only when the views
+ differ from those it last held. Up to N - 1 earlier warps may still execute while this one
+ is recorded; the warp recorded N calls before must have completed when the views change.
 
  # Safety
  `w` is NULL or a live warper on which vkl_warper_record_prepare was recorded first (in

@@ -97,6 +97,7 @@ fn from_error(e: Error) -> vkl_error {
         "method" => "options.method",
         "chromatic" => "options.chromatic",
         "source_camera" => "options.source_camera",
+        "frames_in_flight" => "options.frames_in_flight",
         other => other,
     };
     let handle = error(kind, format!("{}: {}", c_name, e.message_only()));
@@ -778,6 +779,10 @@ pub struct vkl_warp_options {
     pub format: VkFormat,
     /// R, G, B, A in 0..1 for output pixels with no source.
     pub fill: [f32; 4],
+    /// Frames vkl_warper_record may have in flight at once, 1 to 8 (0 = 2): the warper keeps
+    /// one descriptor set per frame, so frame N + 1 may be recorded, with other images, while
+    /// frame N still executes.
+    pub frames_in_flight: u32,
 }
 
 /// One of the caller's images: a 2D image with one mip level and layer, a view of it, and its
@@ -807,7 +812,7 @@ pub type vkl_warper = *mut vkl_warper_s;
 unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error> {
     // SAFETY: `o` is readable (the caller's contract); every read is of a plain field through
     // a raw pointer, and `direction` is read as the u32 it is stored as.
-    let (version, direction, method, chromatic, source, format, fill) = unsafe {
+    let (version, direction, method, chromatic, source, format, fill, frames) = unsafe {
         (
             ptr::addr_of!((*o).version).read(),
             ptr::addr_of!((*o).direction).cast::<u32>().read(),
@@ -816,6 +821,7 @@ unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error>
             ptr::addr_of!((*o).source_camera).read(),
             ptr::addr_of!((*o).format).read(),
             ptr::addr_of!((*o).fill).read(),
+            ptr::addr_of!((*o).frames_in_flight).read(),
         )
     };
     if version != VKL_API_VERSION {
@@ -864,6 +870,9 @@ unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error>
         return Err(input("options.fill: every value must be a finite number"));
     }
     options.fill = fill;
+    if frames != 0 {
+        options.frames_in_flight = frames as usize;
+    }
     Ok(options)
 }
 
@@ -984,9 +993,12 @@ pub unsafe extern "C" fn vkl_warper_record_prepare(
 /// `output` and `mask` after. It changes the bound compute pipeline and descriptor sets.
 ///
 /// Never submits, never waits, not inside a render pass. The sizes and views are checked
-/// first: a call that returns an error records nothing. When the views differ from the last
-/// call's, the warper's descriptor set is rewritten: no earlier recorded warp of this warper
-/// may still be pending then.
+/// first: a call that returns an error records nothing.
+///
+/// Frames in flight: the warper keeps one descriptor set per frame in flight (N, the options'
+/// frames_in_flight) and the k-th call uses set k mod N, rewriting it only when the views
+/// differ from those it last held. Up to N - 1 earlier warps may still execute while this one
+/// is recorded; the warp recorded N calls before must have completed when the views change.
 ///
 /// # Safety
 /// `w` is NULL or a live warper on which vkl_warper_record_prepare was recorded first (in

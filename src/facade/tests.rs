@@ -227,3 +227,131 @@ fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
     );
     device.check_validation().unwrap();
 }
+
+#[test]
+fn two_frames_in_flight_warp_other_images_without_waiting_for_each_other() {
+    use crate::gpu::{image_barrier, record_compute_download, Buffer, Image};
+    use crate::ImageRef;
+    use ash::vk;
+    let device = device();
+    let gpu = device.gpu();
+    let camera = reference_camera("prism_tilt");
+    let (w, h) = (camera.width, camera.height);
+    let mut warper = Warper::new(gpu, &camera, &WarpOptions::distort()).unwrap();
+    assert_eq!(WarpOptions::distort().frames_in_flight, 2);
+    // Two frames, each with its own images, as a swapchain-fed engine has them.
+    let inputs = [pattern(w, h), {
+        let mut p = pattern(w, h);
+        if let Pixels::Rgba8(px) = &mut p.pixels {
+            px.iter_mut().for_each(|q| q[0] = 255 - q[0]);
+        }
+        p
+    }];
+    let expected: Vec<_> = inputs
+        .iter()
+        .map(|i| warper.run(&device, i).unwrap().image.pixels)
+        .collect();
+    let usage = vk::ImageUsageFlags::STORAGE
+        | vk::ImageUsageFlags::TRANSFER_SRC
+        | vk::ImageUsageFlags::TRANSFER_DST;
+    let fmt = vk::Format::R8G8B8A8_UNORM;
+    let frames: Vec<_> = inputs
+        .iter()
+        .map(|input| {
+            let Pixels::Rgba8(px) = &input.pixels else {
+                unreachable!()
+            };
+            (
+                Image::new_2d(gpu, "frame.source", fmt, w, h, usage).unwrap(),
+                Image::new_2d(gpu, "frame.output", fmt, w, h, usage).unwrap(),
+                Buffer::from_pod(
+                    gpu,
+                    "frame.upload",
+                    bytemuck::cast_slice::<[u8; 4], u8>(px),
+                    vk::BufferUsageFlags::TRANSFER_SRC,
+                )
+                .unwrap(),
+                Buffer::new(
+                    gpu,
+                    "frame.download",
+                    (w * h * 4) as u64,
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                    gpu_allocator::MemoryLocation::GpuToCpu,
+                )
+                .unwrap(),
+            )
+        })
+        .collect();
+    let r = |i: &Image| ImageRef {
+        image: i.raw,
+        view: i.view,
+        width: i.extent.width,
+        height: i.extent.height,
+    };
+    // Both frames in one submission: the second is recorded while the first is still
+    // pending, with other views. With one set it would be rewritten under the first.
+    device
+        .context()
+        .submit(|cmd| {
+            let top = (
+                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::AccessFlags::empty(),
+            );
+            let copy_w = (
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            );
+            let read = (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_READ,
+            );
+            let write = (
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::AccessFlags::SHADER_WRITE,
+            );
+            // SAFETY: `cmd` is recording outside a render pass on the context's compute
+            // queue; every image and buffer outlives the submission, which `submit` waits for.
+            unsafe {
+                let d = gpu.device();
+                for (source, output, upload, _) in &frames {
+                    let to_dst = (
+                        vk::ImageLayout::UNDEFINED,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    );
+                    image_barrier(gpu, cmd, source.raw, to_dst, top, copy_w);
+                    d.cmd_copy_buffer_to_image(
+                        cmd,
+                        upload.raw,
+                        source.raw,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &[source.whole_copy()],
+                    );
+                    let to_general = (
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        vk::ImageLayout::GENERAL,
+                    );
+                    image_barrier(gpu, cmd, source.raw, to_general, copy_w, read);
+                    let fresh = (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
+                    image_barrier(gpu, cmd, output.raw, fresh, top, write);
+                }
+                // Once, as an engine records it before its first frame.
+                warper.record_prepare(cmd);
+                for (source, output, _, download) in &frames {
+                    warper.record(cmd, &r(source), &r(output), None)?;
+                    record_compute_download(gpu, cmd, output, download);
+                }
+                crate::gpu::host_read_barrier(gpu, cmd);
+            }
+            Ok(())
+        })
+        .unwrap();
+    for ((_, _, _, download), want) in frames.iter().zip(&expected) {
+        let got: Vec<[u8; 4]> = download.read_pod((w * h) as usize).unwrap();
+        assert_eq!(
+            &Pixels::Rgba8(got),
+            want,
+            "a frame in flight differs from its run"
+        );
+    }
+    device.check_validation().unwrap();
+}

@@ -83,6 +83,10 @@ impl fmt::Display for WarpMethod {
     }
 }
 
+/// Frames in flight a [`Warper`] keeps descriptor sets for unless told otherwise: double
+/// buffering, what engines record by default.
+pub const DEFAULT_FRAMES_IN_FLIGHT: usize = 2;
+
 /// What a [`Warper`] is built for. Start from [`WarpOptions::distort`],
 /// [`WarpOptions::undistort`] or [`WarpOptions::precorrect`] and change what differs.
 #[derive(Debug, Clone)]
@@ -107,6 +111,10 @@ pub struct WarpOptions {
     pub sampling: Sampling,
     /// Value of output pixels with no source, in 0..1 (default transparent black).
     pub fill: [f32; 4],
+    /// Frames [`Warper::record`] may have in flight at once (default 2, at most 8): the
+    /// warper keeps one descriptor set per frame, so the caller may record frame N + 1, with
+    /// other images, while frame N still executes.
+    pub frames_in_flight: usize,
 }
 
 impl WarpOptions {
@@ -120,6 +128,7 @@ impl WarpOptions {
             format: PixelFormat::Rgba8,
             sampling: Sampling::Bilinear,
             fill: [0.0; 4],
+            frames_in_flight: DEFAULT_FRAMES_IN_FLIGHT,
         }
     }
     /// Simulate the lens on a pinhole image.
@@ -245,8 +254,10 @@ pub struct Warper {
     direction: WarpDirection,
     /// The mask bound when the caller passes none (the shader always writes one).
     own_mask: Image,
-    /// The views the pass is bound to now.
-    bound: Option<[vk::ImageView; 3]>,
+    /// The views each frame's descriptor set is bound to now.
+    bound: Vec<Option<[vk::ImageView; 3]>>,
+    /// Frames recorded so far: the next one uses set `frame % frames_in_flight`.
+    frame: usize,
     /// Images for [`Warper::run`], made on its first call.
     headless: Option<WarpImages>,
     /// Whether the map build has been recorded (it runs once).
@@ -283,7 +294,17 @@ impl Warper {
             fill: options.fill,
             write_mask: true,
         };
-        let pass = WarpPass::new(gpu, desc)?;
+        if !(1..=crate::pass::warp::MAX_FRAMES_IN_FLIGHT).contains(&options.frames_in_flight) {
+            return Err(Error::argument(
+                "frames_in_flight",
+                format!(
+                    "{}: expected 1 to {} frames in flight",
+                    options.frames_in_flight,
+                    crate::pass::warp::MAX_FRAMES_IN_FLIGHT
+                ),
+            ));
+        }
+        let pass = WarpPass::with_frames(gpu, desc, options.frames_in_flight)?;
         let (ow, oh) = geometry.output_size;
         let own_mask = Image::new_2d(
             gpu,
@@ -300,7 +321,8 @@ impl Warper {
             source_camera,
             direction: options.direction,
             own_mask,
-            bound: None,
+            bound: vec![None; options.frames_in_flight],
+            frame: 0,
             headless: None,
             prepared_headless: false,
         })
@@ -361,12 +383,17 @@ impl Warper {
     /// caller's barriers make the source's writes visible to it before, and its writes
     /// visible to whatever reads them after. It never submits and never waits.
     ///
+    /// Frames in flight: the warper keeps one descriptor set per frame in flight
+    /// ([`WarpOptions::frames_in_flight`], N) and the k-th call uses set k mod N, rewriting it
+    /// only when its views differ from those it was last bound to. So up to N − 1 earlier
+    /// warps may still execute while this one is recorded, whatever images they used.
+    ///
     /// # Safety
     /// `cmd` must be recording outside a render pass, after [`Warper::record_prepare`] was
     /// recorded (in this or an earlier submission that has completed or precedes it). The
-    /// images must be alive until the work completes. When the views differ from the last
-    /// call's, the warp's descriptor set is rewritten: no previously recorded warp of this
-    /// warper may still be pending then.
+    /// images must be alive until the work completes. The warp recorded N calls before this
+    /// one (N = frames in flight) must have completed when the views differ from its views:
+    /// its descriptor set is rewritten then.
     pub unsafe fn record(
         &mut self,
         cmd: vk::CommandBuffer,
@@ -396,8 +423,8 @@ impl Warper {
             output.view,
             mask.map_or(self.own_mask.view, |m| m.view),
         ];
-        // SAFETY: the caller guarantees that no recorded warp of this warper is pending when
-        // the views change (see `# Safety`).
+        // SAFETY: the caller guarantees that the warp recorded N calls ago, the last user of
+        // this frame's set, has completed when the views change (see `# Safety`).
         unsafe { self.bind(views) };
         // SAFETY: the caller upholds `record`'s contract (recording outside a render pass,
         // after `record_prepare`, the images alive and in GENERAL), and the views just bound
@@ -406,13 +433,20 @@ impl Warper {
         Ok(())
     }
 
+    /// Selects the next frame's descriptor set and binds `views` to it where they differ from
+    /// the views it holds.
+    ///
     /// # Safety
-    /// When `views` differ from the bound ones, no recorded warp of this warper may be pending.
+    /// When `views` differ from that set's, the last warp recorded with it (N calls ago) must
+    /// have completed.
     unsafe fn bind(&mut self, views: [vk::ImageView; 3]) {
-        if self.bound != Some(views) {
+        let slot = self.frame % self.bound.len();
+        self.frame = self.frame.wrapping_add(1);
+        self.pass.select_frame(slot);
+        if self.bound[slot] != Some(views) {
             // SAFETY: the caller upholds this function's contract.
             unsafe { self.pass.bind(views[0], views[1], views[2]) };
-            self.bound = Some(views);
+            self.bound[slot] = Some(views);
         }
     }
 

@@ -118,6 +118,9 @@ const _: () = assert!(std::mem::size_of::<WarpPush>() == 64);
 const MAP_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 /// Largest forward residual (px) a coarse-map pixel may have before it is marked invalid.
 pub const COARSE_MAX_RESIDUAL_PX: f32 = 0.05;
+/// Most frames in flight a warp keeps descriptor sets for (triple buffering and then some).
+pub const MAX_FRAMES_IN_FLIGHT: usize = 8;
+
 /// Map images per channel in shader binding order: R (5), G (4), B (6) → stored as [R, G, B].
 const MAP_BINDINGS: [u32; 3] = [5, 4, 6];
 
@@ -136,7 +139,11 @@ pub struct WarpPass {
     desc: WarpDesc,
     pipeline: ComputePipeline,
     _pool: DescriptorPool,
-    set: vk::DescriptorSet,
+    /// One descriptor set per frame in flight (librashader's frame residuals): a caller may
+    /// bind other images for the next frame while the previous one still reads its set.
+    sets: Vec<vk::DescriptorSet>,
+    /// The set [`WarpPass::bind`] writes and [`WarpPass::record`] uses.
+    slot: usize,
     _camera: Buffer,
     /// [R, G, B] maps (1×1 placeholders in analytic mode; only G without chromatic).
     pub(crate) maps: Vec<Image>,
@@ -164,6 +171,13 @@ impl WarpPass {
     /// Builds the pipelines (terms the camera does not use are compiled out; the single-fetch
     /// variant when there is no chromatic aberration) and, in map mode, the map images.
     pub fn new(gpu: &Gpu, desc: WarpDesc) -> Result<Self> {
+        Self::with_frames(gpu, desc, 1)
+    }
+
+    /// As [`WarpPass::new`], with `frames` descriptor sets (at least one): one per frame in
+    /// flight, chosen by [`WarpPass::select_frame`].
+    pub fn with_frames(gpu: &Gpu, desc: WarpDesc, frames: usize) -> Result<Self> {
+        let frames = frames.clamp(1, MAX_FRAMES_IN_FLIGHT);
         let g = &desc.geometry;
         if matches!(desc.format, PixelFormat::R32Uint | PixelFormat::R32Float)
             && (desc.sampling != Sampling::Nearest || g.is_chromatic())
@@ -224,19 +238,23 @@ impl WarpPass {
             std::mem::size_of::<WarpPush>() as u32,
             constants,
         )?;
-        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
-        let set = pool.allocate(&pipeline)?;
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, frames as u32)?;
+        let sets = (0..frames)
+            .map(|_| pool.allocate(&pipeline))
+            .collect::<Result<Vec<_>>>()?;
         let camera = Buffer::from_pod(
             gpu,
             "warp.camera",
             &[CameraParams::from_camera(&g.camera)],
             vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
-        write_buffer_descriptors(
-            gpu,
-            set,
-            &[(0, vk::DescriptorType::UNIFORM_BUFFER, &camera)],
-        );
+        for &set in &sets {
+            write_buffer_descriptors(
+                gpu,
+                set,
+                &[(0, vk::DescriptorType::UNIFORM_BUFFER, &camera)],
+            );
+        }
         let scales = g.chromatic.unwrap_or([1.0; 3]);
         let k = &g.ideal;
         let push = WarpPush {
@@ -268,7 +286,9 @@ impl WarpPass {
         }
         let map_views: Vec<(u32, vk::ImageView)> =
             (0..3).map(|c| (MAP_BINDINGS[c], maps[c].view)).collect();
-        write_storage_image_descriptors(gpu, set, &map_views);
+        for &set in &sets {
+            write_storage_image_descriptors(gpu, set, &map_views);
+        }
 
         let mut map_pipelines = Vec::new();
         let mut map_pool = None;
@@ -389,7 +409,8 @@ impl WarpPass {
             desc,
             pipeline,
             _pool: pool,
-            set,
+            sets,
+            slot: 0,
             _camera: camera,
             maps,
             map_pipelines,
@@ -469,15 +490,26 @@ impl WarpPass {
         &self.pipeline
     }
 
+    /// How many descriptor sets the pass keeps: frames that may be in flight at once.
+    pub fn frames_in_flight(&self) -> usize {
+        self.sets.len()
+    }
+
+    /// Makes frame `frame`'s descriptor set (`frame` modulo [`Self::frames_in_flight`]) the
+    /// one [`WarpPass::bind`] writes and [`WarpPass::record`] records.
+    pub fn select_frame(&mut self, frame: usize) {
+        self.slot = frame % self.sets.len();
+    }
+
     /// Points the pass at the caller's images (views of storage images that will be in
     /// `GENERAL` layout when the recorded work runs): the source (`source_size`, this pass's
     /// format), the output (`output_size`, same format) and the mask (`output_size`,
     /// `R8_UNORM`: 1 valid, 0 filled). Not while recorded work using the pass is pending.
     ///
     /// # Safety
-    /// This rewrites the pass's descriptor set: no recorded work that uses
-    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
-    /// requires of descriptor sets and memory the device reads.
+    /// This rewrites the selected frame's descriptor set: no recorded work that uses that set
+    /// (a frame recorded with the same selection) may be pending on the GPU (wait for its
+    /// fence first), as Vulkan requires of descriptor sets the device reads.
     pub unsafe fn bind(
         &mut self,
         source: vk::ImageView,
@@ -486,7 +518,7 @@ impl WarpPass {
     ) {
         write_storage_image_descriptors(
             &self.gpu,
-            self.set,
+            self.sets[self.slot],
             &[(1, source), (2, output), (3, mask)],
         );
     }
@@ -550,7 +582,7 @@ impl WarpPass {
         unsafe {
             self.pipeline.record_dispatch(
                 cmd,
-                self.set,
+                self.sets[self.slot],
                 bytemuck::bytes_of(&self.push),
                 (w.div_ceil(8), h.div_ceil(8)),
             )

@@ -215,7 +215,7 @@ static void gpu_and_warper(void) {
     double d[4] = {-0.05, 0.01, 0.03, -0.01};
     expect_ok("camera", vkl_camera_from_opencv(800, 600, K, d, 4, &c));
     vkl_warper w = NULL;
-    vkl_warp_options o = {VKL_API_VERSION, VKL_DISTORT, NULL, NULL, NULL, VK_FORMAT_R8G8B8A8_UNORM, {0, 0, 0, 0}};
+    vkl_warp_options o = {VKL_API_VERSION, VKL_DISTORT, NULL, NULL, NULL, VK_FORMAT_R8G8B8A8_UNORM, {0, 0, 0, 0}, 0};
     vkl_warp_options bad = o;
     bad.direction = (vkl_direction)7;
     expect_error("direction 7", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "direction");
@@ -225,6 +225,9 @@ static void gpu_and_warper(void) {
     bad = o;
     bad.format = VK_FORMAT_B8G8R8A8_SRGB;
     expect_error("unsupported format", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "format");
+    bad = o;
+    bad.frames_in_flight = 9;
+    expect_error("nine frames in flight", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "frames_in_flight");
     bad = o;
     bad.version = 0;
     expect_error("options version", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "version");

@@ -20,14 +20,15 @@
 //! `bench inverse`); `--explain` prints the times measured on the frame itself.
 
 pub(crate) mod antialias;
+mod cost;
+mod explain;
 pub mod limits;
 pub mod record;
 mod request;
 pub mod scene_file;
+mod search;
 
 use crate::{Error, Result};
-
-use glam::{DVec2, DVec3};
 
 use crate::lens::image_model::{channel_models, ModelOptions};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};
@@ -40,6 +41,11 @@ pub use antialias::{
 pub use record::{PassKind, PlanRecorder, RecordedPipeline};
 pub use request::{PathChoice, RenderRequest};
 pub use scene_file::{SceneFile, SceneFileError};
+
+use cost::*;
+pub use cost::{inverse_candidates, inverse_candidates_for, ray_model_inverse_ns};
+pub use search::inverse_error_px;
+use search::*;
 
 /// How the frames are made.
 #[derive(Debug, Clone, PartialEq)]
@@ -204,86 +210,6 @@ impl Plan {
         }
     }
 
-    /// The plan as text (what `--explain` prints), with the frame's wall time and each pass's
-    /// GPU time (timestamps) where measured.
-    pub fn explain(&self, measured_ms: Option<f64>, passes: &[(&str, f64)]) -> String {
-        let p = self;
-        let mut out = format!(
-            "plan: {}\n",
-            match &p.route {
-                Route::Pinhole => "pinhole render".to_string(),
-                Route::Vertex { tessellate } => format!(
-                    "vertex path (Alg. 1){}",
-                    tessellate
-                        .map(|l| format!(", tessellated to {l} px"))
-                        .unwrap_or_default()
-                ),
-                Route::Warp {
-                    method,
-                    chromatic,
-                    map,
-                } => format!(
-                    "pinhole render + warp ({}{})",
-                    if *map {
-                        "precomputed map".to_string()
-                    } else {
-                        method.to_string()
-                    },
-                    if chromatic.is_some() {
-                        ", chromatic"
-                    } else {
-                        ""
-                    }
-                ),
-                Route::WarpAndVertex { method, map, .. } => {
-                    let how = if *map {
-                        "precomputed map".to_string()
-                    } else {
-                        method.to_string()
-                    };
-                    format!("warp ({how}, chromatic) for colour + vertex path for the data")
-                }
-                Route::Cube { side, chromatic } => format!(
-                    "cube map of six {side}×{side} pinhole faces + sphere warp{}",
-                    if chromatic.is_some() {
-                        " (chromatic)"
-                    } else {
-                        ""
-                    }
-                ),
-                Route::LensModel { samples, .. } => {
-                    format!("image-based lens model, {samples} lens sample(s)")
-                }
-            }
-        );
-        for (i, s) in p.steps.iter().enumerate() {
-            out.push_str(&format!("  {}. {}: {}\n", i + 1, s.stage.name(), s.why));
-        }
-        out.push_str(&format!(
-            "  geometric error: {:.2e} px (budget {} px)\n",
-            p.expected_error_px, p.budget_px
-        ));
-        if p.estimated_ms.is_finite() {
-            out.push_str(&format!(
-                "  estimated {:.1} ms per frame (lavapipe tables)",
-                p.estimated_ms
-            ));
-            out.push_str(&match measured_ms {
-                Some(m) => format!("; measured {m:.1} ms on frame 1\n"),
-                None => "\n".into(),
-            });
-        } else if let Some(m) = measured_ms {
-            out.push_str(&format!("  measured {m:.1} ms on frame 1\n"));
-        }
-        if !passes.is_empty() {
-            out.push_str("  GPU time per pass (timestamps, frame 1):\n");
-            for (name, ms) in passes {
-                out.push_str(&format!("    {name}: {ms:.2} ms\n"));
-            }
-        }
-        out
-    }
-
     /// The lens prescription and its setting, if the optics are one.
     pub fn lens(&self) -> Option<&LensSetting> {
         match &self.optics {
@@ -293,135 +219,6 @@ impl Plan {
     }
 }
 
-/// Inverse methods the planner chooses between, cheapest first for `terms`, with a per-pixel
-/// GPU cost (ns, f32, lavapipe), read off the README's `bench inverse` table: Heikkilä ~25;
-/// fixed-point ~22 + N × (1.2 for radial lenses, 6 with rational, prism or tilt terms, e.g.
-/// 36 → 129 ns from 5 to 20 iterations on `prism_tilt`); Newton ~70 (radial) to ~100.
-pub fn inverse_candidates_for(terms: crate::model::Terms) -> Vec<(InverseMethod, f64)> {
-    if terms.is_ray_model() {
-        // One inverse for the ray models: their own (closed form, or Newton).
-        return vec![(InverseMethod::Newton, ray_model_inverse_ns(terms.model))];
-    }
-    let complex = terms.rational || terms.prism || terms.tilt;
-    let per_iteration = if complex { 6.0 } else { 1.2 };
-    let mut v = vec![(InverseMethod::Heikkila, 25.0)];
-    for n in [1, 2, 3, 5, 10, 20, 50] {
-        v.push((
-            InverseMethod::FixedPoint(n),
-            22.0 + per_iteration * n as f64,
-        ));
-    }
-    v.push((InverseMethod::Newton, if complex { 100.0 } else { 70.0 }));
-    v.sort_by(|a, b| a.1.total_cmp(&b.1));
-    v
-}
-
-/// GPU cost per pixel (ns, f32, lavapipe) of a ray model's inverse: the fisheye's 70 (Newton
-/// on θ, as `bench inverse` measured it) scaled by each model's 1080p inverse time relative to
-/// the fisheye's in two `vklens bench models` runs (docs/benchmarks.md): closed forms about
-/// 0.6–0.8 of it, the omni model (the standard model's Newton on its radial-tangential part)
-/// and the thin-prism fisheyes (Newton on their plane) about 2.6× and 3×.
-pub fn ray_model_inverse_ns(model: crate::model::ModelKind) -> f64 {
-    use crate::model::ModelKind as M;
-    const FISHEYE_NS: f64 = 70.0;
-    let relative = match model {
-        M::Standard | M::Fisheye => 1.0,
-        M::Omni => 2.6,
-        M::Ucm | M::Eucm | M::DoubleSphere => 0.65,
-        M::Fov | M::Division => 0.8,
-        M::Equirectangular => 0.6,
-        M::FTheta => 1.6,
-        M::Ocam => 0.75,
-        M::ThinPrismFisheye => 3.0,
-    };
-    FISHEYE_NS * relative
-}
-
-/// [`inverse_candidates_for`] a lens with every term.
-pub fn inverse_candidates() -> Vec<(InverseMethod, f64)> {
-    inverse_candidates_for(crate::model::Terms {
-        radial: true,
-        rational: true,
-        tangential: true,
-        prism: true,
-        tilt: true,
-        model: crate::model::ModelKind::Standard,
-    })
-}
-
-/// The largest error (pixels) of `method` on `camera`: every pixel of a 48 × 36 grid over
-/// the image inside the valid domain is undistorted by the method and projected back by the
-/// exact forward model. `None` where the method refuses a pixel Newton accepts.
-pub fn inverse_error_px(camera: &Camera, method: InverseMethod) -> Option<f64> {
-    let k = &camera.intrinsics;
-    let mut worst = 0f64;
-    for j in 0..36 {
-        for i in 0..48 {
-            let p = DVec2::new(
-                (i as f64 + 0.5) / 48.0 * camera.width as f64 - 0.5,
-                (j as f64 + 0.5) / 36.0 * camera.height as f64 - 0.5,
-            );
-            let y = DVec2::new((p.x - k.cx) / k.fx, (p.y - k.cy) / k.fy);
-            if camera
-                .undistort_normalized(y, InverseMethod::Newton)
-                .is_none()
-            {
-                continue; // outside the valid domain: no method may answer
-            }
-            let x = camera.undistort_normalized(y, method)?;
-            let back = camera.project(DVec3::new(x.x, x.y, 1.0))?;
-            let e = (back - p).length();
-            if !e.is_finite() {
-                return None;
-            }
-            worst = worst.max(e);
-        }
-    }
-    Some(worst)
-}
-
-// The cost model: frame times on lavapipe (2 cores), from `vklens bench vertex` and
-// `vklens bench warp` at 800×600 (docs/benchmarks.md). Only their ratios matter to the choice.
-
-/// A pinhole render, per output pixel (ns): clear, raster and store (`bench vertex`, plain).
-const RENDER_NS_PER_PIXEL: f64 = 12.0;
-/// A pinhole render, per triangle (ns) (`bench vertex`, plain render at 128² and 512² quads).
-const RENDER_NS_PER_TRIANGLE: f64 = 230.0;
-/// Alg. 1 with its compute discard (the default), per vertex, beyond the plain render of the
-/// same triangles (ns): the per-vertex pass (the model once per vertex, the discard's
-/// bookkeeping); the draw that follows costs what the plain render does. `bench vertex`,
-/// 2026-12-02, 512² quads (263,169 vertices), the 14-term lens: 112.3 against 92.2 ms at
-/// 800×600 (76 ns a vertex), 140.6 against 113.2 ms at 1920×1080 (104 ns). The geometry-shader
-/// discard costs 2.2× and 1.9× the plain render there.
-const DISCARD_NS_PER_VERTEX: f64 = 90.0;
-/// The overscanned source a warp renders, in source pixels per output pixel (density 1 on
-/// the shipped barrel and prism cameras).
-const OVERSCAN_AREA: f64 = 1.3;
-/// Sampling a precomputed map in the warp, per output pixel (ns): `bench warp` "warp map",
-/// 6.0 ms at 800×600.
-const MAP_WARP_NS: f64 = 12.5;
-/// The same with three maps, one per channel: "warp map chromatic", 10.6 ms at 800×600.
-const MAP_WARP_CHROMATIC_NS: f64 = 22.0;
-/// Building a coarse map (every 8th pixel solved, cubic between), per output pixel and
-/// channel (ns): "inverse map build: coarse8+cubic", 3.2 ms at 800×600.
-const MAP_BUILD_NS: f64 = 6.7;
-/// The sphere warp from a cube map, per output pixel and fetch (ns): each pixel's ray (the
-/// lens's inverse) and a bilinear cube fetch into an RGBA8 target. `bench wide`, 2026-12-02,
-/// GPU time of the warp pass at 1920×1080: 24 and 23 ns a pixel on the 180° and 200°
-/// fisheyes, 30 on the GoPro-like lens (its inverse is a Newton solve).
-const SPHERE_WARP_NS: f64 = 25.0;
-/// The cube path's geometric error (px): the pixel each output pixel's f32 ray reprojects
-/// to, against the f64 model, the largest over `bench wide`'s three lenses (2.2e-4 px on the
-/// GoPro-like lens, 1.1e-4 and 8.5e-5 on the 180° and 200° fisheyes).
-const CUBE_RAY_ERROR_PX: f64 = 2.5e-4;
-/// The largest face the planner asks for: the smallest `maxImageDimensionCube` Vulkan allows
-/// (the recorder clamps to the device's own limit and the cube budget again).
-const PLANNED_CUBE_MAX_SIDE: u32 = 4096;
-
-/// The f32 floor of a coarse cubic map's coordinates (px): its measured error at 1080p on
-/// `prism_tilt` ("map max error px" in `bench warp`), where the f64 estimate is 3e-6 px.
-const MAP_F32_FLOOR_PX: f64 = 5.3e-4;
-
 /// How the warp route's coordinates come when the planner picks the precomputed map: solved
 /// every 8th pixel with Newton, cubic Lagrange between (error O(h⁴)), built once.
 pub const MAP_COORDINATES: Coordinates = Coordinates::CoarseMap {
@@ -429,78 +226,6 @@ pub const MAP_COORDINATES: Coordinates = Coordinates::CoarseMap {
     refine: 0,
     interpolation: MapInterpolation::Cubic,
 };
-
-/// One way of warping, as the planner weighs it.
-#[derive(Debug, Clone, Copy)]
-struct WarpChoice {
-    /// The inverse solved per pixel (or the map's, Newton).
-    method: InverseMethod,
-    /// Whether the coordinates come from a precomputed map.
-    map: bool,
-    /// Its geometric error on the camera (px).
-    error_px: f64,
-    /// Its estimated frame time (ms).
-    ms: f64,
-}
-
-/// What a frame costs, by route.
-#[derive(Debug, Clone, Copy)]
-enum Cost {
-    /// A pinhole render of the camera.
-    Pinhole,
-    /// Alg. 1 on a mesh of this many vertices.
-    Vertex { vertices: f64 },
-    /// The overscanned pinhole render, then a warp spending `coordinate_ns` per output pixel
-    /// on its coordinates and samples.
-    Warp { coordinate_ns: f64 },
-    /// Six pinhole faces of `side` pixels, each drawing every triangle, then the sphere warp
-    /// with `fetches` per output pixel.
-    Cube { side: u32, fetches: f64 },
-}
-
-/// Estimated frame time (ms) of `pixels` output pixels and `triangles` triangles.
-fn estimate_ms(pixels: f64, triangles: f64, cost: Cost) -> f64 {
-    let ns = match cost {
-        Cost::Pinhole => RENDER_NS_PER_PIXEL * pixels + RENDER_NS_PER_TRIANGLE * triangles,
-        Cost::Vertex { vertices } => {
-            RENDER_NS_PER_PIXEL * pixels
-                + RENDER_NS_PER_TRIANGLE * triangles
-                + DISCARD_NS_PER_VERTEX * vertices
-        }
-        Cost::Cube { side, fetches } => {
-            6.0 * (RENDER_NS_PER_PIXEL * side as f64 * side as f64
-                + RENDER_NS_PER_TRIANGLE * triangles)
-                + SPHERE_WARP_NS * fetches * pixels
-        }
-        Cost::Warp { coordinate_ns } => {
-            RENDER_NS_PER_PIXEL * OVERSCAN_AREA * pixels
-                + RENDER_NS_PER_TRIANGLE * triangles
-                + coordinate_ns * pixels
-        }
-    };
-    ns * 1e-6
-}
-
-/// The precomputed map's error (px) on `camera`'s warp geometry: the f64 estimate of the
-/// interpolation, at least the f32 floor. `None` where a fold is in view (a map there needs a
-/// per-pixel check, which the planner does not weigh).
-fn map_error_px(camera: &Camera, chromatic: Option<[f64; 3]>) -> Option<f64> {
-    let (_, mut g) =
-        crate::model::warp::WarpGeometry::overscanned(camera, InverseMethod::Newton, 1.0).ok()?;
-    if let Some(scales) = chromatic {
-        g = g.with_chromatic(scales).ok()?;
-    }
-    let Coordinates::CoarseMap {
-        stride,
-        interpolation,
-        ..
-    } = MAP_COORDINATES
-    else {
-        return None;
-    };
-    g.coarse_interpolation_error(stride, interpolation)
-        .map(|e| e.max(MAP_F32_FLOOR_PX))
-}
 
 /// Loads the scene's geometry.
 pub fn load_geometry(file: &SceneFile) -> Result<Scene> {
@@ -1086,71 +811,4 @@ fn plan_camera(file: &SceneFile, scene: &Scene, path: &std::path::Path) -> Resul
         antialias: file.antialias,
         estimated_ms: estimated,
     })
-}
-
-/// The tessellation Alg. 1 needs: the mesh as it is, or its edges split to the coarsest
-/// length whose straight-edge error meets the budget.
-#[derive(Debug, Clone, Copy)]
-struct TessellationChoice {
-    /// Edge length in pixels (`None`: the mesh as it is).
-    edge_px: Option<f64>,
-    /// Largest distance of a straight edge from the true curve (px), measured.
-    error_px: f64,
-    triangles: usize,
-    vertices: usize,
-}
-
-/// The coarsest tessellation of `scene` whose straight-line error at `pose` meets `budget`
-/// (none beyond 4 million triangles).
-fn search_tessellation(
-    scene: &Scene,
-    pose: &Pose,
-    camera: &Camera,
-    budget: f64,
-) -> Result<Option<TessellationChoice>> {
-    const EDGES: [Option<f64>; 8] = [
-        None,
-        Some(64.0),
-        Some(32.0),
-        Some(16.0),
-        Some(8.0),
-        Some(4.0),
-        Some(2.0),
-        Some(1.0),
-    ];
-    for l in EDGES {
-        let mesh = match l {
-            None => scene.mesh.clone(),
-            Some(l) => crate::scene::tessellate::tessellate(&scene.mesh, pose, camera, l)?,
-        };
-        if mesh.triangle_count() > 4_000_000 {
-            break;
-        }
-        let err = crate::scene::tessellate::straight_line_error(camera, pose, &mesh);
-        if err <= budget {
-            return Ok(Some(TessellationChoice {
-                edge_px: l,
-                error_px: err,
-                triangles: mesh.triangle_count(),
-                vertices: mesh.vertices.len(),
-            }));
-        }
-    }
-    Ok(None)
-}
-
-/// The cheapest inverse method whose error, measured on `camera`, meets `budget`, with the
-/// frame time `ms` estimates from its per-pixel cost (ns).
-fn search_inverse(camera: &Camera, budget: f64, ms: impl Fn(f64) -> f64) -> Option<WarpChoice> {
-    inverse_candidates_for(camera.terms())
-        .into_iter()
-        .find_map(|(method, ns)| {
-            let err = inverse_error_px(camera, method)?;
-            (err <= budget).then(|| WarpChoice {
-                method,
-                map: false,
-                error_px: err,
-                ms: ms(ns),
-            })
-        })
 }

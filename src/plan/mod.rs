@@ -390,15 +390,16 @@ fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Result<Plan> {
     } else {
         file.poses.clone()
     };
-    Ok(Plan {
-        route: Route::LensModel {
+    Ok(file_plan(
+        file,
+        Route::LensModel {
             samples,
             chromatic: e.chromatic_aberration,
             vignetting: e.vignetting,
             max_angle_deg,
         },
         steps,
-        optics: Optics::Lens(LensSetting {
+        Optics::Lens(LensSetting {
             prescription: lens,
             pitch_mm: pitch,
             pixels: *pixels,
@@ -406,17 +407,9 @@ fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Result<Plan> {
             f_number: *f_number,
             models,
         }),
-        expected_error_px: model_angle / px_deg,
-        budget_px: file.max_error_px,
         poses,
-        previous_pose: None,
-        delta: crate::pass::geometry::DEFAULT_DELTA,
-        density: 1.0,
-        outputs: *o,
-        background: file.background,
-        antialias: file.antialias,
-        estimated_ms: f64::NAN,
-    })
+        (model_angle / px_deg, f64::NAN),
+    ))
 }
 
 /// A calibrated camera's plan: validation, the candidates' search (tessellation, inverse,
@@ -484,21 +477,15 @@ fn plan_camera(file: &SceneFile, scene: &Scene, path: &std::path::Path) -> Resul
             },
         ));
         push_antialias_step(&mut steps, file.antialias, o.color);
-        return Ok(Plan {
-            route: Route::Pinhole,
+        let ms = estimate_ms(pixels, scene.mesh.triangle_count() as f64, Cost::Pinhole);
+        return Ok(file_plan(
+            file,
+            Route::Pinhole,
             steps,
-            estimated_ms: estimate_ms(pixels, scene.mesh.triangle_count() as f64, Cost::Pinhole),
-            optics: Optics::Camera(camera),
-            expected_error_px: 0.0,
-            budget_px: budget,
+            Optics::Camera(camera),
             poses,
-            previous_pose: None,
-            delta: crate::pass::geometry::DEFAULT_DELTA,
-            density: 1.0,
-            outputs: *o,
-            background: file.background,
-            antialias: file.antialias,
-        });
+            (0.0, ms),
+        ));
     }
     // The vertex path: the coarsest tessellation that meets the budget (not searched
     // when nothing can go that way: chromatic colour without IDs or flow).
@@ -796,19 +783,39 @@ fn plan_camera(file: &SceneFile, scene: &Scene, path: &std::path::Path) -> Resul
         )
     };
     push_antialias_step(&mut steps, file.antialias, o.color);
-    Ok(Plan {
+    Ok(file_plan(
+        file,
         route,
         steps,
-        optics: Optics::Camera(camera),
-        expected_error_px: expected,
-        budget_px: budget,
+        Optics::Camera(camera),
+        poses,
+        (expected, estimated),
+    ))
+}
+
+/// A scene file's plan once its route is chosen: `(expected error px, estimated ms)` as
+/// measured while planning; the rest is the file's.
+fn file_plan(
+    file: &SceneFile,
+    route: Route,
+    steps: Vec<Step>,
+    optics: Optics,
+    poses: Vec<Pose>,
+    (expected_error_px, estimated_ms): (f64, f64),
+) -> Plan {
+    Plan {
+        route,
+        steps,
+        optics,
+        expected_error_px,
+        budget_px: file.max_error_px,
         poses,
         previous_pose: None,
         delta: crate::pass::geometry::DEFAULT_DELTA,
         density: 1.0,
-        outputs: *o,
+        outputs: file.outputs,
         background: file.background,
         antialias: file.antialias,
-        estimated_ms: estimated,
-    })
+        estimated_ms,
+    }
 }

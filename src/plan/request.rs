@@ -13,7 +13,7 @@ use crate::{Error, Result};
 use super::antialias::{scaled_camera, MAX_JITTER, MAX_SUPERSAMPLE};
 use super::limits::pinhole_source_refusal;
 use super::scene_file::{Antialias, OutputSpec};
-use super::{inverse_error_px, push_antialias_step, Plan, Route, Stage, Step, CUBE_RAY_ERROR_PX};
+use super::{inverse_error_px, Plan, Route, Stage, Step, CUBE_RAY_ERROR_PX};
 
 /// Which path renders the lens, as a caller names it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -256,7 +256,15 @@ impl Plan {
                 (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX)
             }
         };
-        push_antialias_step(&mut steps, aa, o.color);
+        if aa.is_on() && o.color {
+            steps.push(Step {
+                stage: Stage::Antialias,
+                why: format!(
+                    "{}× supersampling and {} jittered pass(es) of the colour asked for, averaged; IDs, flow and depth stay one sample per pixel",
+                    aa.supersample, aa.jitter
+                ),
+            });
+        }
         Ok(Plan {
             route,
             steps,

@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
-use vklens::internal::gpu::{image_barrier, Buffer, Image};
+use vklens::internal::gpu::{global_barrier, image_transition, Access, Buffer, Image};
 use vklens::{Camera, EnabledFeatures, Gpu, ImageRef, WarpOptions, Warper};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -114,39 +114,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             };
 
             device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;
-            let none = (
-                vk::PipelineStageFlags::TOP_OF_PIPE,
-                vk::AccessFlags::empty(),
-            );
-            let xfer_w = (
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            );
-            let xfer_r = (
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_READ,
-            );
-            let sh_r = (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_READ,
-            );
-            let sh_w = (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_WRITE,
-            );
             let range = [Image::color_range()];
 
             // 1. The engine "renders" its pinhole image: a clear, then a brighter block.
-            image_barrier(
+            image_transition(
                 &gpu,
                 cmd,
                 pinhole.raw,
-                (
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                ),
-                none,
-                xfer_w,
+                Access::Nothing,
+                Access::TransferWrite,
             );
             let clear = vk::ClearColorValue {
                 float32: [0.2, 0.4, 0.8, 1.0],
@@ -159,26 +135,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 &range,
             );
             // The warp reads the rendered image as a storage image in GENERAL layout.
-            image_barrier(
+            image_transition(
                 &gpu,
                 cmd,
                 pinhole.raw,
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::ImageLayout::GENERAL,
-                ),
-                xfer_w,
-                sh_r,
+                Access::TransferWrite,
+                Access::ComputeRead,
             );
             for img in [&lens, &mask] {
-                image_barrier(
-                    &gpu,
-                    cmd,
-                    img.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    none,
-                    sh_w,
-                );
+                image_transition(&gpu, cmd, img.raw, Access::Nothing, Access::ComputeWrite);
             }
 
             // 2. vklens: build the map (once per camera), then warp.
@@ -186,16 +151,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             warper.record(cmd, &image(&pinhole), &image(&lens), Some(&image(&mask)))?;
 
             // 3. The engine "presents": copies the lens image out.
-            image_barrier(
+            image_transition(
                 &gpu,
                 cmd,
                 lens.raw,
-                (
-                    vk::ImageLayout::GENERAL,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                ),
-                sh_w,
-                xfer_r,
+                Access::ComputeWrite,
+                Access::TransferRead,
             );
             let region = [vk::BufferImageCopy {
                 image_subresource: vk::ImageSubresourceLayers {
@@ -218,12 +179,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 readback.raw,
                 &region,
             );
-            vklens::internal::gpu::memory_barrier(
-                &gpu,
-                cmd,
-                xfer_w,
-                (vk::PipelineStageFlags::HOST, vk::AccessFlags::HOST_READ),
-            );
+            global_barrier(&gpu, cmd, Access::TransferWrite, Access::HostRead);
             device.end_command_buffer(cmd)?;
             let cmds = [cmd];
             device.queue_submit(

@@ -16,7 +16,7 @@ use glam::DVec2;
 use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
-use crate::gpu::{host_read_barrier, memory_barrier, Buffer, QueryPool};
+use crate::gpu::{global_barrier, host_read_barrier, Access, Buffer, QueryPool};
 use crate::host::Context;
 use crate::io::reference::{ReferenceCase, ReferenceFile};
 use crate::model::{Camera, CameraModel, InverseMethod};
@@ -318,11 +318,8 @@ pub(crate) fn time_points(
                         pass.record(cmd, n as u32);
                         if i + 1 < repeats {
                             // Each dispatch rewrites the outputs: order the writes.
-                            let write = (
-                                vk::PipelineStageFlags::COMPUTE_SHADER,
-                                vk::AccessFlags::SHADER_WRITE,
-                            );
-                            memory_barrier(gpu, cmd, write, write);
+                            let write = Access::ComputeWrite;
+                            global_barrier(gpu, cmd, write, write);
                         }
                     }
                 }

@@ -13,7 +13,7 @@ use ash::vk;
 use glam::DVec2;
 use serde_json::{json, Value};
 
-use crate::gpu::{memory_barrier, QueryPool, Result};
+use crate::gpu::{global_barrier, Access, QueryPool, Result};
 use crate::host::warp::read_maps;
 use crate::host::warp_images::WarpImages;
 use crate::host::Context;
@@ -106,10 +106,7 @@ pub(crate) fn time_batch(
 ) -> Result<(f64, Option<f64>)> {
     let gpu = ctx.gpu();
     let queries = QueryPool::timestamps(gpu, 2).ok();
-    let write = (
-        vk::PipelineStageFlags::COMPUTE_SHADER,
-        vk::AccessFlags::SHADER_WRITE,
-    );
+    let write = Access::ComputeWrite;
     let record = |cmd: vk::CommandBuffer, n: u32| {
         for i in 0..n {
             frame(cmd);
@@ -117,7 +114,7 @@ pub(crate) fn time_batch(
                 // Successive frames write the same output: order them, as an engine would.
                 // SAFETY: `record` only runs inside `ctx.submit` below, on the buffer it is
                 // recording, and every `frame` leaves no render pass open.
-                unsafe { memory_barrier(gpu, cmd, write, write) };
+                unsafe { global_barrier(gpu, cmd, write, write) };
             }
         }
     };

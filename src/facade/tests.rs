@@ -104,7 +104,7 @@ fn a_warper_matches_the_f64_reference_warp_and_its_maps_are_the_exact_coordinate
 
 #[test]
 fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
-    use crate::gpu::{image_barrier, record_compute_download, Buffer, Image};
+    use crate::gpu::{image_transition, record_compute_download, Access, Buffer, Image};
     use crate::ImageRef;
     use ash::vk;
     let device = device();
@@ -154,35 +154,9 @@ fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
     device
         .context()
         .submit(|cmd| {
-            let top = (
-                vk::PipelineStageFlags::TOP_OF_PIPE,
-                vk::AccessFlags::empty(),
-            );
-            let copy_w = (
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            );
-            let read = (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_READ,
-            );
-            let write = (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_WRITE,
-            );
             unsafe {
                 let d = gpu.device();
-                image_barrier(
-                    gpu,
-                    cmd,
-                    source.raw,
-                    (
-                        vk::ImageLayout::UNDEFINED,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    ),
-                    top,
-                    copy_w,
-                );
+                image_transition(gpu, cmd, source.raw, Access::Nothing, Access::TransferWrite);
                 d.cmd_copy_buffer_to_image(
                     cmd,
                     upload.raw,
@@ -190,25 +164,14 @@ fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                     &[source.whole_copy()],
                 );
-                image_barrier(
+                image_transition(
                     gpu,
                     cmd,
                     source.raw,
-                    (
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        vk::ImageLayout::GENERAL,
-                    ),
-                    copy_w,
-                    read,
+                    Access::TransferWrite,
+                    Access::ComputeRead,
                 );
-                image_barrier(
-                    gpu,
-                    cmd,
-                    output.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    top,
-                    write,
-                );
+                image_transition(gpu, cmd, output.raw, Access::Nothing, Access::ComputeWrite);
                 // The map was built by `run` on this warper already; an engine records the
                 // prepare once. Recording it again rebuilds the same map.
                 warper.record_prepare(cmd);

@@ -6,6 +6,8 @@
 //!   caller's.
 //! * Owned objects: [`Buffer`], [`Image`], [`ComputePipeline`], [`GraphicsPipeline`],
 //!   [`RenderPass`], [`Framebuffer`], [`Sampler`], [`DescriptorPool`], [`QueryPool`], each destroying its handle (and freeing its allocation) in `Drop`.
+//! * Barriers named by what a resource is used for ([`Access`]): [`global_barrier`],
+//!   [`image_transition`], [`image_discard`].
 
 mod barriers;
 mod graphics;
@@ -21,8 +23,8 @@ use ash::vk;
 use gpu_allocator::vulkan::Allocator;
 
 pub use barriers::{
-    host_read_barrier, image_barrier, memory_barrier, record_compute_download,
-    record_compute_readback, record_discard_for_compute_write, record_download,
+    global_barrier, host_read_barrier, image_discard, image_transition, record_compute_download,
+    record_compute_readback, record_discard_for_compute_write, record_download, Access,
 };
 pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,

@@ -3,7 +3,9 @@
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{image_barrier, record_compute_download, Buffer, Error, Gpu, Image, Result};
+use crate::gpu::{
+    image_transition, record_compute_download, Access, Buffer, Error, Gpu, Image, Result,
+};
 use crate::host::Context;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::Camera;
@@ -134,14 +136,6 @@ pub fn run_sphere_warp(
     // SAFETY: no submission using the pass is pending; the views are live and of the kinds
     // `bind` asks (a cube or 2D sampled view, storage images), in the layouts set below.
     unsafe { pass.bind(image.view, output.view, mask.view) };
-    let none = (
-        vk::PipelineStageFlags::TOP_OF_PIPE,
-        vk::AccessFlags::empty(),
-    );
-    let transfer_write = (
-        vk::PipelineStageFlags::TRANSFER,
-        vk::AccessFlags::TRANSFER_WRITE,
-    );
     ctx.submit(|cmd| {
         let d = gpu.device();
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.
@@ -150,17 +144,7 @@ pub fn run_sphere_warp(
         // barriers put each image in the layout the next command expects. Everything outlives
         // the submission, which `submit` waits for.
         unsafe {
-            image_barrier(
-                gpu,
-                cmd,
-                image.raw,
-                (
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                ),
-                none,
-                transfer_write,
-            );
+            image_transition(gpu, cmd, image.raw, Access::Nothing, Access::TransferWrite);
             d.cmd_copy_buffer_to_image(
                 cmd,
                 upload.raw,
@@ -168,19 +152,12 @@ pub fn run_sphere_warp(
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &[image.whole_copy()],
             );
-            image_barrier(
+            image_transition(
                 gpu,
                 cmd,
                 image.raw,
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-                transfer_write,
-                (
-                    vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::AccessFlags::SHADER_READ,
-                ),
+                Access::TransferWrite,
+                Access::ComputeSampled,
             );
             crate::gpu::record_discard_for_compute_write(gpu, cmd, [&output, &mask]);
             pass.record(cmd);

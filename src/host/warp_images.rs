@@ -4,7 +4,7 @@
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{image_barrier, record_compute_download, Buffer, Gpu, Image};
+use crate::gpu::{image_transition, record_compute_download, Access, Buffer, Gpu, Image};
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::pass::warp::check_sizes;
 use crate::pass::warp::{PixelFormat, WarpDesc};
@@ -112,22 +112,6 @@ impl WarpImages {
     /// `cmd` must be recording outside a render pass.
     pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
         let d = self.gpu.device();
-        let none = (
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::AccessFlags::empty(),
-        );
-        let transfer_write = (
-            vk::PipelineStageFlags::TRANSFER,
-            vk::AccessFlags::TRANSFER_WRITE,
-        );
-        let shader_read = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_READ,
-        );
-        let shader_write = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_WRITE,
-        );
         // SAFETY: the caller upholds `record_upload`'s contract: `cmd` is recording outside a
         // render pass. The images are this struct's, made in `new` with TRANSFER_DST and
         // STORAGE usage; `upload` holds the source tightly packed in the pass's format, which
@@ -135,16 +119,12 @@ impl WarpImages {
         // size but not the pixel count).
         unsafe {
             // Source: fill it by copy, then hand it to the shader for reading.
-            image_barrier(
+            image_transition(
                 &self.gpu,
                 cmd,
                 self.source.raw,
-                (
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                ),
-                none,
-                transfer_write,
+                Access::Nothing,
+                Access::TransferWrite,
             );
             d.cmd_copy_buffer_to_image(
                 cmd,
@@ -153,26 +133,21 @@ impl WarpImages {
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &[self.source.whole_copy()],
             );
-            image_barrier(
+            image_transition(
                 &self.gpu,
                 cmd,
                 self.source.raw,
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::ImageLayout::GENERAL,
-                ),
-                transfer_write,
-                shader_read,
+                Access::TransferWrite,
+                Access::ComputeRead,
             );
             // Output and mask: the shader writes every pixel, old contents are irrelevant.
             for img in [&self.output, &self.mask] {
-                image_barrier(
+                image_transition(
                     &self.gpu,
                     cmd,
                     img.raw,
-                    (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
-                    none,
-                    shader_write,
+                    Access::Nothing,
+                    Access::ComputeWrite,
                 );
             }
         }

@@ -1,6 +1,6 @@
 //! Headless helpers for `pass::warp_raster`: upload, record, submit, wait and read back.
 
-use crate::gpu::{memory_barrier, Result};
+use crate::gpu::{global_barrier, Access, Result};
 use crate::host::warp_images::WarpImages;
 use crate::host::Context;
 use crate::imaging::Raster;
@@ -29,17 +29,11 @@ pub fn run_raster_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result
             images.record_upload(cmd);
             maps.record_prepare(cmd);
             // The maps (compute) and the source (upload) are read by the fragment shader.
-            memory_barrier(
+            global_barrier(
                 gpu,
                 cmd,
-                (
-                    vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (
-                    vk::PipelineStageFlags::FRAGMENT_SHADER,
-                    vk::AccessFlags::SHADER_READ,
-                ),
+                [Access::ComputeWrite, Access::TransferWrite],
+                Access::FragmentRead,
             );
             pass.record(cmd, &target.framebuffer);
             target.record_download(gpu, cmd);

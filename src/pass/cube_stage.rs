@@ -8,7 +8,7 @@
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{image_barrier, Buffer, Image};
+use crate::gpu::{global_barrier, image_discard, image_transition, Access, Buffer, Image};
 use crate::imaging::Raster;
 use crate::model::Camera;
 use crate::pass::geometry::{
@@ -226,7 +226,7 @@ impl CubeStage {
     /// pass on a queue with graphics and compute; `mesh` uploaded and alive until the work
     /// completes.
     pub unsafe fn record_faces(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
-        use vk::{AccessFlags as A, ImageLayout as L, PipelineStageFlags as S};
+        use vk::ImageLayout as L;
         let d = self.gpu.device();
         let Some(face_image) = self.targets.color() else {
             // `new` made a colour output: unreachable.
@@ -249,13 +249,12 @@ impl CubeStage {
         // layout), whose render pass orders its clear after the copy's read; copies are
         // within both images (same side, one layer each).
         unsafe {
-            image_barrier(
+            image_discard(
                 &self.gpu,
                 cmd,
                 self.cube.raw,
-                (L::UNDEFINED, L::TRANSFER_DST_OPTIMAL),
-                (S::COMPUTE_SHADER, A::empty()),
-                (S::TRANSFER, A::TRANSFER_WRITE),
+                Access::ComputeSampled,
+                Access::TransferWrite,
             );
             for face in CubeFace::ALL {
                 let layer = face.layer();
@@ -276,13 +275,12 @@ impl CubeStage {
                     }],
                 );
             }
-            image_barrier(
+            image_transition(
                 &self.gpu,
                 cmd,
                 self.cube.raw,
-                (L::TRANSFER_DST_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL),
-                (S::TRANSFER, A::TRANSFER_WRITE),
-                (S::COMPUTE_SHADER, A::SHADER_READ),
+                Access::TransferWrite,
+                Access::ComputeSampled,
             );
         }
     }
@@ -293,20 +291,16 @@ impl CubeStage {
     /// # Safety
     /// As [`Self::record_faces`], recorded after it.
     pub unsafe fn record_warp(&self, cmd: vk::CommandBuffer) {
-        use vk::{AccessFlags as A, PipelineStageFlags as S};
         // SAFETY: the caller upholds this function's contract: the cube is in
         // SHADER_READ_ONLY_OPTIMAL with its writes visible to compute, and `record_prepare` put
         // the output and mask, which the warp was bound to with the cube in `new`, in GENERAL.
         unsafe {
             self.warp.record(cmd);
-            crate::gpu::memory_barrier(
+            global_barrier(
                 &self.gpu,
                 cmd,
-                (S::COMPUTE_SHADER, A::SHADER_WRITE),
-                (
-                    S::TRANSFER | S::COMPUTE_SHADER,
-                    A::TRANSFER_READ | A::SHADER_READ,
-                ),
+                Access::ComputeWrite,
+                [Access::TransferRead, Access::ComputeRead],
             );
         }
     }

@@ -11,8 +11,8 @@ use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{
-    image_barrier, record_download, shaders, Buffer, DescriptorPool, Error, Framebuffer, Gpu,
-    GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
+    image_transition, record_download, shaders, Access, Buffer, DescriptorPool, Error, Framebuffer,
+    Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 
 /// The film's format: float, so that many weighted slices add without clipping or banding.
@@ -117,22 +117,12 @@ impl FilmPass {
         // render pass and `target` outlives the work. The film image has TRANSFER_DST and
         // COLOR_ATTACHMENT usage; UNDEFINED is a valid old layout as it is cleared whole.
         unsafe {
-            image_barrier(
+            image_transition(
                 &self.gpu,
                 cmd,
                 target.image.raw,
-                (
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                ),
-                (
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::AccessFlags::empty(),
-                ),
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
+                Access::Nothing,
+                Access::TransferWrite,
             );
             d.cmd_clear_color_image(
                 cmd,
@@ -141,23 +131,13 @@ impl FilmPass {
                 &vk::ClearColorValue { float32: [0.0; 4] },
                 &[Image::color_range()],
             );
-            image_barrier(
+            // The cells blend into the cleared film.
+            image_transition(
                 &self.gpu,
                 cmd,
                 target.image.raw,
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                ),
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                    vk::AccessFlags::COLOR_ATTACHMENT_READ
-                        | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-                ),
+                Access::TransferWrite,
+                Access::ColorAttachmentReadWrite,
             );
         }
     }
@@ -267,22 +247,12 @@ impl FilmTarget {
         // render pass after the cells, which leave the film in COLOR_ATTACHMENT_OPTIMAL (the
         // transition's old layout); `download` holds width × height RGBA32F texels.
         unsafe {
-            image_barrier(
+            image_transition(
                 &self.gpu,
                 cmd,
                 self.image.raw,
-                (
-                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                ),
-                (
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                    vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-                ),
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_READ,
-                ),
+                Access::ColorAttachmentReadWrite,
+                Access::TransferRead,
             );
             record_download(&self.gpu, cmd, &self.image, &self.download);
         }

@@ -20,9 +20,9 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
 use crate::gpu::{
-    image_barrier, record_download, shaders, Attribute, Buffer, ComputePipeline, DescriptorPool,
-    Error, Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
-    SpecConstants, Stage, VertexBinding,
+    image_transition, record_download, shaders, Access, Attribute, Buffer, ComputePipeline,
+    DescriptorPool, Error, Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass,
+    Result, Sampler, SpecConstants, Stage, VertexBinding,
 };
 pub use crate::imaging::Rendered;
 use crate::imaging::{BitDepth, Pixels, Raster};
@@ -319,22 +319,12 @@ impl Texture {
         // old layout as it is overwritten whole; `staging` holds it as tightly packed RGBA8,
         // which relies on an RGBA8 raster having width × height pixels (`new` does not check).
         unsafe {
-            image_barrier(
+            image_transition(
                 &self.gpu,
                 cmd,
                 self.image.raw,
-                (
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                ),
-                (
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::AccessFlags::empty(),
-                ),
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
+                Access::Nothing,
+                Access::TransferWrite,
             );
             self.gpu.device().cmd_copy_buffer_to_image(
                 cmd,
@@ -343,22 +333,12 @@ impl Texture {
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &[self.image.whole_copy()],
             );
-            image_barrier(
+            image_transition(
                 &self.gpu,
                 cmd,
                 self.image.raw,
-                (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
-                (
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                ),
-                (
-                    vk::PipelineStageFlags::FRAGMENT_SHADER,
-                    vk::AccessFlags::SHADER_READ,
-                ),
+                Access::TransferWrite,
+                Access::FragmentSampled,
             );
         }
     }
@@ -1080,11 +1060,14 @@ impl DiscardPass {
     /// `cmd` is recording outside a render pass on a queue with graphics and compute; `mesh`
     /// is the mesh last bound ([`Self::bind`]) and stays alive until the work completes.
     unsafe fn record(&self, gpu: &Gpu, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
-        use vk::{AccessFlags as A, PipelineStageFlags as S};
+        use crate::gpu::global_barrier;
+        use Access::{ComputeReadWrite, IndexBuffer, IndirectBuffer, TransferWrite, VertexBuffer};
         let m = &mesh.discard;
         let none = bytemuck::bytes_of(&DiscardPush { count: 0 });
-        let compute = S::COMPUTE_SHADER | S::DRAW_INDIRECT;
-        let shader_rw = A::SHADER_READ | A::SHADER_WRITE;
+        // A discard stage: compute shaders reading and writing the buffers, in a dispatch
+        // whose group count (the dropped list's header) may be read indirectly.
+        let discard = [ComputeReadWrite, IndirectBuffer];
+        let draw = [IndexBuffer, VertexBuffer];
         // SAFETY: the caller upholds this function's contract; the push constants are the
         // `DiscardPush` the pipelines were built with; the per-vertex dispatch covers exactly
         // the vertices the buffers were sized for in `MeshBuffers::new`, and the indirect ones
@@ -1093,34 +1076,17 @@ impl DiscardPass {
         unsafe {
             // Earlier draws of this mesh read `kept` and the attributes; earlier discards wrote
             // them and the dropped list.
-            crate::gpu::memory_barrier(
-                gpu,
-                cmd,
-                (S::VERTEX_INPUT | compute, A::SHADER_WRITE),
-                (compute, shader_rw | A::INDIRECT_COMMAND_READ),
-            );
+            let earlier = [IndexBuffer, VertexBuffer, ComputeReadWrite, IndirectBuffer];
+            global_barrier(gpu, cmd, earlier, discard);
             let [per_vertex, restore, drop] = &self.stages;
             restore.record_dispatch_indirect(cmd, self.set, none, &m.dropped, 0);
             // The restore has read the list (and its dispatch the header) before it is emptied;
             // its writes of `kept` come before the drop's.
-            crate::gpu::memory_barrier(
-                gpu,
-                cmd,
-                (compute, A::SHADER_WRITE),
-                (
-                    S::TRANSFER | S::COMPUTE_SHADER,
-                    A::TRANSFER_WRITE | shader_rw,
-                ),
-            );
+            global_barrier(gpu, cmd, discard, [TransferWrite, ComputeReadWrite]);
             let header = bytemuck::cast_slice(&DROPPED_HEADER);
             gpu.device()
                 .cmd_update_buffer(cmd, m.dropped.raw, 0, header);
-            crate::gpu::memory_barrier(
-                gpu,
-                cmd,
-                (S::TRANSFER, A::TRANSFER_WRITE),
-                (S::COMPUTE_SHADER, shader_rw),
-            );
+            global_barrier(gpu, cmd, TransferWrite, ComputeReadWrite);
             let push = DiscardPush {
                 count: mesh.vertex_count,
             };
@@ -1130,19 +1096,9 @@ impl DiscardPass {
                 bytemuck::bytes_of(&push),
                 (push.count.div_ceil(64).max(1), 1),
             );
-            crate::gpu::memory_barrier(
-                gpu,
-                cmd,
-                (S::COMPUTE_SHADER, A::SHADER_WRITE),
-                (compute, shader_rw | A::INDIRECT_COMMAND_READ),
-            );
+            global_barrier(gpu, cmd, ComputeReadWrite, discard);
             drop.record_dispatch_indirect(cmd, self.set, none, &m.dropped, 0);
-            crate::gpu::memory_barrier(
-                gpu,
-                cmd,
-                (S::COMPUTE_SHADER, A::SHADER_WRITE),
-                (S::VERTEX_INPUT, A::INDEX_READ | A::VERTEX_ATTRIBUTE_READ),
-            );
+            global_barrier(gpu, cmd, ComputeReadWrite, draw);
         }
     }
 }

@@ -12,8 +12,8 @@ use bytemuck::{Pod, Zeroable};
 
 use super::camera_params::CameraParams;
 use crate::gpu::{
-    memory_barrier, shaders, write_buffer_descriptors, write_storage_image_descriptors, Buffer,
-    ComputePipeline, DescriptorPool, Error, Gpu, Image, Result,
+    global_barrier, shaders, write_buffer_descriptors, write_storage_image_descriptors, Access,
+    Buffer, ComputePipeline, DescriptorPool, Error, Gpu, Image, Result,
 };
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::{Pixels, Raster};
@@ -530,14 +530,7 @@ impl WarpPass {
     /// `cmd` must be recording outside a render pass on a compute queue; record this once,
     /// before the first [`WarpPass::record`], and not again while that work is pending.
     pub unsafe fn record_prepare(&self, cmd: vk::CommandBuffer) {
-        let write = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_WRITE,
-        );
-        let read = (
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::SHADER_READ,
-        );
+        let (write, read) = (Access::ComputeWrite, Access::ComputeRead);
         // SAFETY: the caller upholds `record_prepare`'s contract: `cmd` is recording outside a
         // render pass on a compute queue, and no earlier prepare is pending. The maps are this
         // pass's own images, so UNDEFINED is a valid old layout; each map-build set was written
@@ -558,11 +551,11 @@ impl WarpPass {
                 );
                 if step.barrier_after {
                     // The upsampling reads the coarse map just written.
-                    memory_barrier(&self.gpu, cmd, write, read);
+                    global_barrier(&self.gpu, cmd, write, read);
                 }
             }
             // The warp reads the maps the builds wrote.
-            memory_barrier(&self.gpu, cmd, write, read);
+            global_barrier(&self.gpu, cmd, write, read);
         }
     }
 

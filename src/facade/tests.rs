@@ -5,7 +5,12 @@
 use crate::host::ContextOptions;
 use crate::host::{geometry_shader_discard_from_env, geometry_shader_from_env, Context};
 use crate::imaging::cpu_warp;
-use crate::{Camera, Device, InverseMethod, Pixels, Raster, WarpMethod, WarpOptions, Warper};
+use ash::vk;
+
+use crate::gpu::{image_transition, record_compute_download, Access, Buffer, Image};
+use crate::{
+    Camera, Device, ImageRef, InverseMethod, Pixels, Raster, WarpMethod, WarpOptions, Warper,
+};
 
 fn device() -> Device {
     Device::from_context(
@@ -102,100 +107,132 @@ fn a_warper_matches_the_f64_reference_warp_and_its_maps_are_the_exact_coordinate
     device.check_validation().unwrap();
 }
 
+/// One frame's images and staging, as an engine would have them: the source it uploads, the
+/// output it reads back.
+struct CallerFrame {
+    source: Image,
+    output: Image,
+    upload: Buffer,
+    download: Buffer,
+}
+
+impl CallerFrame {
+    fn new(gpu: &crate::Gpu, input: &Raster) -> Self {
+        let (w, h) = (input.width, input.height);
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        let fmt = vk::Format::R8G8B8A8_UNORM;
+        let Pixels::Rgba8(px) = &input.pixels else {
+            unreachable!("the patterns are 8-bit")
+        };
+        CallerFrame {
+            source: Image::new_2d(gpu, "caller.source", fmt, w, h, usage).unwrap(),
+            output: Image::new_2d(gpu, "caller.output", fmt, w, h, usage).unwrap(),
+            upload: Buffer::from_pod(
+                gpu,
+                "caller.upload",
+                bytemuck::cast_slice::<[u8; 4], u8>(px),
+                vk::BufferUsageFlags::TRANSFER_SRC,
+            )
+            .unwrap(),
+            download: Buffer::new(
+                gpu,
+                "caller.download",
+                (w * h * 4) as u64,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                gpu_allocator::MemoryLocation::GpuToCpu,
+            )
+            .unwrap(),
+        }
+    }
+
+    /// Records the source's upload and both images' transitions to what the warp needs.
+    ///
+    /// # Safety
+    /// `cmd` is recording outside a render pass on a queue with graphics and compute.
+    unsafe fn record_upload(&self, gpu: &crate::Gpu, cmd: vk::CommandBuffer) {
+        let (source, output) = (&self.source, &self.output);
+        // SAFETY: the function's contract; both images are this frame's own, fresh or done.
+        unsafe {
+            image_transition(gpu, cmd, source.raw, Access::Nothing, Access::TransferWrite);
+            gpu.device().cmd_copy_buffer_to_image(
+                cmd,
+                self.upload.raw,
+                source.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[source.whole_copy()],
+            );
+            image_transition(
+                gpu,
+                cmd,
+                source.raw,
+                Access::TransferWrite,
+                Access::ComputeRead,
+            );
+            image_transition(gpu, cmd, output.raw, Access::Nothing, Access::ComputeWrite);
+        }
+    }
+
+    fn image(i: &Image) -> ImageRef {
+        ImageRef {
+            image: i.raw,
+            view: i.view,
+            width: i.extent.width,
+            height: i.extent.height,
+        }
+    }
+
+    fn read(&self) -> Pixels {
+        let e = self.output.extent;
+        Pixels::Rgba8(
+            self.download
+                .read_pod((e.width * e.height) as usize)
+                .unwrap(),
+        )
+    }
+}
+
 #[test]
 fn a_warper_records_into_the_callers_command_buffer_with_the_callers_images() {
-    use crate::gpu::{image_transition, record_compute_download, Access, Buffer, Image};
-    use crate::ImageRef;
-    use ash::vk;
     let device = device();
     let gpu = device.gpu();
     let camera = reference_camera("prism_tilt");
-    let (w, h) = (camera.width, camera.height);
     let mut warper = Warper::new(gpu, &camera, &WarpOptions::distort()).unwrap();
-    let input = pattern(w, h);
+    let input = pattern(camera.width, camera.height);
     let expected = warper.run(&device, &input).unwrap();
-    // The caller's images and staging, as an engine would have them.
-    let usage = vk::ImageUsageFlags::STORAGE
-        | vk::ImageUsageFlags::TRANSFER_SRC
-        | vk::ImageUsageFlags::TRANSFER_DST;
-    let fmt = vk::Format::R8G8B8A8_UNORM;
-    let source = Image::new_2d(gpu, "caller.source", fmt, w, h, usage).unwrap();
-    let output = Image::new_2d(gpu, "caller.output", fmt, w, h, usage).unwrap();
-    let Pixels::Rgba8(px) = &input.pixels else {
-        unreachable!()
-    };
-    let upload = Buffer::from_pod(
-        gpu,
-        "caller.upload",
-        bytemuck::cast_slice::<[u8; 4], u8>(px),
-        vk::BufferUsageFlags::TRANSFER_SRC,
-    )
-    .unwrap();
-    let download = Buffer::new(
-        gpu,
-        "caller.download",
-        (w * h * 4) as u64,
-        vk::BufferUsageFlags::TRANSFER_DST,
-        gpu_allocator::MemoryLocation::GpuToCpu,
-    )
-    .unwrap();
-    let r = |i: &Image| ImageRef {
-        image: i.raw,
-        view: i.view,
-        width: i.extent.width,
-        height: i.extent.height,
-    };
+    let frame = CallerFrame::new(gpu, &input);
+    let image = CallerFrame::image;
     // A wrong size is refused before anything is recorded.
-    let tiny = Image::new_2d(gpu, "caller.tiny", fmt, 8, 8, usage).unwrap();
+    let usage = vk::ImageUsageFlags::STORAGE;
+    let tiny = Image::new_2d(gpu, "caller.tiny", vk::Format::R8G8B8A8_UNORM, 8, 8, usage).unwrap();
     let refused = device
         .context()
-        .submit(|cmd| unsafe { warper.record(cmd, &r(&tiny), &r(&output), None) });
+        .submit(|cmd| unsafe { warper.record(cmd, &image(&tiny), &image(&frame.output), None) });
     assert!(refused.unwrap_err().to_string().contains("8×8"));
     device
         .context()
         .submit(|cmd| {
+            // SAFETY: `cmd` is recording outside a render pass on the context's queue; every
+            // image and buffer outlives the submission, which `submit` waits for.
             unsafe {
-                let d = gpu.device();
-                image_transition(gpu, cmd, source.raw, Access::Nothing, Access::TransferWrite);
-                d.cmd_copy_buffer_to_image(
-                    cmd,
-                    upload.raw,
-                    source.raw,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &[source.whole_copy()],
-                );
-                image_transition(
-                    gpu,
-                    cmd,
-                    source.raw,
-                    Access::TransferWrite,
-                    Access::ComputeRead,
-                );
-                image_transition(gpu, cmd, output.raw, Access::Nothing, Access::ComputeWrite);
+                frame.record_upload(gpu, cmd);
                 // The map was built by `run` on this warper already; an engine records the
                 // prepare once. Recording it again rebuilds the same map.
                 warper.record_prepare(cmd);
-                warper.record(cmd, &r(&source), &r(&output), None)?;
-                record_compute_download(gpu, cmd, &output, &download);
+                warper.record(cmd, &image(&frame.source), &image(&frame.output), None)?;
+                record_compute_download(gpu, cmd, &frame.output, &frame.download);
                 crate::gpu::host_read_barrier(gpu, cmd);
             }
             Ok(())
         })
         .unwrap();
-    let got: Vec<[u8; 4]> = download.read_pod((w * h) as usize).unwrap();
-    assert_eq!(
-        Pixels::Rgba8(got),
-        expected.image.pixels,
-        "record and run differ"
-    );
+    assert_eq!(frame.read(), expected.image.pixels, "record and run differ");
     device.check_validation().unwrap();
 }
 
 #[test]
 fn two_frames_in_flight_warp_other_images_without_waiting_for_each_other() {
-    use crate::gpu::{image_barrier, record_compute_download, Buffer, Image};
-    use crate::ImageRef;
-    use ash::vk;
     let device = device();
     let gpu = device.gpu();
     let camera = reference_camera("prism_tilt");
@@ -203,118 +240,41 @@ fn two_frames_in_flight_warp_other_images_without_waiting_for_each_other() {
     let mut warper = Warper::new(gpu, &camera, &WarpOptions::distort()).unwrap();
     assert_eq!(WarpOptions::distort().frames_in_flight, 2);
     // Two frames, each with its own images, as a swapchain-fed engine has them.
-    let inputs = [pattern(w, h), {
-        let mut p = pattern(w, h);
-        if let Pixels::Rgba8(px) = &mut p.pixels {
-            px.iter_mut().for_each(|q| q[0] = 255 - q[0]);
-        }
-        p
-    }];
+    let mut inverted = pattern(w, h);
+    if let Pixels::Rgba8(px) = &mut inverted.pixels {
+        px.iter_mut().for_each(|q| q[0] = 255 - q[0]);
+    }
+    let inputs = [pattern(w, h), inverted];
     let expected: Vec<_> = inputs
         .iter()
         .map(|i| warper.run(&device, i).unwrap().image.pixels)
         .collect();
-    let usage = vk::ImageUsageFlags::STORAGE
-        | vk::ImageUsageFlags::TRANSFER_SRC
-        | vk::ImageUsageFlags::TRANSFER_DST;
-    let fmt = vk::Format::R8G8B8A8_UNORM;
-    let frames: Vec<_> = inputs
-        .iter()
-        .map(|input| {
-            let Pixels::Rgba8(px) = &input.pixels else {
-                unreachable!()
-            };
-            (
-                Image::new_2d(gpu, "frame.source", fmt, w, h, usage).unwrap(),
-                Image::new_2d(gpu, "frame.output", fmt, w, h, usage).unwrap(),
-                Buffer::from_pod(
-                    gpu,
-                    "frame.upload",
-                    bytemuck::cast_slice::<[u8; 4], u8>(px),
-                    vk::BufferUsageFlags::TRANSFER_SRC,
-                )
-                .unwrap(),
-                Buffer::new(
-                    gpu,
-                    "frame.download",
-                    (w * h * 4) as u64,
-                    vk::BufferUsageFlags::TRANSFER_DST,
-                    gpu_allocator::MemoryLocation::GpuToCpu,
-                )
-                .unwrap(),
-            )
-        })
-        .collect();
-    let r = |i: &Image| ImageRef {
-        image: i.raw,
-        view: i.view,
-        width: i.extent.width,
-        height: i.extent.height,
-    };
+    let frames: Vec<_> = inputs.iter().map(|i| CallerFrame::new(gpu, i)).collect();
+    let image = CallerFrame::image;
     // Both frames in one submission: the second is recorded while the first is still
     // pending, with other views. With one set it would be rewritten under the first.
     device
         .context()
         .submit(|cmd| {
-            let top = (
-                vk::PipelineStageFlags::TOP_OF_PIPE,
-                vk::AccessFlags::empty(),
-            );
-            let copy_w = (
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            );
-            let read = (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_READ,
-            );
-            let write = (
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::AccessFlags::SHADER_WRITE,
-            );
-            // SAFETY: `cmd` is recording outside a render pass on the context's compute
-            // queue; every image and buffer outlives the submission, which `submit` waits for.
+            // SAFETY: `cmd` is recording outside a render pass on the context's queue; every
+            // image and buffer outlives the submission, which `submit` waits for.
             unsafe {
-                let d = gpu.device();
-                for (source, output, upload, _) in &frames {
-                    let to_dst = (
-                        vk::ImageLayout::UNDEFINED,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    );
-                    image_barrier(gpu, cmd, source.raw, to_dst, top, copy_w);
-                    d.cmd_copy_buffer_to_image(
-                        cmd,
-                        upload.raw,
-                        source.raw,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        &[source.whole_copy()],
-                    );
-                    let to_general = (
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        vk::ImageLayout::GENERAL,
-                    );
-                    image_barrier(gpu, cmd, source.raw, to_general, copy_w, read);
-                    let fresh = (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
-                    image_barrier(gpu, cmd, output.raw, fresh, top, write);
+                for f in &frames {
+                    f.record_upload(gpu, cmd);
                 }
                 // Once, as an engine records it before its first frame.
                 warper.record_prepare(cmd);
-                for (source, output, _, download) in &frames {
-                    warper.record(cmd, &r(source), &r(output), None)?;
-                    record_compute_download(gpu, cmd, output, download);
+                for f in &frames {
+                    warper.record(cmd, &image(&f.source), &image(&f.output), None)?;
+                    record_compute_download(gpu, cmd, &f.output, &f.download);
                 }
                 crate::gpu::host_read_barrier(gpu, cmd);
             }
             Ok(())
         })
         .unwrap();
-    for ((_, _, _, download), want) in frames.iter().zip(&expected) {
-        let got: Vec<[u8; 4]> = download.read_pod((w * h) as usize).unwrap();
-        assert_eq!(
-            &Pixels::Rgba8(got),
-            want,
-            "a frame in flight differs from its run"
-        );
+    for (f, want) in frames.iter().zip(&expected) {
+        assert_eq!(&f.read(), want, "a frame in flight differs from its run");
     }
     device.check_validation().unwrap();
 }

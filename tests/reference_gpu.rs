@@ -266,15 +266,19 @@ fn specialization_constants_compile_out_unused_terms() {
             MemoryLocation::GpuToCpu,
         )
         .unwrap();
-        write_buffer_descriptors(
-            gpu,
-            set,
-            &[
-                (0, vk::DescriptorType::UNIFORM_BUFFER, &params),
-                (1, vk::DescriptorType::STORAGE_BUFFER, &ins),
-                (2, vk::DescriptorType::STORAGE_BUFFER, &outs),
-            ],
-        );
+        // SAFETY: `set` was allocated for this pipeline's layout (a uniform and two storage
+        // buffers at 0..=2) and the previous case's submission has completed.
+        unsafe {
+            write_buffer_descriptors(
+                gpu,
+                set,
+                &[
+                    (0, vk::DescriptorType::UNIFORM_BUFFER, &params),
+                    (1, vk::DescriptorType::STORAGE_BUFFER, &ins),
+                    (2, vk::DescriptorType::STORAGE_BUFFER, &outs),
+                ],
+            )
+        };
         ctx.submit(|cmd| unsafe {
             let d = gpu.device();
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);

@@ -308,8 +308,12 @@ pub(crate) fn time_points(
     let ns = match QueryPool::timestamps(gpu, 2) {
         Ok(queries) => {
             ctx.submit(|cmd| {
-                queries.cmd_reset(cmd);
-                queries.cmd_write(cmd, 0);
+                // SAFETY: `cmd` is the buffer `submit` is recording, outside a render pass; the
+                // pool holds these indices and is reset first in this buffer.
+                unsafe { queries.cmd_reset(cmd) };
+                // SAFETY: `cmd` is the buffer `submit` is recording, outside a render pass; the
+                // pool holds these indices and is reset first in this buffer.
+                unsafe { queries.cmd_write(cmd, 0) };
                 for i in 0..repeats {
                     // SAFETY: as in the warm-up: `cmd` is the fresh buffer `submit` is
                     // recording, outside any render pass, and the bound buffers hold `n` points
@@ -323,7 +327,9 @@ pub(crate) fn time_points(
                         }
                     }
                 }
-                queries.cmd_write(cmd, 1);
+                // SAFETY: `cmd` is the buffer `submit` is recording, outside a render pass; the
+                // pool holds these indices and is reset first in this buffer.
+                unsafe { queries.cmd_write(cmd, 1) };
                 Ok(())
             })?;
             let t = queries.read_ns()?;

@@ -131,12 +131,18 @@ pub(crate) fn time_batch(
         let start = Instant::now();
         ctx.submit(|cmd| {
             if let Some(q) = &queries {
-                q.cmd_reset(cmd);
-                q.cmd_write(cmd, 0);
+                // SAFETY: `cmd` is the buffer `submit` is recording, outside a render pass; the
+                // pool holds these indices and is reset first in this buffer.
+                unsafe { q.cmd_reset(cmd) };
+                // SAFETY: `cmd` is the buffer `submit` is recording, outside a render pass; the
+                // pool holds these indices and is reset first in this buffer.
+                unsafe { q.cmd_write(cmd, 0) };
             }
             record(cmd, n);
             if let Some(q) = &queries {
-                q.cmd_write(cmd, 1);
+                // SAFETY: `cmd` is the buffer `submit` is recording, outside a render pass; the
+                // pool holds these indices and is reset first in this buffer.
+                unsafe { q.cmd_write(cmd, 1) };
             }
             Ok(())
         })?;

@@ -187,7 +187,12 @@ pub struct Framebuffer {
 }
 
 impl Framebuffer {
-    pub fn new(
+    /// A framebuffer of `views` for `render_pass`, `extent` large.
+    ///
+    /// # Safety
+    /// The views are live views of this device matching the render pass's attachments in
+    /// number, format and samples, each at least `extent` large.
+    pub unsafe fn new(
         gpu: &Gpu,
         render_pass: &RenderPass,
         views: &[vk::ImageView],
@@ -200,9 +205,8 @@ impl Framebuffer {
             .height(extent.height)
             .layers(1);
         // SAFETY: `render_pass` is alive and of this device; `info` and `views` outlive the
-        // call. The views must be live views of this device matching the render pass's
-        // attachments and at least `extent` large: this safe function cannot check that and
-        // relies on its callers, which pass views of images they just made to fit.
+        // call; the views match the render pass's attachments and cover `extent` (the
+        // function's contract).
         let raw = unsafe {
             gpu.device()
                 .create_framebuffer(&info, None)

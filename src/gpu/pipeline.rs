@@ -387,7 +387,11 @@ impl Drop for DescriptorPool {
 }
 
 /// Points the bindings of `set` at whole buffers: `(binding, descriptor type, buffer)`.
-pub fn write_buffer_descriptors(
+///
+/// # Safety
+/// `set` is a live descriptor set of this device with these bindings of these types, and no
+/// pending work uses it (Vulkan forbids updating a set a pending command buffer uses).
+pub unsafe fn write_buffer_descriptors(
     gpu: &Gpu,
     set: vk::DescriptorSet,
     bindings: &[(u32, vk::DescriptorType, &super::Buffer)],
@@ -414,13 +418,17 @@ pub fn write_buffer_descriptors(
         })
         .collect();
     // SAFETY: `writes` points at `infos`, both alive across the call, and every buffer is a
-    // live vklens `Buffer`. That `set` is live, has these bindings with these types, and is
-    // not used by pending work is up to the caller: this safe function cannot check it.
+    // live vklens `Buffer`; `set` is live, has these bindings and is unused by pending work
+    // (the function's contract).
     unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
 }
 
 /// Points `binding` of `set` at a sampled image (in `SHADER_READ_ONLY_OPTIMAL`) with `sampler`.
-pub fn write_sampled_image_descriptor(
+///
+/// # Safety
+/// `set` is a live descriptor set of this device with a combined image sampler at `binding`,
+/// `view` a live view of this device, and no pending work uses `set`.
+pub unsafe fn write_sampled_image_descriptor(
     gpu: &Gpu,
     set: vk::DescriptorSet,
     binding: u32,
@@ -438,14 +446,16 @@ pub fn write_sampled_image_descriptor(
         .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
         .image_info(&info);
     // SAFETY: `write` points at `info`, alive across the call; `sampler` is a live vklens
-    // sampler. That `set` is live with a combined image sampler at `binding`, that `view` is a
-    // live view of this device, and that no pending work uses `set` is up to the caller: this
-    // safe function cannot check it.
+    // sampler; `set`, `binding` and `view` are as the function's contract says.
     unsafe { gpu.device().update_descriptor_sets(&[write], &[]) };
 }
 
 /// Points the bindings of `set` at storage images in `GENERAL` layout: `(binding, view)`.
-pub fn write_storage_image_descriptors(
+///
+/// # Safety
+/// `set` is a live descriptor set of this device whose `binding`s are storage images, the
+/// views are live views of this device, and no pending work uses `set`.
+pub unsafe fn write_storage_image_descriptors(
     gpu: &Gpu,
     set: vk::DescriptorSet,
     bindings: &[(u32, vk::ImageView)],
@@ -471,8 +481,7 @@ pub fn write_storage_image_descriptors(
                 .image_info(info)
         })
         .collect();
-    // SAFETY: `writes` points at `infos`, both alive across the call. That `set` and the
-    // views are live objects of this device, that the bindings are storage images, and that
-    // no pending work uses `set` is up to the caller: this safe function cannot check it.
+    // SAFETY: `writes` points at `infos`, both alive across the call; `set`, the bindings and
+    // the views are as the function's contract says.
     unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
 }

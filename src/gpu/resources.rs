@@ -399,12 +399,13 @@ impl QueryPool {
         })
     }
 
-    /// Records a reset of every query (must be outside a render pass).
-    pub fn cmd_reset(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the pool is alive and of this device, and the range is the whole pool. That
-        // `cmd` is recording, outside a render pass, is the caller's duty: this function is
-        // safe but cannot check it (every caller passes a buffer `submit` or
-        // `PlanRecorder::record` is recording).
+    /// Records a reset of every query.
+    ///
+    /// # Safety
+    /// `cmd` is recording, outside a render pass, on a queue of this device.
+    pub unsafe fn cmd_reset(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: the pool is alive and of this device, and the range is the whole pool; `cmd`
+        // is recording outside a render pass (the function's contract).
         unsafe {
             self.gpu
                 .device()
@@ -413,11 +414,14 @@ impl QueryPool {
     }
 
     /// Records a timestamp into query `index` after all prior work.
-    pub fn cmd_write(&self, cmd: vk::CommandBuffer, index: u32) {
+    ///
+    /// # Safety
+    /// `cmd` is recording on a queue of this device, the query was reset since its last write
+    /// (in this command buffer or an earlier completed one), and `index` is below the pool's
+    /// count.
+    pub unsafe fn cmd_write(&self, cmd: vk::CommandBuffer, index: u32) {
         // SAFETY: the pool is alive, of this device, and its queue has timestamps (`timestamps`
-        // checked). That `cmd` is recording, that the query was reset first and that `index`
-        // is below `count` are the caller's duty: this safe function checks none of them
-        // (every caller resets in the same buffer and writes indices below the count it asked for).
+        // checked); `cmd`, the reset and `index` are as the function's contract says.
         unsafe {
             self.gpu.device().cmd_write_timestamp(
                 cmd,

@@ -42,14 +42,18 @@ pub fn render_grid(ctx: &Context, camera: &Camera, grid: u32) -> Result<Vec<u8>>
         vk::BufferUsageFlags::STORAGE_BUFFER,
         MemoryLocation::GpuToCpu,
     )?;
-    write_buffer_descriptors(
-        gpu,
-        set,
-        &[
-            (0, vk::DescriptorType::UNIFORM_BUFFER, &params),
-            (1, vk::DescriptorType::STORAGE_BUFFER, &pixels),
-        ],
-    );
+    // SAFETY: the set was just allocated from a pool made for this pipeline's layout, so no
+    // work uses it yet; the buffers and views are this pass's own, alive.
+    unsafe {
+        write_buffer_descriptors(
+            gpu,
+            set,
+            &[
+                (0, vk::DescriptorType::UNIFORM_BUFFER, &params),
+                (1, vk::DescriptorType::STORAGE_BUFFER, &pixels),
+            ],
+        )
+    };
     ctx.submit(|cmd| {
         let size = [w, h];
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;

@@ -45,7 +45,12 @@ impl CopyPass {
     /// this object may be pending on the GPU (wait for its fence first), as Vulkan
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn bind(&mut self, source: vk::ImageView, target: vk::ImageView) {
-        write_storage_image_descriptors(&self.gpu, self.set, &[(0, source), (1, target)]);
+        // SAFETY: the caller upholds this function's contract (no pending work uses the set);
+        // the set is this pass's own, of its pipeline's layout, and the views and buffers are
+        // live.
+        unsafe {
+            write_storage_image_descriptors(&self.gpu, self.set, &[(0, source), (1, target)])
+        };
     }
 
     /// Records the copy.

@@ -98,7 +98,11 @@ impl FilmPass {
     /// A descriptor set that samples `view` (in `SHADER_READ_ONLY_OPTIMAL` when drawn).
     pub fn bind_image(&self, view: vk::ImageView) -> Result<vk::DescriptorSet> {
         let set = self.pool.allocate(&self.pipeline)?;
-        crate::gpu::write_sampled_image_descriptor(&self.gpu, set, 0, &self.sampler, view);
+        // SAFETY: the set was just allocated from a pool made for this pipeline's layout (a
+        // sampled image at 0), so no work uses it yet; `view` is the caller's live view.
+        unsafe {
+            crate::gpu::write_sampled_image_descriptor(&self.gpu, set, 0, &self.sampler, view)
+        };
         Ok(set)
     }
 
@@ -214,12 +218,16 @@ impl FilmTarget {
                 | vk::ImageUsageFlags::TRANSFER_SRC
                 | vk::ImageUsageFlags::TRANSFER_DST,
         )?;
-        let framebuffer = Framebuffer::new(
-            gpu,
-            &pass.render_pass,
-            &[image.view],
-            vk::Extent2D { width, height },
-        )?;
+        // SAFETY: the views are of images just made for this render pass's attachments,
+        // `extent` large.
+        let framebuffer = unsafe {
+            Framebuffer::new(
+                gpu,
+                &pass.render_pass,
+                &[image.view],
+                vk::Extent2D { width, height },
+            )
+        }?;
         let download = Buffer::new(
             gpu,
             "film.download",

@@ -616,14 +616,18 @@ impl GeometryPass {
         )?;
         let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
         let set = pool.allocate(&pipeline)?;
-        crate::gpu::write_buffer_descriptors(
-            gpu,
-            set,
-            &[
-                (0, vk::DescriptorType::UNIFORM_BUFFER, &camera),
-                (1, vk::DescriptorType::UNIFORM_BUFFER, &frame),
-            ],
-        );
+        // SAFETY: the set was just allocated from a pool made for this pipeline's layout, so no
+        // work uses it yet; the buffers and views are this pass's own, alive.
+        unsafe {
+            crate::gpu::write_buffer_descriptors(
+                gpu,
+                set,
+                &[
+                    (0, vk::DescriptorType::UNIFORM_BUFFER, &camera),
+                    (1, vk::DescriptorType::UNIFORM_BUFFER, &frame),
+                ],
+            )
+        };
         let domain_table = discard_needs_domain_table(cam, discard_bound);
         let discard = if pulled {
             let constants = vertex_constants.bool(spec::DOMAIN_TABLE, domain_table);
@@ -793,14 +797,18 @@ impl GeometryPass {
                 vk::BufferUsageFlags::UNIFORM_BUFFER,
             )?;
             let set = pool.allocate(&self.pipeline)?;
-            crate::gpu::write_buffer_descriptors(
-                &self.gpu,
-                set,
-                &[
-                    (0, vk::DescriptorType::UNIFORM_BUFFER, &camera),
-                    (1, vk::DescriptorType::UNIFORM_BUFFER, &frame),
-                ],
-            );
+            // SAFETY: the set was just allocated from a pool made for this pipeline's layout,
+            // so no work uses it yet; the buffers and views are this pass's own, alive.
+            unsafe {
+                crate::gpu::write_buffer_descriptors(
+                    &self.gpu,
+                    set,
+                    &[
+                        (0, vk::DescriptorType::UNIFORM_BUFFER, &camera),
+                        (1, vk::DescriptorType::UNIFORM_BUFFER, &frame),
+                    ],
+                )
+            };
             slots.push(Slot { camera, frame, set });
         }
         Ok(GeometrySlots { _pool: pool, slots })
@@ -846,7 +854,9 @@ impl GeometryPass {
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn bind_slots_mesh(&self, slots: &GeometrySlots, mesh: &MeshBuffers) {
         for slot in &slots.slots {
-            self.write_texture(slot.set, mesh);
+            // SAFETY: the caller upholds this function's contract: no pending work uses the
+            // slots' sets, which have this pipeline's layout.
+            unsafe { self.write_texture(slot.set, mesh) };
         }
     }
 
@@ -878,20 +888,33 @@ impl GeometryPass {
     /// requires of descriptor sets and memory the device reads.
     /// With the compute discard, its set is pointed at the mesh's buffers too.
     pub unsafe fn bind_mesh(&mut self, mesh: &MeshBuffers) {
-        self.write_texture(self.set, mesh);
-        if let Some(d) = &self.discard {
-            d.bind(&self.gpu, mesh);
+        // SAFETY: the caller upholds this function's contract: no pending work uses the
+        // pass's set or the discard's.
+        unsafe {
+            self.write_texture(self.set, mesh);
+            if let Some(d) = &self.discard {
+                d.bind(&self.gpu, mesh);
+            }
         }
     }
 
-    fn write_texture(&self, set: vk::DescriptorSet, mesh: &MeshBuffers) {
-        crate::gpu::write_sampled_image_descriptor(
-            &self.gpu,
-            set,
-            2,
-            &self.sampler,
-            mesh.texture.image.view,
-        );
+    /// Points `set` (this pipeline's layout) at `mesh`'s texture.
+    ///
+    /// # Safety
+    /// No pending work uses `set`.
+    unsafe fn write_texture(&self, set: vk::DescriptorSet, mesh: &MeshBuffers) {
+        // SAFETY: `set` has this pipeline's layout, with the texture's combined image sampler
+        // at binding 2; the mesh's texture view is live; no pending work uses `set` (the
+        // function's contract).
+        unsafe {
+            crate::gpu::write_sampled_image_descriptor(
+                &self.gpu,
+                set,
+                2,
+                &self.sampler,
+                mesh.texture.image.view,
+            )
+        };
     }
 
     /// Records the render pass: clears every output, draws `mesh`, leaves the outputs in
@@ -1018,11 +1041,15 @@ impl DiscardPass {
         let pool = DescriptorPool::for_pipeline(gpu, &stages[0], 1)?;
         // One set for all three: their set layouts are identically defined, hence compatible.
         let set = pool.allocate(&stages[0])?;
-        crate::gpu::write_buffer_descriptors(
-            gpu,
-            set,
-            &[(0, uniform, camera), (1, uniform, frame)],
-        );
+        // SAFETY: the set was just allocated from a pool made for this pipeline's layout, so no
+        // work uses it yet; the buffers and views are this pass's own, alive.
+        unsafe {
+            crate::gpu::write_buffer_descriptors(
+                gpu,
+                set,
+                &[(0, uniform, camera), (1, uniform, frame)],
+            )
+        };
         Ok(DiscardPass {
             stages,
             set,
@@ -1030,25 +1057,32 @@ impl DiscardPass {
         })
     }
 
-    /// Points the set at `mesh`'s buffers. No pending work may use the set (the caller's
-    /// part: [`GeometryPass::bind_mesh`]'s contract).
-    fn bind(&self, gpu: &Gpu, mesh: &MeshBuffers) {
+    /// Points the set at `mesh`'s buffers.
+    ///
+    /// # Safety
+    /// No pending work uses the set ([`GeometryPass::bind_mesh`]'s contract).
+    unsafe fn bind(&self, gpu: &Gpu, mesh: &MeshBuffers) {
         let m = &mesh.discard;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
-        crate::gpu::write_buffer_descriptors(
-            gpu,
-            self.set,
-            &[
-                (2, storage, &mesh.vertices),
-                (3, storage, &m.positions),
-                (4, storage, &m.motion),
-                (5, storage, &m.dropped),
-                (6, storage, &m.incidence_start),
-                (7, storage, &m.incidence),
-                (8, storage, &mesh.indices),
-                (9, storage, &m.kept),
-            ],
-        );
+        // SAFETY: the set has the discard pipeline's layout with these storage buffers at
+        // these bindings, the buffers are the mesh's own, live; no pending work uses the set
+        // (the function's contract).
+        unsafe {
+            crate::gpu::write_buffer_descriptors(
+                gpu,
+                self.set,
+                &[
+                    (2, storage, &mesh.vertices),
+                    (3, storage, &m.positions),
+                    (4, storage, &m.motion),
+                    (5, storage, &m.dropped),
+                    (6, storage, &m.incidence_start),
+                    (7, storage, &m.incidence),
+                    (8, storage, &mesh.indices),
+                    (9, storage, &m.kept),
+                ],
+            )
+        };
     }
 
     /// Records the three stages with the barriers around them: the restore of the triangles
@@ -1205,7 +1239,9 @@ impl GeometryTargets {
         let mut views: Vec<vk::ImageView> =
             targets.iter().flatten().map(|t| t.image.view).collect();
         views.push(depth_buffer.view);
-        let framebuffer = Framebuffer::new(gpu, &pass.render_pass, &views, extent)?;
+        // SAFETY: the views are of images just made for this render pass's attachments,
+        // `extent` large.
+        let framebuffer = unsafe { Framebuffer::new(gpu, &pass.render_pass, &views, extent) }?;
         Ok(GeometryTargets {
             gpu: gpu.clone(),
             outputs: pass.desc.outputs,

@@ -206,7 +206,18 @@ impl MeshWarpPass {
     /// this object may be pending on the GPU (wait for its fence first), as Vulkan
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn bind(&mut self, source: vk::ImageView) {
-        crate::gpu::write_sampled_image_descriptor(&self.gpu, self.set, 0, &self.sampler, source);
+        // SAFETY: the caller upholds this function's contract (no pending work uses the set);
+        // the set is this pass's own, of its pipeline's layout, and the views and buffers are
+        // live.
+        unsafe {
+            crate::gpu::write_sampled_image_descriptor(
+                &self.gpu,
+                self.set,
+                0,
+                &self.sampler,
+                source,
+            )
+        };
     }
 
     /// Records the warp into `framebuffer` (one colour attachment of `output_size` and this
@@ -274,7 +285,9 @@ impl MeshWarpTarget {
             width: w,
             height: h,
         };
-        let framebuffer = Framebuffer::new(gpu, render_pass, &[image.view], extent)?;
+        // SAFETY: the views are of images just made for this render pass's attachments,
+        // `extent` large.
+        let framebuffer = unsafe { Framebuffer::new(gpu, render_pass, &[image.view], extent) }?;
         let bpp = if format == vk::Format::R8G8B8A8_UNORM {
             4
         } else {

@@ -173,15 +173,20 @@ impl PointsPass {
     /// this object may be pending on the GPU (wait for its fence first), as Vulkan
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn bind(&mut self, inputs: &Buffer, outputs: &Buffer) {
-        write_buffer_descriptors(
-            &self.gpu,
-            self.set,
-            &[
-                (0, vk::DescriptorType::UNIFORM_BUFFER, &self.camera),
-                (1, vk::DescriptorType::STORAGE_BUFFER, inputs),
-                (2, vk::DescriptorType::STORAGE_BUFFER, outputs),
-            ],
-        );
+        // SAFETY: the caller upholds this function's contract (no pending work uses the set);
+        // the set is this pass's own, of its pipeline's layout, and the views and buffers are
+        // live.
+        unsafe {
+            write_buffer_descriptors(
+                &self.gpu,
+                self.set,
+                &[
+                    (0, vk::DescriptorType::UNIFORM_BUFFER, &self.camera),
+                    (1, vk::DescriptorType::STORAGE_BUFFER, inputs),
+                    (2, vk::DescriptorType::STORAGE_BUFFER, outputs),
+                ],
+            )
+        };
     }
 
     /// Records the dispatch over `count` points.

@@ -312,13 +312,32 @@ impl SphereWarpPass {
         output: vk::ImageView,
         mask: vk::ImageView,
     ) {
-        crate::gpu::write_buffer_descriptors(
-            &self.gpu,
-            self.set,
-            &[(0, vk::DescriptorType::UNIFORM_BUFFER, &self.camera)],
-        );
-        crate::gpu::write_sampled_image_descriptor(&self.gpu, self.set, 1, &self.sampler, source);
-        write_storage_image_descriptors(&self.gpu, self.set, &[(2, output), (3, mask)]);
+        // SAFETY: the caller upholds this function's contract (no pending work uses the set);
+        // the set is this pass's own, of its pipeline's layout, and the views and buffers are
+        // live.
+        unsafe {
+            crate::gpu::write_buffer_descriptors(
+                &self.gpu,
+                self.set,
+                &[(0, vk::DescriptorType::UNIFORM_BUFFER, &self.camera)],
+            )
+        };
+        // SAFETY: the caller upholds this function's contract (no pending work uses the set);
+        // the set is this pass's own, of its pipeline's layout, and the views and buffers are
+        // live.
+        unsafe {
+            crate::gpu::write_sampled_image_descriptor(
+                &self.gpu,
+                self.set,
+                1,
+                &self.sampler,
+                source,
+            )
+        };
+        // SAFETY: the caller upholds this function's contract (no pending work uses the set);
+        // the set is this pass's own, of its pipeline's layout, and the views and buffers are
+        // live.
+        unsafe { write_storage_image_descriptors(&self.gpu, self.set, &[(2, output), (3, mask)]) };
     }
 
     /// Records the warp over the whole output.

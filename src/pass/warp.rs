@@ -249,11 +249,15 @@ impl WarpPass {
             vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
         for &set in &sets {
-            write_buffer_descriptors(
-                gpu,
-                set,
-                &[(0, vk::DescriptorType::UNIFORM_BUFFER, &camera)],
-            );
+            // SAFETY: the set was just allocated from a pool made for this pipeline's layout,
+            // so no work uses it yet; the buffers and views are this pass's own, alive.
+            unsafe {
+                write_buffer_descriptors(
+                    gpu,
+                    set,
+                    &[(0, vk::DescriptorType::UNIFORM_BUFFER, &camera)],
+                )
+            };
         }
         let scales = g.chromatic.unwrap_or([1.0; 3]);
         let k = &g.ideal;
@@ -287,7 +291,9 @@ impl WarpPass {
         let map_views: Vec<(u32, vk::ImageView)> =
             (0..3).map(|c| (MAP_BINDINGS[c], maps[c].view)).collect();
         for &set in &sets {
-            write_storage_image_descriptors(gpu, set, &map_views);
+            // SAFETY: the set was just allocated from a pool made for this pipeline's layout,
+            // so no work uses it yet; the buffers and views are this pass's own, alive.
+            unsafe { write_storage_image_descriptors(gpu, set, &map_views) };
         }
 
         let mut map_pipelines = Vec::new();
@@ -360,8 +366,14 @@ impl WarpPass {
                 p.chromatic = [g.channel_scale(c) as f32, 0.0, 0.0, 0.0];
                 if stride == 1 {
                     let set = mpool.allocate(&map_pipelines[0])?;
-                    write_buffer_descriptors(gpu, set, &[(0, uniform, &cam)]);
-                    write_storage_image_descriptors(gpu, set, &[(1, maps[c].view)]);
+                    // SAFETY: the set was just allocated from a pool made for this pipeline's
+                    // layout, so no work uses it yet; the buffers and views are this pass's
+                    // own, alive.
+                    unsafe { write_buffer_descriptors(gpu, set, &[(0, uniform, &cam)]) };
+                    // SAFETY: the set was just allocated from a pool made for this pipeline's
+                    // layout, so no work uses it yet; the buffers and views are this pass's
+                    // own, alive.
+                    unsafe { write_storage_image_descriptors(gpu, set, &[(1, maps[c].view)]) };
                     map_steps.push(MapStep {
                         pipeline: 0,
                         set,
@@ -372,8 +384,14 @@ impl WarpPass {
                 } else {
                     let coarse = Image::new_2d(gpu, "warp.map.coarse", MAP_FORMAT, cw, ch, usage)?;
                     let solve = mpool.allocate(&map_pipelines[0])?;
-                    write_buffer_descriptors(gpu, solve, &[(0, uniform, &cam)]);
-                    write_storage_image_descriptors(gpu, solve, &[(1, coarse.view)]);
+                    // SAFETY: the set was just allocated from a pool made for this pipeline's
+                    // layout, so no work uses it yet; the buffers and views are this pass's
+                    // own, alive.
+                    unsafe { write_buffer_descriptors(gpu, solve, &[(0, uniform, &cam)]) };
+                    // SAFETY: the set was just allocated from a pool made for this pipeline's
+                    // layout, so no work uses it yet; the buffers and views are this pass's
+                    // own, alive.
+                    unsafe { write_storage_image_descriptors(gpu, solve, &[(1, coarse.view)]) };
                     let mut cp = p;
                     cp.sizes = [p.sizes[0], p.sizes[1], cw, ch];
                     map_steps.push(MapStep {
@@ -384,12 +402,20 @@ impl WarpPass {
                         barrier_after: true,
                     });
                     let up = mpool.allocate(&map_pipelines[1])?;
-                    write_buffer_descriptors(gpu, up, &[(0, uniform, &cam)]);
-                    write_storage_image_descriptors(
-                        gpu,
-                        up,
-                        &[(1, coarse.view), (2, maps[c].view)],
-                    );
+                    // SAFETY: the set was just allocated from a pool made for this pipeline's
+                    // layout, so no work uses it yet; the buffers and views are this pass's
+                    // own, alive.
+                    unsafe { write_buffer_descriptors(gpu, up, &[(0, uniform, &cam)]) };
+                    // SAFETY: the set was just allocated from a pool made for this pipeline's
+                    // layout, so no work uses it yet; the buffers and views are this pass's
+                    // own, alive.
+                    unsafe {
+                        write_storage_image_descriptors(
+                            gpu,
+                            up,
+                            &[(1, coarse.view), (2, maps[c].view)],
+                        )
+                    };
                     map_steps.push(MapStep {
                         pipeline: 1,
                         set: up,
@@ -516,11 +542,16 @@ impl WarpPass {
         output: vk::ImageView,
         mask: vk::ImageView,
     ) {
-        write_storage_image_descriptors(
-            &self.gpu,
-            self.sets[self.slot],
-            &[(1, source), (2, output), (3, mask)],
-        );
+        // SAFETY: the caller upholds this function's contract (no pending work uses the set);
+        // the set is this pass's own, of its pipeline's layout, and the views and buffers are
+        // live.
+        unsafe {
+            write_storage_image_descriptors(
+                &self.gpu,
+                self.sets[self.slot],
+                &[(1, source), (2, output), (3, mask)],
+            )
+        };
     }
 
     /// Records the one-off work: the map images' transition to `GENERAL` and, in map mode, the

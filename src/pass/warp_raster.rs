@@ -90,7 +90,9 @@ impl RasterWarpPass {
             format,
         };
         let [g, r, b] = warp.map_views();
-        write_storage_image_descriptors(&pass.gpu, pass.set, &[(0, g), (1, r), (2, b)]);
+        // SAFETY: the set was just allocated from a pool made for this pipeline's layout, so no
+        // work uses it yet; the buffers and views are this pass's own, alive.
+        unsafe { write_storage_image_descriptors(&pass.gpu, pass.set, &[(0, g), (1, r), (2, b)]) };
         Ok(pass)
     }
 
@@ -102,7 +104,10 @@ impl RasterWarpPass {
     /// this object may be pending on the GPU (wait for its fence first), as Vulkan
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn bind(&mut self, source: vk::ImageView) {
-        write_storage_image_descriptors(&self.gpu, self.set, &[(3, source)]);
+        // SAFETY: the caller upholds this function's contract (no pending work uses the set);
+        // the set is this pass's own, of its pipeline's layout, and the views and buffers are
+        // live.
+        unsafe { write_storage_image_descriptors(&self.gpu, self.set, &[(3, source)]) };
     }
 
     /// Records the warp into `framebuffer` (one colour attachment of `output_size` and this

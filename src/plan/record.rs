@@ -502,12 +502,16 @@ impl PlanRecorder {
         let mut k = 0;
         let mut stamp = || {
             if let Some(q) = timestamps {
-                q.cmd_write(cmd, k);
+                // SAFETY: `record`'s contract: `cmd` is recording outside a render pass and
+                // `timestamps` holds `timestamp_count` queries, reset first in this buffer.
+                unsafe { q.cmd_write(cmd, k) };
             }
             k += 1;
         };
         if let Some(q) = timestamps {
-            q.cmd_reset(cmd);
+            // SAFETY: `record`'s contract: `cmd` is recording outside a render pass and
+            // `timestamps` holds `timestamp_count` queries, reset first in this buffer.
+            unsafe { q.cmd_reset(cmd) };
         }
         stamp();
         // SAFETY: the caller upholds `record`'s contract: `cmd` is recording (outside a render

@@ -82,28 +82,39 @@ fn a_warper_matches_the_f64_reference_warp_and_its_maps_are_the_exact_coordinate
         }
     }
     assert!(worst <= 1.0 / 255.0 + 1e-6, "worst {worst}");
-    // The maps: the exact source coordinate of every pixel, NaN where there is none.
-    let maps = warper.maps(&device).unwrap();
-    let (w, h) = warper.output_size();
-    assert_eq!(maps.len(), (w * h) as usize);
-    let mut compared = 0;
-    for y in (0..h).step_by(37) {
-        for x in (0..w).step_by(41) {
-            let m = maps[(y * w + x) as usize];
-            let exact = warper
-                .geometry()
-                .source_coordinate(glam::DVec2::new(x as f64, y as f64), 1);
-            match exact {
-                Some(e) => {
-                    let d = (m[0] as f64 - e.x).hypot(m[1] as f64 - e.y);
-                    assert!(d < 1e-3, "({x}, {y}): map off by {d} px");
-                    compared += 1;
+    // The maps: the exact source coordinate of every pixel, NaN where there is none; from a
+    // map build of their own for the per-pixel warper, from the warper's own maps (built by
+    // its first run) for a `lut` one.
+    let mut lut_options = options.clone();
+    lut_options.method = WarpMethod::Lut;
+    let mut lut = Warper::new(device.gpu(), &camera, &lut_options).unwrap();
+    lut.run(&device, &input).unwrap();
+    for warper in [&warper, &lut] {
+        let maps = warper.maps(&device).unwrap();
+        let (w, h) = warper.output_size();
+        assert_eq!(maps.len(), (w * h) as usize);
+        let mut compared = 0;
+        for y in (0..h).step_by(37) {
+            for x in (0..w).step_by(41) {
+                let m = maps[(y * w + x) as usize];
+                let exact = warper
+                    .geometry()
+                    .source_coordinate(glam::DVec2::new(x as f64, y as f64), 1);
+                match exact {
+                    Some(e) => {
+                        let d = (m[0] as f64 - e.x).hypot(m[1] as f64 - e.y);
+                        assert!(d < 1e-3, "({x}, {y}): map off by {d} px");
+                        compared += 1;
+                    }
+                    None => assert!(m[0].is_nan() && m[1].is_nan(), "({x}, {y}): {m:?}"),
                 }
-                None => assert!(m[0].is_nan() && m[1].is_nan(), "({x}, {y}): {m:?}"),
             }
         }
+        assert!(compared > 100);
     }
-    assert!(compared > 100);
+    // A `lut` warper never run builds its maps for the read.
+    let fresh = Warper::new(device.gpu(), &camera, &lut_options).unwrap();
+    assert_eq!(fresh.maps(&device).unwrap(), lut.maps(&device).unwrap());
     device.check_validation().unwrap();
 }
 

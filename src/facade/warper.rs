@@ -261,7 +261,7 @@ pub struct Warper {
     /// Images for [`Warper::run`], made on its first call.
     headless: Option<WarpImages>,
     /// Whether the map build has been recorded (it runs once).
-    prepared_headless: bool,
+    prepared_headless: std::cell::Cell<bool>,
 }
 
 impl Warper {
@@ -324,7 +324,7 @@ impl Warper {
             bound: vec![None; options.frames_in_flight],
             frame: 0,
             headless: None,
-            prepared_headless: false,
+            prepared_headless: std::cell::Cell::new(false),
         })
     }
 
@@ -585,9 +585,9 @@ impl Warper {
             device.context(),
             images,
             &self.pass,
-            !self.prepared_headless,
+            !self.prepared_headless.get(),
         )?;
-        self.prepared_headless = true;
+        self.prepared_headless.set(true);
         Ok(())
     }
 
@@ -596,9 +596,21 @@ impl Warper {
     /// `cv2.remap`. Solved per pixel with Newton on the GPU, then refined on the host in f64
     /// (the f32 solve alone loses up to a tenth of a pixel next to a fold), so every entry is
     /// the f64 coordinate rounded to f32.
+    ///
+    /// A `lut` warper hands out the maps it warps with (built by its first run or prepare);
+    /// a per-pixel method has none, and its coordinates are solved by a map build of their own.
+    /// Either way the device is waited for: no warp recorded into your own command buffers may
+    /// be pending while the maps are built.
     pub fn maps(&self, device: &Device) -> Result<Vec<[f32; 2]>> {
-        let mut maps =
-            crate::host::warp::read_maps(device.context(), &self.geometry, Coordinates::Map)?;
+        let ctx = device.context();
+        let mut maps = if self.pass.desc().coordinates == Coordinates::Map {
+            let maps =
+                crate::host::warp::read_pass_maps(ctx, &self.pass, !self.prepared_headless.get())?;
+            self.prepared_headless.set(true);
+            maps
+        } else {
+            crate::host::warp::read_maps(ctx, &self.geometry, Coordinates::Map)?
+        };
         // G is the geometric map (the only one without chromatic aberration).
         let index = if maps.len() == 3 { 1 } else { 0 };
         let mut map = maps.swap_remove(index);

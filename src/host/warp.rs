@@ -1,6 +1,6 @@
 //! Headless helpers for `pass::warp`: upload, record, submit, wait and read back.
 
-use crate::gpu::record_compute_download;
+use crate::gpu::{record_compute_download, record_compute_readback};
 use crate::gpu::{host_read_barrier, Buffer, Result};
 use crate::host::warp_images::WarpImages;
 use crate::host::Context;
@@ -59,6 +59,64 @@ pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raste
         Ok(())
     })?;
     images.read(source.bit_depth)
+}
+
+/// Reads back the coordinate maps of `pass` (a pass in map mode, `Coordinates::Map`),
+/// recording its map build first when `prepare` (a pass whose maps were never built): per
+/// built channel (G only without chromatic aberration; else R, G, B), row-major `[x, y]`
+/// source positions, NaN where there is none.
+pub(crate) fn read_pass_maps(
+    ctx: &Context,
+    pass: &WarpPass,
+    prepare: bool,
+) -> Result<Vec<Vec<[f32; 2]>>> {
+    let desc = pass.desc();
+    if desc.coordinates != Coordinates::Map {
+        return Err(crate::Error::internal(
+            "only a full per-pixel map can be read back as the warp's maps",
+        ));
+    }
+    let gpu = ctx.gpu();
+    let (w, h) = desc.geometry.output_size;
+    let channels: Vec<usize> = if desc.geometry.is_chromatic() {
+        vec![0, 1, 2]
+    } else {
+        vec![1]
+    };
+    let buffers = channels
+        .iter()
+        .map(|_| {
+            Buffer::new(
+                gpu,
+                "map.read",
+                w as u64 * h as u64 * 8,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
+        // the maps are in GENERAL once built (by the prepare recorded here, or by an earlier
+        // one that completed), each channel's map is a real `w × h` RG32F image (8 bytes a
+        // texel, as each buffer is sized) with TRANSFER_SRC usage, and `pass` and `buffers`
+        // outlive the submission, which `submit` waits for.
+        unsafe {
+            if prepare {
+                pass.record_prepare(cmd);
+            }
+            for (&c, buf) in channels.iter().zip(&buffers) {
+                // The copy reads what the map build wrote; the map goes back to GENERAL,
+                // where the pass's warps read it.
+                record_compute_readback(gpu, cmd, &pass.maps[c], buf);
+            }
+        }
+        Ok(())
+    })?;
+    buffers
+        .iter()
+        .map(|b| b.read_pod::<[f32; 2]>(w as usize * h as usize))
+        .collect()
 }
 
 /// Builds `geometry`'s coordinate maps on the GPU and reads them back: per built channel

@@ -79,6 +79,28 @@ pub fn execute_untimed(
     run_frames(ctx, plan, scene, frames, false, each)
 }
 
+/// Records `what` of every recorder into one submission, and waits.
+///
+/// # Safety
+/// `what`'s contract holds for each recorder in a fresh command buffer recording outside a
+/// render pass on the context's graphics and compute queue.
+unsafe fn submit_each<'a>(
+    ctx: &Context,
+    recorders: impl Iterator<Item = &'a PlanRecorder>,
+    what: unsafe fn(&PlanRecorder, ash::vk::CommandBuffer),
+) -> Result<()> {
+    let recorders: Vec<&PlanRecorder> = recorders.collect();
+    ctx.submit(|cmd| {
+        for r in &recorders {
+            // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside a render pass
+            // on the context's graphics and compute queue; the rest is this function's
+            // contract.
+            unsafe { what(r, cmd) };
+        }
+        Ok(())
+    })
+}
+
 fn run_frames(
     ctx: &Context,
     plan: &Plan,
@@ -163,16 +185,14 @@ fn run_frames(
         .as_ref()
         .filter(|_| timing)
         .and_then(|r| QueryPool::timestamps(gpu, r.timestamp_count()).ok());
-    ctx.submit(|cmd| {
-        // SAFETY: `cmd` is recording outside a render pass on the context's graphics and
-        // compute queue; each recorder's one-off work is recorded once, before any frame.
-        unsafe {
-            for r in main.iter().chain(smooth.iter()) {
-                r.record_setup(cmd);
-            }
-        }
-        Ok(())
-    })?;
+    // SAFETY: each recorder's one-off work, recorded once, before any frame.
+    unsafe {
+        submit_each(
+            ctx,
+            main.iter().chain(smooth.iter()),
+            PlanRecorder::record_setup,
+        )
+    }?;
     // Run one recorder's prepared frame and read its outputs back.
     let run = |r: &PlanRecorder, timestamps: Option<&QueryPool>| -> Result<Rendered> {
         ctx.submit(|cmd| {
@@ -202,16 +222,14 @@ fn run_frames(
                 // SAFETY: every submission has completed (`submit` waits on its fence).
                 unsafe { r.set_mesh(gpu, &mesh, texture) }?;
             }
-            ctx.submit(|cmd| {
-                // SAFETY: `cmd` is recording outside a render pass on the context's graphics
-                // queue, before the frame that draws the new mesh.
-                unsafe {
-                    for r in main.iter().chain(smooth.iter()) {
-                        r.record_mesh_upload(cmd);
-                    }
-                }
-                Ok(())
-            })?;
+            // SAFETY: before the frame that draws the new mesh.
+            unsafe {
+                submit_each(
+                    ctx,
+                    main.iter().chain(smooth.iter()),
+                    PlanRecorder::record_mesh_upload,
+                )
+            }?;
             mesh_pose = index;
         }
         let mut rendered = match &mut main {

@@ -1,6 +1,6 @@
 //! Headless helpers for `pass::warp`: upload, record, submit, wait and read back.
 
-use crate::gpu::{record_compute_download, record_compute_readback};
+use crate::gpu::record_compute_readback;
 use crate::gpu::{host_read_barrier, Buffer, Result};
 use crate::host::warp_images::WarpImages;
 use crate::host::Context;
@@ -44,24 +44,11 @@ pub fn run_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result<(Raste
     let mut pass = WarpPass::new(gpu, desc)?;
     // SAFETY: no submission using it is pending (`submit` waits on its fence).
     unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
-    ctx.submit(|cmd| {
-        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
-        // the context's compute+graphics queue. The calls come in the order their contracts
-        // ask (upload, prepare, warp after `bind` above, download), and `images` and `pass`
-        // outlive the submission, which `submit` waits for.
-        unsafe {
-            images.record_upload(cmd);
-            pass.record_prepare(cmd);
-            pass.record(cmd);
-            images.record_download(cmd);
-            host_read_barrier(gpu, cmd);
-        }
-        Ok(())
-    })?;
+    run_staged(ctx, &images, &pass, true)?;
     images.read(source.bit_depth)
 }
 
-/// Reads back the coordinate maps of `pass` (a pass in map mode, `Coordinates::Map`),
+/// Reads back the coordinate maps of `pass` (a pass whose coordinates come from a map),
 /// recording its map build first when `prepare` (a pass whose maps were never built): per
 /// built channel (G only without chromatic aberration; else R, G, B), row-major `[x, y]`
 /// source positions, NaN where there is none.
@@ -71,9 +58,9 @@ pub(crate) fn read_pass_maps(
     prepare: bool,
 ) -> Result<Vec<Vec<[f32; 2]>>> {
     let desc = pass.desc();
-    if desc.coordinates != Coordinates::Map {
+    if !desc.coordinates.uses_map() {
         return Err(crate::Error::internal(
-            "only a full per-pixel map can be read back as the warp's maps",
+            "an analytic warp has no maps to read back",
         ));
     }
     let gpu = ctx.gpu();
@@ -137,40 +124,5 @@ pub fn read_maps(
         write_mask: false,
     };
     let pass = WarpPass::new(gpu, desc)?;
-    let (w, h) = geometry.output_size;
-    let channels: Vec<usize> = if geometry.is_chromatic() {
-        vec![0, 1, 2]
-    } else {
-        vec![1]
-    };
-    let buffers = channels
-        .iter()
-        .map(|_| {
-            Buffer::new(
-                gpu,
-                "map.read",
-                w as u64 * h as u64 * 8,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )
-        })
-        .collect::<Result<Vec<_>>>()?;
-    ctx.submit(|cmd| {
-        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
-        // `record_prepare` leaves the maps in GENERAL, each channel's map is a real
-        // `w × h` RG32F image (8 bytes a texel, as each buffer is sized) with TRANSFER_SRC usage,
-        // and `pass` and `buffers` outlive the submission, which `submit` waits for.
-        unsafe {
-            pass.record_prepare(cmd);
-            for (&c, buf) in channels.iter().zip(&buffers) {
-                // The copy reads what the map build wrote.
-                record_compute_download(gpu, cmd, &pass.maps[c], buf);
-            }
-        }
-        Ok(())
-    })?;
-    buffers
-        .iter()
-        .map(|b| b.read_pod::<[f32; 2]>(w as usize * h as usize))
-        .collect()
+    read_pass_maps(ctx, &pass, true)
 }

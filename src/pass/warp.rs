@@ -516,12 +516,7 @@ impl WarpPass {
         &self.pipeline
     }
 
-    /// How many descriptor sets the pass keeps: frames that may be in flight at once.
-    pub fn frames_in_flight(&self) -> usize {
-        self.sets.len()
-    }
-
-    /// Makes frame `frame`'s descriptor set (`frame` modulo [`Self::frames_in_flight`]) the
+    /// Makes frame `frame`'s descriptor set (`frame` modulo the number of sets) the
     /// one [`WarpPass::bind`] writes and [`WarpPass::record`] records.
     pub fn select_frame(&mut self, frame: usize) {
         self.slot = frame % self.sets.len();

@@ -294,7 +294,6 @@ fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Result<Plan> {
         sensor_mm,
         pixels,
     } = spec;
-    let (focus_m, f_number, sensor_mm, pixels) = (&focus_m, &f_number, &sensor_mm, &pixels);
     if file.antialias.is_on() {
         return Err(Error::input(format!(
                     "{src}: [render] supersample / jitter: the image-based lens model renders one sample per pixel per lens sample; anti-aliasing is for camera-file scenes"
@@ -327,7 +326,7 @@ fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Result<Plan> {
         )));
     }
     let first = file.poses.first().copied();
-    let (optics, _) = frame_scene(&lens, *pixels, pitch, *f_number, *focus_m, first, scene)
+    let (optics, _) = frame_scene(&lens, pixels, pitch, f_number, focus_m, first, scene)
         .map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
     let efl = crate::lens::analyse(&lens, LAMBDA_D).efl.unwrap_or(1.0);
     // The budget in degrees: one pixel subtends pitch / EFL radians.
@@ -402,9 +401,9 @@ fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Result<Plan> {
         Optics::Lens(LensSetting {
             prescription: lens,
             pitch_mm: pitch,
-            pixels: *pixels,
+            pixels,
             focus_m: optics.focus_m,
-            f_number: *f_number,
+            f_number,
             models,
         }),
         poses,

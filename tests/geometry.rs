@@ -5,7 +5,7 @@ mod common;
 
 use common::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::{DVec2, DVec3};
-use vklens::internal::host::geometry::render;
+use vklens::internal::host::geometry::{render, TargetsReadback};
 use vklens::internal::imaging::{BitDepth, Pixels, Raster};
 use vklens::internal::model::{Camera, InverseMethod};
 use vklens::internal::pass::geometry::{
@@ -804,6 +804,7 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
     let buffers = MeshBuffers::new(gpu, mesh, None).unwrap();
     let mut pass = GeometryPass::new(gpu, desc(&barrel)).unwrap();
     let targets = GeometryTargets::new(gpu, &pass).unwrap();
+    let readback = TargetsReadback::new(gpu, &targets).unwrap();
     unsafe { pass.bind_mesh(&buffers) };
     ctx.submit(|cmd| {
         unsafe { buffers.record_upload(cmd) };
@@ -812,15 +813,17 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
     .unwrap();
     let frame = |pose: &Pose| {
         unsafe { pass.set_frame(pose, pose) }.unwrap();
-        ctx.submit(|cmd| {
-            unsafe {
-                pass.record(cmd, &targets, &buffers);
-                targets.record_download(cmd);
-            }
-            Ok(())
+        ctx.submit(|cmd| unsafe {
+            pass.record(cmd, &targets, &buffers);
+            readback.record(
+                gpu,
+                cmd,
+                &targets,
+                ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )
         })
         .unwrap();
-        targets.read().unwrap().ids.unwrap()
+        readback.read().unwrap().ids.unwrap()
     };
     let expected_near = fresh(&barrel, &near);
     let expected_far = fresh(&barrel, &far);
@@ -854,24 +857,32 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
     .unwrap();
     let mut second = GeometryPass::new(gpu, desc(&mild)).unwrap();
     let second_targets = GeometryTargets::new(gpu, &second).unwrap();
+    let second_readback = TargetsReadback::new(gpu, &second_targets).unwrap();
     unsafe {
         second.bind_mesh(&buffers);
         pass.set_frame(&near, &near).unwrap();
         second.set_frame(&aside, &aside).unwrap();
     }
-    ctx.submit(|cmd| {
-        unsafe {
-            pass.record(cmd, &targets, &buffers);
-            targets.record_download(cmd);
-            second.record(cmd, &second_targets, &buffers);
-            second_targets.record_download(cmd);
-        }
-        Ok(())
+    ctx.submit(|cmd| unsafe {
+        pass.record(cmd, &targets, &buffers);
+        readback.record(
+            gpu,
+            cmd,
+            &targets,
+            ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )?;
+        second.record(cmd, &second_targets, &buffers);
+        second_readback.record(
+            gpu,
+            cmd,
+            &second_targets,
+            ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )
     })
     .unwrap();
     let (first_ids, second_ids) = (
-        targets.read().unwrap().ids.unwrap(),
-        second_targets.read().unwrap().ids.unwrap(),
+        readback.read().unwrap().ids.unwrap(),
+        second_readback.read().unwrap().ids.unwrap(),
     );
     assert!(first_ids == expected_near, "the first lens");
     assert!(second_ids == fresh(&mild, &aside), "the second lens");

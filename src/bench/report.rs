@@ -114,12 +114,16 @@ fn bound(
         .map(|v| v.1)
         .filter(|v| v.is_finite())
         .collect();
-    if finite.is_empty() || finite.len() < values.len() {
-        return Goal {
-            goal,
-            measured: "no rows to judge".into(),
-            verdict: Verdict::NotMeasured,
-        };
+    if finite.is_empty() {
+        return not_measured(goal, "no rows to judge");
+    }
+    if finite.len() < values.len() {
+        let missing: Vec<&str> = values
+            .iter()
+            .filter(|(_, v)| !v.is_finite())
+            .map(|(w, _)| w.as_str())
+            .collect();
+        return not_measured(goal, &format!("no value at {}", missing.join("; ")));
     }
     let lo = finite.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = finite.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -538,7 +542,7 @@ pub fn subsection(bench: &str, rows: &[Value]) -> Result<Option<String>> {
     );
     for s in &skipped {
         out.push_str(&format!(
-            "Not measured: {} ({}).\n\n",
+            "Not measured: {}: {}.\n\n",
             s["skipped"].as_str().unwrap_or("?"),
             s["why"].as_str().unwrap_or("?"),
         ));
@@ -710,6 +714,13 @@ mod tests {
         let goals = vertex_goals(&rows[..1]);
         assert_eq!(goals[0].verdict, Verdict::Met);
         assert_eq!(vertex_goals(&[])[0].verdict, Verdict::NotMeasured);
+        let partial = [
+            rows[0].clone(),
+            json!({"kind": "paths", "width": 8, "height": 6, "grid": 8, "lens": "k1 k2"}),
+        ];
+        let goals = vertex_goals(&partial);
+        assert_eq!(goals[0].verdict, Verdict::NotMeasured);
+        assert_eq!(goals[0].measured, "no value at 8×6, 8², k1 k2");
     }
 
     #[test]
@@ -818,7 +829,7 @@ mod tests {
             "why": "No module named 'cv2'", "device": "dev", "driver": "drv", "date": "d"}),
         ];
         let text = subsection("python", &rows).unwrap().unwrap();
-        assert!(text.contains("Not measured: python -m vklens.bench (No module named 'cv2')."));
+        assert!(text.contains("Not measured: python -m vklens.bench: No module named 'cv2'."));
     }
 
     #[test]

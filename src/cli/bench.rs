@@ -583,7 +583,7 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
                 match opencv_warp_rows(&args.python) {
                     Ok(peers) => r.extend(peers),
                     Err(why) => skipped.push((
-                        "`cv2.remap` and `cv2.undistortPoints` (benches/warp_vs_opencv.py)",
+                        "`cv2.remap` and `cv2.undistortPoints`, benches/warp_vs_opencv.py",
                         why,
                     )),
                 }

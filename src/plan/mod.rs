@@ -20,6 +20,8 @@
 //! `bench inverse`); `--explain` prints the times measured on the frame itself.
 
 pub(crate) mod antialias;
+mod camera;
+mod choice;
 mod cost;
 mod explain;
 pub mod limits;
@@ -32,7 +34,7 @@ use crate::{Error, Result};
 
 use crate::lens::image_model::{channel_models, ModelOptions};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};
-use crate::model::{Camera, InverseMethod, OpenCvDistortion};
+use crate::model::{Camera, InverseMethod};
 use crate::pass::warp::{Coordinates, MapInterpolation};
 use crate::scene::{builtin, Pose, Scene};
 pub use antialias::{
@@ -42,10 +44,11 @@ pub use record::{PassKind, PlanRecorder, RecordedPipeline};
 pub use request::{PathChoice, RenderRequest};
 pub use scene_file::{SceneFile, SceneFileError};
 
-use cost::*;
+use camera::plan_camera;
+// `request` weighs the cube path's error as the planner does.
+use cost::CUBE_RAY_ERROR_PX;
 pub use cost::{inverse_candidates, inverse_candidates_for, ray_model_inverse_ns};
 pub use search::inverse_error_px;
-use search::*;
 
 /// How the frames are made.
 #[derive(Debug, Clone, PartialEq)]
@@ -233,19 +236,6 @@ pub fn load_geometry(file: &SceneFile) -> Result<Scene> {
         .map_err(|e| Error::input(format!("{}: [geometry] scene: {e}", file.source.display())))
 }
 
-/// The step that says colour is anti-aliased, when `[render]` asks for it.
-fn push_antialias_step(steps: &mut Vec<Step>, aa: scene_file::Antialias, color: bool) {
-    if aa.is_on() && color {
-        steps.push(Step {
-            stage: Stage::Antialias,
-            why: format!(
-                "[render] asks for {}× supersampling and {} jittered pass(es) of the colour, averaged; IDs, flow and depth stay one sample per pixel",
-                aa.supersample, aa.jitter
-            ),
-        });
-    }
-}
-
 /// Plans `file` for `scene`: a lens prescription by Heidrich et al.'s image-based model, a
 /// calibrated camera by the cheapest route that meets the budget.
 pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
@@ -411,385 +401,10 @@ fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Result<Plan> {
     ))
 }
 
-/// A calibrated camera's plan: validation, the candidates' search (tessellation, inverse,
-/// map, cube), their costs, and the steps that explain the choice.
-fn plan_camera(file: &SceneFile, scene: &Scene, path: &std::path::Path) -> Result<Plan> {
-    let src = file.source.display().to_string();
+/// The chromatic scales `[effects]` asks for, if it asks for chromatic aberration.
+fn chromatic_scales(file: &SceneFile) -> Option<[f64; 3]> {
     let e = &file.effects;
-    let o = &file.outputs;
-    let mut steps = Vec::new();
-    let step = |stage: Stage, why: String| Step { stage, why };
-    let mut camera =
-        crate::io::load_camera(path).map_err(|e| e.named_by(format!("{src}: [optics] camera")))?;
-    if e.vignetting || e.depth_of_field {
-        let key = if e.vignetting {
-            "vignetting"
-        } else {
-            "depth_of_field"
-        };
-        return Err(Error::input(format!(
-                    "{src}: [effects] {key}: a calibrated camera (OpenCV model) has no {key}; give a lens prescription (optics.lens)"
-                )));
-    }
-    if !e.distortion {
-        camera = Camera::new(
-            camera.width,
-            camera.height,
-            camera.intrinsics,
-            OpenCvDistortion::default(),
-        )
-        .map_err(Error::from)?;
-    }
-    let poses = if file.poses.is_empty() {
-        vec![scene.default_pose(&camera)]
-    } else {
-        file.poses.clone()
-    };
-    let budget = file.max_error_px;
-    let pixels = camera.width as f64 * camera.height as f64;
-    let terms = camera.terms();
-    let terms_note = format!(
-        "compiled in: {}",
-        [
-            (terms.is_ray_model(), terms.model.name()),
-            (terms.radial, "radial"),
-            (terms.rational, "rational"),
-            (terms.tangential, "tangential"),
-            (terms.prism, "thin prism"),
-            (terms.tilt, "tilt"),
-        ]
-        .iter()
-        .filter(|t| t.0)
-        .map(|t| t.1)
-        .collect::<Vec<_>>()
-        .join(", ")
-    );
-    let chromatic = e.chromatic_aberration.then_some(e.chromatic_scales);
-    let lensless = terms == Default::default();
-    if lensless && chromatic.is_none() {
-        steps.push(step(
-            Stage::PinholeRender,
-            if e.distortion {
-                "the camera has no distortion: no lens work at all".into()
-            } else {
-                "no distortion asked: the pinhole projection, no warp, no geometry shader".into()
-            },
-        ));
-        push_antialias_step(&mut steps, file.antialias, o.color);
-        let ms = estimate_ms(pixels, scene.mesh.triangle_count() as f64, Cost::Pinhole);
-        return Ok(file_plan(
-            file,
-            Route::Pinhole,
-            steps,
-            Optics::Camera(camera),
-            poses,
-            (0.0, ms),
-        ));
-    }
-    // The vertex path: the coarsest tessellation that meets the budget (not searched
-    // when nothing can go that way: chromatic colour without IDs or flow).
-    let data_needs_vertex = o.ids || o.flow;
-    let vertex = if chromatic.is_none() || data_needs_vertex {
-        search_tessellation(scene, &poses[0], &camera, budget)?
-    } else {
-        None
-    };
-    let triangles = scene.mesh.triangle_count() as f64;
-    // Three fetches (and inverses, or maps) per pixel with chromatic aberration.
-    let fetches = if chromatic.is_some() { 3.0 } else { 1.0 };
-    // The warp solved per pixel: the cheapest inverse meeting the budget, measured on
-    // this camera.
-    let per_pixel = search_inverse(&camera, budget, |ns| {
-        estimate_ms(
-            pixels,
-            triangles,
-            Cost::Warp {
-                coordinate_ns: ns * fetches,
-            },
-        )
-    });
-    // The warp from a precomputed map: built once, its build shared by the frames.
-    // Jittered anti-aliasing moves the lens every pass, so it solves per pixel.
-    let frames = poses.len().max(1) as f64;
-    let from_map = if file.antialias.is_on() {
-        None
-    } else {
-        map_error_px(&camera, chromatic)
-            .filter(|&e| e <= budget)
-            .map(|e| {
-                let sample = if chromatic.is_some() {
-                    MAP_WARP_CHROMATIC_NS
-                } else {
-                    MAP_WARP_NS
-                };
-                WarpChoice {
-                    method: InverseMethod::Newton,
-                    map: true,
-                    error_px: e,
-                    ms: estimate_ms(
-                        pixels,
-                        triangles,
-                        Cost::Warp {
-                            coordinate_ns: sample + MAP_BUILD_NS * fetches / frames,
-                        },
-                    ),
-                }
-            })
-    };
-    let warp = match (per_pixel, from_map) {
-        (Some(a), Some(b)) => Some(if b.ms < a.ms { b } else { a }),
-        (a, b) => a.or(b),
-    };
-    // A lens no overscanned pinhole source holds (180° and more, or past the image
-    // limit): the planned warp would miss pixels, so it is not a candidate; the vertex
-    // path runs the lens's own model per vertex, the cube map samples six pinhole
-    // faces along each pixel's ray.
-    let no_pinhole_warp =
-        limits::pinhole_source_refusal(&camera, 1.0, crate::model::MAX_IMAGE_SIDE.min(16384));
-    let warp = if no_pinhole_warp.is_some() {
-        None
-    } else {
-        warp
-    };
-    // The cube map carries colour alone: a face's depth is not the lens camera's, and
-    // IDs are never filtered across faces. Faces of one face pixel per output pixel at
-    // the centre (density 1, as the warp's source).
-    let cube =
-        (o.color && !data_needs_vertex && !o.depth && CUBE_RAY_ERROR_PX <= budget).then(|| {
-            let texel = if o.exr { 16 } else { 4 };
-            let wanted = crate::model::overscan::cube_face_side(&camera, 1.0);
-            let side = limits::cube_side(wanted, texel, PLANNED_CUBE_MAX_SIDE);
-            (
-                side,
-                estimate_ms(pixels, triangles, Cost::Cube { side, fetches }),
-            )
-        });
-    if let Some(why) = &no_pinhole_warp {
-        if chromatic.is_some() && cube.is_none() {
-            return Err(Error::input(format!(
-                        "{src}: [effects] chromatic_aberration: {why}, and a chromatic warp needs a pinhole source, or a cube map, which carries colour alone (no IDs, flow or depth): not planned (drop chromatic_aberration or the data outputs, or use a camera whose frame a pinhole holds)"
-                    )));
-        }
-    }
-    let describe_option = |c: &Option<WarpChoice>, what: &str| match c {
-        Some(c) => format!(
-            "{what} {:.1e} px, est. {:.1} ms per frame",
-            c.error_px, c.ms
-        ),
-        None => format!("{what} does not meet the budget"),
-    };
-    let options_note = format!(
-        "options: {}; {}",
-        describe_option(
-            &per_pixel,
-            &per_pixel.map_or("solved per pixel:".to_string(), |c| format!(
-                "{} per pixel:",
-                c.method
-            ))
-        ),
-        describe_option(
-            &from_map,
-            &format!("precomputed map (coarse 8 px, cubic; built once over {frames} frame(s)):")
-        )
-    );
-    let vertex_ms = vertex.map(|t| {
-        estimate_ms(
-            pixels,
-            t.triangles as f64,
-            Cost::Vertex {
-                vertices: t.vertices as f64,
-            },
-        )
-    });
-    let warp_ms = warp.map(|c| c.ms);
-    let cube_ms = cube.map(|(_, ms)| ms);
-    // Whether `a` is cheaper than `b` (a missing `b` loses to any `a`).
-    let cheaper = |a: Option<f64>, b: Option<f64>| match (a, b) {
-        (Some(a), Some(b)) => a < b,
-        (a, _) => a.is_some(),
-    };
-    // Alg. 1 cannot give each channel its own lens: with chromatic aberration only the
-    // warps compete.
-    let pick_cube =
-        cheaper(cube_ms, warp_ms) && (chromatic.is_some() || cheaper(cube_ms, vertex_ms));
-    let ms_or = |ms: Option<f64>, none: &str| {
-        ms.map(|m| format!("{m:.1} ms"))
-            .unwrap_or_else(|| none.into())
-    };
-    let describe_tess = |l: Option<f64>, err: f64, tris: usize| {
-        match l {
-                None => format!("the mesh as it is: its straight edges stay within {err:.1e} px of the true curves ({tris} triangles)"),
-                Some(l) => format!("edges split to {l} px: straight-line error {err:.1e} px ≤ budget ({tris} triangles)"),
-            }
-    };
-    let describe_warp = |c: &WarpChoice| {
-        if c.map {
-            format!("a precomputed map: its error on this camera, {:.1e} px, meets the budget, and it is the cheaper per frame ({options_note}); overscanned source so every valid pixel has one", c.error_px)
-        } else {
-            format!("inverse {}: the cheapest method whose error on this camera, {:.1e} px, meets the budget ({options_note}); overscanned source so every valid pixel has one", c.method, c.error_px)
-        }
-    };
-    let (route, expected, estimated) = if let (true, Some((side, ms))) = (pick_cube, cube) {
-        let why = match &no_pinhole_warp {
-            Some(why) => format!("no pinhole warp: {why}"),
-            None => format!("cheaper than the pinhole warp ({})", ms_or(warp_ms, "none")),
-        };
-        steps.push(step(
-                    Stage::CubeFaces,
-                    format!("{why}: six 90° pinhole faces of {side}×{side} px (one face pixel per output pixel at the centre), rendered into a cube map on the GPU"),
-                ));
-        steps.push(step(
-                    Stage::SphereWarp {
-                        chromatic: chromatic.is_some(),
-                    },
-                    format!(
-                        "each output pixel samples the cube along its ray, bilinear across faces: {CUBE_RAY_ERROR_PX:.1e} px; est. {ms:.1} ms per frame (Alg. 1: {}); {}; {terms_note}",
-                        match vertex_ms {
-                            Some(v) if chromatic.is_none() => format!("est. {v:.1} ms"),
-                            _ if chromatic.is_some() => "cannot give each channel its own lens".into(),
-                            _ => "no tessellation meets the budget".into(),
-                        },
-                        if chromatic.is_some() {
-                            "chromatic aberration asked: each channel through its own radial scale"
-                        } else {
-                            "no chromatic aberration: the single-fetch variant"
-                        },
-                    ),
-                ));
-        (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX, ms)
-    } else if chromatic.is_some()
-        || (!data_needs_vertex && warp.is_some() && (vertex.is_none() || warp_ms < vertex_ms))
-    {
-        let Some(choice) = warp else {
-            return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera")));
-        };
-        steps.push(step(
-            Stage::OverscannedRender,
-            "the warp's source, covering every valid output pixel (Lambers et al. Sec. 3.3)".into(),
-        ));
-        steps.push(step(
-            Stage::Warp {
-                chromatic: chromatic.is_some(),
-            },
-            format!(
-                "{}; {}; {}",
-                describe_warp(&choice),
-                if chromatic.is_some() {
-                    "chromatic aberration asked: each channel through its own radial scale"
-                } else {
-                    "no chromatic aberration: the single-fetch variant"
-                },
-                terms_note
-            ),
-        ));
-        if data_needs_vertex {
-            let Some(TessellationChoice {
-                edge_px: l,
-                error_px: verr,
-                triangles: tris,
-                ..
-            }) = vertex
-            else {
-                return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: tessellation cannot meet it for the ID/flow outputs")));
-            };
-            steps.push(step(
-                Stage::VertexRenderData,
-                format!(
-                    "IDs and flow cannot be warped (Lambers et al. Table 1); {}; {terms_note}",
-                    describe_tess(l, verr, tris)
-                ),
-            ));
-            (
-                Route::WarpAndVertex {
-                    method: choice.method,
-                    chromatic,
-                    tessellate: l,
-                    map: choice.map,
-                },
-                choice.error_px.max(verr),
-                warp_ms.unwrap_or(0.0) + vertex_ms.unwrap_or(0.0),
-            )
-        } else {
-            (
-                Route::Warp {
-                    method: choice.method,
-                    chromatic,
-                    map: choice.map,
-                },
-                choice.error_px,
-                choice.ms,
-            )
-        }
-    } else {
-        let Some(TessellationChoice {
-            edge_px: l,
-            error_px: verr,
-            triangles: tris,
-            ..
-        }) = vertex
-        else {
-            return Err(Error::input(format!("{src}: [accuracy] max_error_px = {budget}: even 1 px edges do not meet it, and the outputs (IDs/flow) need the vertex path")));
-        };
-        let why = if data_needs_vertex {
-            format!(
-                "{} need the geometry path: a warp cannot carry them (Lambers et al. Table 1)",
-                match (o.ids, o.flow) {
-                    (true, true) => "IDs and flow",
-                    (true, false) => "object IDs",
-                    _ => "flow vectors",
-                }
-            )
-        } else if let Some(why) = &no_pinhole_warp {
-            format!(
-                "no pinhole warp: {why}; {}",
-                match cube_ms {
-                    Some(c) => format!(
-                        "estimated {:.1} ms against {c:.1} ms for a cube map",
-                        vertex_ms.unwrap_or(f64::NAN)
-                    ),
-                    None if CUBE_RAY_ERROR_PX > budget =>
-                        format!("a cube map's rays ({CUBE_RAY_ERROR_PX:.1e} px) miss the budget"),
-                    None => "a cube map carries colour alone".into(),
-                }
-            )
-        } else {
-            format!(
-                "estimated {:.1} ms against {} for pinhole + warp",
-                vertex_ms.unwrap_or(f64::NAN),
-                warp_ms
-                    .map(|w| format!("{w:.1} ms"))
-                    .unwrap_or_else(|| "no warp meeting the budget".into())
-            )
-        };
-        if l.is_some() {
-            steps.push(step(Stage::Tessellation, describe_tess(l, verr, tris)));
-        }
-        steps.push(step(
-            Stage::VertexRender,
-            format!(
-                "{why}; {}; {terms_note}",
-                if l.is_none() {
-                    describe_tess(l, verr, tris)
-                } else {
-                    "discard δ = 0.1 + D".into()
-                }
-            ),
-        ));
-        (
-            Route::Vertex { tessellate: l },
-            verr,
-            vertex_ms.unwrap_or(f64::NAN),
-        )
-    };
-    push_antialias_step(&mut steps, file.antialias, o.color);
-    Ok(file_plan(
-        file,
-        route,
-        steps,
-        Optics::Camera(camera),
-        poses,
-        (expected, estimated),
-    ))
+    e.chromatic_aberration.then_some(e.chromatic_scales)
 }
 
 /// A scene file's plan once its route is chosen: `(expected error px, estimated ms)` as

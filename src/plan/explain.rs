@@ -4,7 +4,8 @@
 
 use super::choice::{Choice, CubeLoss, CubeReason, VertexReason};
 use super::cost::CUBE_RAY_ERROR_PX;
-use super::scene_file::Antialias;
+use super::lens::Cells;
+use super::scene_file::{Antialias, Effects};
 use super::search::{Candidates, TessellationChoice, WarpChoice};
 use super::{Plan, Route, Stage, Step};
 use crate::model::Terms;
@@ -344,4 +345,56 @@ fn vertex_reason(why: &VertexReason, vertex_ms: f64) -> String {
                 .unwrap_or_else(|| "no warp meeting the budget".into())
         ),
     }
+}
+
+/// The image-based lens model's steps: `samples` lens samples, cells split until
+/// `max_angle_deg` (`budget_px` turned into degrees), and the `cells` that came of it.
+pub(super) fn lens_steps(
+    e: &Effects,
+    samples: u32,
+    max_angle_deg: f64,
+    budget_px: f64,
+    cells: &Cells,
+) -> Vec<Step> {
+    vec![
+        Step {
+            stage: Stage::LensModel,
+            why: format!(
+                "optics is a lens prescription; {} lens sample{} ({}), quad-tree until {:.2e}° = {} px",
+                samples,
+                if samples == 1 { "" } else { "s" },
+                if e.depth_of_field {
+                    "depth of field asked for"
+                } else {
+                    "no depth of field asked: the rear surface's centre only"
+                },
+                max_angle_deg,
+                budget_px
+            ),
+        },
+        Step {
+            stage: Stage::FilmAccumulation,
+            why: if e.chromatic_aberration {
+                "chromatic aberration asked: R, G, B traced at the C, e and F lines, each channel its own projections".into()
+            } else {
+                "one wavelength (d line) for all channels: no chromatic aberration asked".into()
+            },
+        },
+        Step {
+            stage: Stage::Vignetting { kept: e.vignetting },
+            why: if e.vignetting {
+                "vignetting asked: border bisection per sample, radiometric weights kept".into()
+            } else {
+                "no vignetting asked: no border fitting; the accumulated weight is divided out"
+                    .into()
+            },
+        },
+        Step {
+            stage: Stage::CellRenders,
+            why: format!(
+                "{} perspective projections per frame, largest angle error {:.2e}°",
+                cells.projections, cells.max_angle_deg
+            ),
+        },
+    ]
 }

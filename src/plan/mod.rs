@@ -24,6 +24,7 @@ mod camera;
 mod choice;
 mod cost;
 mod explain;
+mod lens;
 pub mod limits;
 pub mod record;
 mod request;
@@ -32,8 +33,7 @@ mod search;
 
 use crate::{Error, Result};
 
-use crate::lens::image_model::{channel_models, ModelOptions};
-use crate::lens::{frame_scene, Prescription, LAMBDA_D};
+use crate::lens::Prescription;
 use crate::model::{Camera, InverseMethod};
 use crate::pass::warp::{Coordinates, MapInterpolation};
 use crate::scene::{builtin, Pose, Scene};
@@ -48,6 +48,7 @@ use camera::plan_camera;
 // `request` weighs the cube path's error as the planner does.
 use cost::CUBE_RAY_ERROR_PX;
 pub use cost::{inverse_candidates, inverse_candidates_for, ray_model_inverse_ns};
+use lens::{plan_lens, LensSpec};
 pub use search::inverse_error_px;
 
 /// How the frames are made.
@@ -259,146 +260,6 @@ pub fn plan(file: &SceneFile, scene: &Scene) -> Result<Plan> {
         ),
         scene_file::OpticsSpec::Camera(path) => plan_camera(file, scene, path),
     }
-}
-
-/// A scene file's lens optics, borrowed.
-struct LensSpec<'a> {
-    path: &'a std::path::Path,
-    focus_m: Option<f64>,
-    f_number: Option<f64>,
-    sensor_mm: (f64, f64),
-    pixels: (u32, u32),
-}
-
-/// The image-based lens model's plan: validation, the model's cells, the steps.
-fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Result<Plan> {
-    let src = file.source.display().to_string();
-    let e = &file.effects;
-    let o = &file.outputs;
-    let mut steps = Vec::new();
-    let step = |stage: Stage, why: String| Step { stage, why };
-    let LensSpec {
-        path,
-        focus_m,
-        f_number,
-        sensor_mm,
-        pixels,
-    } = spec;
-    if file.antialias.is_on() {
-        return Err(Error::input(format!(
-                    "{src}: [render] supersample / jitter: the image-based lens model renders one sample per pixel per lens sample; anti-aliasing is for camera-file scenes"
-                )));
-    }
-    for (asked, key) in [(o.ids, "ids"), (o.flow, "flow"), (o.depth, "depth")] {
-        if asked {
-            return Err(Error::input(format!(
-                        "{src}: [outputs] {key}: the image-based lens model blends many views, so it has no exact {key}; give a calibrated camera (optics.camera; `vklens lens fit-opencv` makes one from the lens) for {key}"
-                    )));
-        }
-    }
-    if !e.distortion {
-        return Err(Error::input(format!(
-                    "{src}: [effects] distortion = false: a real lens always distorts; use a camera file with the distortion switched off for a pinhole"
-                )));
-    }
-    let lens = Prescription::load(path)
-        .map_err(|e| Error::from(e).named_by(format!("{src}: [optics] lens")))?;
-    if e.chromatic_aberration && lens.surfaces.iter().all(|s| s.abbe.is_none()) {
-        return Err(Error::input(format!(
-            "{src}: [effects] chromatic_aberration: {} has no Abbe numbers (5th column)",
-            path.display()
-        )));
-    }
-    let pitch = sensor_mm.0 / pixels.0 as f64;
-    if ((sensor_mm.1 / pixels.1 as f64) / pitch - 1.0).abs() > 1e-3 {
-        return Err(Error::input(format!(
-            "{src}: [optics] sensor_mm and pixels give non-square pixels"
-        )));
-    }
-    let first = file.poses.first().copied();
-    let (optics, _) = frame_scene(&lens, pixels, pitch, f_number, focus_m, first, scene)
-        .map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
-    let efl = crate::lens::analyse(&lens, LAMBDA_D).efl.unwrap_or(1.0);
-    // The budget in degrees: one pixel subtends pitch / EFL radians.
-    let px_deg = (pitch / efl).atan().to_degrees();
-    let max_angle_deg = file.max_error_px * px_deg;
-    let samples = if e.depth_of_field { e.lens_samples } else { 1 };
-    steps.push(step(
-        Stage::LensModel,
-        format!(
-            "optics is a lens prescription; {} lens sample{} ({}), quad-tree until {:.2e}° = {} px",
-            samples,
-            if samples == 1 { "" } else { "s" },
-            if e.depth_of_field {
-                "depth of field asked for"
-            } else {
-                "no depth of field asked: the rear surface's centre only"
-            },
-            max_angle_deg,
-            file.max_error_px
-        ),
-    ));
-    steps.push(step(
-                Stage::FilmAccumulation,
-                if e.chromatic_aberration {
-                    "chromatic aberration asked: R, G, B traced at the C, e and F lines, each channel its own projections".into()
-                } else {
-                    "one wavelength (d line) for all channels: no chromatic aberration asked".into()
-                },
-            ));
-    steps.push(step(
-        Stage::Vignetting { kept: e.vignetting },
-        if e.vignetting {
-            "vignetting asked: border bisection per sample, radiometric weights kept".into()
-        } else {
-            "no vignetting asked: no border fitting; the accumulated weight is divided out".into()
-        },
-    ));
-    let options = ModelOptions {
-        samples,
-        max_angle_deg,
-        vignetting: e.vignetting,
-        ..ModelOptions::default()
-    };
-    let models = channel_models(&optics, &options, e.chromatic_aberration)
-        .map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
-    let model_angle = models
-        .iter()
-        .map(|(m, _)| m.max_angle_deg())
-        .fold(0.0, f64::max);
-    let projections: usize = models.iter().map(|(m, _)| m.projection_count()).sum();
-    steps.push(step(
-                Stage::CellRenders,
-                format!("{projections} perspective projections per frame, largest angle error {model_angle:.2e}°"),
-            ));
-    let frame_pose = first
-        .map(Ok)
-        .unwrap_or_else(|| optics.equivalent_camera().map(|c| scene.default_pose(&c)))?;
-    let poses = if file.poses.is_empty() {
-        vec![frame_pose]
-    } else {
-        file.poses.clone()
-    };
-    Ok(file_plan(
-        file,
-        Route::LensModel {
-            samples,
-            chromatic: e.chromatic_aberration,
-            vignetting: e.vignetting,
-            max_angle_deg,
-        },
-        steps,
-        Optics::Lens(LensSetting {
-            prescription: lens,
-            pitch_mm: pitch,
-            pixels,
-            focus_m: optics.focus_m,
-            f_number,
-            models,
-        }),
-        poses,
-        (model_angle / px_deg, f64::NAN),
-    ))
 }
 
 /// The chromatic scales `[effects]` asks for, if it asks for chromatic aberration.

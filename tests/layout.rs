@@ -204,7 +204,10 @@ fn warp_push_matches_the_warp_and_map_blocks() {
     map[2].0 = "unused";
     check(shaders::INVERSE_MAP_COMP, "MapPush", map.clone());
     check(shaders::UPSAMPLE_MAP_COMP, "MapPush", map);
-    assert!(std::mem::size_of::<WarpPush>() <= 128, "past the guaranteed push-constant size");
+    assert!(
+        std::mem::size_of::<WarpPush>() <= 128,
+        "past the guaranteed push-constant size"
+    );
 }
 
 #[test]

@@ -191,6 +191,51 @@ fn vector(
     Ok(data)
 }
 
+/// A finite 3×3 matrix (row-major), or the left 3×3 of a 3×4 one where `allow_3x4` (a
+/// projection matrix P, whose fourth column is a stereo baseline the warp does not use).
+fn matrix3(
+    py: Python<'_>,
+    value: &Bound<'_, PyAny>,
+    name: &str,
+    allow_3x4: bool,
+) -> PyResult<[[f64; 3]; 3]> {
+    let (data, shape) = numbers(py, value, name)?;
+    let cols = match shape.as_slice() {
+        [3, 3] => 3,
+        [3, 4] if allow_3x4 => 4,
+        _ => {
+            return Err(input_arg(
+                py,
+                name,
+                format!(
+                    "shape {}; expected (3, 3){}",
+                    tuple(&shape),
+                    if allow_3x4 { " or (3, 4)" } else { "" }
+                ),
+            ))
+        }
+    };
+    if data.iter().any(|v| !v.is_finite()) {
+        return Err(input_arg(py, name, "every entry must be a finite number"));
+    }
+    Ok(std::array::from_fn(|i| {
+        std::array::from_fn(|j| data[i * cols + j])
+    }))
+}
+
+/// The pinhole camera of a projection matrix P (its 3×3 part: `[[fx, 0, cx], [0, fy, cy],
+/// [0, 0, 1]]`) at `size`.
+fn camera_of_p(py: Python<'_>, p: [[f64; 3]; 3], size: (u32, u32)) -> PyResult<Camera> {
+    if p[0][1] != 0.0 || p[1][0] != 0.0 || p[2] != [0.0, 0.0, 1.0] {
+        return Err(input_arg(
+            py,
+            "P",
+            format!("{p:?}: expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew)"),
+        ));
+    }
+    Camera::from_opencv(p, &[0.0; 4], size).arg(py, "P")
+}
+
 /// `(N, 2)` float64 rows, NaN where the model gave no answer.
 fn nan_rows<'py, const N: usize>(
     py: Python<'py>,
@@ -481,20 +526,31 @@ impl PyCamera {
 
     /// Distorted pixels → normalized undistorted ``(x, y)``; NaN rows outside the valid domain
     /// (where the lens folds over, or no preimage exists). ``method``: ``"newton"``,
-    /// ``"heikkila"`` or ``"fixed-point:N"``.
-    #[pyo3(signature = (uv, method = "newton"))]
+    /// ``"heikkila"`` or ``"fixed-point:N"``. With ``R`` (3×3 rectification rotation) and ``P``
+    /// (3×3 new camera matrix, or a 3×4 projection matrix) as ``cv2.undistortPoints(uv, K, D,
+    /// R, P)``: the ray turned by ``R``, then pixels of ``P`` (normalized coordinates without
+    /// it); NaN where the turned ray points behind the image plane.
+    #[pyo3(signature = (uv, method = "newton", R = None, P = None))]
+    #[allow(non_snake_case)]
     fn undistort_points<'py>(
         &self,
         py: Python<'py>,
         uv: &Bound<'py, PyAny>,
         method: &str,
+        R: Option<&Bound<'py, PyAny>>,
+        P: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let m = self::method(py, method)?;
         self.inner
             .check_method(m)
             .map_err(|e| input_arg(py, "method", e))?;
+        let r = R.map(|r| matrix3(py, r, "R", false)).transpose()?;
+        let p = P.map(|p| matrix3(py, p, "P", true)).transpose()?;
         let uv = rows::<2>(py, uv, "uv")?;
-        let xy = py.detach(|| self.inner.undistort_points(&uv, m));
+        let xy = py.detach(|| match (r, p) {
+            (None, None) => self.inner.undistort_points(&uv, m),
+            (r, p) => self.inner.undistort_points_rectified(&uv, m, r, p),
+        });
         nan_rows(py, xy)
     }
 
@@ -784,9 +840,9 @@ struct PyWarper {
 impl PyWarper {
     #[new]
     #[pyo3(signature = (camera, direction = "distort", method = "lut", chromatic = None,
-                        source_camera = None, fill = None, device = None),
-           text_signature = "(camera, direction='distort', method='lut', chromatic=None, source_camera=None, fill=(0, 0, 0, 0), device=None)")]
-    #[allow(clippy::too_many_arguments)]
+                        source_camera = None, fill = None, device = None, R = None, P = None),
+           text_signature = "(camera, direction='distort', method='lut', chromatic=None, source_camera=None, fill=(0, 0, 0, 0), device=None, R=None, P=None)")]
+    #[allow(clippy::too_many_arguments, non_snake_case)]
     fn new(
         py: Python<'_>,
         camera: PyRef<'_, PyCamera>,
@@ -796,6 +852,8 @@ impl PyWarper {
         source_camera: Option<PyRef<'_, PyCamera>>,
         fill: Option<&Bound<'_, PyAny>>,
         device: Option<PyRef<'_, PyDevice>>,
+        R: Option<&Bound<'_, PyAny>>,
+        P: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let dir: WarpDirection = direction.parse().arg(py, "direction")?;
         let m: WarpMethod = method.parse().arg(py, "method")?;
@@ -810,6 +868,34 @@ impl PyWarper {
             options.chromatic = Some([c[0], c[1], c[2]]);
         }
         options.source_camera = source_camera.map(|c| c.inner.clone());
+        if let Some(r) = R {
+            if dir == WarpDirection::Distort {
+                return Err(input_arg(
+                    py,
+                    "R",
+                    "a rectification rotation applies to a pinhole output: direction='undistort'",
+                ));
+            }
+            options.rectification = Some(matrix3(py, r, "R", false)?);
+        }
+        if let Some(p) = P {
+            if dir == WarpDirection::Distort {
+                return Err(input_arg(
+                    py,
+                    "P",
+                    "the output camera P applies to a pinhole output: direction='undistort' (distort takes source_camera)",
+                ));
+            }
+            if options.source_camera.is_some() {
+                return Err(input_arg(
+                    py,
+                    "P",
+                    "give the output camera once: P or source_camera",
+                ));
+            }
+            let size = (camera.inner.width, camera.inner.height);
+            options.source_camera = Some(camera_of_p(py, matrix3(py, p, "P", true)?, size)?);
+        }
         let f = match fill {
             Some(f) => vector(py, f, "fill", Some(4))?,
             None => vec![0.0; 4],

@@ -139,33 +139,31 @@ fn tuple(shape: &[usize]) -> String {
     }
 }
 
-/// `(N, D)` rows (also `(N, 1, D)` as OpenCV hands out points, and a single `(D,)` row).
+/// Points of `D` numbers along the last axis, in any leading shape (`(D,)`, `(N, D)`, OpenCV's
+/// `(N, 1, D)`, an image's `(H, W, D)`): the points and that leading shape, which the answer
+/// keeps.
 fn rows<const D: usize>(
     py: Python<'_>,
     value: &Bound<'_, PyAny>,
     name: &str,
-) -> PyResult<Vec<[f64; D]>> {
+) -> PyResult<(Vec<[f64; D]>, Vec<usize>)> {
     let (data, shape) = numbers(py, value, name)?;
-    let ok = match shape.as_slice() {
-        [n] => *n == D,
-        [_, d] => *d == D,
-        [_, 1, d] => *d == D,
-        _ => false,
-    };
-    if !ok {
+    let Some((&last, leading)) = shape.split_last().filter(|(&d, _)| d == D) else {
         return Err(input_arg(
             py,
             name,
             format!(
-                "shape {}; expected (N, {D}) (or (N, 1, {D}) as OpenCV hands them out)",
+                "shape {}; expected (..., {D}): {D} numbers per point, in any leading shape ((N, {D}), OpenCV's (N, 1, {D}), …)",
                 tuple(&shape)
             ),
         ));
-    }
-    Ok(data
+    };
+    debug_assert_eq!(last, D);
+    let points = data
         .chunks_exact(D)
         .map(|c| std::array::from_fn(|i| c[i]))
-        .collect())
+        .collect();
+    Ok((points, leading.to_vec()))
 }
 
 /// A vector of `n` numbers given as `(n,)`, `(1, n)` or `(n, 1)` (any `n` when `n` is None).
@@ -236,17 +234,19 @@ fn camera_of_p(py: Python<'_>, p: [[f64; 3]; 3], size: (u32, u32)) -> PyResult<C
     Camera::from_opencv(p, &[0.0; 4], size).arg(py, "P")
 }
 
-/// `(N, 2)` float64 rows, NaN where the model gave no answer.
+/// Answers of `N` numbers per point, float64, in the points' leading shape; NaN where the
+/// model gave no answer.
 fn nan_rows<'py, const N: usize>(
     py: Python<'py>,
     v: Vec<Option<[f64; N]>>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let n = v.len();
+    leading: &[usize],
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let flat: Vec<f64> = v
         .into_iter()
         .flat_map(|p| p.unwrap_or([f64::NAN; N]))
         .collect();
-    PyArray1::from_vec(py, flat).reshape([n, N])
+    let shape: Vec<usize> = leading.iter().copied().chain([N]).collect();
+    PyArray1::from_vec(py, flat).reshape(shape)
 }
 
 fn method(py: Python<'_>, name: &str) -> PyResult<InverseMethod> {
@@ -512,16 +512,17 @@ impl PyCamera {
         self.inner.save(&path).py(py)
     }
 
-    /// Normalized undistorted ``(x, y)`` → distorted pixels, ``(N, 2)`` float64, exact (f64 on
+    /// Normalized undistorted ``(x, y)`` → distorted pixels, ``(..., 2)`` float64 in the
+    /// points' own leading shape, exact (f64 on
     /// the CPU); NaN rows where the model is undefined.
     fn distort_points<'py>(
         &self,
         py: Python<'py>,
         xy: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let xy = rows::<2>(py, xy, "xy")?;
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (xy, leading) = rows::<2>(py, xy, "xy")?;
         let uv = py.detach(|| self.inner.distort_points(&xy));
-        nan_rows(py, uv)
+        nan_rows(py, uv, &leading)
     }
 
     /// Distorted pixels → normalized undistorted ``(x, y)``; NaN rows outside the valid domain
@@ -539,34 +540,34 @@ impl PyCamera {
         method: &str,
         R: Option<&Bound<'py, PyAny>>,
         P: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let m = self::method(py, method)?;
         self.inner
             .check_method(m)
             .map_err(|e| input_arg(py, "method", e))?;
         let r = R.map(|r| matrix3(py, r, "R", false)).transpose()?;
         let p = P.map(|p| matrix3(py, p, "P", true)).transpose()?;
-        let uv = rows::<2>(py, uv, "uv")?;
+        let (uv, leading) = rows::<2>(py, uv, "uv")?;
         let xy = py.detach(|| match (r, p) {
             (None, None) => self.inner.undistort_points(&uv, m),
             (r, p) => self.inner.undistort_points_rectified(&uv, m, r, p),
         });
-        nan_rows(py, xy)
+        nan_rows(py, xy, &leading)
     }
 
-    /// Distorted pixels ``(N, 2)`` → unit camera-frame rays ``(N, 3)``; NaN rows outside the
+    /// Distorted pixels ``(..., 2)`` → unit camera-frame rays ``(..., 3)``; NaN rows outside the
     /// valid domain. A fisheye's rays reach past 90° off the axis (``z < 0``).
     fn unproject_points<'py>(
         &self,
         py: Python<'py>,
         uv: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let uv = rows::<2>(py, uv, "uv")?;
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (uv, leading) = rows::<2>(py, uv, "uv")?;
         let rays = py.detach(|| self.inner.unproject_points(&uv));
-        nan_rows(py, rays)
+        nan_rows(py, rays, &leading)
     }
 
-    /// World points ``(N, 3)`` → distorted pixels ``(N, 2)``, as ``cv2.projectPoints`` with
+    /// World points ``(..., 3)`` → distorted pixels ``(..., 2)``, as ``cv2.projectPoints`` with
     /// ``rvec`` (Rodrigues) and ``tvec``; NaN rows for points the lens does not see (at or
     /// behind the camera for the standard model; past its field of view for a fisheye).
     #[pyo3(signature = (points_3d, rvec = None, tvec = None))]
@@ -576,8 +577,8 @@ impl PyCamera {
         points_3d: &Bound<'py, PyAny>,
         rvec: Option<&Bound<'py, PyAny>>,
         tvec: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let points = rows::<3>(py, points_3d, "points_3d")?;
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (points, leading) = rows::<3>(py, points_3d, "points_3d")?;
         let r = match rvec {
             Some(r) => vector(py, r, "rvec", Some(3))?,
             None => vec![0.0; 3],
@@ -599,7 +600,7 @@ impl PyCamera {
             })
             .collect();
         let uv = py.detach(|| self.inner.project_points(&cam));
-        nan_rows(py, uv)
+        nan_rows(py, uv, &leading)
     }
 
     fn __repr__(&self) -> String {

@@ -986,11 +986,13 @@ impl PyWarper {
             self.call_typed(py, a, out, return_mask)
         } else if let Ok(a) = image.cast::<PyArrayDyn<f32>>() {
             self.call_typed(py, a, out, return_mask)
+        } else if image.cast::<PyArrayDyn<f64>>().is_ok() {
+            self.call_f64(py, image, out, return_mask)
         } else if let Ok(a) = image.cast::<PyUntypedArray>() {
             Err(input(
                 py,
                 format!(
-                    "image: dtype {} is not supported; expected uint8, uint16 or float32 (convert it explicitly, e.g. image.astype(numpy.float32))",
+                    "image: dtype {} is not supported; expected uint8, uint16, float32 or float64 (convert it explicitly, e.g. image.astype(numpy.float32))",
                     a.dtype()
                 ),
             ))
@@ -1032,6 +1034,60 @@ impl PyWarper {
 }
 
 impl PyWarper {
+    /// A float64 image: warped in float32 (the device's sample type) and handed back as
+    /// float64, into `out` when given (a float64 array of the output's shape).
+    fn call_f64<'py>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+        out: Option<&Bound<'py, PyAny>>,
+        return_mask: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        if let Some(o) = out {
+            if o.cast::<PyArrayDyn<f64>>().is_err() {
+                return Err(input_arg(
+                    py,
+                    "out",
+                    "a float64 image is warped into a float64 out= array",
+                ));
+            }
+        }
+        let single = image.call_method1("astype", ("float32",))?;
+        let single = single
+            .cast::<PyArrayDyn<f32>>()
+            .map_err(|_| input_arg(py, "image", "expected a numpy array"))?;
+        let warped = self.call_typed(py, single, None, return_mask)?;
+        let (image_out, mask) = if return_mask {
+            let (i, m): (Bound<'py, PyAny>, Bound<'py, PyAny>) = warped.extract()?;
+            (i, Some(m))
+        } else {
+            (warped, None)
+        };
+        let double = match out {
+            Some(o) => {
+                let (want, got): (Vec<usize>, Vec<usize>) = (
+                    image_out.getattr("shape")?.extract()?,
+                    o.getattr("shape")?.extract()?,
+                );
+                if want != got {
+                    return Err(input_arg(
+                        py,
+                        "out",
+                        format!("shape {}; expected {}", tuple(&got), tuple(&want)),
+                    ));
+                }
+                o.call_method1("__setitem__", (py.Ellipsis(), &image_out))
+                    .map_err(|e| input_arg(py, "out", e))?;
+                o.clone()
+            }
+            None => image_out.call_method1("astype", ("float64",))?,
+        };
+        match mask {
+            Some(m) => Ok((double, m).into_pyobject(py)?.into_any()),
+            None => Ok(double),
+        }
+    }
+
     fn call_typed<'py, T: Sample>(
         &self,
         py: Python<'py>,

@@ -118,7 +118,8 @@ class Warper:
                  chromatic: Optional[Sequence[float]] = None, source_camera: Optional[Camera] = None,
                  fill: Sequence[float] = (0, 0, 0, 0), device: Optional[Device] = None,
                  R: Optional[ArrayLike] = None, P: Optional[ArrayLike] = None) -> None:
-        """``direction``: ``"distort"`` (a pinhole image in, the lens image out),
+        """Images: uint8, uint16, float32 or float64 (warped in float32, returned float64).
+        ``direction``: ``"distort"`` (a pinhole image in, the lens image out),
         ``"undistort"`` (a lens image in, a pinhole image out) or ``"precorrect"`` (a headset
         pre-correction). ``method``: ``"lut"`` (a map built once), ``"newton"``, ``"heikkila"``
         or ``"fixed-point:N"`` (solved per pixel). ``chromatic``: R, G, B magnifications about

@@ -4,8 +4,10 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use vklens::internal::imaging::{file as image_io, Pixels};
-use vklens::internal::io::reference::shared_dir;
+mod common;
+
+use common::shared_dir;
+use image::ColorType;
 
 fn vklens(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_vklens"))
@@ -57,22 +59,28 @@ fn render_writes_every_output_at_the_camera_size() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     for p in [&color, &ids, &flow, &depth] {
-        let r = image_io::load(p).unwrap();
-        assert_eq!((r.width, r.height), (800, 600), "{}", p.display());
+        let r = image::open(p).unwrap();
+        assert_eq!((r.width(), r.height()), (800, 600), "{}", p.display());
     }
     // IDs: the floor (1) and the three boxes (2, 3, 4), nothing else.
-    let r = image_io::load(&ids).unwrap();
-    let Pixels::Rgba32F(px) = r.pixels else {
-        panic!("16-bit IDs load as float")
-    };
-    let mut seen: Vec<u32> = px.iter().map(|p| (p[0] * 65535.0).round() as u32).collect();
+    let r = image::open(&ids).unwrap();
+    assert!(
+        matches!(
+            r.color(),
+            ColorType::L16 | ColorType::La16 | ColorType::Rgb16 | ColorType::Rgba16
+        ),
+        "IDs are 16-bit, not {:?}",
+        r.color()
+    );
+    let mut seen: Vec<u32> = r.to_rgba16().pixels().map(|p| p[0] as u32).collect();
     seen.sort();
     seen.dedup();
     assert_eq!(seen, vec![0, 1, 2, 3, 4]);
     // Flow: known (A = 1) on the scene, and the default motion is not zero.
-    let f = image_io::load(&flow).unwrap();
-    let moving = (0..f.len())
-        .filter(|&i| f.rgba_f32(i)[3] == 1.0 && f.rgba_f32(i)[0].abs() > 0.1)
+    let f = image::open(&flow).unwrap().to_rgba32f();
+    let moving = f
+        .pixels()
+        .filter(|p| p[3] == 1.0 && p[0].abs() > 0.1)
         .count();
     assert!(moving > 10_000, "{moving}");
 
@@ -229,12 +237,20 @@ fn flags_and_a_scene_file_render_the_same_jittered_image() {
         }
         let o = vklens(&args);
         assert!(o.status.success(), "{}", stderr(&o));
-        let a = image_io::load(&flag_png).unwrap();
-        let b = image_io::load(&out.join("color_0000.png")).unwrap();
-        let (Pixels::Rgba8(a), Pixels::Rgba8(b)) = (&a.pixels, &b.pixels) else {
-            panic!("8-bit colour expected");
+        let a = image::open(&flag_png).unwrap();
+        let b = image::open(out.join("color_0000.png")).unwrap();
+        let eight = |c: ColorType| {
+            matches!(
+                c,
+                ColorType::L8 | ColorType::La8 | ColorType::Rgb8 | ColorType::Rgba8
+            )
         };
-        let differ = a.iter().zip(b).filter(|(x, y)| x != y).count();
+        assert!(
+            eight(a.color()) && eight(b.color()),
+            "8-bit colour expected"
+        );
+        let (a, b) = (a.to_rgba8(), b.to_rgba8());
+        let differ = a.pixels().zip(b.pixels()).filter(|(x, y)| x != y).count();
         assert_eq!(
             differ, 0,
             "supersample {s}, jitter {j}: {differ} pixels differ"

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::Path;
 
-use vklens::internal::io::reference::{load_reference, shared_dir};
+use common::{load_reference, shared_dir};
 use vklens::{
     Camera, Device, DeviceOptions, ErrorKind, InverseMethod, PixelFormat, Pixels, Raster,
     SceneRenderer, WarpDirection, WarpMethod, WarpOptions, Warper,
@@ -45,7 +45,7 @@ fn pattern(width: u32, height: u32) -> Raster {
 
 #[test]
 fn points_match_opencv_on_every_reference_camera() {
-    let reference = load_reference().unwrap();
+    let reference = load_reference();
     for case in &reference.cases {
         let k = [
             [case.fx, 0.0, case.cx],

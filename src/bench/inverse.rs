@@ -14,7 +14,7 @@ use std::time::Instant;
 use ash::vk;
 use glam::DVec2;
 use gpu_allocator::MemoryLocation;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::gpu::{global_barrier, host_read_barrier, Access, Buffer, QueryPool};
 use crate::host::Context;
@@ -30,8 +30,10 @@ pub fn default_methods() -> Vec<InverseMethod> {
 }
 
 /// One row of the table (one JSON line with `--json`).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct InverseRow {
+    /// Always `inverse`; read back (`vklens bench all --from`), whatever the line says.
+    #[serde(skip_deserializing, default = "bench_name")]
     pub bench: &'static str,
     pub camera: String,
     pub method: String,
@@ -45,6 +47,10 @@ pub struct InverseRow {
     pub points: usize,
     /// Time per point in nanoseconds (None for the OpenCV reference rows).
     pub ns_per_point: Option<f64>,
+}
+
+fn bench_name() -> &'static str {
+    "inverse"
 }
 
 /// What to measure.

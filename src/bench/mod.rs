@@ -5,6 +5,7 @@ pub mod inverse;
 pub mod lens;
 pub mod models;
 pub mod plan;
+pub mod report;
 pub mod vertex;
 pub mod warp;
 pub mod wide;

@@ -11,7 +11,7 @@
 use std::time::Instant;
 
 use glam::{DVec2, DVec3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::bench::inverse::time_points;
 use crate::host::Context;
@@ -22,8 +22,10 @@ use crate::pass::{PointsMode, Precision};
 use crate::Result;
 
 /// One row (one JSON line with `--json`).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ModelRow {
+    /// Always `models`; read back (`vklens bench all --from`), whatever the line says.
+    #[serde(skip_deserializing, default = "bench_name")]
     pub bench: &'static str,
     pub camera: String,
     pub model: String,
@@ -45,6 +47,10 @@ pub struct ModelRow {
     pub map_ratio: Option<f64>,
     /// The file's fit of the inverse against the exact one (px), where the model has one.
     pub fit_error_px: Option<f64>,
+}
+
+fn bench_name() -> &'static str {
+    "models"
 }
 
 /// Directions over the domain (for the forward map) and a pixel grid over the image.

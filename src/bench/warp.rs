@@ -13,6 +13,8 @@ use ash::vk;
 use glam::DVec2;
 use serde_json::{json, Value};
 
+use super::{fixed, sci};
+
 use crate::gpu::{global_barrier, Access, QueryPool, Result};
 use crate::host::warp::read_maps;
 use crate::host::warp_images::WarpImages;
@@ -193,8 +195,8 @@ pub(crate) fn coordinate_error(
     Ok((worst, disagree))
 }
 
-/// Runs the benchmark at `sizes`; `progress` hears what is being measured. Returns JSON rows
-/// (`bench`: `warp`, `inverse_map`, `copy`).
+/// Runs the benchmark at `sizes`; `progress` hears what is being measured. Returns JSON rows,
+/// each with `"bench": "warp"` and a `kind`: `copy`, `inverse_map` or `warp`.
 pub fn run(
     ctx: &Context,
     sizes: &[(u32, u32)],
@@ -230,7 +232,9 @@ pub fn run(
         // outside any render pass, and waits for each submission; the upload above left both
         // bound images in GENERAL with the source's writes visible to compute.
         let (frame_ms, _) = time_batch(ctx, &|cmd| unsafe { copy.record(cmd) })?;
-        rows.push(json!({"bench": "copy", "width": w, "height": h, "frame_ms": frame_ms}));
+        rows.push(
+            json!({"bench": "warp", "kind": "copy", "width": w, "height": h, "frame_ms": frame_ms}),
+        );
 
         // Full-frame inverse maps: exact per pixel, or coarse + interpolation (+ Newton).
         for (label, coordinates) in MAP_BUILDS {
@@ -255,7 +259,7 @@ pub fn run(
             times.remove(0);
             times.sort_by(f64::total_cmp);
             let (map_err, map_disagree) = coordinate_error(ctx, &plain, coordinates)?;
-            rows.push(json!({"bench": "inverse_map", "width": w, "height": h, "method": label, "ms": times[1], "max_err_px": map_err, "disagreeing_px": map_disagree, "per_pixel_check": build.coarse_map_checked()}));
+            rows.push(json!({"bench": "warp", "kind": "inverse_map", "width": w, "height": h, "method": label, "ms": times[1], "max_err_px": map_err, "disagreeing_px": map_disagree, "per_pixel_check": build.coarse_map_checked()}));
         }
 
         for chromatic in [false, true] {
@@ -290,7 +294,7 @@ pub fn run(
                 // images were uploaded and the pass prepared and bound above.
                 let (frame_ms, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd) })?;
                 rows.push(json!({
-                    "bench": "warp", "width": w, "height": h, "method": label, "chromatic": chromatic,
+                    "bench": "warp", "kind": "warp", "width": w, "height": h, "method": label, "chromatic": chromatic,
                     "frame_ms": frame_ms, "gpu_ms": gpu_ms, "max_err_px": err,
                 }));
                 if coordinates.uses_map() {
@@ -319,7 +323,7 @@ pub fn run(
                         raster.record(cmd, &target.framebuffer)
                     })?;
                     rows.push(json!({
-                        "bench": "warp", "width": w, "height": h, "method": "map_raster", "chromatic": chromatic,
+                        "bench": "warp", "kind": "warp", "width": w, "height": h, "method": "map_raster", "chromatic": chromatic,
                         "frame_ms": frame_ms, "gpu_ms": gpu_ms, "max_err_px": err,
                     }));
                 }
@@ -329,61 +333,93 @@ pub fn run(
     Ok(rows)
 }
 
-/// The rows as a Markdown table, with each warp's ratio to the copy pass of its size.
+/// The ms of a row: a map build's single build, every other kind's frame.
+pub(crate) fn row_ms(r: &Value) -> Option<f64> {
+    match r["kind"].as_str() {
+        Some("inverse_map") => r["ms"].as_f64(),
+        _ => r["frame_ms"].as_f64(),
+    }
+}
+
+/// The row of `kind` at the size of `r` (the copy floor, or the OpenCV peer).
+pub(crate) fn same_size<'a>(rows: &'a [Value], kind: &str, r: &Value) -> Option<&'a Value> {
+    rows.iter()
+        .find(|x| x["kind"] == kind && x["width"] == r["width"] && x["height"] == r["height"])
+}
+
+/// The rows as a Markdown table, with each pass's ratio to the copy pass of its size. Where
+/// the rows hold OpenCV's times at a size (`kind` `opencv`, from `benches/warp_vs_opencv.py`),
+/// two columns more: the ratio to `cv2.remap` and `cv2.undistortPoints`'s time over it.
 pub fn table(rows: &[Value]) -> String {
-    let mut out = String::from(
-        "| size | pass | chromatic | frame ms | GPU ms | × copy | max coord err px |\n|---|---|---|---:|---:|---:|---:|\n",
-    );
-    let copy_ms = |w: &Value, h: &Value| {
-        rows.iter()
-            .find(|r| r["bench"] == "copy" && &r["width"] == w && &r["height"] == h)
-            .and_then(|r| r["frame_ms"].as_f64())
+    let peers = rows.iter().any(|r| r["kind"] == "opencv");
+    let mut out =
+        String::from("| size | pass | chromatic | frame ms | GPU ms | × copy | max coord err px |");
+    if peers {
+        out.push_str(" × cv2.remap | cv2.undistortPoints ÷ this |");
+    }
+    out.push_str("\n|---|---|---|---:|---:|---:|---:|");
+    if peers {
+        out.push_str("---:|---:|");
+    }
+    out.push('\n');
+    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) if b > 0.0 => format!("{:.2}", a / b),
+        _ => "—".into(),
     };
     for r in rows {
         let size = format!("{}×{}", r["width"], r["height"]);
-        let f = |k: &str| {
-            r[k].as_f64()
-                .map(|v| format!("{v:.2}"))
-                .unwrap_or_else(|| "—".into())
+        let pass = match r["kind"].as_str() {
+            Some("copy") => "copy (floor)".to_string(),
+            Some("inverse_map") => format!(
+                "inverse map build, {} (once; {} px invalid only here)",
+                r["method"].as_str().unwrap_or(""),
+                r["disagreeing_px"]
+            ),
+            Some("warp") => format!("warp, {}", r["method"].as_str().unwrap_or("")),
+            _ => continue,
         };
-        let e = |k: &str| {
-            r[k].as_f64()
-                .map(|v| format!("{v:.1e}"))
-                .unwrap_or_else(|| "—".into())
+        let chromatic = match r["kind"].as_str() {
+            Some("warp") if r["chromatic"] == true => "yes",
+            Some("warp") => "no",
+            _ => "—",
         };
-        match r["bench"].as_str() {
-            Some("copy") => out.push_str(&format!(
-                "| {size} | copy (floor) | — | {} | — | 1.00 | — |\n",
-                f("frame_ms")
-            )),
-            Some("inverse_map") => {
-                let ratio = match (r["ms"].as_f64(), copy_ms(&r["width"], &r["height"])) {
-                    (Some(a), Some(b)) => format!("{:.2}", a / b),
-                    _ => "—".into(),
-                };
-                out.push_str(&format!(
-                    "| {size} | inverse map build, {} (once; {} px invalid only here) | — | {} | — | {ratio} | {} |\n",
-                    r["method"].as_str().unwrap_or(""),
-                    r["disagreeing_px"],
-                    f("ms"),
-                    e("max_err_px")
-                ))
-            }
-            Some("warp") => {
-                let ratio = match (r["frame_ms"].as_f64(), copy_ms(&r["width"], &r["height"])) {
-                    (Some(a), Some(b)) => format!("{:.2}", a / b),
-                    _ => "—".into(),
-                };
-                out.push_str(&format!(
-                    "| {size} | warp, {} | {} | {} | {} | {ratio} | {} |\n",
-                    r["method"].as_str().unwrap_or(""),
-                    if r["chromatic"] == true { "yes" } else { "no" },
-                    f("frame_ms"),
-                    f("gpu_ms"),
-                    e("max_err_px")
-                ));
-            }
-            _ => {}
+        let ms = row_ms(r);
+        let copy = same_size(rows, "copy", r).and_then(|c| c["frame_ms"].as_f64());
+        out.push_str(&format!(
+            "| {size} | {pass} | {chromatic} | {} | {} | {} | {} |",
+            ms.map_or("—".into(), |v| format!("{v:.2}")),
+            fixed(r, "gpu_ms", 2),
+            ratio(ms, copy),
+            sci(r, "max_err_px"),
+        ));
+        if peers {
+            let peer = same_size(rows, "opencv", r);
+            let remap = peer.and_then(|p| p["remap_ms"].as_f64());
+            let undistort = peer.and_then(|p| p["undistort_points_ms"].as_f64());
+            out.push_str(&format!(
+                " {} | {} |",
+                ratio(ms, remap),
+                ratio(undistort, ms)
+            ));
+        }
+        out.push('\n');
+    }
+    if let Some(p) = rows.iter().find(|r| r["kind"] == "opencv") {
+        out.push_str(&format!(
+            "\nOpenCV {} ({} threads), same run: `cv2.remap` with precomputed CV_32FC1 maps, linear, \
+             RGBA8; `cv2.undistortPoints` over every pixel, 5 iterations.\n\n\
+             | size | cv2.remap ms | cv2.undistortPoints ms |\n|---|---:|---:|\n",
+            p["opencv"].as_str().unwrap_or("?"),
+            p["threads"],
+        ));
+        for r in rows.iter().filter(|r| r["kind"] == "opencv") {
+            out.push_str(&format!(
+                "| {}×{} | {} | {} |\n",
+                r["width"],
+                r["height"],
+                fixed(r, "remap_ms", 2),
+                fixed(r, "undistort_points_ms", 0),
+            ));
         }
     }
     out

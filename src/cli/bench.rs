@@ -4,6 +4,7 @@ use clap::Args;
 
 use super::{context, finish, CliError};
 use crate::bench::inverse::{self, InverseBenchOptions};
+use crate::bench::report::BENCHES;
 use crate::io::reference::{load_reference, reference_path};
 
 #[derive(Args, Debug)]
@@ -281,16 +282,42 @@ pub fn models(args: ModelsArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+fn parse_bench(s: &str) -> Result<String, String> {
+    let s = s.trim();
+    if BENCHES.contains(&s) {
+        Ok(s.to_string())
+    } else {
+        Err(format!(
+            "no bench `{s}`; the benches: {}",
+            BENCHES.join(", ")
+        ))
+    }
+}
+
 #[derive(Args, Debug)]
 pub struct AllArgs {
-    /// One JSON object per line (each row with its "bench", "device", "driver" and "date")
-    /// instead of writing the tables.
+    /// One JSON object per line instead of writing the tables: each row with its "bench",
+    /// "device", "driver" and "date"; rows with "bench": "all" give each bench's seconds
+    /// ("ran") and each peer not measured ("skipped", "why"). `--from` writes them later.
     #[arg(long)]
     json: bool,
-    /// The Markdown file whose section for this device is written (the sections of other
-    /// devices are kept).
+    /// The Markdown file whose section for this device is written. The sections of other
+    /// devices are kept, and so are this device's tables of benches this run leaves out.
     #[arg(long, value_name = "FILE", default_value = "docs/benchmarks.md")]
     out: std::path::PathBuf,
+    /// Run only these, comma-separated: inverse, warp, vertex, lens, wide, models, plan, and
+    /// python (the Python package's frame loop beside cv2.remap). Default: all of them.
+    #[arg(long, value_delimiter = ',', value_parser = parse_bench, value_name = "LIST")]
+    benches: Vec<String>,
+    /// Measure nothing: write the section of each device in FILE, the rows a `--json` run
+    /// printed (`vklens bench all --json > rows.jsonl`, then `--from rows.jsonl`).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["json", "benches"])]
+    from: Option<std::path::PathBuf>,
+    /// The Python that runs the OpenCV peers (benches/warp_vs_opencv.py beside `bench warp`,
+    /// `python -m vklens.bench`); a peer whose imports (cv2, numpy; vklens for the frame loop)
+    /// fail is skipped, and the section says so.
+    #[arg(long, value_name = "PROGRAM", default_value = "python3")]
+    python: String,
 }
 
 /// Today's date (UTC) as YYYY-MM-DD, from the system clock.
@@ -312,16 +339,208 @@ fn today() -> String {
     format!("{y:04}-{m:02}-{d:02}")
 }
 
-/// `vklens bench all`: every bench on one device, its tables written into one section of
-/// `--out` that names the device, the driver and the date.
+/// A file of the source tree, below the working directory or the source tree's root.
+fn source_file(relative: &str) -> Option<std::path::PathBuf> {
+    [
+        std::path::PathBuf::from(relative),
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative),
+    ]
+    .into_iter()
+    .find(|p| p.is_file())
+}
+
+/// Runs a Python peer after checking that `python` imports `imports`: its stdout, or why it
+/// could not run (the last line Python wrote on stderr). Its own stderr (progress) passes
+/// through.
+fn python_peer(python: &str, imports: &str, args: &[String]) -> Result<String, String> {
+    use std::process::{Command, Stdio};
+    let last_line = |bytes: &[u8]| {
+        String::from_utf8_lossy(bytes)
+            .lines()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .unwrap_or("no message")
+            .trim()
+            .to_string()
+    };
+    let check = Command::new(python)
+        .args(["-c", &format!("import {imports}")])
+        .output()
+        .map_err(|e| format!("{python}: {e}"))?;
+    if !check.status.success() {
+        return Err(last_line(&check.stderr));
+    }
+    let out = Command::new(python)
+        .args(args)
+        .stdin(Stdio::null())
+        .stderr(Stdio::inherit())
+        .output()
+        .map_err(|e| format!("{python}: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "{python} {} failed ({})",
+            args.join(" "),
+            out.status
+        ));
+    }
+    String::from_utf8(out.stdout).map_err(|e| e.to_string())
+}
+
+/// OpenCV's rows beside `bench warp` (`benches/warp_vs_opencv.py --opencv-only --json`).
+fn opencv_warp_rows(python: &str) -> Result<Vec<serde_json::Value>, String> {
+    let script = source_file("benches/warp_vs_opencv.py")
+        .ok_or("benches/warp_vs_opencv.py is not in this directory or the source tree")?;
+    let sizes: Vec<String> = crate::bench::warp::SIZES
+        .iter()
+        .map(|(w, h)| format!("{w}x{h}"))
+        .collect();
+    let out = python_peer(
+        python,
+        "cv2, numpy",
+        &[
+            script.display().to_string(),
+            "--opencv-only".into(),
+            "--sizes".into(),
+            sizes.join(","),
+            "--json".into(),
+        ],
+    )?;
+    out.lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| serde_json::from_str(l).map_err(|e| format!("its output: {e}")))
+        .collect()
+}
+
+/// The Python frame loop's rows (`python -m vklens.bench --json`), each with the run's facts.
+fn python_frame_rows(python: &str) -> Result<Vec<serde_json::Value>, String> {
+    let out = python_peer(
+        python,
+        "cv2, numpy, vklens",
+        &["-m".into(), "vklens.bench".into(), "--json".into()],
+    )?;
+    let v: serde_json::Value =
+        serde_json::from_str(&out).map_err(|e| format!("its output: {e}"))?;
+    let meta = v["meta"].as_object().cloned().unwrap_or_default();
+    let rows = v["rows"].as_array().cloned().unwrap_or_default();
+    Ok(rows
+        .into_iter()
+        .map(|mut r| {
+            if let Some(o) = r.as_object_mut() {
+                for key in ["opencv", "numpy", "device_start_ms", "frames", "repeats"] {
+                    if let Some(x) = meta.get(key) {
+                        o.insert(key.into(), x.clone());
+                    }
+                }
+                if let Some(d) = meta.get("device") {
+                    o.insert("python_device".into(), d.clone());
+                }
+            }
+            r
+        })
+        .collect())
+}
+
+/// Typed rows as JSON rows.
+fn to_json<T: serde::Serialize>(rows: &[T]) -> crate::Result<Vec<serde_json::Value>> {
+    rows.iter()
+        .map(|r| serde_json::to_value(r).map_err(|e| crate::Error::internal(e.to_string())))
+        .collect()
+}
+
+/// The devices of `rows`, each once, in the order they appear.
+fn devices(rows: &[serde_json::Value]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for r in rows {
+        if let Some(d) = r["device"].as_str() {
+            if !out.iter().any(|x| x == d) {
+                out.push(d.to_string());
+            }
+        }
+    }
+    out
+}
+
+/// Writes each device's section of `rows` into `out`.
+fn write_sections(out: &std::path::Path, rows: &[serde_json::Value]) -> Result<(), CliError> {
+    use crate::bench::report::{subsection, write_section, RUN};
+    let mut text = match std::fs::read_to_string(out) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(e) => return Err(CliError::io(out, "cannot read", &e)),
+    };
+    let names = devices(rows);
+    if names.is_empty() {
+        return Err(CliError::input("no rows with a \"device\" to write"));
+    }
+    for device in &names {
+        let of_device: Vec<serde_json::Value> = rows
+            .iter()
+            .filter(|r| r["device"] == device.as_str())
+            .cloned()
+            .collect();
+        let mut fresh = Vec::new();
+        for bench in BENCHES {
+            let present = of_device.iter().any(|r| {
+                r["bench"] == bench
+                    || (r["bench"] == RUN && (r["ran"] == bench || r["for"] == bench))
+            });
+            if present {
+                if let Some(s) = subsection(bench, &of_device)? {
+                    fresh.push((bench, s));
+                }
+            }
+        }
+        text = write_section(&text, device, &fresh);
+        eprintln!("wrote the {device} section of {}", out.display());
+    }
+    crate::imaging::file::write_atomically(out, |tmp| std::fs::write(tmp, &text))?;
+    Ok(())
+}
+
+/// `vklens bench all --from FILE`: the sections of saved rows, nothing measured.
+fn all_from(from: &std::path::Path, out: &std::path::Path) -> Result<(), CliError> {
+    let text = std::fs::read_to_string(from).map_err(|e| CliError::io(from, "cannot read", &e))?;
+    let rows = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            serde_json::from_str::<serde_json::Value>(l)
+                .map_err(|e| CliError::input(format!("{} line {}: {e}", from.display(), i + 1)))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    write_sections(out, &rows)
+}
+
+/// `vklens bench all`: every bench on one device (or those `--benches` names), and the OpenCV
+/// peers Python can run; the rows as JSON lines, or each bench's tables and goals written into
+/// the device's section of `--out` (headed by the device, the driver and the date).
 pub fn all(args: AllArgs) -> Result<(), CliError> {
-    use std::fmt::Write as _;
-    let reference = load_reference()?;
-    let lenses = data_folder(None, "lenses", "lenses")?;
-    let scenes = data_folder(None, "examples/scenes", "examples/scenes")?;
+    use crate::bench::report::RUN;
     if !args.json {
         super::output::check_output(&args.out, "benchmark", &["md"])?;
     }
+    if let Some(from) = &args.from {
+        return all_from(from, &args.out);
+    }
+    let chosen: Vec<&str> = BENCHES
+        .iter()
+        .copied()
+        .filter(|b| args.benches.is_empty() || args.benches.iter().any(|x| x == b))
+        .collect();
+    // Everything the benches read is found before the first of them runs.
+    let reference = match chosen.contains(&"inverse") {
+        true => Some(load_reference()?),
+        false => None,
+    };
+    let lenses = match chosen.contains(&"lens") {
+        true => Some(data_folder(None, "lenses", "lenses")?),
+        false => None,
+    };
+    let scenes = match chosen.contains(&"plan") {
+        true => Some(data_folder(None, "examples/scenes", "examples/scenes")?),
+        false => None,
+    };
     let ctx = context()?;
     let (device, driver, date) = (
         ctx.gpu().device_name().to_string(),
@@ -329,112 +548,96 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
         today(),
     );
     eprintln!("device: {device} ({driver})");
-    let mut sections: Vec<(&str, String, f64)> = Vec::new();
-    let mut json_rows: Vec<serde_json::Value> = Vec::new();
-    let mut timed = |name: &'static str,
-                     run: &mut dyn FnMut() -> crate::Result<(Vec<serde_json::Value>, String)>|
-     -> Result<(), CliError> {
-        let start = std::time::Instant::now();
-        let (rows, table) = run()?;
-        let s = start.elapsed().as_secs_f64();
-        super::progress_done(&format!("bench {name}: {} rows in {s:.0} s", rows.len()));
-        for mut r in rows {
+    let mut rows: Vec<serde_json::Value> = Vec::new();
+    let push = |rows: &mut Vec<serde_json::Value>, bench: &str, new: Vec<serde_json::Value>| {
+        for mut r in new {
             if let Some(o) = r.as_object_mut() {
-                o.insert("bench".into(), name.into());
+                o.insert("bench".into(), bench.into());
                 o.insert("device".into(), device.clone().into());
                 o.insert("driver".into(), driver.clone().into());
                 o.insert("date".into(), date.clone().into());
             }
-            json_rows.push(r);
+            rows.push(r);
         }
-        sections.push((name, table, s));
-        Ok(())
     };
-    timed("inverse", &mut || {
-        let rows = inverse::run(
-            &reference,
-            Some(&ctx),
-            &InverseBenchOptions::default(),
-            super::progress_line,
-        )?;
-        let json = rows
-            .iter()
-            .map(|r| serde_json::to_value(r).map_err(|e| crate::Error::internal(e.to_string())))
-            .collect::<crate::Result<Vec<_>>>()?;
-        Ok((json, inverse::table(&rows)))
-    })?;
-    timed("warp", &mut || {
-        let rows = crate::bench::warp::run(&ctx, &crate::bench::warp::SIZES, super::progress_line)?;
-        let table = crate::bench::warp::table(&rows);
-        Ok((rows, table))
-    })?;
-    timed("vertex", &mut || {
-        let rows = crate::bench::vertex::run(&ctx, &crate::bench::vertex::SIZES, &mut |s| {
-            super::progress_line(s)
-        })?;
-        let table = crate::bench::vertex::table(&rows);
-        Ok((rows, table))
-    })?;
-    timed("lens", &mut || {
-        let rows = crate::bench::lens::run(&ctx, &lenses, 256, &mut |s| super::progress_line(s))?;
-        let table = crate::bench::lens::table(&rows);
-        Ok((rows, table))
-    })?;
-    timed("wide", &mut || {
-        let rows = crate::bench::wide::run(&ctx, &mut |s| super::progress_line(s))?;
-        let table = crate::bench::wide::table(&rows);
-        Ok((rows, table))
-    })?;
-    timed("models", &mut || {
-        let rows = crate::bench::models::run(Some(&ctx), super::progress_line)?;
-        let json = rows
-            .iter()
-            .map(|r| serde_json::to_value(r).map_err(|e| crate::Error::internal(e.to_string())))
-            .collect::<crate::Result<Vec<_>>>()?;
-        Ok((json, crate::bench::models::table(&rows)))
-    })?;
-    timed("plan", &mut || {
-        let rows = crate::bench::plan::run(&ctx, &scenes, &mut |s| super::progress_line(s))?;
-        let table = crate::bench::plan::table(&rows);
-        Ok((rows, table))
-    })?;
+    for &bench in &chosen {
+        let start = std::time::Instant::now();
+        let mut skipped: Vec<(&str, String)> = Vec::new();
+        let measured: Vec<serde_json::Value> = match bench {
+            "inverse" => match &reference {
+                Some(reference) => to_json(&inverse::run(
+                    reference,
+                    Some(&ctx),
+                    &InverseBenchOptions::default(),
+                    super::progress_line,
+                )?)?,
+                None => Vec::new(),
+            },
+            "warp" => {
+                let mut r = crate::bench::warp::run(
+                    &ctx,
+                    &crate::bench::warp::SIZES,
+                    super::progress_line,
+                )?;
+                super::progress_done("bench warp: OpenCV beside it (benches/warp_vs_opencv.py)");
+                match opencv_warp_rows(&args.python) {
+                    Ok(peers) => r.extend(peers),
+                    Err(why) => skipped.push((
+                        "`cv2.remap` and `cv2.undistortPoints`, benches/warp_vs_opencv.py",
+                        why,
+                    )),
+                }
+                r
+            }
+            "vertex" => crate::bench::vertex::run(&ctx, &crate::bench::vertex::SIZES, &mut |s| {
+                super::progress_line(s)
+            })?,
+            "lens" => match &lenses {
+                Some(dir) => {
+                    crate::bench::lens::run(&ctx, dir, 256, &mut |s| super::progress_line(s))?
+                }
+                None => Vec::new(),
+            },
+            "wide" => crate::bench::wide::run(&ctx, &mut |s| super::progress_line(s))?,
+            "models" => to_json(&crate::bench::models::run(
+                Some(&ctx),
+                super::progress_line,
+            )?)?,
+            "plan" => match &scenes {
+                Some(dir) => crate::bench::plan::run(&ctx, dir, &mut |s| super::progress_line(s))?,
+                None => Vec::new(),
+            },
+            "python" => match python_frame_rows(&args.python) {
+                Ok(r) => r,
+                Err(why) => {
+                    skipped.push(("`python -m vklens.bench`", why));
+                    Vec::new()
+                }
+            },
+            _ => Vec::new(),
+        };
+        let seconds = start.elapsed().as_secs_f64();
+        super::progress_done(&format!(
+            "bench {bench}: {} rows in {seconds:.0} s",
+            measured.len()
+        ));
+        push(&mut rows, bench, measured);
+        let mut run = vec![serde_json::json!({"ran": bench, "seconds": seconds})];
+        for (peer, why) in skipped {
+            eprintln!("bench {bench}: skipped {peer}: {why}");
+            run.push(serde_json::json!({"for": bench, "skipped": peer, "why": why}));
+        }
+        push(&mut rows, RUN, run);
+    }
     finish(&ctx)?;
     if args.json {
         let mut out = std::io::stdout().lock();
-        for r in &json_rows {
+        for r in &rows {
             use std::io::Write as _;
             writeln!(out, "{r}")
                 .map_err(|e| CliError::io(std::path::Path::new("<stdout>"), "cannot write", &e))?;
         }
         return Ok(());
     }
-    let begin = format!("<!-- bench all: {device} -->");
-    let end = format!("<!-- end bench all: {device} -->");
-    let total: f64 = sections.iter().map(|s| s.2).sum();
-    let mut section = format!(
-        "{begin}\n## {device}\n\n`vklens bench all` on {device}, driver {driver}, {date} \
-         ({total:.0} s in all). Every table below is from this one run.\n"
-    );
-    for (name, table, s) in &sections {
-        let _ = write!(
-            section,
-            "\n### `vklens bench {name}` ({device}, {driver}, {date}; {s:.0} s)\n\n{}\n",
-            table.trim_end()
-        );
-    }
-    section.push_str(&end);
-    let old = match std::fs::read_to_string(&args.out) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
-        Err(e) => return Err(CliError::io(&args.out, "cannot read", &e)),
-    };
-    let new = match (old.find(&begin), old.find(&end)) {
-        (Some(a), Some(b)) if b > a => {
-            format!("{}{section}{}", &old[..a], &old[b + end.len()..])
-        }
-        _ => format!("{}\n\n{section}\n", old.trim_end()),
-    };
-    crate::imaging::file::write_atomically(&args.out, |tmp| std::fs::write(tmp, &new))?;
-    eprintln!("wrote the {device} section of {}", args.out.display());
-    Ok(())
+    write_sections(&args.out, &rows)
 }

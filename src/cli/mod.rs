@@ -268,10 +268,13 @@ enum BenchCommand {
     /// the inverse over a 1080p frame as a ratio to the standard model, and the error of the
     /// fits of the inverse that f-theta files carry.
     Models(bench::ModelsArgs),
-    /// Every bench above on the device VKLENS_DEVICE picks, in one run: writes (or replaces)
-    /// that device's section of docs/benchmarks.md, each table headed by the device, the
-    /// driver and the date. Run it on a machine with a real GPU to add its rows beside
-    /// lavapipe's: `VKLENS_DEVICE=gpu vklens bench all`.
+    /// Every bench above on the device VKLENS_DEVICE picks, in one run, with the OpenCV peers
+    /// Python can run (cv2 beside `bench warp`; the Python package's frame loop): writes (or
+    /// replaces) that device's section of docs/benchmarks.md, each bench's tables headed by
+    /// the device, the driver and the date, then its goals judged on the rows (met, not met,
+    /// not measured). A real GPU gets its own section: `VKLENS_DEVICE=gpu vklens bench all`.
+    /// Quick paths: `--benches models` (the section keeps the other tables); `--json >
+    /// rows.jsonl`, then `--from rows.jsonl` writes the section without measuring.
     All(bench::AllArgs),
 }
 

@@ -1,6 +1,7 @@
 //! Headless helpers for `pass::geometry`: upload, record, submit, wait and read back.
 
-use crate::gpu::Result;
+use crate::gpu::{Gpu, Result};
+use crate::host::readback::{Download, Left};
 use crate::host::Context;
 use crate::imaging::Raster;
 use crate::pass::geometry::*;
@@ -23,21 +24,106 @@ pub fn render(
     // SAFETY: no submission using it is pending (`submit` waits on its fence).
     unsafe { pass.set_frame(pose, previous) }?;
     let targets = GeometryTargets::new(gpu, &pass)?;
+    let readback = TargetsReadback::new(gpu, &targets)?;
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
         // a graphics queue; the texture upload comes before the draw that samples it and
-        // `targets` were made for `pass`. The download needs the outputs in
-        // TRANSFER_SRC_OPTIMAL: `GeometryDesc::new`'s default final layout, which this safe
-        // function assumes but does not check in `desc`. Everything outlives the submission,
-        // which `submit` waits for.
+        // `targets` were made for `pass`. The readback is told the outputs' layout from
+        // `desc`; everything outlives the submission, which `submit` waits for.
         unsafe {
             buffers.record_upload(cmd);
             pass.record(cmd, &targets, &buffers);
-            targets.record_download(cmd);
+            readback.record(gpu, cmd, &targets, pass.desc().final_layout)
+        }
+    })?;
+    readback.read()
+}
+
+/// Host buffers for every output of a [`GeometryTargets`], and their reading into a
+/// [`Rendered`].
+pub struct TargetsReadback {
+    /// By location: colour, IDs, flow, depth.
+    slots: [Option<Download>; 4],
+    extent: ash::vk::Extent2D,
+}
+
+impl TargetsReadback {
+    /// Buffers for every output `targets` has.
+    pub fn new(gpu: &Gpu, targets: &GeometryTargets) -> Result<Self> {
+        let names = [
+            "geometry.color.download",
+            "geometry.ids.download",
+            "geometry.flow.download",
+            "geometry.depth.download",
+        ];
+        let images = targets.images();
+        let mut slots: [Option<Download>; 4] = Default::default();
+        for (i, image) in images.iter().enumerate() {
+            if let Some(image) = image {
+                slots[i] = Some(Download::new(gpu, image, names[i])?);
+            }
+        }
+        Ok(TargetsReadback {
+            slots,
+            extent: targets.extent(),
+        })
+    }
+
+    /// Records the copy of every output, which the pass left in `layout` (its
+    /// `final_layout`: `TRANSFER_SRC_OPTIMAL`, or `GENERAL` for a warp's source).
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass after [`GeometryPass::record`] into
+    /// `targets` (those this readback was made for); the buffers stay alive until the work
+    /// completes.
+    pub unsafe fn record(
+        &self,
+        gpu: &Gpu,
+        cmd: ash::vk::CommandBuffer,
+        targets: &GeometryTargets,
+        layout: ash::vk::ImageLayout,
+    ) -> Result<()> {
+        let left = if layout == ash::vk::ImageLayout::GENERAL {
+            Left::ComputeGeneral
+        } else if layout == ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL {
+            Left::TransferSource
+        } else {
+            return Err(crate::gpu::Error::internal(format!(
+                "no readback of geometry outputs left in {layout:?}"
+            )));
+        };
+        for (download, image) in self.slots.iter().zip(targets.images()) {
+            if let (Some(d), Some(image)) = (download, image) {
+                // SAFETY: the caller upholds this function's contract: the pass was recorded
+                // into these targets, which it left in `layout`; `record` checks that each
+                // image is the one its buffer was made for.
+                unsafe { d.record(gpu, cmd, image, left) }?;
+            }
         }
         Ok(())
-    })?;
-    targets.read()
+    }
+
+    /// The outputs (after the submission completed).
+    pub fn read(&self) -> Result<Rendered> {
+        let mut out = Rendered {
+            width: self.extent.width,
+            height: self.extent.height,
+            ..Default::default()
+        };
+        if let Some(d) = &self.slots[0] {
+            out.color = Some(d.read_rgba()?);
+        }
+        if let Some(d) = &self.slots[1] {
+            out.ids = Some(d.read::<u32>()?);
+        }
+        if let Some(d) = &self.slots[2] {
+            out.flow = Some(d.read::<[f32; 2]>()?);
+        }
+        if let Some(d) = &self.slots[3] {
+            out.depth = Some(d.read::<f32>()?);
+        }
+        Ok(out)
+    }
 }
 
 /// Uploads `mesh` (and its texture) for any number of draws, and waits.

@@ -1,6 +1,7 @@
 //! The lens renderer on the headless context: render a frame and read it back.
 
 use crate::gpu::Result;
+use crate::host::readback::{Download, Left};
 use crate::host::Context;
 use crate::pass::geometry::MeshBuffers;
 use crate::pass::lens_render::*;
@@ -24,17 +25,17 @@ impl LensRenderer {
         })?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let target = &self.target;
+        let film = Download::new(ctx.gpu(), &target.image, "film.download")?;
         ctx.submit(|cmd| {
             // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass,
             // after the frame's submission completed, which left the film in
-            // COLOR_ATTACHMENT_OPTIMAL; `target` outlives this submission too.
-            unsafe { target.record_download(cmd) };
-            Ok(())
+            // COLOR_ATTACHMENT_OPTIMAL; `target` and `film` outlive this submission too.
+            unsafe { film.record(ctx.gpu(), cmd, &target.image, Left::ColorAttachment) }
         })?;
         Ok(LensFrame {
             width: target.width,
             height: target.height,
-            pixels: target.read()?,
+            pixels: film.read()?,
             projections: self.draws.len(),
             frame_ms,
         })

@@ -1,6 +1,7 @@
 //! Headless helpers for `pass::mesh_warp`: upload, record, submit, wait and read back.
 
 use crate::gpu::{Error, Result};
+use crate::host::readback::{Download, Left};
 use crate::host::Context;
 use crate::imaging::Raster;
 use crate::model::warp::WarpGeometry;
@@ -36,6 +37,7 @@ pub fn run_mesh_warp(
     // SAFETY: no submission using it is pending (`submit` waits on its fence).
     unsafe { pass.bind(texture.image.view) };
     let target = MeshWarpTarget::new(gpu, &pass)?;
+    let download = Download::new(gpu, &target.image, "mesh_warp.download")?;
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.
         // The upload leaves the texture in SHADER_READ_ONLY_OPTIMAL, visible to fragment
@@ -44,9 +46,8 @@ pub fn run_mesh_warp(
         unsafe {
             texture.record_upload(cmd);
             pass.record(cmd, &target.framebuffer);
-            target.record_download(gpu, cmd);
+            download.record(gpu, cmd, &target.image, Left::TransferSource)
         }
-        Ok(())
     })?;
-    target.read()
+    download.read_rgba()
 }

@@ -9,6 +9,7 @@ pub mod lens_render;
 pub mod mesh_warp;
 pub mod plan;
 pub mod points;
+pub mod readback;
 pub mod sphere_warp;
 pub mod warp;
 pub mod warp_images;

@@ -4,6 +4,9 @@
 use std::time::Instant;
 
 use crate::gpu::QueryPool;
+use crate::host::geometry::TargetsReadback;
+use crate::host::readback::{Download, Left};
+use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::pass::geometry::Rendered;
 use crate::plan::antialias::{average, shifted};
 use crate::plan::record::{plan_mesh_at, tessellation};
@@ -135,7 +138,7 @@ fn run_frames(
     }
     let data = main_plan.outputs;
     let mut main = if data.color || data.ids || data.flow || data.depth {
-        Some(PlanRecorder::build(gpu, &main_plan, &mesh, texture)?)
+        Some(PlanRecorder::build(gpu, &main_plan, &mesh, texture, 1)?)
     } else {
         None
     };
@@ -173,7 +176,7 @@ fn run_frames(
                 }
                 _ => {}
             }
-            Some(PlanRecorder::build(gpu, &p, &mesh, texture)?)
+            Some(PlanRecorder::build(gpu, &p, &mesh, texture, 1)?)
         }
         _ => None,
     };
@@ -193,19 +196,31 @@ fn run_frames(
             PlanRecorder::record_setup,
         )
     }?;
+    let main_readback = main
+        .as_ref()
+        .map(|r| PlanReadback::new(gpu, r))
+        .transpose()?;
+    let smooth_readback = smooth
+        .as_ref()
+        .map(|r| PlanReadback::new(gpu, r))
+        .transpose()?;
     // Run one recorder's prepared frame and read its outputs back.
-    let run = |r: &PlanRecorder, timestamps: Option<&QueryPool>| -> Result<Rendered> {
+    let run = |r: &PlanRecorder,
+               readback: Option<&PlanReadback>,
+               timestamps: Option<&QueryPool>|
+     -> Result<Rendered> {
+        let readback =
+            readback.ok_or_else(|| Error::internal("a recorder without its readback"))?;
         ctx.submit(|cmd| {
             // SAFETY: `cmd` is recording outside a render pass; the recorder was set up and
-            // prepared, and `submit` waits, so nothing it records outlives the recorder.
+            // prepared, and `submit` waits, so nothing it records outlives the recorder or
+            // the readback made for it.
             unsafe {
                 r.record(cmd, timestamps);
-                r.record_download(cmd);
-                crate::gpu::host_read_barrier(gpu, cmd);
+                readback.record(gpu, cmd, r)
             }
-            Ok(())
         })?;
-        r.read()
+        readback.read(r)
     };
     // The first frame once more before timing: caches warm up on first use.
     let warm_up = frames.first().copied().filter(|_| timing);
@@ -241,7 +256,7 @@ fn run_frames(
                 } else {
                     None
                 };
-                run(r, stamps)?
+                run(r, main_readback.as_ref(), stamps)?
             }
             None => Rendered::default(),
         };
@@ -254,7 +269,7 @@ fn run_frames(
                 let big = scaled_camera(&shifted(cam, shift)?, s)?;
                 // SAFETY: the last pass's submission has completed (`submit` waits).
                 unsafe { r.jitter(&big, shift * s as f64) }?;
-                let colour = run(r, None)?
+                let colour = run(r, smooth_readback.as_ref(), None)?
                     .color
                     .ok_or_else(|| Error::internal("the anti-aliased pass rendered no colour"))?;
                 images.push(downsample(&colour, s));
@@ -313,4 +328,310 @@ pub fn render_request(
         Ok(())
     })?;
     out.ok_or_else(|| Error::internal("the plan rendered no frame"))
+}
+
+/// Host buffers for every output a [`PlanRecorder`]'s plan asks for, and their reading into a
+/// [`Rendered`]: the headless path's readback (an engine samples the recorder's images in
+/// place instead, see [`PlanRecorder::images`]).
+pub struct PlanReadback {
+    geometry: Option<TargetsReadback>,
+    /// The warp's, the cube's or the lens film's colour, whichever route made it.
+    colour: Option<Download>,
+    ids: Option<Download>,
+    depth: Option<Download>,
+}
+
+impl PlanReadback {
+    /// Buffers for the outputs `recorder` renders.
+    pub fn new(gpu: &crate::gpu::Gpu, recorder: &PlanRecorder) -> Result<Self> {
+        let o = recorder.outputs();
+        let geometry = recorder
+            .geometry_targets()
+            .map(|t| TargetsReadback::new(gpu, t))
+            .transpose()?;
+        let mut colour = None;
+        let (mut ids, mut depth) = (None, None);
+        if let Some(l) = recorder.lens_renderer() {
+            colour = Some(Download::new(gpu, &l.film().image, "film.download")?);
+        }
+        if let Some(c) = recorder.cube_stage() {
+            colour = Some(Download::new(gpu, &c.output, "cube_stage.download")?);
+        }
+        if let Some(st) = recorder.warp_stage() {
+            if o.color {
+                colour = Some(Download::new(gpu, &st.output, "warp_path.download")?);
+            }
+            if let Some(d) = &st.ids {
+                ids = Some(Download::new(gpu, &d.output, "warp_path.ids.download")?);
+            }
+            if let Some(d) = &st.depth {
+                depth = Some(Download::new(gpu, &d.output, "warp_path.depth.download")?);
+            }
+        }
+        Ok(PlanReadback {
+            geometry,
+            colour,
+            ids,
+            depth,
+        })
+    }
+
+    /// Records the copies of the outputs of the frame `recorder` just recorded.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass, after [`PlanRecorder::record`] of
+    /// `recorder` (the one this readback was made for); everything alive until the work
+    /// completes.
+    pub unsafe fn record(
+        &self,
+        gpu: &crate::gpu::Gpu,
+        cmd: ash::vk::CommandBuffer,
+        recorder: &PlanRecorder,
+    ) -> Result<()> {
+        // SAFETY (every block below): the caller upholds this function's contract; each image
+        // is in the layout `PlanRecorder::record` documents for it, named by `Left`, and each
+        // `Download::record` checks the image is the one its buffer was made for.
+        if let (Some(r), Some(t)) = (&self.geometry, recorder.geometry_targets()) {
+            unsafe { r.record(gpu, cmd, t, ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL) }?;
+        }
+        if let (Some(d), Some(l)) = (&self.colour, recorder.lens_renderer()) {
+            unsafe { d.record(gpu, cmd, &l.film().image, Left::ColorAttachment) }?;
+        }
+        if let (Some(d), Some(c)) = (&self.colour, recorder.cube_stage()) {
+            unsafe { d.record(gpu, cmd, &c.output, Left::ComputeGeneral) }?;
+        }
+        if let Some(st) = recorder.warp_stage() {
+            let pairs = [
+                (&self.colour, Some(&st.output)),
+                (&self.ids, st.ids.as_ref().map(|d| &d.output)),
+                (&self.depth, st.depth.as_ref().map(|d| &d.output)),
+            ];
+            for (download, image) in pairs {
+                if let (Some(d), Some(image)) = (download, image) {
+                    unsafe { d.record(gpu, cmd, image, Left::ComputeGeneral) }?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The outputs of the frame (after the submission completed): colour, IDs, flow and
+    /// depth as the plan asks for them.
+    pub fn read(&self, recorder: &PlanRecorder) -> Result<Rendered> {
+        let o = recorder.outputs();
+        let mut out = match &self.geometry {
+            Some(g) => g.read()?,
+            None => Rendered::default(),
+        };
+        if let Some(d) = &self.colour {
+            let colour = if recorder.lens_renderer().is_some() {
+                film_colour(d, recorder.keeps_vignetting(), o.exr)?
+            } else {
+                d.read_rgba()?
+            };
+            (out.width, out.height) = (colour.width, colour.height);
+            out.color = Some(colour);
+        }
+        if let Some(d) = &self.ids {
+            out.ids = Some(d.read()?);
+        }
+        if let Some(d) = &self.depth {
+            out.depth = Some(d.read()?);
+        }
+        if !o.color {
+            out.color = None;
+        }
+        Ok(out)
+    }
+}
+
+/// The lens film as an image: alpha is the accumulated weight of what was drawn (relative
+/// illumination where the scene is opaque), divided out unless the plan keeps vignetting.
+fn film_colour(film: &Download, vignetting: bool, float: bool) -> Result<Raster> {
+    let e = film.extent();
+    let pixels = film
+        .read::<[f32; 4]>()?
+        .iter()
+        .map(|p| {
+            let a = p[3];
+            if vignetting || a <= 1e-6 {
+                [p[0], p[1], p[2], 1.0]
+            } else {
+                [p[0] / a, p[1] / a, p[2] / a, 1.0]
+            }
+        })
+        .collect::<Vec<_>>();
+    let (pixels, bit_depth) = if float {
+        (Pixels::Rgba32F(pixels), BitDepth::F32)
+    } else {
+        (
+            Pixels::Rgba8(
+                pixels
+                    .iter()
+                    .map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+                    .collect(),
+            ),
+            BitDepth::U8,
+        )
+    };
+    Ok(Raster {
+        width: e.width,
+        height: e.height,
+        pixels,
+        bit_depth,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::host::{geometry_shader_discard_from_env, geometry_shader_from_env, ContextOptions};
+    use crate::plan::scene_file::{Antialias, SceneFile};
+
+    fn context() -> Context {
+        Context::new(ContextOptions {
+            validation: true,
+            device: std::env::var("VKLENS_DEVICE")
+                .ok()
+                .filter(|s| !s.is_empty()),
+            geometry_shader: geometry_shader_from_env(),
+            geometry_shader_discard: geometry_shader_discard_from_env(),
+        })
+        .expect(
+            "a Vulkan device with the validation layer (README: the test command installs both)",
+        )
+    }
+
+    /// An example scene's plan, one sample per pixel, with at least two different poses.
+    fn two_pose_plan(name: &str) -> (Plan, Scene) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenes")
+            .join(name);
+        let file = SceneFile::load(&path).unwrap();
+        let scene = crate::plan::load_geometry(&file).unwrap();
+        let mut p = crate::plan::plan(&file, &scene).unwrap();
+        p.antialias = Antialias::default();
+        if p.poses.len() < 2 {
+            let mut moved = p.poses[0];
+            moved.translation.x += 0.05;
+            p.poses.push(moved);
+        }
+        p.poses.truncate(2);
+        (p, scene)
+    }
+
+    /// Frames 0 and 1 recorded into one command buffer after both were prepared, as an engine
+    /// records frame N + 1 before frame N has run; each read back between the frames.
+    fn both_in_one_submission(
+        ctx: &Context,
+        plan: &Plan,
+        scene: &Scene,
+        frames: usize,
+    ) -> [Rendered; 2] {
+        let gpu = ctx.gpu();
+        let mut r = PlanRecorder::with_frames(gpu, plan, scene, frames).unwrap();
+        let readbacks = [
+            PlanReadback::new(gpu, &r).unwrap(),
+            PlanReadback::new(gpu, &r).unwrap(),
+        ];
+        for frame in 0..2 {
+            r.select_frame(frame);
+            // SAFETY: nothing has been submitted yet.
+            unsafe { r.prepare(frame) }.unwrap();
+        }
+        let r = ctx
+            .submit(|cmd| {
+                // SAFETY: `cmd` is recording outside a render pass; `submit` waits, so the
+                // recorder and the readbacks outlive the work.
+                unsafe {
+                    r.record_setup(cmd);
+                    for (frame, readback) in readbacks.iter().enumerate() {
+                        r.select_frame(frame);
+                        r.record(cmd, None);
+                        readback.record(gpu, cmd, &r)?;
+                    }
+                }
+                Ok(r)
+            })
+            .unwrap();
+        readbacks.map(|b| b.read(&r).unwrap())
+    }
+
+    /// The same frames from a one-frame recorder, each submitted and waited for in turn.
+    fn one_after_the_other(ctx: &Context, plan: &Plan, scene: &Scene) -> [Rendered; 2] {
+        let gpu = ctx.gpu();
+        let mut r = PlanRecorder::new(gpu, plan, scene).unwrap();
+        let readback = PlanReadback::new(gpu, &r).unwrap();
+        // SAFETY: `submit` waits: nothing is pending after it.
+        ctx.submit(|cmd| {
+            unsafe { r.record_setup(cmd) };
+            Ok(())
+        })
+        .unwrap();
+        [0, 1].map(|frame| {
+            // SAFETY: the last submission has completed (`submit` waits).
+            unsafe { r.prepare(frame) }.unwrap();
+            ctx.submit(|cmd| unsafe {
+                r.record(cmd, None);
+                readback.record(gpu, cmd, &r)
+            })
+            .unwrap();
+            readback.read(&r).unwrap()
+        })
+    }
+
+    fn same(a: &Rendered, b: &Rendered) -> bool {
+        let colour = |r: &Rendered| r.color.as_ref().map(|c| format!("{:?}", c.pixels));
+        colour(a) == colour(b) && a.ids == b.ids && a.depth == b.depth && {
+            // Flow is NaN in the background: compare bits.
+            let bits = |r: &Rendered| {
+                r.flow
+                    .as_ref()
+                    .map(|f| f.iter().map(|v| v.map(f32::to_bits)).collect::<Vec<_>>())
+            };
+            bits(a) == bits(b)
+        }
+    }
+
+    #[test]
+    fn every_route_keeps_a_frame_in_flight_of_its_own() {
+        let ctx = context();
+        // Alg. 1 with IDs, flow and depth; the chromatic map warp; the cube map; the lens model.
+        for name in [
+            "ids_and_flow.toml",
+            "chromatic.toml",
+            "fisheye_chromatic.toml",
+            "lens_chromatic.toml",
+        ] {
+            let (plan, scene) = two_pose_plan(name);
+            let expected = one_after_the_other(&ctx, &plan, &scene);
+            assert!(
+                !same(&expected[0], &expected[1]),
+                "{name}: the two poses must render differently for this test to mean anything"
+            );
+            for refused in [0, crate::pass::geometry::MAX_FRAMES_IN_FLIGHT + 1] {
+                let e = PlanRecorder::with_frames(ctx.gpu(), &plan, &scene, refused);
+                assert!(
+                    e.is_err_and(|e| e.to_string().contains("frames in flight")),
+                    "{name}: {refused} frames in flight"
+                );
+            }
+            let got = both_in_one_submission(&ctx, &plan, &scene, 2);
+            for frame in 0..2 {
+                assert!(
+                    same(&got[frame], &expected[frame]),
+                    "{name}: frame {frame} in flight differs from the same frame rendered alone"
+                );
+            }
+            // One set of uniforms for both: the first frame draws with the second's pose.
+            let shared = both_in_one_submission(&ctx, &plan, &scene, 1);
+            assert!(
+                same(&shared[0], &expected[1]),
+                "{name}: with one frame in flight the first frame should show the second pose"
+            );
+        }
+        if let Err(e) = ctx.check_validation() {
+            panic!("{e}");
+        }
+    }
 }

@@ -1,15 +1,13 @@
 //! Headless helpers for `pass::warp`: upload, record, submit, wait and read back.
 
-use crate::gpu::record_compute_readback;
-use crate::gpu::{host_read_barrier, Buffer, Result};
+use crate::gpu::{host_read_barrier, Result};
+use crate::host::readback::{Download, Left};
 use crate::host::warp_images::WarpImages;
 use crate::host::Context;
 use crate::imaging::cpu_warp::Sampling;
 use crate::imaging::Raster;
 use crate::model::warp::WarpGeometry;
 use crate::pass::warp::*;
-use ash::vk;
-use gpu_allocator::MemoryLocation;
 
 /// One submission of a bound warp through staged images: upload what is staged, build the
 /// maps first when `prepare` (the first run), warp, download; then waits.
@@ -64,46 +62,32 @@ pub(crate) fn read_pass_maps(
         ));
     }
     let gpu = ctx.gpu();
-    let (w, h) = desc.geometry.output_size;
     let channels: Vec<usize> = if desc.geometry.is_chromatic() {
         vec![0, 1, 2]
     } else {
         vec![1]
     };
-    let buffers = channels
+    let downloads = channels
         .iter()
-        .map(|_| {
-            Buffer::new(
-                gpu,
-                "map.read",
-                w as u64 * h as u64 * 8,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )
-        })
+        .map(|&c| Download::new(gpu, &pass.maps[c], "map.read"))
         .collect::<Result<Vec<_>>>()?;
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass;
         // the maps are in GENERAL once built (by the prepare recorded here, or by an earlier
-        // one that completed), each channel's map is a real `w × h` RG32F image (8 bytes a
-        // texel, as each buffer is sized) with TRANSFER_SRC usage, and `pass` and `buffers`
-        // outlive the submission, which `submit` waits for.
+        // one that completed), written by compute, with TRANSFER_SRC usage; the copy goes back
+        // to GENERAL, where the pass's warps read them. `pass` and `downloads` outlive the
+        // submission, which `submit` waits for.
         unsafe {
             if prepare {
                 pass.record_prepare(cmd);
             }
-            for (&c, buf) in channels.iter().zip(&buffers) {
-                // The copy reads what the map build wrote; the map goes back to GENERAL,
-                // where the pass's warps read it.
-                record_compute_readback(gpu, cmd, &pass.maps[c], buf);
+            for (&c, d) in channels.iter().zip(&downloads) {
+                d.record(gpu, cmd, &pass.maps[c], Left::ComputeGeneral)?;
             }
         }
         Ok(())
     })?;
-    buffers
-        .iter()
-        .map(|b| b.read_pod::<[f32; 2]>(w as usize * h as usize))
-        .collect()
+    downloads.iter().map(|d| d.read::<[f32; 2]>()).collect()
 }
 
 /// Builds `geometry`'s coordinate maps on the GPU and reads them back: per built channel

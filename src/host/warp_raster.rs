@@ -1,6 +1,7 @@
 //! Headless helpers for `pass::warp_raster`: upload, record, submit, wait and read back.
 
 use crate::gpu::{global_barrier, Access, Result};
+use crate::host::readback::{Download, Left};
 use crate::host::warp_images::WarpImages;
 use crate::host::Context;
 use crate::imaging::Raster;
@@ -20,6 +21,7 @@ pub fn run_raster_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result
     unsafe { pass.bind(images.source.view) };
     let target =
         MeshWarpTarget::for_render_pass(gpu, &pass.render_pass, pass.output_size, pass.format)?;
+    let download = Download::new(gpu, &target.image, "mesh_warp.download")?;
     ctx.submit(|cmd| {
         // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass.
         // The upload and map builds come first and the barrier below makes their writes
@@ -36,9 +38,8 @@ pub fn run_raster_warp(ctx: &Context, desc: WarpDesc, source: &Raster) -> Result
                 Access::FragmentRead,
             );
             pass.record(cmd, &target.framebuffer);
-            target.record_download(gpu, cmd);
+            download.record(gpu, cmd, &target.image, Left::TransferSource)
         }
-        Ok(())
     })?;
-    target.read()
+    download.read_rgba()
 }

@@ -6,10 +6,8 @@
 //! holds (a fisheye of 180° and more, a wide lens past the device's image limit).
 
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{global_barrier, image_discard, image_transition, Access, Buffer, Image};
-use crate::imaging::Raster;
+use crate::gpu::{global_barrier, image_discard, image_transition, Access, Image};
 use crate::model::Camera;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
@@ -25,7 +23,10 @@ pub struct CubeStage {
     gpu: crate::gpu::Gpu,
     /// The pinhole render of a face (90° across), one slot per face.
     pub pass: GeometryPass,
-    slots: GeometrySlots,
+    /// The six faces' slots, one set of them per frame in flight.
+    slots: Vec<GeometrySlots>,
+    /// The frame in flight [`Self::prepare`] writes and [`Self::record`] records.
+    current: usize,
     /// The face the pass renders into before it is copied to its layer.
     pub targets: GeometryTargets,
     /// The six faces (`SHADER_READ_ONLY_OPTIMAL` after a frame).
@@ -34,7 +35,6 @@ pub struct CubeStage {
     /// The faces' format (RGBA8 or RGBA32F), the lens camera's size, `GENERAL` after a frame.
     pub output: Image,
     mask: Image,
-    download: Buffer,
     side: u32,
     face_camera: Camera,
     format: ColorFormat,
@@ -53,6 +53,26 @@ impl CubeStage {
         format: ColorFormat,
         options: &SphereWarpOptions,
     ) -> Result<Self> {
+        Self::with_frames(gpu, camera, side, format, options, 1)
+    }
+
+    /// As [`Self::new`], with the faces' uniforms and sets for `frames` frames in flight
+    /// (1 to [`crate::pass::geometry::MAX_FRAMES_IN_FLIGHT`]), chosen by
+    /// [`Self::select_frame`].
+    pub fn with_frames(
+        gpu: &crate::gpu::Gpu,
+        camera: &Camera,
+        side: u32,
+        format: ColorFormat,
+        options: &SphereWarpOptions,
+        frames: usize,
+    ) -> Result<Self> {
+        if !(1..=crate::pass::geometry::MAX_FRAMES_IN_FLIGHT).contains(&frames) {
+            return Err(Error::input(format!(
+                "{frames} frames in flight: a cube stage keeps 1 to {}",
+                crate::pass::geometry::MAX_FRAMES_IN_FLIGHT
+            )));
+        }
         let max = gpu.max_image_side().min(gpu.max_cube_side());
         if side < 2 || side > max {
             return Err(Error::input(format!(
@@ -82,7 +102,9 @@ impl CubeStage {
         );
         desc.background = options.fill;
         let pass = GeometryPass::new(gpu, desc)?;
-        let slots = pass.slots(6)?;
+        let slots = (0..frames)
+            .map(|_| pass.slots(6))
+            .collect::<crate::gpu::Result<Vec<_>>>()?;
         let targets = GeometryTargets::new(gpu, &pass)?;
         let cube = Image::new_cube(
             gpu,
@@ -94,20 +116,13 @@ impl CubeStage {
         let (ow, oh) = (camera.width, camera.height);
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let eight_bit = format == ColorFormat::Rgba8;
-        let (out_format, texel) = if eight_bit {
-            (vk::Format::R8G8B8A8_UNORM, 4)
+        let out_format = if eight_bit {
+            vk::Format::R8G8B8A8_UNORM
         } else {
-            (vk::Format::R32G32B32A32_SFLOAT, 16)
+            vk::Format::R32G32B32A32_SFLOAT
         };
         let output = Image::new_2d(gpu, "cube_stage.output", out_format, ow, oh, usage)?;
         let mask = Image::new_2d(gpu, "cube_stage.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
-        let download = Buffer::new(
-            gpu,
-            "cube_stage.download",
-            ow as u64 * oh as u64 * texel,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
         let options = SphereWarpOptions {
             write_mask: false,
             ..options.clone()
@@ -121,12 +136,12 @@ impl CubeStage {
             gpu: gpu.clone(),
             pass,
             slots,
+            current: 0,
             targets,
             cube,
             warp,
             output,
             mask,
-            download,
             side,
             face_camera,
             format,
@@ -151,6 +166,12 @@ impl CubeStage {
             && self.lens == ((camera.width, camera.height), camera.terms())
     }
 
+    /// Makes frame `frame` (modulo the frames in flight it was made with) the one
+    /// [`Self::prepare`] writes and [`Self::record`] records.
+    pub fn select_frame(&mut self, frame: usize) {
+        self.current = frame % self.slots.len();
+    }
+
     /// The faces' side in pixels.
     pub fn side(&self) -> u32 {
         self.side
@@ -160,12 +181,13 @@ impl CubeStage {
     /// looks from the same centre, turned by [`CubeFace::rotation`].
     ///
     /// # Safety
-    /// Host writes to the face slots' uniforms and descriptor sets: no recorded work that uses
-    /// this stage may be pending on the GPU.
+    /// Host writes to the selected frame's face uniforms and descriptor sets
+    /// ([`Self::select_frame`]): no recorded work of that frame may be pending on the GPU.
     pub unsafe fn prepare(&self, mesh: &MeshBuffers, pose: &Pose) -> Result<()> {
         // SAFETY: the caller upholds this function's contract (nothing pending uses the slots).
         unsafe {
-            self.pass.bind_slots_mesh(&self.slots, mesh);
+            let slots = &self.slots[self.current];
+            self.pass.bind_slots_mesh(slots, mesh);
             for face in CubeFace::ALL {
                 let r = face.rotation();
                 let face_pose = Pose {
@@ -173,7 +195,7 @@ impl CubeStage {
                     translation: r * pose.translation,
                 };
                 self.pass.set_slot(
-                    &self.slots,
+                    slots,
                     face.layer() as usize,
                     &self.face_camera,
                     &face_pose,
@@ -258,8 +280,13 @@ impl CubeStage {
             );
             for face in CubeFace::ALL {
                 let layer = face.layer();
-                self.pass
-                    .record_slot(cmd, &self.targets, mesh, &self.slots, layer as usize);
+                self.pass.record_slot(
+                    cmd,
+                    &self.targets,
+                    mesh,
+                    &self.slots[self.current],
+                    layer as usize,
+                );
                 d.cmd_copy_image(
                     cmd,
                     face_image.raw,
@@ -303,26 +330,5 @@ impl CubeStage {
                 [Access::TransferRead, Access::ComputeRead],
             );
         }
-    }
-
-    /// Records the readback of the output (after [`Self::record`]).
-    ///
-    /// # Safety
-    /// As [`Self::record`].
-    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds this function's contract (after `record`): the output is
-        // in GENERAL with its writes visible to transfers, and `download` holds it whole.
-        unsafe {
-            crate::gpu::record_compute_readback(&self.gpu, cmd, &self.output, &self.download)
-        };
-    }
-
-    /// The warped image (after the submission completed), in the faces' format.
-    pub fn read(&self) -> Result<Raster> {
-        crate::pass::warp_stage::read_rgba(
-            &self.download,
-            self.output.extent,
-            self.format == ColorFormat::Rgba8,
-        )
     }
 }

@@ -3,16 +3,15 @@
 //! (additive blending; Heidrich et al.'s accumulation buffer).
 //!
 //! Embedding: [`FilmPass::record_clear`], then any number of [`FilmPass::record_cell`]
-//! (each after the cell's image was rendered), then [`FilmTarget::record_download`] or the
-//! caller's own use of the image (left in `COLOR_ATTACHMENT_OPTIMAL`).
+//! (each after the cell's image was rendered), then the
+//! caller's use of the image (left in `COLOR_ATTACHMENT_OPTIMAL`; the host reads it back).
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
-use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{
-    image_transition, record_download, shaders, Access, Buffer, DescriptorPool, Error, Framebuffer,
-    Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
+    image_transition, shaders, Access, Buffer, DescriptorPool, Error, Framebuffer, Gpu,
+    GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
 
 /// The film's format: float, so that many weighted slices add without clipping or banding.
@@ -190,12 +189,10 @@ impl FilmPass {
     }
 }
 
-/// The float film image and a host buffer to read it back.
+/// The float film image the cells accumulate into.
 pub struct FilmTarget {
-    gpu: Gpu,
     pub image: Image,
     pub framebuffer: Framebuffer,
-    download: Buffer,
     pub width: u32,
     pub height: u32,
 }
@@ -228,48 +225,11 @@ impl FilmTarget {
                 vk::Extent2D { width, height },
             )
         }?;
-        let download = Buffer::new(
-            gpu,
-            "film.download",
-            width as u64 * height as u64 * 16,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
         Ok(FilmTarget {
-            gpu: gpu.clone(),
             image,
             framebuffer,
-            download,
             width,
             height,
         })
-    }
-
-    /// Copies the film to its host buffer (it must be in `COLOR_ATTACHMENT_OPTIMAL`, as the
-    /// cells leave it); afterwards it is in `TRANSFER_SRC_OPTIMAL`.
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass, after the cells.
-    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds `record_download`'s contract: `cmd` is recording outside a
-        // render pass after the cells, which leave the film in COLOR_ATTACHMENT_OPTIMAL (the
-        // transition's old layout); `download` holds width × height RGBA32F texels.
-        unsafe {
-            image_transition(
-                &self.gpu,
-                cmd,
-                self.image.raw,
-                Access::ColorAttachmentReadWrite,
-                Access::TransferRead,
-            );
-            record_download(&self.gpu, cmd, &self.image, &self.download);
-        }
-    }
-
-    /// The film after the submission that downloaded it completed: RGBA, alpha = the
-    /// accumulated weight of what was drawn (relative illumination where the scene is opaque).
-    pub fn read(&self) -> Result<Vec<[f32; 4]>> {
-        self.download
-            .read_pod::<[f32; 4]>(self.width as usize * self.height as usize)
     }
 }

@@ -20,9 +20,9 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
 use crate::gpu::{
-    image_transition, record_download, shaders, Access, Attribute, Buffer, ComputePipeline,
-    DescriptorPool, Error, Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass,
-    Result, Sampler, SpecConstants, Stage, VertexBinding,
+    image_transition, shaders, Access, Attribute, Buffer, ComputePipeline, DescriptorPool, Error,
+    Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
+    SpecConstants, Stage, VertexBinding,
 };
 pub use crate::imaging::Rendered;
 use crate::imaging::{BitDepth, Pixels, Raster};
@@ -485,11 +485,13 @@ pub struct GeometryPass {
     desc: GeometryDesc,
     // Drop order: descriptor pool and pipeline before the render pass they were made for.
     _pool: DescriptorPool,
-    set: vk::DescriptorSet,
+    /// One camera block, pose block and descriptor set per frame in flight, so that a caller
+    /// writes frame N+1's while frame N executes ([`Self::select_frame`]).
+    frames: Vec<FrameSlot>,
+    /// The frame [`Self::set_frame`] writes and [`Self::record`] records.
+    current: usize,
     pipeline: GraphicsPipeline,
     render_pass: RenderPass,
-    camera: Buffer,
-    frame: Buffer,
     sampler: Sampler,
     discard_bound: f64,
     /// The pose and previous pose of the last [`GeometryPass::set_frame`]: the frame block
@@ -503,13 +505,23 @@ pub struct GeometryPass {
     discard: Option<DiscardPass>,
 }
 
+/// One frame in flight of a [`GeometryPass`]: its uniforms and the sets that read them.
+struct FrameSlot {
+    camera: Buffer,
+    frame: Buffer,
+    set: vk::DescriptorSet,
+    /// The compute discard's set for this frame (it reads the same uniforms).
+    discard_set: Option<vk::DescriptorSet>,
+}
+
+/// Most frames in flight a geometry pass keeps uniforms and sets for (the warp's limit).
+pub const MAX_FRAMES_IN_FLIGHT: usize = crate::pass::warp::MAX_FRAMES_IN_FLIGHT;
+
 /// The compute discard's three pipelines (`glsl/discard.comp`, STAGE 0 per vertex, 1 restore,
-/// 2 drop) and their set.
+/// 2 drop) and the pool of their sets (one per frame in flight, in [`FrameSlot`]).
 struct DiscardPass {
     stages: [ComputePipeline; 3],
-    /// The set before the pool it lives in.
-    set: vk::DescriptorSet,
-    _pool: DescriptorPool,
+    pool: DescriptorPool,
 }
 
 /// `DiscardPush` of `glsl/discard.comp`: how many vertices (stage 0; the other stages read
@@ -522,6 +534,19 @@ pub struct DiscardPush {
 
 impl GeometryPass {
     pub fn new(gpu: &Gpu, desc: GeometryDesc) -> Result<Self> {
+        Self::with_frames(gpu, desc, 1)
+    }
+
+    /// As [`GeometryPass::new`], with uniforms and descriptor sets for `frames` frames in
+    /// flight (1 to [`MAX_FRAMES_IN_FLIGHT`]), chosen by [`Self::select_frame`]. The mesh's
+    /// discard buffers are shared: the frames must run on one queue, in the order recorded
+    /// (the barriers `record` records order them there).
+    pub fn with_frames(gpu: &Gpu, desc: GeometryDesc, frames: usize) -> Result<Self> {
+        if !(1..=MAX_FRAMES_IN_FLIGHT).contains(&frames) {
+            return Err(Error::Input(format!(
+                "{frames} frames in flight: a geometry pass keeps 1 to {MAX_FRAMES_IN_FLIGHT}"
+            )));
+        }
         let cam = &desc.camera;
         if cam.width > gpu.max_image_side() || cam.height > gpu.max_image_side() {
             return Err(Error::Input(format!(
@@ -602,57 +627,85 @@ impl GeometryPass {
                 additive: false,
             },
         )?;
-        let camera = Buffer::from_pod(
-            gpu,
-            "geometry.camera",
-            &[CameraParams::from_camera(cam)],
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-        )?;
-        let frame = Buffer::from_pod(
-            gpu,
-            "geometry.frame",
-            &[GeometryFrame::zeroed()],
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-        )?;
-        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
-        let set = pool.allocate(&pipeline)?;
-        // SAFETY: the set was just allocated from a pool made for this pipeline's layout, so no
-        // work uses it yet; the buffers and views are this pass's own, alive.
-        unsafe {
-            crate::gpu::write_buffer_descriptors(
-                gpu,
-                set,
-                &[
-                    (0, vk::DescriptorType::UNIFORM_BUFFER, &camera),
-                    (1, vk::DescriptorType::UNIFORM_BUFFER, &frame),
-                ],
-            )
-        };
         let domain_table = discard_needs_domain_table(cam, discard_bound);
         let discard = if pulled {
             let constants = vertex_constants.bool(spec::DOMAIN_TABLE, domain_table);
-            Some(DiscardPass::new(gpu, constants, &camera, &frame)?)
+            Some(DiscardPass::new(gpu, constants, frames)?)
         } else {
             None
         };
-        let pass = GeometryPass {
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, frames as u32)?;
+        let uniform = vk::DescriptorType::UNIFORM_BUFFER;
+        let mut slots = Vec::with_capacity(frames);
+        for _ in 0..frames {
+            let camera = Buffer::from_pod(
+                gpu,
+                "geometry.camera",
+                &[CameraParams::from_camera(cam)],
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+            )?;
+            let frame = Buffer::from_pod(
+                gpu,
+                "geometry.frame",
+                &[GeometryFrame::zeroed()],
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+            )?;
+            let set = pool.allocate(&pipeline)?;
+            let uniforms = [(0, uniform, &camera), (1, uniform, &frame)];
+            // SAFETY: the set was just allocated from a pool made for this pipeline's layout,
+            // so no work uses it yet; the buffers are this pass's own, alive.
+            unsafe { crate::gpu::write_buffer_descriptors(gpu, set, &uniforms) };
+            let discard_set = match &discard {
+                Some(d) => {
+                    let set = d.pool.allocate(&d.stages[0])?;
+                    // SAFETY: as above, for the discard's layout, whose bindings 0 and 1 are
+                    // these uniforms too.
+                    unsafe { crate::gpu::write_buffer_descriptors(gpu, set, &uniforms) };
+                    Some(set)
+                }
+                None => None,
+            };
+            slots.push(FrameSlot {
+                camera,
+                frame,
+                set,
+                discard_set,
+            });
+        }
+        let mut pass = GeometryPass {
             gpu: gpu.clone(),
             sampler: Sampler::new(gpu, vk::Filter::LINEAR, vk::SamplerAddressMode::REPEAT)?,
             discard,
             desc,
             _pool: pool,
-            set,
+            frames: slots,
+            current: 0,
             pipeline,
             render_pass,
-            camera,
-            frame,
             discard_bound,
             last_frame: std::cell::Cell::new((Pose::IDENTITY, Pose::IDENTITY)),
             domain_table,
         };
-        // SAFETY: no submission using it is pending (`submit` waits on its fence).
-        unsafe { pass.set_frame(&Pose::IDENTITY, &Pose::IDENTITY) }?;
+        for i in 0..frames {
+            pass.select_frame(i);
+            // SAFETY: the pass is new: no submission using it exists.
+            unsafe { pass.set_frame(&Pose::IDENTITY, &Pose::IDENTITY) }?;
+        }
+        pass.select_frame(0);
         Ok(pass)
+    }
+
+    /// How many frames in flight the pass keeps uniforms and sets for.
+    pub fn frames_in_flight(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Makes frame `frame` (modulo [`Self::frames_in_flight`]) the one [`Self::set_frame`]
+    /// and [`Self::set_camera`] write and [`Self::record`] records. A caller with N frames in
+    /// flight selects frame k mod N before writing frame k, after waiting only for frame
+    /// k − N's fence.
+    pub fn select_frame(&mut self, frame: usize) {
+        self.current = frame % self.frames.len();
     }
 
     pub fn desc(&self) -> &GeometryDesc {
@@ -707,9 +760,10 @@ impl GeometryPass {
     /// it: the projection changes with the intrinsics. Host write, like `set_frame`.
     ///
     /// # Safety
-    /// This writes the pass's host-visible camera uniform: no recorded work that uses
-    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
-    /// requires of descriptor sets and memory the device reads.
+    /// This writes the selected frame's host-visible uniforms: no recorded work of that frame
+    /// ([`Self::select_frame`]) may be pending on the GPU (wait for its fence first), as
+    /// Vulkan requires of memory the device reads. The other frames take the new camera when
+    /// they are next written with [`Self::set_frame`].
     pub unsafe fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         if !self.accepts_camera(camera) {
             return Err(Error::Input(
@@ -720,8 +774,6 @@ impl GeometryPass {
             ));
         }
         self.discard_bound = discard_bound(&self.desc.projection, camera)?;
-        self.camera
-            .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))?;
         self.desc.camera = camera.clone();
         // The frame block holds the old camera's projection: a jittered pass (a moved
         // principal point) drew with the previous pass's projection, and the average of the
@@ -731,17 +783,20 @@ impl GeometryPass {
         unsafe { self.set_frame(&pose, &previous) }
     }
 
-    /// Sets the pose to render from and the pose flow is measured from. Host write: call it
-    /// while no recorded draw of this pass is executing.
+    /// Sets the pose to render from and the pose flow is measured from (and the pass's
+    /// camera), for the selected frame ([`Self::select_frame`]). Host write.
     ///
     /// # Safety
-    /// This writes the pass's host-visible pose uniform: no recorded work that uses
-    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
-    /// requires of descriptor sets and memory the device reads.
+    /// This writes the selected frame's host-visible uniforms: no recorded work of that frame
+    /// may be pending on the GPU (wait for its fence first), as Vulkan requires of memory the
+    /// device reads.
     pub unsafe fn set_frame(&self, pose: &Pose, previous: &Pose) -> Result<()> {
         self.last_frame.set((*pose, *previous));
+        let slot = &self.frames[self.current];
+        let camera = CameraParams::from_camera(&self.desc.camera);
+        slot.camera.write(0, bytemuck::bytes_of(&camera))?;
         let frame = self.frame_data(&self.desc.camera, self.discard_bound, pose, previous);
-        self.frame.write(0, bytemuck::bytes_of(&frame))
+        slot.frame.write(0, bytemuck::bytes_of(&frame))
     }
 
     fn frame_data(
@@ -876,24 +931,26 @@ impl GeometryPass {
             // SAFETY: the caller upholds `record_slot`'s contract (`record`'s, with the slot
             // filled and its texture bound); `slot.set` is of this pipeline's layout, allocated
             // by `slots` from a pool made for it.
-            unsafe { self.record_with_set(cmd, targets, mesh, slot.set) }
+            unsafe { self.record_with_set(cmd, targets, mesh, slot.set, None) }
         }
     }
 
-    /// Points the pass at `mesh`'s texture.
+    /// Points the pass at `mesh`'s texture, in every frame's set.
     ///
     /// # Safety
-    /// This rewrites the pass's descriptor set: no recorded work that uses
-    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
-    /// requires of descriptor sets and memory the device reads.
-    /// With the compute discard, its set is pointed at the mesh's buffers too.
+    /// This rewrites every frame's descriptor sets: no recorded work that uses this object
+    /// may be pending on the GPU (wait for every frame's fence first), as Vulkan requires of
+    /// descriptor sets the device reads. With the compute discard, its sets are pointed at
+    /// the mesh's buffers too.
     pub unsafe fn bind_mesh(&mut self, mesh: &MeshBuffers) {
-        // SAFETY: the caller upholds this function's contract: no pending work uses the
-        // pass's set or the discard's.
-        unsafe {
-            self.write_texture(self.set, mesh);
-            if let Some(d) = &self.discard {
-                d.bind(&self.gpu, mesh);
+        for slot in &self.frames {
+            // SAFETY: the caller upholds this function's contract: no pending work uses the
+            // pass's sets or the discard's.
+            unsafe {
+                self.write_texture(slot.set, mesh);
+                if let Some(set) = slot.discard_set {
+                    DiscardPass::bind(&self.gpu, set, mesh);
+                }
             }
         }
     }
@@ -935,9 +992,10 @@ impl GeometryPass {
         targets: &GeometryTargets,
         mesh: &MeshBuffers,
     ) {
+        let slot = &self.frames[self.current];
         // SAFETY: the caller upholds `record`'s contract, which `record_with_set` shares;
-        // `self.set` is of this pipeline's layout, its uniforms written in `new`.
-        unsafe { self.record_with_set(cmd, targets, mesh, self.set) }
+        // the slot's set is of this pipeline's layout, its uniforms written in `with_frames`.
+        unsafe { self.record_with_set(cmd, targets, mesh, slot.set, slot.discard_set) }
     }
 
     unsafe fn record_with_set(
@@ -946,6 +1004,7 @@ impl GeometryPass {
         targets: &GeometryTargets,
         mesh: &MeshBuffers,
         set: vk::DescriptorSet,
+        discard_set: Option<vk::DescriptorSet>,
     ) {
         let bg = self.desc.background;
         let mut clears = Vec::new();
@@ -991,15 +1050,15 @@ impl GeometryPass {
         // One buffer per binding the pipeline was built with (`vertex_bindings`, in order).
         let buffers = [mesh.vertices.raw, m.positions.raw, m.motion.raw];
         let bound = vertex_bindings(self.discard.is_some(), self.desc.outputs.flow).len();
-        let indices = match &self.discard {
+        let indices = match (&self.discard, discard_set) {
             // SAFETY: as above, and the discard's set was written for `mesh` by `bind_mesh`
             // (the contract's "mesh must be bound"); `record_slot` never reaches here with a
             // discard (`slots` refuses).
-            Some(discard) => unsafe {
-                discard.record(&self.gpu, cmd, mesh);
+            (Some(discard), Some(discard_set)) => unsafe {
+                discard.record(&self.gpu, cmd, mesh, discard_set);
                 m.kept.raw
             },
-            None => mesh.indices.raw,
+            _ => mesh.indices.raw,
         };
         unsafe {
             self.pipeline.begin(
@@ -1020,9 +1079,9 @@ impl GeometryPass {
 
 impl DiscardPass {
     /// The three stages' pipelines, specialized like the vertex shader (camera terms,
-    /// DISTORT, WRITE_FLOW), and a set whose uniforms are the pass's own (the mesh's buffers
-    /// are written by [`GeometryPass::bind_mesh`]).
-    fn new(gpu: &Gpu, vertex: SpecConstants, camera: &Buffer, frame: &Buffer) -> Result<Self> {
+    /// DISTORT, WRITE_FLOW), and a pool for one set per frame in flight (their uniforms are
+    /// the frame's own; the mesh's buffers are written by [`GeometryPass::bind_mesh`]).
+    fn new(gpu: &Gpu, vertex: SpecConstants, frames: usize) -> Result<Self> {
         use vk::DescriptorType as T;
         let (uniform, storage) = (T::UNIFORM_BUFFER, T::STORAGE_BUFFER);
         let mut bindings = [storage; 10];
@@ -1038,30 +1097,17 @@ impl DiscardPass {
             )
         };
         let stages = [pipeline(0)?, pipeline(1)?, pipeline(2)?];
-        let pool = DescriptorPool::for_pipeline(gpu, &stages[0], 1)?;
-        // One set for all three: their set layouts are identically defined, hence compatible.
-        let set = pool.allocate(&stages[0])?;
-        // SAFETY: the set was just allocated from a pool made for this pipeline's layout, so no
-        // work uses it yet; the buffers and views are this pass's own, alive.
-        unsafe {
-            crate::gpu::write_buffer_descriptors(
-                gpu,
-                set,
-                &[(0, uniform, camera), (1, uniform, frame)],
-            )
-        };
-        Ok(DiscardPass {
-            stages,
-            set,
-            _pool: pool,
-        })
+        // One set per frame for all three: their set layouts are identically defined, hence
+        // compatible.
+        let pool = DescriptorPool::for_pipeline(gpu, &stages[0], frames as u32)?;
+        Ok(DiscardPass { stages, pool })
     }
 
-    /// Points the set at `mesh`'s buffers.
+    /// Points `set` (a frame's discard set) at `mesh`'s buffers.
     ///
     /// # Safety
     /// No pending work uses the set ([`GeometryPass::bind_mesh`]'s contract).
-    unsafe fn bind(&self, gpu: &Gpu, mesh: &MeshBuffers) {
+    unsafe fn bind(gpu: &Gpu, set: vk::DescriptorSet, mesh: &MeshBuffers) {
         let m = &mesh.discard;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         // SAFETY: the set has the discard pipeline's layout with these storage buffers at
@@ -1070,7 +1116,7 @@ impl DiscardPass {
         unsafe {
             crate::gpu::write_buffer_descriptors(
                 gpu,
-                self.set,
+                set,
                 &[
                     (2, storage, &mesh.vertices),
                     (3, storage, &m.positions),
@@ -1092,8 +1138,15 @@ impl DiscardPass {
     ///
     /// # Safety
     /// `cmd` is recording outside a render pass on a queue with graphics and compute; `mesh`
-    /// is the mesh last bound ([`Self::bind`]) and stays alive until the work completes.
-    unsafe fn record(&self, gpu: &Gpu, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+    /// is the mesh last bound to `set` ([`Self::bind`]) and stays alive until the work
+    /// completes.
+    unsafe fn record(
+        &self,
+        gpu: &Gpu,
+        cmd: vk::CommandBuffer,
+        mesh: &MeshBuffers,
+        set: vk::DescriptorSet,
+    ) {
         use crate::gpu::global_barrier;
         use Access::{ComputeReadWrite, IndexBuffer, IndirectBuffer, TransferWrite, VertexBuffer};
         let m = &mesh.discard;
@@ -1113,7 +1166,7 @@ impl DiscardPass {
             let earlier = [IndexBuffer, VertexBuffer, ComputeReadWrite, IndirectBuffer];
             global_barrier(gpu, cmd, earlier, discard);
             let [per_vertex, restore, drop] = &self.stages;
-            restore.record_dispatch_indirect(cmd, self.set, none, &m.dropped, 0);
+            restore.record_dispatch_indirect(cmd, set, none, &m.dropped, 0);
             // The restore has read the list (and its dispatch the header) before it is emptied;
             // its writes of `kept` come before the drop's.
             global_barrier(gpu, cmd, discard, [TransferWrite, ComputeReadWrite]);
@@ -1126,12 +1179,12 @@ impl DiscardPass {
             };
             per_vertex.record_dispatch(
                 cmd,
-                self.set,
+                set,
                 bytemuck::bytes_of(&push),
                 (push.count.div_ceil(64).max(1), 1),
             );
             global_barrier(gpu, cmd, ComputeReadWrite, discard);
-            drop.record_dispatch_indirect(cmd, self.set, none, &m.dropped, 0);
+            drop.record_dispatch_indirect(cmd, set, none, &m.dropped, 0);
             global_barrier(gpu, cmd, ComputeReadWrite, draw);
         }
     }
@@ -1160,18 +1213,12 @@ struct Slot {
     set: vk::DescriptorSet,
 }
 
-/// One output image and the host buffer it is read back into.
-struct Target {
-    image: Image,
-    download: Buffer,
-}
-
-/// The images a [`GeometryPass`] renders into, with host buffers to read them back.
+/// The images a [`GeometryPass`] renders into (the host reads them back with
+/// `host::geometry::TargetsReadback`).
 pub struct GeometryTargets {
-    gpu: Gpu,
     outputs: Outputs,
     /// By location: colour, ID, flow, depth.
-    targets: [Option<Target>; 4],
+    targets: [Option<Image>; 4],
     _depth_buffer: Image,
     pub framebuffer: Framebuffer,
     extent: vk::Extent2D,
@@ -1195,37 +1242,23 @@ impl GeometryTargets {
             "geometry.flow",
             "geometry.depth",
         ];
-        let mut targets: [Option<Target>; 4] = Default::default();
+        let mut targets: [Option<Image>; 4] = Default::default();
         for (i, f) in formats.iter().enumerate() {
             if let Some(format) = *f {
-                let bytes_per_pixel = match format {
-                    vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
-                    vk::Format::R32G32B32A32_SFLOAT => 16,
-                    _ => 4,
-                };
                 // RGBA16F is not a required storage format; it need not be one.
                 let usage = if format == vk::Format::R16G16B16A16_SFLOAT {
                     usage & !vk::ImageUsageFlags::STORAGE
                 } else {
                     usage
                 };
-                targets[i] = Some(Target {
-                    image: Image::new_2d(
-                        gpu,
-                        names[i],
-                        format,
-                        extent.width,
-                        extent.height,
-                        usage,
-                    )?,
-                    download: Buffer::new(
-                        gpu,
-                        names[i],
-                        extent.width as u64 * extent.height as u64 * bytes_per_pixel,
-                        vk::BufferUsageFlags::TRANSFER_DST,
-                        MemoryLocation::GpuToCpu,
-                    )?,
-                });
+                targets[i] = Some(Image::new_2d(
+                    gpu,
+                    names[i],
+                    format,
+                    extent.width,
+                    extent.height,
+                    usage,
+                )?);
             }
         }
         let depth_buffer = Image::new_2d(
@@ -1236,14 +1269,12 @@ impl GeometryTargets {
             extent.height,
             vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
         )?;
-        let mut views: Vec<vk::ImageView> =
-            targets.iter().flatten().map(|t| t.image.view).collect();
+        let mut views: Vec<vk::ImageView> = targets.iter().flatten().map(|t| t.view).collect();
         views.push(depth_buffer.view);
         // SAFETY: the views are of images just made for this render pass's attachments,
         // `extent` large.
         let framebuffer = unsafe { Framebuffer::new(gpu, &pass.render_pass, &views, extent) }?;
         Ok(GeometryTargets {
-            gpu: gpu.clone(),
             outputs: pass.desc.outputs,
             targets,
             _depth_buffer: depth_buffer,
@@ -1254,94 +1285,35 @@ impl GeometryTargets {
 
     /// The colour image (when rendered), e.g. as the source of a warp.
     pub fn color(&self) -> Option<&Image> {
-        self.targets[0].as_ref().map(|t| &t.image)
+        self.targets[0].as_ref()
     }
 
     /// The ID image (when rendered).
     pub fn ids(&self) -> Option<&Image> {
-        self.targets[1].as_ref().map(|t| &t.image)
+        self.targets[1].as_ref()
     }
 
     /// The camera-depth image (when rendered; R32F metres, +inf where nothing was drawn).
     pub fn depth(&self) -> Option<&Image> {
-        self.targets[3].as_ref().map(|t| &t.image)
+        self.targets[3].as_ref()
     }
 
-    /// Records the copies of every output into its host buffer. The outputs must be in
-    /// `TRANSFER_SRC_OPTIMAL` (the default final layout).
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass, after [`GeometryPass::record`].
-    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        for t in self.targets.iter().flatten() {
-            // SAFETY: the caller upholds `record_download`'s contract: `cmd` is recording
-            // outside a render pass after `GeometryPass::record`, with the outputs in
-            // TRANSFER_SRC_OPTIMAL (the doc's precondition); each `download` was sized for its
-            // image's format in `new`, and every output image has TRANSFER_SRC usage.
-            unsafe { record_download(&self.gpu, cmd, &t.image, &t.download) };
-        }
+    /// Every output by location (colour, IDs, flow, depth), those rendered. After
+    /// [`GeometryPass::record`] they are in the pass's final layout (`TRANSFER_SRC_OPTIMAL` by
+    /// default).
+    pub fn images(&self) -> [Option<&Image>; 4] {
+        self.targets.each_ref().map(Option::as_ref)
     }
 
-    /// Reads the outputs back (after the submission completed).
-    pub fn read(&self) -> Result<Rendered> {
-        let (w, h) = (self.extent.width, self.extent.height);
-        let n = w as usize * h as usize;
-        let mut out = Rendered {
-            width: w,
-            height: h,
-            ..Default::default()
-        };
-        if let Some(t) = &self.targets[0] {
-            let pixels = match self.outputs.color {
-                Some(ColorFormat::Rgba32F) => Pixels::Rgba32F(t.download.read_pod::<[f32; 4]>(n)?),
-                Some(ColorFormat::Rgba16F) => {
-                    let halves = t.download.read_pod::<[u16; 4]>(n)?;
-                    Pixels::Rgba32F(halves.iter().map(|p| p.map(f16_to_f32)).collect())
-                }
-                _ => Pixels::Rgba8(t.download.read_pod::<[u8; 4]>(n)?),
-            };
-            let depth = if matches!(pixels, Pixels::Rgba8(_)) {
-                BitDepth::U8
-            } else {
-                BitDepth::F32
-            };
-            out.color = Some(Raster {
-                width: w,
-                height: h,
-                pixels,
-                bit_depth: depth,
-            });
-        }
-        if let Some(t) = &self.targets[1] {
-            out.ids = Some(t.download.read_pod::<u32>(n)?);
-        }
-        if let Some(t) = &self.targets[2] {
-            out.flow = Some(t.download.read_pod::<[f32; 2]>(n)?);
-        }
-        if let Some(t) = &self.targets[3] {
-            out.depth = Some(t.download.read_pod::<f32>(n)?);
-        }
-        Ok(out)
+    /// What the pass renders.
+    pub fn outputs(&self) -> Outputs {
+        self.outputs
     }
-}
 
-/// IEEE half → f32 (RGBA16F readback).
-fn f16_to_f32(h: u16) -> f32 {
-    let sign = ((h >> 15) as u32) << 31;
-    let exp = ((h >> 10) & 0x1f) as u32;
-    let frac = (h & 0x3ff) as u32;
-    let bits = match (exp, frac) {
-        (0, 0) => sign,
-        (0, _) => {
-            // Subnormal: frac × 2⁻²⁴.
-            let magnitude = frac as f32 * 2f32.powi(-24);
-            return if sign != 0 { -magnitude } else { magnitude };
-        }
-        (31, 0) => sign | 0x7f80_0000,
-        (31, _) => sign | 0x7fc0_0000,
-        _ => sign | ((exp + 112) << 23) | (frac << 13),
-    };
-    f32::from_bits(bits)
+    /// The size of every output (the pass's camera).
+    pub fn extent(&self) -> vk::Extent2D {
+        self.extent
+    }
 }
 
 #[cfg(test)]
@@ -1365,16 +1337,5 @@ mod tests {
         // glsl/discard.comp reads scene::Vertex as 8 floats with the position first.
         assert_eq!(std::mem::size_of::<Vertex>(), 32);
         assert_eq!(std::mem::offset_of!(Vertex, position), 0);
-    }
-
-    #[test]
-    fn half_floats_convert() {
-        assert_eq!(f16_to_f32(0x3c00), 1.0);
-        assert_eq!(f16_to_f32(0xc000), -2.0);
-        assert_eq!(f16_to_f32(0x3800), 0.5);
-        assert!(f16_to_f32(0x7e00).is_nan());
-        assert_eq!(f16_to_f32(0x7c00), f32::INFINITY);
-        assert_eq!(f16_to_f32(0x0001), 2f32.powi(-24));
-        assert_eq!(f16_to_f32(0x8001), -(2f32.powi(-24)));
     }
 }

@@ -35,6 +35,9 @@ pub struct LensRenderOptions {
     /// Near and far planes of the cell renders (metres from the COP).
     pub near: f64,
     pub far: f64,
+    /// Frames in flight the cells keep uniforms and descriptor sets for
+    /// ([`LensRenderer::select_frame`]), 1 to [`crate::pass::geometry::MAX_FRAMES_IN_FLIGHT`].
+    pub frames_in_flight: usize,
 }
 
 impl Default for LensRenderOptions {
@@ -43,6 +46,7 @@ impl Default for LensRenderOptions {
             oversample: 1.0,
             near: 0.01,
             far: 1000.0,
+            frames_in_flight: 1,
         }
     }
 }
@@ -63,7 +67,8 @@ pub(crate) struct CellDraw {
 struct Bucket {
     pass: GeometryPass,
     targets: GeometryTargets,
-    slots: GeometrySlots,
+    /// The cells' slots, one set of them per frame in flight.
+    slots: Vec<GeometrySlots>,
     set: vk::DescriptorSet,
 }
 
@@ -91,6 +96,8 @@ pub struct LensRenderer {
     buckets: Vec<Bucket>,
     pub(crate) draws: Vec<CellDraw>,
     vertices: Buffer,
+    /// The frame in flight [`Self::prepare`] writes and [`Self::record`] records.
+    current: usize,
 }
 
 pub use crate::lens::image_model::{ALL_CHANNELS, RGB_CHANNELS};
@@ -108,6 +115,13 @@ impl LensRenderer {
         };
         if models.iter().any(|(m, _)| m.film != film) {
             return Err(Error::Input("the models have different films".into()));
+        }
+        let frames = options.frames_in_flight;
+        if !(1..=crate::pass::geometry::MAX_FRAMES_IN_FLIGHT).contains(&frames) {
+            return Err(Error::Input(format!(
+                "{frames} frames in flight: the lens renderer keeps 1 to {}",
+                crate::pass::geometry::MAX_FRAMES_IN_FLIGHT
+            )));
         }
         if !(options.oversample.is_finite() && options.oversample > 0.0) {
             return Err(Error::Input(format!(
@@ -181,7 +195,9 @@ impl LensRenderer {
                 .ok_or_else(|| Error::internal("cell render without colour"))?;
             let set = film_pass.bind_image(view)?;
             let count = draws.iter().filter(|d| d.bucket == index).count();
-            let slots = pass.slots(count as u32)?;
+            let slots = (0..frames)
+                .map(|_| pass.slots(count as u32))
+                .collect::<Result<Vec<_>>>()?;
             buckets.push(Bucket {
                 pass,
                 targets,
@@ -201,6 +217,7 @@ impl LensRenderer {
             buckets,
             draws,
             vertices,
+            current: 0,
         })
     }
 
@@ -214,13 +231,13 @@ impl LensRenderer {
     /// this renderer may be executing.
     ///
     /// # Safety
-    /// This writes host-visible uniforms and rewrites descriptor sets: no recorded work that uses
-    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
-    /// requires of descriptor sets and memory the device reads.
+    /// This writes the selected frame's host-visible uniforms and rewrites its descriptor sets
+    /// ([`Self::select_frame`]): no recorded work of that frame may be pending on the GPU (wait
+    /// for its fence first), as Vulkan requires of descriptor sets and memory the device reads.
     pub unsafe fn prepare(&mut self, mesh: &MeshBuffers, pose: &Pose) -> Result<()> {
         for b in &self.buckets {
             // SAFETY: this function's contract: no recorded work of this renderer is pending.
-            unsafe { b.pass.bind_slots_mesh(&b.slots, mesh) };
+            unsafe { b.pass.bind_slots_mesh(&b.slots[self.current], mesh) };
         }
         for draw in &self.draws {
             let b = &self.buckets[draw.bucket];
@@ -231,8 +248,13 @@ impl LensRenderer {
             };
             // SAFETY: this function's contract: no recorded work of this renderer is pending.
             unsafe {
-                b.pass
-                    .set_slot(&b.slots, draw.slot, &draw.camera, &cell_pose, &cell_pose)
+                b.pass.set_slot(
+                    &b.slots[self.current],
+                    draw.slot,
+                    &draw.camera,
+                    &cell_pose,
+                    &cell_pose,
+                )
             }?;
         }
         Ok(())
@@ -256,7 +278,7 @@ impl LensRenderer {
             for draw in &self.draws {
                 let b = &self.buckets[draw.bucket];
                 b.pass
-                    .record_slot(cmd, &b.targets, mesh, &b.slots, draw.slot);
+                    .record_slot(cmd, &b.targets, mesh, &b.slots[self.current], draw.slot);
                 self.film.record_cell(
                     cmd,
                     &self.target,
@@ -268,6 +290,12 @@ impl LensRenderer {
                 );
             }
         }
+    }
+
+    /// Makes frame `frame` (modulo the options' `frames_in_flight`) the one
+    /// [`Self::prepare`] writes and [`Self::record`] records.
+    pub fn select_frame(&mut self, frame: usize) {
+        self.current = frame % self.buckets.first().map_or(1, |b| b.slots.len().max(1));
     }
 
     /// The film image the frame accumulates into.

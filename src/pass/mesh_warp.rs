@@ -12,13 +12,11 @@ use crate::pass::spec;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::DVec2;
-use gpu_allocator::MemoryLocation;
 
 use crate::gpu::{
-    record_download, shaders, Buffer, DescriptorPool, Error, Framebuffer, Gpu, GraphicsDesc,
-    GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
+    shaders, Buffer, DescriptorPool, Error, Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline,
+    Image, RenderPass, Result, Sampler, SpecConstants, Stage,
 };
-use crate::imaging::{Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 
 /// One grid vertex: output pixel, source pixel (OpenCV coordinates).
@@ -252,12 +250,10 @@ impl MeshWarpPass {
     }
 }
 
-/// Target image, framebuffer and readback buffer for a headless mesh warp.
+/// Target image and framebuffer for a mesh warp.
 pub struct MeshWarpTarget {
     pub image: Image,
     pub framebuffer: Framebuffer,
-    download: Buffer,
-    format: vk::Format,
 }
 
 impl MeshWarpTarget {
@@ -288,56 +284,6 @@ impl MeshWarpTarget {
         // SAFETY: the views are of images just made for this render pass's attachments,
         // `extent` large.
         let framebuffer = unsafe { Framebuffer::new(gpu, render_pass, &[image.view], extent) }?;
-        let bpp = if format == vk::Format::R8G8B8A8_UNORM {
-            4
-        } else {
-            16
-        };
-        Ok(MeshWarpTarget {
-            download: Buffer::new(
-                gpu,
-                "mesh_warp.download",
-                w as u64 * h as u64 * bpp,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?,
-            image,
-            framebuffer,
-            format,
-        })
-    }
-
-    /// Records the readback (the pass's final layout must be `TRANSFER_SRC_OPTIMAL`).
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass, after the warp.
-    pub unsafe fn record_download(&self, gpu: &Gpu, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds `record_download`'s contract: `cmd` is recording outside a
-        // render pass after the warp, whose render pass (final layout TRANSFER_SRC_OPTIMAL, as
-        // the doc asks) left the image ready; `download` holds it whole at the format's size.
-        unsafe { record_download(gpu, cmd, &self.image, &self.download) };
-    }
-
-    /// The output (after the submission completed).
-    pub fn read(&self) -> Result<Raster> {
-        let e = self.image.extent;
-        let n = e.width as usize * e.height as usize;
-        let (pixels, depth) = if self.format == vk::Format::R8G8B8A8_UNORM {
-            (
-                Pixels::Rgba8(self.download.read_pod::<[u8; 4]>(n)?),
-                crate::imaging::BitDepth::U8,
-            )
-        } else {
-            (
-                Pixels::Rgba32F(self.download.read_pod::<[f32; 4]>(n)?),
-                crate::imaging::BitDepth::F32,
-            )
-        };
-        Ok(Raster {
-            width: e.width,
-            height: e.height,
-            pixels,
-            bit_depth: depth,
-        })
+        Ok(MeshWarpTarget { image, framebuffer })
     }
 }

@@ -4,11 +4,9 @@
 //! al., Sec. 3.3: nearest, since IDs and depths must not be blended across an edge).
 
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 
-use crate::gpu::{Buffer, Image};
+use crate::gpu::Image;
 use crate::imaging::cpu_warp::Sampling;
-use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 use crate::model::Camera;
 use crate::pass::geometry::{
@@ -18,7 +16,7 @@ use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
 use crate::{Error, Result};
 
 /// The warp path on the GPU in one submission: pinhole render (colour left in `GENERAL`) →
-/// compute warp reading it in place → optional readback. Nothing makes a round trip through
+/// compute warp reading it in place (the host reads the output back, if it wants it). Nothing makes a round trip through
 /// the host. `render` and `bench vertex` both drive it.
 pub struct WarpStage {
     gpu: crate::gpu::Gpu,
@@ -27,8 +25,6 @@ pub struct WarpStage {
     pub warp: WarpPass,
     pub output: Image,
     pub mask: Image,
-    download: Buffer,
-    format: PixelFormat,
     /// The object IDs through the same lens (nearest, 0 fill), when asked for.
     pub ids: Option<DataWarp>,
     /// The depth through the same lens (nearest, +inf fill), when asked for.
@@ -50,30 +46,6 @@ pub struct DataWarp {
     pub warp: WarpPass,
     /// The warp's output size, `GENERAL` after the warp.
     pub output: Image,
-    /// Host copy of `output` for headless readback.
-    download: Buffer,
-}
-
-impl DataWarp {
-    /// Records the copy of the warped image to the host (after the warp).
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass, after the warp was recorded.
-    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds the contract above; `download` was sized for `output`
-        // (four bytes a pixel, the warp's output size) and `output` has TRANSFER_SRC usage.
-        unsafe {
-            crate::gpu::record_compute_readback(self.warp.gpu(), cmd, &self.output, &self.download)
-        };
-    }
-
-    /// The warped image (after the submission completed): depths in metres (+inf without a
-    /// source) or IDs (0 without one), by the type asked for.
-    pub fn read<T: bytemuck::Pod>(&self) -> Result<Vec<T>> {
-        let e = self.output.extent;
-        self.download
-            .read_pod::<T>(e.width as usize * e.height as usize)
-    }
 }
 
 impl WarpStage {
@@ -95,11 +67,15 @@ impl WarpStage {
             format,
             background,
             DataOutputs::default(),
+            1,
         )
     }
 
     /// As [`Self::new`]; the pinhole render also writes the `data` outputs, and a nearest
-    /// warp of each carries it to the output.
+    /// warp of each carries it to the output. The render's uniforms and every warp's
+    /// descriptor sets are kept for `frames` frames in flight (1 to
+    /// [`crate::pass::geometry::MAX_FRAMES_IN_FLIGHT`]), chosen by [`Self::select_frame`].
+    #[allow(clippy::too_many_arguments)]
     pub fn with_data(
         gpu: &crate::gpu::Gpu,
         source: Camera,
@@ -108,6 +84,7 @@ impl WarpStage {
         format: ColorFormat,
         background: [f32; 4],
         data: DataOutputs,
+        frames: usize,
     ) -> Result<Self> {
         let pixel_format = match format {
             ColorFormat::Rgba8 => PixelFormat::Rgba8,
@@ -127,20 +104,13 @@ impl WarpStage {
         );
         desc.background = background;
         desc.final_layout = vk::ImageLayout::GENERAL;
-        let pass = GeometryPass::new(gpu, desc)?;
+        let pass = GeometryPass::with_frames(gpu, desc, frames)?;
         let targets = GeometryTargets::new(gpu, &pass)?;
         let (ow, oh) = geometry.output_size;
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let output = Image::new_2d(gpu, "warp_path.output", pixel_format.vk(), ow, oh, usage)?;
         let mask = Image::new_2d(gpu, "warp_path.mask", vk::Format::R8_UNORM, ow, oh, usage)?;
-        let download = Buffer::new(
-            gpu,
-            "warp_path.download",
-            ow as u64 * oh as u64 * pixel_format.bytes() as u64,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let mut warp = WarpPass::new(
+        let mut warp = WarpPass::with_frames(
             gpu,
             WarpDesc {
                 geometry,
@@ -150,12 +120,18 @@ impl WarpStage {
                 fill: background,
                 write_mask: false,
             },
+            frames,
         )?;
         let color = targets
             .color()
             .ok_or_else(|| Error::internal("the warp stage's render has no colour target"))?;
-        // SAFETY: no submission using it is pending (`submit` waits on its fence).
-        unsafe { warp.bind(color.view, output.view, mask.view) };
+        // Every frame's set reads the same images.
+        for frame in 0..frames {
+            warp.select_frame(frame);
+            // SAFETY: the warp is new: nothing recorded with it exists yet.
+            unsafe { warp.bind(color.view, output.view, mask.view) };
+        }
+        warp.select_frame(0);
         // IDs and depth follow the lens itself (the green channel's reference geometry, unit
         // scale): one coordinate, nearest.
         let mut plain = warp.desc().geometry.clone();
@@ -172,7 +148,7 @@ impl WarpStage {
             let Some(source) = source else {
                 return Ok(None);
             };
-            let mut data_warp = WarpPass::new(
+            let mut data_warp = WarpPass::with_frames(
                 gpu,
                 WarpDesc {
                     geometry: plain.clone(),
@@ -181,22 +157,19 @@ impl WarpStage {
                     fill,
                     ..warp.desc().clone()
                 },
+                frames,
             )?;
             let output = Image::new_2d(gpu, name, format.vk(), ow, oh, usage)?;
             // No warp writes its mask (write_mask is off): they can share one.
-            // SAFETY: the warp is new: nothing recorded with it exists yet.
-            unsafe { data_warp.bind(source.view, output.view, mask.view) };
-            let download = Buffer::new(
-                gpu,
-                "warp_path.data.download",
-                ow as u64 * oh as u64 * 4,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?;
+            for frame in 0..frames {
+                data_warp.select_frame(frame);
+                // SAFETY: the warp is new: nothing recorded with it exists yet.
+                unsafe { data_warp.bind(source.view, output.view, mask.view) };
+            }
+            data_warp.select_frame(0);
             Ok(Some(DataWarp {
                 warp: data_warp,
                 output,
-                download,
             }))
         };
         let ids = data_warp(
@@ -218,11 +191,19 @@ impl WarpStage {
             warp,
             output,
             mask,
-            download,
-            format: pixel_format,
             ids,
             depth,
         })
+    }
+
+    /// Makes frame `frame` (modulo the frames in flight it was made with) the one whose
+    /// uniforms and sets the render and the warps write and record.
+    pub fn select_frame(&mut self, frame: usize) {
+        self.pass.select_frame(frame);
+        self.warp.select_frame(frame);
+        for d in self.ids.iter_mut().chain(self.depth.iter_mut()) {
+            d.warp.select_frame(frame);
+        }
     }
 
     /// The nearest warps of the data outputs (IDs, then depth), those asked for.
@@ -287,51 +268,4 @@ impl WarpStage {
             }
         }
     }
-
-    /// Records the readback of the warped image (after [`Self::record`]).
-    ///
-    /// # Safety
-    /// As [`Self::record`].
-    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds `record_download`'s contract (after `record`): the warp
-        // left `output` in GENERAL, and `download` was sized for it whole in `with_data`.
-        unsafe {
-            crate::gpu::record_compute_readback(&self.gpu, cmd, &self.output, &self.download)
-        };
-    }
-
-    /// The warped image (after the submission completed).
-    pub fn read(&self) -> Result<Raster> {
-        read_rgba(
-            &self.download,
-            self.output.extent,
-            self.format == PixelFormat::Rgba8,
-        )
-    }
-}
-
-/// An RGBA image read back into `download`: 8-bit, or f32 samples.
-pub(crate) fn read_rgba(
-    download: &Buffer,
-    extent: vk::Extent2D,
-    eight_bit: bool,
-) -> Result<Raster> {
-    let n = extent.width as usize * extent.height as usize;
-    let (pixels, bit_depth) = if eight_bit {
-        (
-            Pixels::Rgba8(download.read_pod::<[u8; 4]>(n)?),
-            BitDepth::U8,
-        )
-    } else {
-        (
-            Pixels::Rgba32F(download.read_pod::<[f32; 4]>(n)?),
-            BitDepth::F32,
-        )
-    };
-    Ok(Raster {
-        width: extent.width,
-        height: extent.height,
-        pixels,
-        bit_depth,
-    })
 }

@@ -11,11 +11,10 @@ use glam::DVec2;
 
 use super::{Plan, Route};
 use crate::gpu::{Error, Gpu, QueryPool, Result};
-use crate::imaging::{BitDepth, Pixels, Raster};
+use crate::imaging::Raster;
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, OpenCvDistortion};
 use crate::pass::cube_stage::CubeStage;
-use crate::pass::geometry::Rendered;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
 };
@@ -142,14 +141,27 @@ pub struct PlanRecorder {
     outputs: super::scene_file::OutputSpec,
     /// The lens route keeps vignetting (else the accumulated weight is divided out).
     vignetting: bool,
+    /// Frames in flight every pass keeps uniforms and descriptor sets for.
+    frames_in_flight: usize,
     /// Every pipeline the recorder records, with its specialization constants.
     pipelines: Vec<RecordedPipeline>,
 }
 
 impl PlanRecorder {
     /// Builds the plan's passes on `gpu` for `scene` (its mesh tessellated, where the plan
-    /// says so, at the first pose).
+    /// says so, at the first pose), for one frame in flight.
     pub fn new(gpu: &Gpu, plan: &Plan, scene: &Scene) -> Result<Self> {
+        Self::with_frames(gpu, plan, scene, 1)
+    }
+
+    /// As [`Self::new`], every pass keeping its uniforms and descriptor sets for `frames`
+    /// frames in flight (1 to [`crate::pass::geometry::MAX_FRAMES_IN_FLIGHT`]; librashader's
+    /// frame residuals): select frame k ([`Self::select_frame`]), [`Self::prepare`] it and
+    /// record it while frames k − 1 … k − N + 1 still execute. The frames share their output
+    /// images and the mesh's discard buffers, so they run on one queue in the order recorded
+    /// (the recorded barriers order them), and a frame's outputs are read before a later
+    /// frame overwrites them (in the same command buffer, or after its fence).
+    pub fn with_frames(gpu: &Gpu, plan: &Plan, scene: &Scene, frames: usize) -> Result<Self> {
         if plan.antialias.is_on() {
             return Err(Error::input(
                 "the recorder draws one sample per pixel: the scene's [render] supersample / jitter are averaged on the host by execute(); an engine anti-aliases its own way (MSAA, TAA)",
@@ -160,6 +172,7 @@ impl PlanRecorder {
             plan,
             &plan_mesh_at(plan, scene, 0)?,
             scene.texture.as_ref(),
+            frames,
         )
     }
 
@@ -169,7 +182,14 @@ impl PlanRecorder {
         plan: &Plan,
         mesh: &Mesh,
         texture: Option<&Raster>,
+        frames: usize,
     ) -> Result<Self> {
+        if !(1..=crate::pass::geometry::MAX_FRAMES_IN_FLIGHT).contains(&frames) {
+            return Err(Error::input(format!(
+                "{frames} frames in flight: a recorder keeps 1 to {}",
+                crate::pass::geometry::MAX_FRAMES_IN_FLIGHT
+            )));
+        }
         let o = plan.outputs;
         let format = if o.exr {
             ColorFormat::Rgba16F
@@ -185,7 +205,7 @@ impl PlanRecorder {
         let geometry = |camera: &Camera, projection, outputs| -> Result<_> {
             let mut desc = GeometryDesc::new(camera.clone(), projection, outputs);
             desc.background = plan.background;
-            let pass = GeometryPass::new(gpu, desc)?;
+            let pass = GeometryPass::with_frames(gpu, desc, frames)?;
             let targets = GeometryTargets::new(gpu, &pass)?;
             Ok((pass, targets))
         };
@@ -217,6 +237,7 @@ impl PlanRecorder {
                 f,
                 plan.background,
                 data,
+                frames,
             )?;
             Ok((stage, source, g))
         };
@@ -238,6 +259,7 @@ impl PlanRecorder {
                     ..
                 }
             ),
+            frames_in_flight: frames,
             pipelines: Vec::new(),
         };
         let lens_delta = Projection::Lens { delta: plan.delta };
@@ -249,7 +271,10 @@ impl PlanRecorder {
                 r.lens = Some(LensRenderer::new(
                     gpu,
                     &setting.models,
-                    LensRenderOptions::default(),
+                    LensRenderOptions {
+                        frames_in_flight: frames,
+                        ..Default::default()
+                    },
                 )?);
                 r.names.push("image-based lens model (cells + film)");
                 r.pipelines.push(RecordedPipeline {
@@ -321,7 +346,7 @@ impl PlanRecorder {
                             fill: plan.background,
                             write_mask: false,
                         };
-                        let stage = CubeStage::new(gpu, camera, side, f, &options)?;
+                        let stage = CubeStage::with_frames(gpu, camera, side, f, &options, frames)?;
                         r.pipelines.extend([
                             RecordedPipeline::geometry(&stage.pass),
                             RecordedPipeline::compute(PassKind::SphereWarp, stage.warp.pipeline()),
@@ -339,7 +364,48 @@ impl PlanRecorder {
         if let Some((pass, _)) = &r.geometry {
             r.pipelines.push(RecordedPipeline::geometry(pass));
         }
+        // SAFETY: the passes are new: nothing recorded with them exists yet.
+        unsafe { r.bind_mesh() };
         Ok(r)
+    }
+
+    /// Points every pass that draws the mesh with a set of its own at it (the cube faces and
+    /// the lens cells bind theirs, per frame, in `prepare`).
+    ///
+    /// # Safety
+    /// Rewrites every frame's descriptor sets: no recorded frame may be pending.
+    unsafe fn bind_mesh(&mut self) {
+        // SAFETY: the caller upholds this function's contract.
+        unsafe {
+            if let Some((pass, _)) = &mut self.geometry {
+                pass.bind_mesh(&self.mesh);
+            }
+            if let Some(st) = &mut self.warp {
+                st.pass.bind_mesh(&self.mesh);
+            }
+        }
+    }
+
+    /// Frames in flight the passes keep uniforms and descriptor sets for.
+    pub fn frames_in_flight(&self) -> usize {
+        self.frames_in_flight
+    }
+
+    /// Makes frame `frame` (modulo [`Self::frames_in_flight`]) the one [`Self::prepare`]
+    /// writes and [`Self::record`] records.
+    pub fn select_frame(&mut self, frame: usize) {
+        if let Some((pass, _)) = &mut self.geometry {
+            pass.select_frame(frame);
+        }
+        if let Some(st) = &mut self.warp {
+            st.select_frame(frame);
+        }
+        if let Some(c) = &mut self.cube {
+            c.select_frame(frame);
+        }
+        if let Some(l) = &mut self.lens {
+            l.select_frame(frame);
+        }
     }
 
     fn set_warp(&mut self, (stage, source, geometry): (WarpStage, Camera, WarpGeometry)) {
@@ -370,6 +436,8 @@ impl PlanRecorder {
         texture: Option<&Raster>,
     ) -> Result<()> {
         self.mesh = MeshBuffers::new(gpu, mesh, texture)?;
+        // SAFETY: the caller upholds this function's contract: no frame is pending.
+        unsafe { self.bind_mesh() };
         Ok(())
     }
 
@@ -434,11 +502,11 @@ impl PlanRecorder {
         self.names.len() as u32 + 1
     }
 
-    /// Sets frame `index`'s pose (host writes: no recorded frame may be executing).
+    /// Sets the plan's pose `index` on the selected frame in flight ([`Self::select_frame`]).
     ///
     /// # Safety
-    /// This writes host-visible uniforms and rewrites descriptor sets: no recorded work that uses
-    /// this object may be pending on the GPU (wait for its fence first), as Vulkan
+    /// This writes the selected frame's host-visible uniforms and descriptor sets: no recorded
+    /// work of that frame may be pending on the GPU (wait for its fence first), as Vulkan
     /// requires of descriptor sets and memory the device reads.
     pub unsafe fn prepare(&mut self, index: usize) -> Result<()> {
         let pose = *self
@@ -449,14 +517,12 @@ impl PlanRecorder {
             0 => self.previous_pose.unwrap_or(pose),
             i => self.poses[i - 1],
         };
-        // SAFETY (every block below): this function's contract: no recorded frame of this
-        // recorder, whose passes these are, is pending.
-        if let Some((pass, _)) = &mut self.geometry {
-            unsafe { pass.bind_mesh(&self.mesh) };
+        // SAFETY (every block below): this function's contract: no recorded work of the
+        // selected frame, whose uniforms and sets these are, is pending.
+        if let Some((pass, _)) = &self.geometry {
             unsafe { pass.set_frame(&pose, &previous) }?;
         }
-        if let Some(st) = &mut self.warp {
-            unsafe { st.pass.bind_mesh(&self.mesh) };
+        if let Some(st) = &self.warp {
             unsafe { st.pass.set_frame(&pose, &pose) }?;
         }
         if let Some(c) = &self.cube {
@@ -565,102 +631,35 @@ impl PlanRecorder {
         (colour, self.geometry.as_ref().map(|(_, t)| t))
     }
 
-    /// Records the copies of every output the plan asks for into host buffers, for
-    /// [`Self::read`]: the headless path's readback.
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass, after [`Self::record`].
-    pub unsafe fn record_download(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds the contract above; each download buffer was sized for
-        // its image when the pass was built, and `record` left every image in the layout its
-        // download expects (documented on `record`).
-        unsafe {
-            if let Some(l) = &self.lens {
-                l.film().record_download(cmd);
-            }
-            if let Some(c) = &self.cube {
-                c.record_download(cmd);
-            }
-            if let Some(st) = &self.warp {
-                if self.outputs.color {
-                    st.record_download(cmd);
-                }
-                for d in st.data_warps() {
-                    d.record_download(cmd);
-                }
-            }
-            if let Some((_, targets)) = &self.geometry {
-                targets.record_download(cmd);
-            }
-        }
+    /// The geometry pass's targets (Alg. 1 or the pinhole render), when the plan has one;
+    /// after a frame in `TRANSFER_SRC_OPTIMAL`.
+    pub(crate) fn geometry_targets(&self) -> Option<&GeometryTargets> {
+        self.geometry.as_ref().map(|(_, t)| t)
     }
 
-    /// The outputs of the last recorded frame (after [`Self::record_download`]'s submission
-    /// completed): colour, IDs, flow and depth as the plan asks for them.
-    pub fn read(&self) -> Result<Rendered> {
-        let mut out = match &self.geometry {
-            Some((_, targets)) => targets.read()?,
-            None => Rendered::default(),
-        };
-        if let Some(l) = &self.lens {
-            let film = l.film();
-            let pixels = film
-                .read()?
-                .iter()
-                .map(|p| {
-                    let a = p[3];
-                    // Without vignetting the accumulated weight is divided out.
-                    if self.vignetting || a <= 1e-6 {
-                        [p[0], p[1], p[2], 1.0]
-                    } else {
-                        [p[0] / a, p[1] / a, p[2] / a, 1.0]
-                    }
-                })
-                .collect::<Vec<_>>();
-            let (pixels, bit_depth) = if self.outputs.exr {
-                (Pixels::Rgba32F(pixels), BitDepth::F32)
-            } else {
-                (
-                    Pixels::Rgba8(
-                        pixels
-                            .iter()
-                            .map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
-                            .collect(),
-                    ),
-                    BitDepth::U8,
-                )
-            };
-            out.width = film.width;
-            out.height = film.height;
-            out.color = Some(Raster {
-                width: film.width,
-                height: film.height,
-                pixels,
-                bit_depth,
-            });
-        }
-        if let Some(c) = &self.cube {
-            let colour = c.read()?;
-            (out.width, out.height) = (colour.width, colour.height);
-            out.color = Some(colour);
-        }
-        if let Some(st) = &self.warp {
-            let e = st.output.extent;
-            out.width = e.width;
-            out.height = e.height;
-            if self.outputs.color {
-                out.color = Some(st.read()?);
-            }
-            if let Some(d) = &st.ids {
-                out.ids = Some(d.read()?);
-            }
-            if let Some(d) = &st.depth {
-                out.depth = Some(d.read()?);
-            }
-        }
-        if !self.outputs.color {
-            out.color = None;
-        }
-        Ok(out)
+    /// The warp path's stage (its output and data warps `GENERAL` after a frame).
+    pub(crate) fn warp_stage(&self) -> Option<&WarpStage> {
+        self.warp.as_ref()
+    }
+
+    /// The cube path's stage (its output `GENERAL` after a frame).
+    pub(crate) fn cube_stage(&self) -> Option<&CubeStage> {
+        self.cube.as_ref()
+    }
+
+    /// The lens route's renderer (its film `COLOR_ATTACHMENT_OPTIMAL` after a frame).
+    pub(crate) fn lens_renderer(&self) -> Option<&LensRenderer> {
+        self.lens.as_ref()
+    }
+
+    /// What the plan asks for.
+    pub(crate) fn outputs(&self) -> super::scene_file::OutputSpec {
+        self.outputs
+    }
+
+    /// Whether the lens route keeps vignetting (else the film's accumulated weight is
+    /// divided out when it is read).
+    pub(crate) fn keeps_vignetting(&self) -> bool {
+        self.vignetting
     }
 }

@@ -1,10 +1,14 @@
 //! The candidates' search: the coarsest tessellation, the cheapest inverse, the precomputed
-//! map, each with its error measured on this camera (and scene and pose) against the budget.
+//! map, the cube map, each with its error measured on this camera (and scene and pose)
+//! against the budget and its frame time estimated.
 
 use glam::{DVec2, DVec3};
 
-use super::cost::{inverse_candidates_for, MAP_F32_FLOOR_PX};
-use super::MAP_COORDINATES;
+use super::cost::{
+    estimate_ms, inverse_candidates_for, Cost, CUBE_RAY_ERROR_PX, MAP_BUILD_NS, MAP_F32_FLOOR_PX,
+    MAP_WARP_CHROMATIC_NS, MAP_WARP_NS, PLANNED_CUBE_MAX_SIDE,
+};
+use super::{chromatic_scales, limits, SceneFile, MAP_COORDINATES};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::warp::Coordinates;
 use crate::scene::{Pose, Scene};
@@ -144,4 +148,145 @@ pub(super) fn search_inverse(
                 ms: ms(ns),
             })
         })
+}
+
+/// Alg. 1 as a candidate: the tessellation that meets the budget and its estimated frame time.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct VertexCandidate {
+    pub(super) tessellation: TessellationChoice,
+    /// Estimated frame time (ms).
+    pub(super) ms: f64,
+}
+
+/// The cube map as a candidate: its faces' side (pixels, at 1×) and estimated frame time.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct CubeCandidate {
+    pub(super) side: u32,
+    /// Estimated frame time (ms).
+    pub(super) ms: f64,
+}
+
+/// Every route a calibrated camera's scene could take, each measured against the budget:
+/// `None` where a route cannot meet it, cannot carry the outputs, or was not searched.
+#[derive(Debug, Clone)]
+pub(super) struct Candidates {
+    /// Alg. 1 (not searched when nothing can go that way: chromatic colour without IDs or
+    /// flow, since Alg. 1 cannot give each channel its own lens).
+    pub(super) vertex: Option<VertexCandidate>,
+    /// The warp solved per pixel: the cheapest inverse meeting the budget.
+    pub(super) per_pixel: Option<WarpChoice>,
+    /// The warp from a precomputed map (not with jittered anti-aliasing, which moves the
+    /// lens every pass).
+    pub(super) from_map: Option<WarpChoice>,
+    /// The cheaper of the two warps; none where no pinhole source holds the lens.
+    pub(super) warp: Option<WarpChoice>,
+    /// The cube map, where colour alone is asked for and its rays meet the budget.
+    pub(super) cube: Option<CubeCandidate>,
+    /// Why no overscanned pinhole source holds the lens, where none does.
+    pub(super) no_pinhole_warp: Option<String>,
+    /// The frames a map's build is shared over.
+    pub(super) frames: usize,
+}
+
+/// Searches every candidate route of `file` for `scene` through `camera` at `poses` (the
+/// tessellation is measured at the first).
+pub(super) fn search_candidates(
+    file: &SceneFile,
+    scene: &Scene,
+    camera: &Camera,
+    poses: &[Pose],
+) -> Result<Candidates> {
+    let budget = file.max_error_px;
+    let o = &file.outputs;
+    let chromatic = chromatic_scales(file);
+    let pixels = camera.width as f64 * camera.height as f64;
+    let triangles = scene.mesh.triangle_count() as f64;
+    let data_needs_vertex = o.ids || o.flow;
+    let vertex = match poses.first() {
+        Some(pose) if chromatic.is_none() || data_needs_vertex => {
+            search_tessellation(scene, pose, camera, budget)?
+        }
+        _ => None,
+    }
+    .map(|tessellation| VertexCandidate {
+        tessellation,
+        ms: estimate_ms(
+            pixels,
+            tessellation.triangles as f64,
+            Cost::Vertex {
+                vertices: tessellation.vertices as f64,
+            },
+        ),
+    });
+    // Three fetches (and inverses, or maps) per pixel with chromatic aberration.
+    let fetches = if chromatic.is_some() { 3.0 } else { 1.0 };
+    let per_pixel = search_inverse(camera, budget, |ns| {
+        estimate_ms(
+            pixels,
+            triangles,
+            Cost::Warp {
+                coordinate_ns: ns * fetches,
+            },
+        )
+    });
+    // A map is built once, its build shared by the frames.
+    let frames = poses.len().max(1);
+    let from_map = if file.antialias.is_on() {
+        None
+    } else {
+        map_error_px(camera, chromatic)
+            .filter(|&e| e <= budget)
+            .map(|e| {
+                let sample = if chromatic.is_some() {
+                    MAP_WARP_CHROMATIC_NS
+                } else {
+                    MAP_WARP_NS
+                };
+                WarpChoice {
+                    method: InverseMethod::Newton,
+                    map: true,
+                    error_px: e,
+                    ms: estimate_ms(
+                        pixels,
+                        triangles,
+                        Cost::Warp {
+                            coordinate_ns: sample + MAP_BUILD_NS * fetches / frames as f64,
+                        },
+                    ),
+                }
+            })
+    };
+    // A lens no overscanned pinhole source holds (180° and more, or past the image limit):
+    // the planned warp would miss pixels, so it is not a candidate; the vertex path runs the
+    // lens's own model per vertex, the cube map samples six pinhole faces along each pixel's
+    // ray.
+    let no_pinhole_warp =
+        limits::pinhole_source_refusal(camera, 1.0, crate::model::MAX_IMAGE_SIDE.min(16384));
+    let warp = match (per_pixel, from_map) {
+        _ if no_pinhole_warp.is_some() => None,
+        (Some(a), Some(b)) => Some(if b.ms < a.ms { b } else { a }),
+        (a, b) => a.or(b),
+    };
+    // The cube map carries colour alone: a face's depth is not the lens camera's, and IDs
+    // are never filtered across faces. Faces of one face pixel per output pixel at the
+    // centre (density 1, as the warp's source).
+    let cube =
+        (o.color && !data_needs_vertex && !o.depth && CUBE_RAY_ERROR_PX <= budget).then(|| {
+            let texel = if o.exr { 16 } else { 4 };
+            let wanted = crate::model::overscan::cube_face_side(camera, 1.0);
+            let side = limits::cube_side(wanted, texel, PLANNED_CUBE_MAX_SIDE);
+            CubeCandidate {
+                side,
+                ms: estimate_ms(pixels, triangles, Cost::Cube { side, fetches }),
+            }
+        });
+    Ok(Candidates {
+        vertex,
+        per_pixel,
+        from_map,
+        warp,
+        cube,
+        no_pinhole_warp,
+        frames,
+    })
 }

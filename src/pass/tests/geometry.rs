@@ -1,7 +1,7 @@
 //! The geometry path (Lambers et al. Sec. 3.2) on lavapipe, validated, against exact oracles:
 //! OpenCV's projectPoints (the shared reference) and a CPU ray cast through the f64 model.
 
-use crate::host::geometry::render;
+use crate::host::geometry::{render, TargetsReadback};
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::geometry::{
@@ -801,6 +801,7 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
     let buffers = MeshBuffers::new(gpu, mesh, None).unwrap();
     let mut pass = GeometryPass::new(gpu, desc(&barrel)).unwrap();
     let targets = GeometryTargets::new(gpu, &pass).unwrap();
+    let readback = TargetsReadback::new(gpu, &targets).unwrap();
     unsafe { pass.bind_mesh(&buffers) };
     ctx.submit(|cmd| {
         unsafe { buffers.record_upload(cmd) };
@@ -809,15 +810,17 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
     .unwrap();
     let frame = |pose: &Pose| {
         unsafe { pass.set_frame(pose, pose) }.unwrap();
-        ctx.submit(|cmd| {
-            unsafe {
-                pass.record(cmd, &targets, &buffers);
-                targets.record_download(cmd);
-            }
-            Ok(())
+        ctx.submit(|cmd| unsafe {
+            pass.record(cmd, &targets, &buffers);
+            readback.record(
+                gpu,
+                cmd,
+                &targets,
+                ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )
         })
         .unwrap();
-        targets.read().unwrap().ids.unwrap()
+        readback.read().unwrap().ids.unwrap()
     };
     let expected_near = fresh(&barrel, &near);
     let expected_far = fresh(&barrel, &far);
@@ -851,24 +854,32 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
     .unwrap();
     let mut second = GeometryPass::new(gpu, desc(&mild)).unwrap();
     let second_targets = GeometryTargets::new(gpu, &second).unwrap();
+    let second_readback = TargetsReadback::new(gpu, &second_targets).unwrap();
     unsafe {
         second.bind_mesh(&buffers);
         pass.set_frame(&near, &near).unwrap();
         second.set_frame(&aside, &aside).unwrap();
     }
-    ctx.submit(|cmd| {
-        unsafe {
-            pass.record(cmd, &targets, &buffers);
-            targets.record_download(cmd);
-            second.record(cmd, &second_targets, &buffers);
-            second_targets.record_download(cmd);
-        }
-        Ok(())
+    ctx.submit(|cmd| unsafe {
+        pass.record(cmd, &targets, &buffers);
+        readback.record(
+            gpu,
+            cmd,
+            &targets,
+            ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )?;
+        second.record(cmd, &second_targets, &buffers);
+        second_readback.record(
+            gpu,
+            cmd,
+            &second_targets,
+            ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )
     })
     .unwrap();
     let (first_ids, second_ids) = (
-        targets.read().unwrap().ids.unwrap(),
-        second_targets.read().unwrap().ids.unwrap(),
+        readback.read().unwrap().ids.unwrap(),
+        second_readback.read().unwrap().ids.unwrap(),
     );
     assert!(first_ids == expected_near, "the first lens");
     assert!(second_ids == fresh(&mild, &aside), "the second lens");

@@ -1,0 +1,90 @@
+//! A calibrated camera's plan: the scene file checked against the camera, the candidates'
+//! search (tessellation, inverse, map, cube), the choice among them, and the steps that
+//! explain it.
+
+use std::path::Path;
+
+use super::choice::choose;
+use super::cost::{estimate_ms, Cost};
+use super::search::search_candidates;
+use super::{chromatic_scales, explain, file_plan, Optics, Plan, Route, SceneFile};
+use crate::model::{Camera, OpenCvDistortion};
+use crate::scene::{Pose, Scene};
+use crate::{Error, Result};
+
+/// The file's camera as the search needs it: loaded, refused where the file asks for effects
+/// a calibrated camera cannot have, and its distortion dropped where `[effects]
+/// distortion = false`.
+fn checked_camera(file: &SceneFile, path: &Path) -> Result<Camera> {
+    let src = file.source.display();
+    let e = &file.effects;
+    let camera =
+        crate::io::load_camera(path).map_err(|e| e.named_by(format!("{src}: [optics] camera")))?;
+    if e.vignetting || e.depth_of_field {
+        let key = if e.vignetting {
+            "vignetting"
+        } else {
+            "depth_of_field"
+        };
+        return Err(Error::input(format!(
+            "{src}: [effects] {key}: a calibrated camera (OpenCV model) has no {key}; give a lens prescription (optics.lens)"
+        )));
+    }
+    if e.distortion {
+        return Ok(camera);
+    }
+    Camera::new(
+        camera.width,
+        camera.height,
+        camera.intrinsics,
+        OpenCvDistortion::default(),
+    )
+    .map_err(Error::from)
+}
+
+/// A calibrated camera's plan: a camera without distortion (or without the distortion
+/// wanted) and without chromatic aberration is a pinhole render; any other goes by the
+/// cheapest candidate route that meets the budget.
+pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Result<Plan> {
+    let camera = checked_camera(file, path)?;
+    let poses = if file.poses.is_empty() {
+        vec![scene.default_pose(&camera)]
+    } else {
+        file.poses.clone()
+    };
+    let terms = camera.terms();
+    if terms == Default::default() && chromatic_scales(file).is_none() {
+        return Ok(pinhole_plan(file, scene, camera, poses));
+    }
+    let candidates = search_candidates(file, scene, &camera, &poses)?;
+    let choice = choose(file, &candidates)?;
+    let mut steps = explain::camera_steps(&choice, &candidates, terms);
+    steps.extend(explain::antialias_step(file.antialias, file.outputs.color));
+    Ok(file_plan(
+        file,
+        choice.route(),
+        steps,
+        Optics::Camera(camera),
+        poses,
+        (choice.expected_error_px(), choice.estimated_ms()),
+    ))
+}
+
+/// The plan of a camera with no lens work: its pinhole projection alone.
+fn pinhole_plan(file: &SceneFile, scene: &Scene, camera: Camera, poses: Vec<Pose>) -> Plan {
+    let mut steps = vec![explain::pinhole_step(file.effects.distortion)];
+    steps.extend(explain::antialias_step(file.antialias, file.outputs.color));
+    let ms = estimate_ms(
+        camera.width as f64 * camera.height as f64,
+        scene.mesh.triangle_count() as f64,
+        Cost::Pinhole,
+    );
+    file_plan(
+        file,
+        Route::Pinhole,
+        steps,
+        Optics::Camera(camera),
+        poses,
+        (0.0, ms),
+    )
+}

@@ -1,0 +1,448 @@
+//! The route's choice for a calibrated camera: from the candidates and what the scene file asks
+//! for, the cheapest route that delivers it, with the reason as data, or the refusal.
+
+use super::cost::CUBE_RAY_ERROR_PX;
+use super::search::{Candidates, CubeCandidate, VertexCandidate, WarpChoice};
+use super::{chromatic_scales, Route, SceneFile};
+use crate::{Error, Result};
+
+/// The route chosen for a lens (a camera without distortion or chromatic aberration takes
+/// the pinhole render before any search), with what it needs and why it won.
+#[derive(Debug, Clone)]
+pub(super) enum Choice {
+    /// Alg. 1 for every output.
+    Vertex {
+        vertex: VertexCandidate,
+        why: VertexReason,
+    },
+    /// The pinhole render and the warp, every output.
+    Warp {
+        warp: WarpChoice,
+        chromatic: Option<[f64; 3]>,
+    },
+    /// The warp for colour (chromatic aberration), Alg. 1 for IDs and flow.
+    WarpAndVertex {
+        warp: WarpChoice,
+        vertex: VertexCandidate,
+        chromatic: Option<[f64; 3]>,
+    },
+    /// The cube map's faces and the sphere warp, colour alone.
+    Cube {
+        cube: CubeCandidate,
+        chromatic: Option<[f64; 3]>,
+        why: CubeReason,
+    },
+}
+
+/// Why Alg. 1 carries every output.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum VertexReason {
+    /// Object IDs or flow are asked for, and no warp carries them (Lambers et al. Table 1).
+    DataOutputs { ids: bool, flow: bool },
+    /// No pinhole source holds the lens (`why`), and the cube map lost.
+    NoPinholeWarp { why: String, cube: CubeLoss },
+    /// No dearer than the warp (`warp_ms`), or no warp meets the budget (`None`).
+    Cheaper { warp_ms: Option<f64> },
+}
+
+/// Why the cube map did not carry a lens no pinhole source holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum CubeLoss {
+    /// It would cost `ms` per frame, no less than Alg. 1.
+    Dearer { ms: f64 },
+    /// Its rays' error is beyond the budget.
+    RaysMissBudget,
+    /// Something besides colour is asked for.
+    ColourAlone,
+}
+
+/// Why the cube map carries the colour.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum CubeReason {
+    /// No pinhole source holds the lens (`why`).
+    NoPinholeWarp(String),
+    /// Cheaper than the pinhole warp (`warp_ms`; `None`: no warp meets the budget).
+    Cheaper { warp_ms: Option<f64> },
+}
+
+impl Choice {
+    /// The route the plan records.
+    pub(super) fn route(&self) -> Route {
+        match self {
+            Choice::Vertex { vertex, .. } => Route::Vertex {
+                tessellate: vertex.tessellation.edge_px,
+            },
+            Choice::Warp { warp, chromatic } => Route::Warp {
+                method: warp.method,
+                chromatic: *chromatic,
+                map: warp.map,
+            },
+            Choice::WarpAndVertex {
+                warp,
+                vertex,
+                chromatic,
+            } => Route::WarpAndVertex {
+                method: warp.method,
+                chromatic: *chromatic,
+                tessellate: vertex.tessellation.edge_px,
+                map: warp.map,
+            },
+            Choice::Cube {
+                cube, chromatic, ..
+            } => Route::Cube {
+                side: cube.side,
+                chromatic: *chromatic,
+            },
+        }
+    }
+
+    /// The largest geometric error the route leaves (px), as measured while planning.
+    pub(super) fn expected_error_px(&self) -> f64 {
+        match self {
+            Choice::Vertex { vertex, .. } => vertex.tessellation.error_px,
+            Choice::Warp { warp, .. } => warp.error_px,
+            Choice::WarpAndVertex { warp, vertex, .. } => {
+                warp.error_px.max(vertex.tessellation.error_px)
+            }
+            Choice::Cube { .. } => CUBE_RAY_ERROR_PX,
+        }
+    }
+
+    /// The route's estimated frame time (ms).
+    pub(super) fn estimated_ms(&self) -> f64 {
+        match self {
+            Choice::Vertex { vertex, .. } => vertex.ms,
+            Choice::Warp { warp, .. } => warp.ms,
+            Choice::WarpAndVertex { warp, vertex, .. } => warp.ms + vertex.ms,
+            Choice::Cube { cube, .. } => cube.ms,
+        }
+    }
+}
+
+/// Whether `a` is cheaper than `b` (a missing `b` loses to any `a`).
+fn cheaper(a: Option<f64>, b: Option<f64>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => a < b,
+        (a, _) => a.is_some(),
+    }
+}
+
+/// The cheapest of `candidates` that delivers what `file` asks for, or why none does.
+pub(super) fn choose(file: &SceneFile, candidates: &Candidates) -> Result<Choice> {
+    let src = file.source.display();
+    let chromatic = chromatic_scales(file);
+    let c = candidates;
+    if let (Some(why), Some(_), None) = (&c.no_pinhole_warp, chromatic, c.cube) {
+        return Err(Error::input(format!(
+            "{src}: [effects] chromatic_aberration: {why}, and a chromatic warp needs a pinhole source, or a cube map, which carries colour alone (no IDs, flow or depth): not planned (drop chromatic_aberration or the data outputs, or use a camera whose frame a pinhole holds)"
+        )));
+    }
+    let warp_ms = c.warp.map(|w| w.ms);
+    let vertex_ms = c.vertex.map(|v| v.ms);
+    // Alg. 1 cannot give each channel its own lens: with chromatic aberration only the
+    // warps compete.
+    let cube_ms = c.cube.map(|cube| cube.ms);
+    let pick_cube =
+        cheaper(cube_ms, warp_ms) && (chromatic.is_some() || cheaper(cube_ms, vertex_ms));
+    if let Some(cube) = c.cube.filter(|_| pick_cube) {
+        let why = match &c.no_pinhole_warp {
+            Some(why) => CubeReason::NoPinholeWarp(why.clone()),
+            None => CubeReason::Cheaper { warp_ms },
+        };
+        return Ok(Choice::Cube {
+            cube,
+            chromatic,
+            why,
+        });
+    }
+    let data_needs_vertex = file.outputs.ids || file.outputs.flow;
+    if chromatic.is_some()
+        || (!data_needs_vertex && c.warp.is_some() && (c.vertex.is_none() || warp_ms < vertex_ms))
+    {
+        choose_warp(file, c, chromatic)
+    } else {
+        choose_vertex(file, c)
+    }
+}
+
+/// The warp route, with Alg. 1 beside it for IDs and flow.
+fn choose_warp(
+    file: &SceneFile,
+    candidates: &Candidates,
+    chromatic: Option<[f64; 3]>,
+) -> Result<Choice> {
+    let src = file.source.display();
+    let budget = file.max_error_px;
+    let Some(warp) = candidates.warp else {
+        return Err(Error::input(format!(
+            "{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera"
+        )));
+    };
+    if !(file.outputs.ids || file.outputs.flow) {
+        return Ok(Choice::Warp { warp, chromatic });
+    }
+    let Some(vertex) = candidates.vertex else {
+        return Err(Error::input(format!(
+            "{src}: [accuracy] max_error_px = {budget}: tessellation cannot meet it for the ID/flow outputs"
+        )));
+    };
+    Ok(Choice::WarpAndVertex {
+        warp,
+        vertex,
+        chromatic,
+    })
+}
+
+/// Alg. 1 for every output, and why.
+fn choose_vertex(file: &SceneFile, candidates: &Candidates) -> Result<Choice> {
+    let o = &file.outputs;
+    let budget = file.max_error_px;
+    let Some(vertex) = candidates.vertex else {
+        return Err(Error::input(format!(
+            "{}: [accuracy] max_error_px = {budget}: even 1 px edges do not meet it, and the outputs (IDs/flow) need the vertex path",
+            file.source.display()
+        )));
+    };
+    let why = if o.ids || o.flow {
+        VertexReason::DataOutputs {
+            ids: o.ids,
+            flow: o.flow,
+        }
+    } else if let Some(why) = &candidates.no_pinhole_warp {
+        let cube = match candidates.cube {
+            Some(cube) => CubeLoss::Dearer { ms: cube.ms },
+            None if CUBE_RAY_ERROR_PX > budget => CubeLoss::RaysMissBudget,
+            None => CubeLoss::ColourAlone,
+        };
+        VertexReason::NoPinholeWarp {
+            why: why.clone(),
+            cube,
+        }
+    } else {
+        VertexReason::Cheaper {
+            warp_ms: candidates.warp.map(|w| w.ms),
+        }
+    };
+    Ok(Choice::Vertex { vertex, why })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::InverseMethod;
+    use crate::plan::search::TessellationChoice;
+    use crate::ErrorKind;
+
+    /// A scene file for `camera.json` with `extra` tables, as the choice reads it.
+    fn file(extra: &str) -> SceneFile {
+        let text =
+            format!("[geometry]\nscene = \"grid:8\"\n[optics]\ncamera = \"camera.json\"\n{extra}");
+        SceneFile::parse(&text, std::path::Path::new("/scenes/s.toml")).unwrap()
+    }
+
+    const CHROMATIC: &str =
+        "[effects]\nchromatic_aberration = true\nchromatic_scales = [1.004, 1.0, 0.996]\n";
+
+    fn vertex(ms: f64, error_px: f64) -> VertexCandidate {
+        VertexCandidate {
+            tessellation: TessellationChoice {
+                edge_px: Some(16.0),
+                error_px,
+                triangles: 6144,
+                vertices: 3200,
+            },
+            ms,
+        }
+    }
+
+    fn warp(ms: f64, error_px: f64) -> WarpChoice {
+        WarpChoice {
+            method: InverseMethod::FixedPoint(5),
+            map: false,
+            error_px,
+            ms,
+        }
+    }
+
+    /// Candidates with a pinhole source: `vertex`, `warp` (per pixel) and `cube`.
+    fn candidates(
+        vertex: Option<VertexCandidate>,
+        warp: Option<WarpChoice>,
+        cube: Option<CubeCandidate>,
+    ) -> Candidates {
+        Candidates {
+            vertex,
+            per_pixel: warp,
+            from_map: None,
+            warp,
+            cube,
+            no_pinhole_warp: None,
+            frames: 1,
+        }
+    }
+
+    /// A lens no pinhole source holds: no warp, `vertex` and `cube` only.
+    fn wide(vertex: Option<VertexCandidate>, cube: Option<CubeCandidate>) -> Candidates {
+        Candidates {
+            no_pinhole_warp: Some("the lens sees past 90°".into()),
+            ..candidates(vertex, None, cube)
+        }
+    }
+
+    fn refusal(file: &SceneFile, c: &Candidates) -> String {
+        let e = choose(file, c).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Input);
+        assert!(e.argument_name().is_none());
+        let message = e.to_string();
+        assert!(message.starts_with("/scenes/s.toml: ["), "{message}");
+        message
+    }
+
+    #[test]
+    fn the_cheaper_of_alg1_and_the_warp_carries_colour() {
+        let f = file("");
+        let c = candidates(Some(vertex(7.5, 9e-3)), Some(warp(16.7, 6e-3)), None);
+        let choice = choose(&f, &c).unwrap();
+        assert_eq!(
+            choice.route(),
+            Route::Vertex {
+                tessellate: Some(16.0)
+            }
+        );
+        assert!(matches!(
+            choice,
+            Choice::Vertex {
+                why: VertexReason::Cheaper { warp_ms: Some(w) },
+                ..
+            } if w == 16.7
+        ));
+        assert_eq!(
+            (choice.expected_error_px(), choice.estimated_ms()),
+            (9e-3, 7.5)
+        );
+
+        let c = candidates(Some(vertex(20.0, 9e-3)), Some(warp(16.7, 6e-3)), None);
+        let choice = choose(&f, &c).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Warp {
+                chromatic: None,
+                ..
+            }
+        ));
+        assert_eq!(
+            (choice.expected_error_px(), choice.estimated_ms()),
+            (6e-3, 16.7)
+        );
+    }
+
+    #[test]
+    fn ids_and_flow_take_alg1_however_cheap_the_warp() {
+        let f = file("[outputs]\nids = true\nflow = true\n");
+        let c = candidates(Some(vertex(50.0, 9e-3)), Some(warp(1.0, 6e-3)), None);
+        let choice = choose(&f, &c).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Vertex {
+                why: VertexReason::DataOutputs {
+                    ids: true,
+                    flow: true
+                },
+                ..
+            }
+        ));
+        let none = candidates(None, Some(warp(1.0, 6e-3)), None);
+        assert!(refusal(&f, &none).contains("[accuracy] max_error_px = 0.01"));
+    }
+
+    #[test]
+    fn chromatic_colour_goes_by_a_warp_and_the_data_by_alg1() {
+        let f = file(&format!("{CHROMATIC}[outputs]\nids = true\n"));
+        let c = candidates(Some(vertex(5.0, 9e-3)), Some(warp(40.0, 6e-3)), None);
+        let choice = choose(&f, &c).unwrap();
+        assert!(matches!(
+            choice.route(),
+            Route::WarpAndVertex {
+                chromatic: Some(_),
+                tessellate: Some(_),
+                map: false,
+                ..
+            }
+        ));
+        assert_eq!(
+            (choice.expected_error_px(), choice.estimated_ms()),
+            (9e-3, 45.0)
+        );
+        let no_vertex = candidates(None, Some(warp(40.0, 6e-3)), None);
+        let no_warp = candidates(Some(vertex(5.0, 9e-3)), None, None);
+        assert!(refusal(&f, &no_vertex).contains("tessellation"));
+        assert!(refusal(&f, &no_warp).contains("inverse"));
+    }
+
+    #[test]
+    fn the_cube_map_wins_on_cost_or_where_no_pinhole_source_holds_the_lens() {
+        let cube = CubeCandidate {
+            side: 460,
+            ms: 48.0,
+        };
+        let f = file(CHROMATIC);
+        // With chromatic aberration Alg. 1 does not compete, however cheap.
+        let c = candidates(Some(vertex(1.0, 9e-3)), Some(warp(125.0, 6e-3)), Some(cube));
+        let choice = choose(&f, &c).unwrap();
+        assert!(matches!(
+            &choice,
+            Choice::Cube { why: CubeReason::Cheaper { warp_ms: Some(w) }, chromatic: Some(_), .. } if *w == 125.0
+        ));
+        assert_eq!(
+            choice.route(),
+            Route::Cube {
+                side: 460,
+                chromatic: Some([1.004, 1.0, 0.996])
+            }
+        );
+
+        let choice = choose(&f, &wide(None, Some(cube))).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Cube {
+                why: CubeReason::NoPinholeWarp(_),
+                ..
+            }
+        ));
+        assert!(refusal(&f, &wide(None, None)).contains("[effects] chromatic_aberration"));
+
+        // Without it, the cheaper of the cube and Alg. 1, and why Alg. 1 won.
+        let f = file("");
+        let choice = choose(&f, &wide(Some(vertex(8.0, 9e-3)), Some(cube))).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Vertex { why: VertexReason::NoPinholeWarp { cube: CubeLoss::Dearer { ms }, .. }, .. } if ms == 48.0
+        ));
+        let choice = choose(&f, &wide(Some(vertex(80.0, 9e-3)), Some(cube))).unwrap();
+        assert!(matches!(choice, Choice::Cube { .. }));
+        let tight = file("[accuracy]\nmax_error_px = 1e-4\n");
+        let choice = choose(&tight, &wide(Some(vertex(80.0, 9e-5)), None)).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Vertex {
+                why: VertexReason::NoPinholeWarp {
+                    cube: CubeLoss::RaysMissBudget,
+                    ..
+                },
+                ..
+            }
+        ));
+        let depth = file("[outputs]\ndepth = true\n");
+        let choice = choose(&depth, &wide(Some(vertex(80.0, 9e-3)), None)).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Vertex {
+                why: VertexReason::NoPinholeWarp {
+                    cube: CubeLoss::ColourAlone,
+                    ..
+                },
+                ..
+            }
+        ));
+    }
+}

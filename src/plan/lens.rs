@@ -1,0 +1,165 @@
+//! A lens prescription's plan: the scene file checked against what Heidrich et al.'s
+//! image-based model can give, the budget turned into the quad-tree's angle threshold, the
+//! models built, and the steps that explain them.
+
+use std::path::Path;
+
+use super::{explain, file_plan, LensSetting, Optics, Plan, Route, SceneFile};
+use crate::lens::image_model::{channel_models, ImageModel, ModelOptions};
+use crate::lens::{frame_scene, Prescription, LAMBDA_D};
+use crate::scene::Scene;
+use crate::{Error, Result};
+
+/// A scene file's lens optics, borrowed.
+pub(super) struct LensSpec<'a> {
+    pub(super) path: &'a Path,
+    pub(super) focus_m: Option<f64>,
+    pub(super) f_number: Option<f64>,
+    pub(super) sensor_mm: (f64, f64),
+    pub(super) pixels: (u32, u32),
+}
+
+/// A prescription the scene file may be rendered through: loaded, and its film's pixels
+/// checked square.
+struct CheckedLens {
+    prescription: Prescription,
+    /// The film's pixel pitch (mm).
+    pitch_mm: f64,
+}
+
+/// The cells the image-based models were built of, over every channel.
+pub(super) struct Cells {
+    /// Perspective projections per frame.
+    pub(super) projections: usize,
+    /// The largest angle error of any cell (degrees).
+    pub(super) max_angle_deg: f64,
+}
+
+impl Cells {
+    fn of(models: &[(ImageModel, [f32; 4])]) -> Cells {
+        Cells {
+            projections: models.iter().map(|(m, _)| m.projection_count()).sum(),
+            max_angle_deg: models
+                .iter()
+                .map(|(m, _)| m.max_angle_deg())
+                .fold(0.0, f64::max),
+        }
+    }
+}
+
+/// Refuses what the image-based model cannot give (anti-aliasing, IDs, flow, depth, a lens
+/// without distortion, chromatic aberration without dispersion, non-square pixels) and
+/// loads the prescription.
+fn check_lens(file: &SceneFile, spec: &LensSpec) -> Result<CheckedLens> {
+    let src = file.source.display();
+    let e = &file.effects;
+    let o = &file.outputs;
+    if file.antialias.is_on() {
+        return Err(Error::input(format!(
+            "{src}: [render] supersample / jitter: the image-based lens model renders one sample per pixel per lens sample; anti-aliasing is for camera-file scenes"
+        )));
+    }
+    for (asked, key) in [(o.ids, "ids"), (o.flow, "flow"), (o.depth, "depth")] {
+        if asked {
+            return Err(Error::input(format!(
+                "{src}: [outputs] {key}: the image-based lens model blends many views, so it has no exact {key}; give a calibrated camera (optics.camera; `vklens lens fit-opencv` makes one from the lens) for {key}"
+            )));
+        }
+    }
+    if !e.distortion {
+        return Err(Error::input(format!(
+            "{src}: [effects] distortion = false: a real lens always distorts; use a camera file with the distortion switched off for a pinhole"
+        )));
+    }
+    let prescription = Prescription::load(spec.path)
+        .map_err(|e| Error::from(e).named_by(format!("{src}: [optics] lens")))?;
+    if e.chromatic_aberration && prescription.surfaces.iter().all(|s| s.abbe.is_none()) {
+        return Err(Error::input(format!(
+            "{src}: [effects] chromatic_aberration: {} has no Abbe numbers (5th column)",
+            spec.path.display()
+        )));
+    }
+    let (sensor_mm, pixels) = (spec.sensor_mm, spec.pixels);
+    let pitch_mm = sensor_mm.0 / pixels.0 as f64;
+    if ((sensor_mm.1 / pixels.1 as f64) / pitch_mm - 1.0).abs() > 1e-3 {
+        return Err(Error::input(format!(
+            "{src}: [optics] sensor_mm and pixels give non-square pixels"
+        )));
+    }
+    Ok(CheckedLens {
+        prescription,
+        pitch_mm,
+    })
+}
+
+/// The image-based lens model's plan: validation, the model's cells, the steps.
+pub(super) fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Result<Plan> {
+    let CheckedLens {
+        prescription,
+        pitch_mm,
+    } = check_lens(file, &spec)?;
+    let LensSpec {
+        path,
+        focus_m,
+        f_number,
+        pixels,
+        ..
+    } = spec;
+    let e = &file.effects;
+    let first = file.poses.first().copied();
+    let (optics, _) = frame_scene(
+        &prescription,
+        pixels,
+        pitch_mm,
+        f_number,
+        focus_m,
+        first,
+        scene,
+    )
+    .map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
+    let efl = crate::lens::analyse(&prescription, LAMBDA_D)
+        .efl
+        .unwrap_or(1.0);
+    // The budget in degrees: one pixel subtends pitch / EFL radians.
+    let px_deg = (pitch_mm / efl).atan().to_degrees();
+    let max_angle_deg = file.max_error_px * px_deg;
+    let samples = if e.depth_of_field { e.lens_samples } else { 1 };
+    let options = ModelOptions {
+        samples,
+        max_angle_deg,
+        vignetting: e.vignetting,
+        ..ModelOptions::default()
+    };
+    let models = channel_models(&optics, &options, e.chromatic_aberration)
+        .map_err(|e| Error::input(format!("{}: {e}", path.display())))?;
+    let cells = Cells::of(&models);
+    let steps = explain::lens_steps(e, samples, max_angle_deg, file.max_error_px, &cells);
+    let frame_pose = first
+        .map(Ok)
+        .unwrap_or_else(|| optics.equivalent_camera().map(|c| scene.default_pose(&c)))?;
+    let poses = if file.poses.is_empty() {
+        vec![frame_pose]
+    } else {
+        file.poses.clone()
+    };
+    Ok(file_plan(
+        file,
+        Route::LensModel {
+            samples,
+            chromatic: e.chromatic_aberration,
+            vignetting: e.vignetting,
+            max_angle_deg,
+        },
+        steps,
+        Optics::Lens(LensSetting {
+            prescription,
+            pitch_mm,
+            pixels,
+            focus_m: optics.focus_m,
+            f_number,
+            models,
+        }),
+        poses,
+        (cells.max_angle_deg / px_deg, f64::NAN),
+    ))
+}

@@ -88,6 +88,12 @@ pub struct WarpArgs {
     /// the input's (e.g. from `vklens overscan`); for undistort and precorrect, the output's.
     #[arg(long, value_name = "SRC")]
     source_camera: Option<PathBuf>,
+    /// undistort only: ignore the rectification a ROS camera_info carries (its R and P) and
+    /// undistort with K alone. By default undistort rectifies as ROS image_proc does:
+    /// `initUndistortRectifyMap(K, D, R, P)`, the output taking P's intrinsics (a stereo pair's
+    /// rectified image); it says on stderr which it used.
+    #[arg(long)]
+    no_rectification: bool,
     /// newton | lut | heikkila | fixed-point:N. lut builds a coordinate map once with Newton
     /// and samples it. Only distort solves an inverse; the other directions use the forward
     /// model and accept newton or lut.
@@ -132,6 +138,49 @@ fn pinhole(path: &Path) -> Result<Camera, CliError> {
     Ok(cam)
 }
 
+/// Undistort as ROS `image_proc` does: a camera_info's R and P, unless `--no-rectification`;
+/// says on stderr which camera the output has.
+fn rectify_as_image_proc(
+    args: &WarpArgs,
+    cam: &Camera,
+    options: &mut WarpOptions,
+) -> Result<(), CliError> {
+    let found = crate::io::camera::load_rectification(&args.camera)?
+        .filter(|r| !r.is_identity_for(&cam.intrinsics));
+    let Some(rect) = found else {
+        return Ok(());
+    };
+    let file = args.camera.display();
+    if args.no_rectification {
+        eprintln!(
+            "undistort: {file} carries a rectification (R, P); --no-rectification: undistorting with K alone"
+        );
+        return Ok(());
+    }
+    options.rectification = Some(rect.r);
+    let output = match &options.source_camera {
+        Some(_) => format!(
+            "the output camera of --source-camera {}",
+            args.source_camera
+                .as_deref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        ),
+        None => {
+            let k = rect.intrinsics;
+            options.source_camera = Some(Camera::from_coeffs(cam.width, cam.height, k, &[0.0; 4])?);
+            format!(
+                "P's camera (fx {:.6} fy {:.6} cx {:.6} cy {:.6})",
+                k.fx, k.fy, k.cx, k.cy
+            )
+        }
+    };
+    eprintln!(
+        "undistort: rectifying as image_proc does with {file}'s R and {output} (--no-rectification: K alone)"
+    );
+    Ok(())
+}
+
 /// Runs one of the three warp directions.
 pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     check_output(&args.output, "image", &["png", "exr"])?;
@@ -158,6 +207,13 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     options.fill = args.fill.map(|f| f.map(|c| c as f32)).unwrap_or([0.0; 4]);
     if let Some(src) = &args.source_camera {
         options.source_camera = Some(pinhole(src)?);
+    }
+    if direction == WarpDirection::Undistort {
+        rectify_as_image_proc(&args, &cam, &mut options)?;
+    } else if args.no_rectification {
+        return Err(CliError::input(
+            "--no-rectification applies to undistort (a camera_info's R and P)",
+        ));
     }
     if !args.channel_cameras.is_empty() {
         let [r, g, b] = <[PathBuf; 3]>::try_from(args.channel_cameras.clone())

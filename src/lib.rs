@@ -38,6 +38,8 @@
 
 mod error;
 mod facade;
+#[cfg(test)]
+mod testing;
 
 pub use error::{Error, ErrorKind, Result};
 pub use facade::{

@@ -6,6 +6,8 @@
 //! this detector's noise allows it (the README's table has every camera and path; for k2
 //! the standard deviation itself is near 0.5 % of the value, so a miss there is noise).
 
+mod common;
+
 use std::process::Command;
 
 fn calibrate(camera: &str, path: &str, require_target: bool) {
@@ -18,8 +20,7 @@ fn calibrate(camera: &str, path: &str, require_target: bool) {
         have_cv2,
         "python3 with cv2 and numpy is needed: run scripts/bootstrap"
     );
-    let reference = vklens::internal::io::reference::load_reference().unwrap();
-    let case = reference.cases.iter().find(|c| c.name == camera).unwrap();
+    let case = common::reference_case(camera);
     let dir = std::env::temp_dir().join(format!(
         "vklens-calib-{camera}-{path}-{}",
         std::process::id()
@@ -95,7 +96,7 @@ fn seed_fig1_barrel_warp_path_recovers_the_lens() {
 /// camera, `tests/calibrate.py` with cv2.fisheye.calibrate; fx fy cx cy within 0.5 % and
 /// k1..k4 within 0.005 absolute. Returns the report.
 fn calibrate_fisheye(camera: &str, path: &str) -> serde_json::Value {
-    let cam_file = vklens::internal::io::reference::shared_dir()
+    let cam_file = common::shared_dir()
         .join("reference")
         .join("fisheye")
         .join(format!("{camera}.json"));

@@ -1,8 +1,10 @@
 //! Every calibration file in `../shared/reference/calibration-files/` loads and equals the
 //! camera `index.json` says it holds; bad files give one clear error naming the problem.
 
-use vklens::internal::io::parse_camera;
-use vklens::internal::io::reference::shared_dir;
+mod common;
+
+use common::shared_dir;
+use vklens::Camera;
 
 #[test]
 fn every_shared_calibration_file_loads_with_the_true_parameters() {
@@ -20,7 +22,7 @@ fn every_shared_calibration_file_loads_with_the_true_parameters() {
             .collect();
         for file in cam["files"].as_array().expect("files") {
             let path = dir.join(file.as_str().unwrap());
-            let got = vklens::internal::io::load_camera(&path).unwrap_or_else(|e| panic!("{e}"));
+            let got = Camera::load(&path).unwrap_or_else(|e| panic!("{e}"));
             assert_eq!(
                 got.width as u64,
                 cam["width"].as_u64().unwrap(),
@@ -54,18 +56,17 @@ fn every_shared_calibration_file_loads_with_the_true_parameters() {
 
 #[test]
 fn reference_cases_are_camera_files_as_they_stand() {
-    let text = std::fs::read_to_string(vklens::internal::io::reference::reference_path())
-        .expect("reference");
+    let text = std::fs::read_to_string(common::reference_path()).expect("reference");
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     for case in v["cases"].as_array().unwrap() {
-        let cam =
-            vklens::internal::io::camera::camera_from_value(case).unwrap_or_else(|e| panic!("{e}"));
+        let cam = Camera::parse(&case.to_string(), "opencv_standard_model.json")
+            .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(cam.distortion().to_coeffs().len(), 14);
     }
 }
 
 fn err(text: &str) -> String {
-    parse_camera(text, "cam.json")
+    Camera::parse(text, "cam.json")
         .expect_err("must be refused")
         .to_string()
 }
@@ -97,7 +98,7 @@ fn bad_camera_files_name_the_file_the_field_and_the_value() {
     let e = err(r#"{"height": 600, "fx": 4, "fy": 400, "cx": 1, "cy": 1}"#);
     assert!(e.contains("missing") && e.contains("width"), "{e}");
     // NaN in YAML (FileStorage writes .Nan).
-    let e = parse_camera(
+    let e = Camera::parse(
         "image_width: 8\nimage_height: 8\ncamera_matrix:\n  data: [.Nan, 0, 4, 0, 4, 4, 0, 0, 1]\n",
         "cam.yml",
     )
@@ -105,21 +106,21 @@ fn bad_camera_files_name_the_file_the_field_and_the_value() {
     .to_string();
     assert!(e.contains("fx") && e.contains("NaN"), "{e}");
     // Skewed camera matrices are refused rather than silently mis-read.
-    let e = parse_camera(
+    let e = Camera::parse(
         "image_width: 8\nimage_height: 8\ncamera_matrix:\n  data: [4, 0.5, 4, 0, 4, 4, 0, 0, 1]\n",
         "cam.yml",
     )
     .unwrap_err()
     .to_string();
     assert!(e.contains("skew"), "{e}");
-    let e = parse_camera(
+    let e = Camera::parse(
         "image_width: 8\nimage_height: 8\ndistortion_model: equidistant\ncamera_matrix:\n  data: [4, 0, 4, 0, 4, 4, 0, 0, 1]\n",
         "cam.yaml",
     )
     .unwrap_err()
     .to_string();
     assert!(e.starts_with("cam.yaml: ") && e.contains("k1..k4"), "{e}");
-    let e = parse_camera("<opencv_storage><image_width>8</image_width>", "cam.xml")
+    let e = Camera::parse("<opencv_storage><image_width>8</image_width>", "cam.xml")
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("cam.xml: invalid XML"), "{e}");
@@ -127,7 +128,7 @@ fn bad_camera_files_name_the_file_the_field_and_the_value() {
 
 #[test]
 fn missing_distortion_means_a_pinhole() {
-    let cam = parse_camera(
+    let cam = Camera::parse(
         r#"{"width": 8, "height": 8, "fx": 4, "fy": 4, "cx": 3.5, "cy": 3.5}"#,
         "p.json",
     )
@@ -163,7 +164,17 @@ fn alias_bombs_and_endless_files_are_refused_with_the_limit() {
     );
     let e = vklens::Camera::load("/dev/zero").unwrap_err();
     assert!(e.to_string().contains("VKLENS_MAX_FILE_MB"), "{e}");
-    assert_eq!(vklens::internal::cli::exit_code(&e), 2);
+    // The command line refuses it alike, with the exit code of input the user can fix.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args(["overscan", "--camera", "/dev/zero"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -249,7 +260,7 @@ fn an_unknown_camera_model_is_refused_naming_it() {
 #[test]
 fn a_broken_json_file_is_reported_as_json() {
     // Missing its opening brace: YAML would accept the first line and then complain in YAML.
-    let e = parse_camera(r#""width": 640, "height": 480, "fx": 300}"#, "camera.json")
+    let e = Camera::parse(r#""width": 640, "height": 480, "fx": 300}"#, "camera.json")
         .expect_err("must be refused")
         .to_string();
     assert!(e.starts_with("camera.json: invalid JSON"), "{e}");

@@ -3,7 +3,9 @@
 use std::io::Write;
 use std::process::{Command, Output, Stdio};
 
-use vklens::internal::io::reference::{load_reference, shared_dir};
+mod common;
+
+use common::{load_reference, shared_dir};
 
 fn vklens(args: &[&str], stdin: &str) -> Output {
     let mut child = Command::new(env!("CARGO_BIN_EXE_vklens"))
@@ -37,7 +39,7 @@ fn json(out: &Output) -> serde_json::Value {
 
 #[test]
 fn points_distort_and_undistort_match_the_reference_on_cpu_and_gpu() {
-    let reference = load_reference().unwrap();
+    let reference = load_reference();
     let case = reference
         .cases
         .iter()
@@ -225,27 +227,10 @@ fn help_teaches() {
 }
 
 /// The exit code follows the error's kind, in every command: 2 for what the user can fix
-/// (bad input, a path that cannot be used, work the device cannot do), 1 for the rest.
+/// (bad input, a path that cannot be used, work the device cannot do), 1 for the rest (the
+/// mapping itself, kind by kind, is a unit test of `cli::exit_code`).
 #[test]
 fn exit_codes_follow_the_error_kind() {
-    use vklens::internal::cli::exit_code;
-    use vklens::Error;
-    let missing = std::io::Error::from(std::io::ErrorKind::NotFound);
-    let full = std::io::Error::from(std::io::ErrorKind::StorageFull);
-    let p = std::path::Path::new("x.png");
-    assert_eq!(exit_code(&Error::input("bad")), 2);
-    assert_eq!(exit_code(&Error::unsupported("too big")), 2);
-    assert_eq!(exit_code(&Error::io(p, "cannot read", &missing)), 2);
-    assert_eq!(exit_code(&Error::io(p, "cannot write", &full)), 1);
-    assert_eq!(exit_code(&Error::internal("bug")), 1);
-    assert_eq!(
-        exit_code(&Error::Vulkan {
-            call: "vkQueueSubmit",
-            result: ash::vk::Result::ERROR_DEVICE_LOST,
-        }),
-        1
-    );
-
     let dir = std::env::temp_dir().join(format!("vklens-exit-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::Path;
 
-use vklens::internal::io::reference::{load_reference, shared_dir};
+use common::{load_reference, shared_dir};
 use vklens::{
     Camera, Device, DeviceOptions, ErrorKind, InverseMethod, PixelFormat, Pixels, Raster,
     SceneRenderer, WarpDirection, WarpMethod, WarpOptions, Warper,
@@ -45,7 +45,7 @@ fn pattern(width: u32, height: u32) -> Raster {
 
 #[test]
 fn points_match_opencv_on_every_reference_camera() {
-    let reference = load_reference().unwrap();
+    let reference = load_reference();
     for case in &reference.cases {
         let k = [
             [case.fx, 0.0, case.cx],
@@ -241,4 +241,40 @@ fn a_scene_renderer_plans_once_and_renders_every_pose() {
         .unwrap();
     assert!(e.to_string().contains("[geometry] scene"), "{e}");
     assert_no_validation_messages(&device);
+}
+
+#[test]
+fn errors_in_files_a_scene_names_name_the_scene_file_and_key() {
+    let dir = std::env::temp_dir().join(format!("vklens-scene-refs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = dir.join("scene.toml");
+    let err = |text: &str| match vklens::SceneRenderer::parse(text, &base) {
+        Ok(_) => panic!("must be refused: {text}"),
+        Err(e) => (e.kind(), e.to_string()),
+    };
+    // A missing camera file: still an I/O error about that file, and the scene key says who
+    // named it.
+    let (kind, e) = err("[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"nope.json\"\n");
+    assert_eq!(kind, vklens::ErrorKind::Io);
+    assert!(
+        e.contains("nope.json") && e.contains("scene.toml: [optics] camera"),
+        "{e}"
+    );
+    // A broken one: input, led by the scene file and key.
+    std::fs::write(dir.join("bad.json"), "{\"width\": 10").unwrap();
+    let (kind, e) = err("[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"bad.json\"\n");
+    assert_eq!(kind, vklens::ErrorKind::Input);
+    assert!(
+        e.contains("scene.toml: [optics] camera: ") && e.contains("bad.json"),
+        "{e}"
+    );
+    // A missing lens prescription.
+    let (_, e) = err(
+        "[geometry]\nscene = \"boxes\"\n[optics]\nlens = \"nolens.dat\"\nsensor_mm = [36, 24]\npixels = [360, 240]\n",
+    );
+    assert!(
+        e.contains("scene.toml: [optics] lens") && e.contains("nolens.dat"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

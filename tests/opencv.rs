@@ -2,6 +2,8 @@
 //! initUndistortRectifyMap + remap; the distort → OpenCV-undistort round trip). `scripts/bootstrap`
 //! installs opencv-python-headless.
 
+mod common;
+
 use std::process::Command;
 
 #[test]
@@ -16,7 +18,7 @@ fn vklens_agrees_with_opencv_remap_and_round_trips_through_opencv() {
     let out = Command::new("python3")
         .arg(format!("{root}/tests/opencv_crosscheck.py"))
         .arg(env!("CARGO_BIN_EXE_vklens"))
-        .arg(vklens::internal::io::reference::shared_dir())
+        .arg(common::shared_dir())
         .env("VKLENS_VALIDATION", "1")
         .output()
         .expect("run python3");

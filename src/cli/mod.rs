@@ -31,6 +31,8 @@ mod output;
 mod planned;
 mod points;
 mod render;
+#[cfg(test)]
+mod tests;
 mod warp;
 
 use std::path::PathBuf;

@@ -514,3 +514,6 @@ pub fn remove_pending_and_exit(code: i32) -> ! {
     sweep();
     std::process::exit(code)
 }
+
+#[cfg(test)]
+mod tests;

@@ -8,6 +8,8 @@ pub mod models;
 pub mod reference;
 pub mod slam;
 pub mod stereo;
+#[cfg(test)]
+mod tests;
 pub mod writers;
 
 pub use camera::{load_camera, parse_camera};

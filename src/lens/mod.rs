@@ -105,6 +105,8 @@ mod tests {
     use super::*;
     use glam::DVec3;
 
+    mod lens_systems;
+
     fn lens(text: &str) -> Prescription {
         Prescription::parse(text, "test").unwrap()
     }

@@ -46,6 +46,8 @@ pub mod solve;
 #[cfg(test)]
 mod suite;
 pub mod table;
+#[cfg(test)]
+mod tests;
 pub mod thin_prism;
 pub mod ucm;
 pub mod warp;

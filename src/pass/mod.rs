@@ -13,6 +13,8 @@ pub mod mesh_warp;
 pub mod points;
 pub mod spec;
 pub mod sphere_warp;
+#[cfg(test)]
+mod tests;
 pub mod warp;
 pub mod warp_raster;
 pub mod warp_stage;

@@ -1,5 +1,5 @@
 //! Specialization-constant ids, named once. Each is `(GLSL name, constant_id)`; the host sets
-//! constants only through these, and `tests/layout.rs` checks every one against the compiled
+//! constants only through these, and `src/pass/tests/layout.rs` checks every one against the compiled
 //! SPIR-V of each shader that declares it.
 
 use crate::gpu::SpecId;

@@ -30,6 +30,8 @@ pub mod record;
 mod request;
 pub mod scene_file;
 mod search;
+#[cfg(test)]
+mod tests;
 
 use crate::{Error, Result};
 

@@ -1,17 +1,15 @@
 //! The geometry path (Lambers et al. Sec. 3.2) on lavapipe, validated, against exact oracles:
 //! OpenCV's projectPoints (the shared reference) and a CPU ray cast through the f64 model.
 
-mod common;
-
-use common::{assert_no_validation_messages, reference_camera, validated_context};
-use glam::{DVec2, DVec3};
-use vklens::internal::host::geometry::{render, TargetsReadback};
-use vklens::internal::imaging::{BitDepth, Pixels, Raster};
-use vklens::internal::model::{Camera, InverseMethod};
-use vklens::internal::pass::geometry::{
+use crate::host::geometry::{render, TargetsReadback};
+use crate::imaging::{BitDepth, Pixels, Raster};
+use crate::model::{Camera, InverseMethod};
+use crate::pass::geometry::{
     ColorFormat, GeometryDesc, Outputs, Projection, Rendered, DEFAULT_DELTA,
 };
-use vklens::internal::plan::scene_file::{Antialias, OutputSpec};
+use crate::plan::scene_file::{Antialias, OutputSpec};
+use crate::testing::{assert_no_validation_messages, reference_camera, validated_context};
+use glam::{DVec2, DVec3};
 
 /// 8-bit colour alone.
 const COLOR: OutputSpec = OutputSpec {
@@ -21,11 +19,11 @@ const COLOR: OutputSpec = OutputSpec {
     depth: false,
     exr: false,
 };
-use vklens::internal::host::plan::render_request as render_scene;
-use vklens::internal::plan::{PathChoice, RenderRequest};
-use vklens::internal::scene::builtin::{self, Board};
-use vklens::internal::scene::tessellate::tessellate;
-use vklens::internal::scene::{Mesh, Pose, Vertex};
+use crate::host::plan::render_request as render_scene;
+use crate::plan::{PathChoice, RenderRequest};
+use crate::scene::builtin::{self, Board};
+use crate::scene::tessellate::tessellate;
+use crate::scene::{Mesh, Pose, Vertex};
 
 const DATA: Outputs = Outputs {
     color: None,
@@ -171,7 +169,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
     // 3D point; the centroid of its image must sit on OpenCV's pixel within rasterization
     // precision.
     let ctx = validated_context();
-    let reference = vklens::internal::io::reference::load_reference().unwrap();
+    let reference = crate::io::reference::load_reference().unwrap();
     for name in ["seed_fig2", "webcam_plumb_bob", "prism_tilt"] {
         let case = reference.cases.iter().find(|c| c.name == name).unwrap();
         let camera = case.camera().unwrap();
@@ -207,7 +205,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
         // White squares on black, anti-aliased (4× supersampling, 4 jittered passes): the
         // intensity-weighted centroid of each marker locates it to a small fraction of a
         // pixel, unlike the pixel-centre count of an ID image (quantized to ±0.5 px).
-        let scene = vklens::internal::scene::Scene {
+        let scene = crate::scene::Scene {
             name: name.into(),
             mesh,
             texture: None,
@@ -282,7 +280,7 @@ fn barrel_discard_shows_the_border_and_stretches_nothing() {
     // The middles of the image's sides lie outside the pinhole frustum (their undistorted
     // NDC is beyond ±1) and are drawn. (Its corners are past the lens's fold: no preimage.)
     let ids = r.ids.as_ref().unwrap();
-    let f = vklens::internal::model::Frustum::from_intrinsics(&camera.intrinsics, 800, 600);
+    let f = crate::model::Frustum::from_intrinsics(&camera.intrinsics, 800, 600);
     for (x, y) in [(0, 300), (799, 300), (400, 0), (400, 599)] {
         let p = DVec2::new(x as f64, y as f64);
         let ideal = camera
@@ -419,15 +417,14 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         ),
         bit_depth: BitDepth::F32,
     };
-    let geometry =
-        vklens::internal::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
-    let (bilinear, _) = vklens::internal::host::warp::run_warp(
+    let geometry = crate::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
+    let (bilinear, _) = crate::host::warp::run_warp(
         &ctx,
-        vklens::internal::pass::warp::WarpDesc {
+        crate::pass::warp::WarpDesc {
             geometry,
-            coordinates: vklens::internal::pass::warp::Coordinates::Analytic,
-            sampling: vklens::internal::imaging::cpu_warp::Sampling::Bilinear,
-            format: vklens::internal::pass::warp::PixelFormat::Rgba32F,
+            coordinates: crate::pass::warp::Coordinates::Analytic,
+            sampling: crate::imaging::cpu_warp::Sampling::Bilinear,
+            format: crate::pass::warp::PixelFormat::Rgba32F,
             fill: [0.0; 4],
             write_mask: false,
         },
@@ -499,10 +496,10 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
     // `render --path warp --ids --depth`: a pinhole render of IDs and depth warped nearest on
     // the GPU in one submission equals rendering them, reading them back and warping them
     // from the host, bit for bit.
-    use vklens::internal::host::warp::run_warp;
-    use vklens::internal::imaging::cpu_warp::Sampling;
-    use vklens::internal::model::warp::WarpGeometry;
-    use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc};
+    use crate::host::warp::run_warp;
+    use crate::imaging::cpu_warp::Sampling;
+    use crate::model::warp::WarpGeometry;
+    use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc};
     let ctx = validated_context();
     let camera = reference_camera("seed_fig1_barrel");
     let scene = builtin::boxes();
@@ -527,7 +524,7 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
     };
     let got = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     // The host round trip: the overscanned pinhole render read back, then warped.
-    let ov = vklens::overscan(&camera, 1.0).unwrap();
+    let ov = crate::overscan(&camera, 1.0).unwrap();
     let pinhole = render_scene(
         &ctx,
         &scene,
@@ -599,14 +596,14 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
 /// colour within a level), and a pixel centre on an edge two triangles share can go to the
 /// other one (measured: 2 of 480,000 pixels, in the barrel scene). Returns the IDs.
 fn same_with_both_discards(
-    ctx: &vklens::internal::host::Context,
+    ctx: &crate::host::Context,
     desc: GeometryDesc,
     mesh: &Mesh,
     pose: &Pose,
     previous: &Pose,
     what: &str,
 ) -> Vec<u32> {
-    use vklens::internal::pass::geometry::Discard;
+    use crate::pass::geometry::Discard;
     let with = |discard| {
         let mut d = desc.clone();
         d.discard = discard;
@@ -735,8 +732,8 @@ fn the_compute_discard_renders_what_the_geometry_shader_does() {
 
 #[test]
 fn a_device_without_geometry_shaders_renders_the_vertex_path_through_the_compute_discard() {
-    use vklens::internal::host::{Context, ContextOptions};
-    use vklens::internal::pass::geometry::Discard;
+    use crate::host::{Context, ContextOptions};
+    use crate::pass::geometry::Discard;
     let ctx = Context::new(ContextOptions {
         validation: true,
         device: std::env::var("VKLENS_DEVICE")
@@ -774,7 +771,7 @@ fn a_device_without_geometry_shaders_renders_the_vertex_path_through_the_compute
 /// sharing one mesh inside one command buffer, each render what a fresh mesh renders.
 #[test]
 fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
-    use vklens::internal::pass::geometry::{Discard, GeometryPass, GeometryTargets, MeshBuffers};
+    use crate::pass::geometry::{Discard, GeometryPass, GeometryTargets, MeshBuffers};
     let ctx = validated_context();
     let gpu = ctx.gpu();
     let barrel = reference_camera("seed_fig1_barrel");
@@ -849,7 +846,7 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
         barrel.width,
         barrel.height,
         barrel.intrinsics,
-        vklens::internal::model::OpenCvDistortion {
+        crate::model::OpenCvDistortion {
             k1: -0.05,
             ..Default::default()
         },

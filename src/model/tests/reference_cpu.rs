@@ -1,8 +1,8 @@
 //! The f64 model against OpenCV 5.0.0's own numbers (`../shared/reference/`).
 
+use crate::io::reference::load_reference;
+use crate::model::{CameraModel, InverseMethod};
 use glam::DVec2;
-use vklens::internal::io::reference::load_reference;
-use vklens::internal::model::{CameraModel, InverseMethod};
 
 /// An inverse counts as "wrong" when it is off by more than this (pixels).
 const WRONG_PX: f64 = 1e-3;
@@ -95,8 +95,7 @@ fn fixed_point_5_reproduces_opencv_default_undistort_points() {
         for p in &case.points {
             let y = cam.intrinsics.to_normalized(DVec2::from(p.distorted_pixel));
             let pre = cam.remove_tilt(y).expect("untilt");
-            if let Some(x) = vklens::internal::model::opencv::fixed_point(&cam.distortion(), pre, 5)
-            {
+            if let Some(x) = crate::model::opencv::fixed_point(&cam.distortion(), pre, 5) {
                 let opencv = DVec2::from(p.opencv_undistort_default);
                 worst = worst.max((x - opencv).length() * cam.intrinsics.fx);
                 compared += 1;

@@ -1,13 +1,10 @@
 //! Real lens systems (Heidrich et al.): the shipped prescriptions against their published first-order
-//! figures, and `vklens lens info`.
+//! figures, the centres of projection of the image-based model, and the OpenCV fit at a finite
+//! focus (`tests/cli_lens.rs` runs `vklens lens` on them).
 
-use std::process::Command;
+use crate::lens::{analyse, trace, LAMBDA_D};
 
-use vklens::internal::lens::{analyse, trace, LAMBDA_D};
-
-mod common;
-
-use common::shipped_lens as shipped;
+use crate::testing::shipped_lens as shipped;
 
 #[test]
 fn double_gauss_matches_its_published_figures() {
@@ -42,104 +39,6 @@ fn wide_angle_matches_its_published_figures() {
 }
 
 #[test]
-fn lens_info_json_has_the_documented_keys_and_bad_files_name_the_line() {
-    let bin = env!("CARGO_BIN_EXE_vklens");
-    let lens = format!("{}/lenses/dgauss.50mm.dat", env!("CARGO_MANIFEST_DIR"));
-    let o = Command::new(bin)
-        .args(["lens", "info", "--lens", &lens, "--json"])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    for key in [
-        "efl_mm",
-        "bfl_mm",
-        "f_number",
-        "exit_pupil_z_mm",
-        "exit_pupil_diameter_mm",
-    ] {
-        assert!(v[key].as_f64().is_some(), "{key} missing: {v}");
-    }
-    let curve = v["distortion"].as_array().unwrap();
-    assert!(curve.len() > 5);
-    // A double Gauss has mild barrel distortion at 20°: a few percent at most.
-    assert!(curve
-        .iter()
-        .all(|d| d["distortion_percent"].as_f64().unwrap().abs() < 5.0));
-
-    let bad = std::env::temp_dir().join(format!("vklens-bad-lens-{}.dat", std::process::id()));
-    std::fs::write(&bad, "# a lens\n50 5 1.5 20\n-50 x 1 20\n").unwrap();
-    let o = Command::new(bin)
-        .args(["lens", "info", "--lens", bad.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        e.contains(&format!("{}:3:", bad.display())) && e.contains("thickness"),
-        "{e}"
-    );
-}
-
-#[test]
-fn the_fitted_opencv_camera_reproduces_the_traced_lens() {
-    // lens fit-opencv → a camera file every command accepts, whose forward model puts each
-    // chief ray where the exact trace does.
-    let out = std::env::temp_dir().join(format!("vklens-fit-{}.json", std::process::id()));
-    let lens = format!("{}/lenses/dgauss.50mm.dat", env!("CARGO_MANIFEST_DIR"));
-    let o = Command::new(env!("CARGO_BIN_EXE_vklens"))
-        .args([
-            "lens",
-            "fit-opencv",
-            "--lens",
-            &lens,
-            "--sensor",
-            "36x24",
-            "--pixels",
-            "1800x1200",
-        ])
-        .args(["--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let camera = vklens::internal::io::load_camera(&out).unwrap();
-    let p = shipped("dgauss.50mm.dat");
-    let par = analyse(&p, LAMBDA_D);
-    let film = par.rear_vertex_z + par.bfl.unwrap();
-    let pitch = 36.0 / 1800.0;
-    for deg in [5.0f64, 10.0, 15.0, 20.0] {
-        let theta = deg.to_radians();
-        let exit =
-            trace::trace(&p, trace::chief_ray(&p, theta, LAMBDA_D).unwrap(), LAMBDA_D).unwrap();
-        let traced_px = trace::height_at(&exit, film).abs() / pitch;
-        let model = camera
-            .project(glam::DVec3::new(theta.tan(), 0.0, 1.0))
-            .unwrap();
-        let model_px = model.x - camera.intrinsics.cx;
-        assert!(
-            (model_px - traced_px).abs() < 0.01,
-            "{deg}°: model {model_px} px, trace {traced_px} px"
-        );
-    }
-    // Non-square pixels are refused with a clear line.
-    let o = Command::new(env!("CARGO_BIN_EXE_vklens"))
-        .args([
-            "lens",
-            "fit-opencv",
-            "--lens",
-            &lens,
-            "--sensor",
-            "36x24",
-            "--pixels",
-            "1800x1000",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("square"));
-}
-
-#[test]
 fn the_achromat_matches_its_published_figures_and_corrects_colour() {
     // Thorlabs AC254-050-A: f = 50.0 mm, back focal distance 43.22 mm (its Zemax file).
     let p = shipped("achromat.50mm.dat");
@@ -149,7 +48,7 @@ fn the_achromat_matches_its_published_figures_and_corrects_colour() {
     assert!((bfl - 43.22).abs() < 0.43, "BFL {bfl}");
     // An achromat brings F and C light to (nearly) one focus: far less longitudinal colour
     // than a singlet of its crown glass, whose focal length changes by about f / V_d.
-    use vklens::internal::lens::prescription::{LAMBDA_C, LAMBDA_F};
+    use crate::lens::prescription::{LAMBDA_C, LAMBDA_F};
     let shift = (analyse(&p, LAMBDA_F).bfl.unwrap() - analyse(&p, LAMBDA_C).bfl.unwrap()).abs();
     let singlet_shift = efl / 47.11;
     // Measured: 0.15 mm against 1.06 mm (7× less; the two-term Cauchy dispersion from n_d and
@@ -167,7 +66,7 @@ fn the_singlet_matches_its_published_figures_and_does_not_correct_colour() {
     let efl = analyse(&p, LAMBDA_D).efl.unwrap();
     assert!((efl - 50.0).abs() < 0.5, "EFL {efl}");
     // Its focal length moves by about f / V_d between F and C (no correction at all).
-    use vklens::internal::lens::prescription::{LAMBDA_C, LAMBDA_F};
+    use crate::lens::prescription::{LAMBDA_C, LAMBDA_F};
     let shift = analyse(&p, LAMBDA_C).efl.unwrap() - analyse(&p, LAMBDA_F).efl.unwrap();
     let expected = efl / 64.17;
     assert!(
@@ -178,12 +77,12 @@ fn the_singlet_matches_its_published_figures_and_does_not_correct_colour() {
 
 mod image_model {
     use super::shipped;
-    use glam::{DVec2, DVec3};
-    use vklens::internal::lens::image_model::{
+    use crate::lens::image_model::{
         fit_cop, fit_cop_from, least_squares_cop, max_angle_deg, ImageModel, ModelOptions, Optics,
         PlaneRay,
     };
-    use vklens::internal::lens::{Prescription, LAMBDA_D};
+    use crate::lens::{Prescription, LAMBDA_D};
+    use glam::{DVec2, DVec3};
 
     /// 36 × 24 mm film, 360 × 240 pixels, focused at 2 m.
     fn optics(p: &Prescription) -> Optics {
@@ -246,7 +145,7 @@ mod image_model {
         // stop as the rear surface, the film 40 mm behind it. Every lens sample lies in the
         // stop, every cell is one exact projection from its sample point.
         let p = Prescription::parse("0 1 1 20\n0 40 0 0.05\n", "pinhole").unwrap();
-        let film = vklens::internal::lens::image_model::Film {
+        let film = crate::lens::image_model::Film {
             width: 120,
             height: 80,
             pitch_mm: 0.2,
@@ -258,7 +157,7 @@ mod image_model {
         assert!(m.max_angle_deg() < 1e-7, "{}", m.max_angle_deg());
         for s in &m.samples {
             let cop = s.cells[0].cop;
-            let expected = vklens::internal::lens::image_model::lens_to_camera(s.point);
+            let expected = crate::lens::image_model::lens_to_camera(s.point);
             assert!((cop - expected).length() < 1e-9, "{cop} vs {expected}");
         }
     }
@@ -334,77 +233,8 @@ mod image_model {
 }
 
 #[test]
-fn lens_render_cli_writes_the_film_and_refuses_bad_input() {
-    let bin = env!("CARGO_BIN_EXE_vklens");
-    let dir = std::env::temp_dir().join(format!("vklens-lens-render-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let lens = format!("{}/lenses/achromat.50mm.dat", env!("CARGO_MANIFEST_DIR"));
-    let out = dir.join("film.png");
-    let run = |extra: &[&str]| {
-        Command::new(bin)
-            .args(["lens", "render", "--lens", &lens, "--scene", "boxes"])
-            .args(["--pixels", "96x64", "--samples", "4"])
-            .args(extra)
-            .env("VKLENS_VALIDATION", "1")
-            .output()
-            .unwrap()
-    };
-    for reference in [false, true] {
-        let _ = std::fs::remove_file(&out);
-        let mut args = vec!["--output", out.to_str().unwrap()];
-        if reference {
-            args.push("--reference");
-        }
-        let o = run(&args);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let img = image::open(&out).unwrap().to_rgba8();
-        assert_eq!(img.dimensions(), (96, 64));
-        // Something of the scene reached the film (the boxes are lit, not all black).
-        assert!(
-            img.pixels().any(|p| p[1] > 100),
-            "reference {reference}: a black film"
-        );
-    }
-    // Bad input: one line naming the problem, exit 2, nothing written.
-    let _ = std::fs::remove_file(&out);
-    let bad_file = dir.join("bad.dat");
-    std::fs::write(&bad_file, "30 5 1.5 20\n-30 x 1 20\n").unwrap();
-    let cases: Vec<(Vec<String>, &str)> = vec![
-        (vec!["--fstop".into(), "1.2".into()], "faster than the lens"),
-        (vec!["--fstop".into(), "1e9".into()], "--fstop"),
-        (vec!["--focus=-1".into()], "--focus"),
-        (vec!["--max-angle".into(), "0".into()], "--max-angle"),
-        (vec!["--sensor".into(), "36x36".into()], "non-square"),
-    ];
-    for (extra, expected) in cases {
-        let mut args: Vec<&str> = extra.iter().map(|s| s.as_str()).collect();
-        args.extend(["--output", out.to_str().unwrap()]);
-        let o = run(&args);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
-        assert!(err.contains(expected), "{extra:?}: {err}");
-        assert!(!out.exists());
-    }
-    let o = Command::new(bin)
-        .args([
-            "lens",
-            "render",
-            "--lens",
-            bad_file.to_str().unwrap(),
-            "--scene",
-            "boxes",
-        ])
-        .args(["--output", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("bad.dat:2"));
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-#[test]
 fn fitting_at_a_finite_focus_scales_the_focal_length_by_the_magnification() {
-    use vklens::internal::lens::fit_opencv;
+    use crate::lens::fit_opencv;
     let p = shipped("dgauss.50mm.dat");
     let par = analyse(&p, LAMBDA_D);
     let at_infinity = fit_opencv(&p, (36.0, 24.0), (1800, 1200), f64::INFINITY, LAMBDA_D).unwrap();

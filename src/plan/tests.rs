@@ -1,15 +1,13 @@
 //! The planner: what it chooses, and proof on what is *recorded* (pipelines and
 //! their specialization constants), not on timings, that unasked effects cost nothing.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 
+use crate::host::plan::execute;
+use crate::pass::spec;
+use crate::plan::{load_geometry, plan, PassKind, Route, SceneFile, Stage};
+use crate::testing::{assert_no_validation_messages, validated_context};
 use ash::vk;
-use common::{assert_no_validation_messages, validated_context};
-use vklens::internal::host::plan::execute;
-use vklens::internal::pass::spec;
-use vklens::internal::plan::{load_geometry, plan, PassKind, Route, SceneFile, Stage};
 
 fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes")
@@ -27,10 +25,10 @@ fn error(text: &str) -> String {
 
 /// The recorded constants of a pipeline kind's stage.
 fn constant(
-    recorded: &vklens::internal::host::plan::Recorded,
+    recorded: &crate::host::plan::Recorded,
     kind: PassKind,
     stage: vk::ShaderStageFlags,
-    id: vklens::internal::gpu::SpecId,
+    id: crate::gpu::SpecId,
 ) -> Option<u32> {
     recorded
         .pipelines
@@ -41,12 +39,7 @@ fn constant(
         .and_then(|(_, c)| c.get(id))
 }
 
-fn run(
-    file: &SceneFile,
-) -> (
-    vklens::internal::plan::Plan,
-    vklens::internal::host::plan::Recorded,
-) {
+fn run(file: &SceneFile) -> (crate::plan::Plan, crate::host::plan::Recorded) {
     let ctx = validated_context();
     let scene = load_geometry(file).unwrap();
     let p = plan(file, &scene).unwrap();
@@ -267,85 +260,9 @@ fn scene_file_errors_name_the_file_the_key_and_what_was_expected() {
 }
 
 #[test]
-fn render_scene_cli_writes_every_output_of_every_frame() {
-    let bin = env!("CARGO_BIN_EXE_vklens");
-    let dir = std::env::temp_dir().join(format!("vklens-plan-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let scene = examples().join("ids_and_flow.toml");
-    // `vklens render --scene S --out DIR` plus `extra`.
-    let render = |extra: &[&str]| {
-        std::process::Command::new(bin)
-            .args([
-                "render",
-                "--scene",
-                scene.to_str().unwrap(),
-                "--out",
-                dir.to_str().unwrap(),
-            ])
-            .args(extra)
-            .env("VKLENS_VALIDATION", "1")
-            .output()
-            .unwrap()
-    };
-    let o = render(&["--explain", "--frames", "1..=2"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        stdout.contains("plan: vertex path") && stdout.contains("measured"),
-        "{stdout}"
-    );
-    for f in 1..=2 {
-        for name in [
-            "color_{f:04}.png",
-            "ids_{f:04}.png",
-            "flow_{f:04}.exr",
-            "depth_{f:04}.exr",
-        ] {
-            let name = name.replace("{f:04}", &format!("{f:04}"));
-            assert!(dir.join(&name).exists(), "{name}");
-        }
-    }
-    assert!(
-        !dir.join("color_0000.png").exists(),
-        "frame 0 was not asked for"
-    );
-    let plan: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("plan.json")).unwrap()).unwrap();
-    assert_eq!(plan["frames"].as_array().unwrap().len(), 2);
-    // The camera the frames came through, as vklens JSON and ROS camera_info, loading back to
-    // the very camera of the plan.
-    let file = SceneFile::load(&scene).unwrap();
-    let planned = vklens::internal::plan::plan(&file, &load_geometry(&file).unwrap())
-        .unwrap()
-        .camera()
-        .cloned()
-        .expect("a camera file scene");
-    let back = vklens::Camera::load(dir.join("camera.json")).unwrap();
-    assert_eq!(back.to_json(), planned.to_json());
-    // This scene's camera has thin prism and tilt terms, which ROS camera_info cannot hold:
-    // not written, and said (tests/fisheye.rs round-trips the cameras it can hold).
-    assert!(!dir.join("camera_info.yaml").exists());
-    assert!(
-        String::from_utf8_lossy(&o.stderr)
-            .contains("camera_info.yaml not written: ROS camera_info has no thin prism"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    // Out of range frames: one line, exit 2.
-    let o = render(&["--frames", "2..9"]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("3 pose(s)"));
-    // Anti-aliasing flags beside a scene file would be ignored: refused, pointing at the keys.
-    let o = render(&["--supersample", "2"]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("[render] supersample"));
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-#[test]
 fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
-    use vklens::internal::gpu::QueryPool;
-    use vklens::internal::plan::record::PlanRecorder;
+    use crate::gpu::QueryPool;
+    use crate::plan::record::PlanRecorder;
     let ctx = validated_context();
     let file = SceneFile::load(&examples().join("ids_and_flow.toml")).unwrap();
     let scene = load_geometry(&file).unwrap();
@@ -367,8 +284,7 @@ fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
     let (_, targets) = recorder.images();
     let targets = targets.unwrap();
     // The caller reads the targets back itself, from the layout `record` documents.
-    let readback =
-        vklens::internal::host::geometry::TargetsReadback::new(ctx.gpu(), targets).unwrap();
+    let readback = crate::host::geometry::TargetsReadback::new(ctx.gpu(), targets).unwrap();
     ctx.submit(|cmd| unsafe {
         recorder.record_setup(cmd);
         recorder.record(cmd, Some(&queries));
@@ -398,7 +314,7 @@ fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
     // Chromatic colour takes the warp; depth asked beside it goes through the same warp as a
     // second, nearest one (+inf where there is no source). An engine recording the plan gets
     // the very depth the headless execution writes.
-    use vklens::internal::gpu::{record_compute_download, Buffer};
+    use crate::gpu::{record_compute_download, Buffer};
     let ctx = validated_context();
     let gpu = ctx.gpu();
     let text = std::fs::read_to_string(examples().join("chromatic.toml")).unwrap()
@@ -414,7 +330,7 @@ fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
     })
     .unwrap();
     let expected = expected.unwrap().depth.expect("execute() writes depth");
-    let mut recorder = vklens::internal::plan::record::PlanRecorder::new(gpu, &p, &scene).unwrap();
+    let mut recorder = crate::plan::record::PlanRecorder::new(gpu, &p, &scene).unwrap();
     // SAFETY: no submission using it is pending (`submit` waits on its fence).
     unsafe { recorder.prepare(0) }.unwrap();
     let image = recorder
@@ -524,7 +440,7 @@ fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
     assert!(changed > 0, "anti-aliasing changed no pixel");
     assert!(mean < 0.05, "mean change {mean}");
     // The engine recorder draws one sample per pixel and says so rather than ignore the keys.
-    let e = match vklens::internal::plan::record::PlanRecorder::new(ctx.gpu(), &p4, &scene) {
+    let e = match crate::plan::record::PlanRecorder::new(ctx.gpu(), &p4, &scene) {
         Ok(_) => panic!("the recorder accepted an anti-aliased plan"),
         Err(e) => e.to_string(),
     };
@@ -570,7 +486,7 @@ fn a_scene_of_many_frames_warps_through_a_map_built_once() {
     assert!(p.expected_error_px <= p.budget_px);
     // The same frame solved per pixel (Newton) agrees with the map's within the map's error.
     let ctx = validated_context();
-    let frame = |p: &vklens::internal::plan::Plan| {
+    let frame = |p: &crate::plan::Plan| {
         let mut out = None;
         let recorded = execute(&ctx, p, &scene, 2..3, &mut |f| {
             out = Some(f.rendered.color.unwrap());
@@ -587,7 +503,7 @@ fn a_scene_of_many_frames_warps_through_a_map_built_once() {
     );
     let mut solved_plan = p.clone();
     solved_plan.route = Route::Warp {
-        method: vklens::InverseMethod::Newton,
+        method: crate::InverseMethod::Newton,
         chromatic: Some([1.004, 1.0, 0.996]),
         map: false,
     };
@@ -608,42 +524,6 @@ fn a_scene_of_many_frames_warps_through_a_map_built_once() {
         mapped.len()
     );
     assert_no_validation_messages(&ctx);
-}
-
-#[test]
-fn errors_in_files_a_scene_names_name_the_scene_file_and_key() {
-    let dir = std::env::temp_dir().join(format!("vklens-scene-refs-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let base = dir.join("scene.toml");
-    let err = |text: &str| match vklens::SceneRenderer::parse(text, &base) {
-        Ok(_) => panic!("must be refused: {text}"),
-        Err(e) => (e.kind(), e.to_string()),
-    };
-    // A missing camera file: still an I/O error about that file, and the scene key says who
-    // named it.
-    let (kind, e) = err("[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"nope.json\"\n");
-    assert_eq!(kind, vklens::ErrorKind::Io);
-    assert!(
-        e.contains("nope.json") && e.contains("scene.toml: [optics] camera"),
-        "{e}"
-    );
-    // A broken one: input, led by the scene file and key.
-    std::fs::write(dir.join("bad.json"), "{\"width\": 10").unwrap();
-    let (kind, e) = err("[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"bad.json\"\n");
-    assert_eq!(kind, vklens::ErrorKind::Input);
-    assert!(
-        e.contains("scene.toml: [optics] camera: ") && e.contains("bad.json"),
-        "{e}"
-    );
-    // A missing lens prescription.
-    let (_, e) = err(
-        "[geometry]\nscene = \"boxes\"\n[optics]\nlens = \"nolens.dat\"\nsensor_mm = [36, 24]\npixels = [360, 240]\n",
-    );
-    assert!(
-        e.contains("scene.toml: [optics] lens") && e.contains("nolens.dat"),
-        "{e}"
-    );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -724,13 +604,11 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
     );
     let planned = planned.expect("the cube route renders colour");
     let camera = p.camera().cloned().unwrap();
-    let mut request = vklens::internal::plan::RenderRequest::color(
-        &camera,
-        vklens::internal::plan::PathChoice::Cube { side },
-    );
+    let mut request =
+        crate::plan::RenderRequest::color(&camera, crate::plan::PathChoice::Cube { side });
     request.pose = p.poses[0];
     request.chromatic = Some(scales);
-    let flag = vklens::internal::host::plan::render_request(&ctx, &scene, &request, &mut |_| {})
+    let flag = crate::host::plan::render_request(&ctx, &scene, &request, &mut |_| {})
         .unwrap()
         .color
         .unwrap();
@@ -772,7 +650,7 @@ fn a_double_sphere_scene_runs_alg1_specialized_for_its_model() {
     let (p, recorded) = run(&file);
     assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
     assert!(recorded.has(PassKind::VertexRender));
-    let model = vklens::internal::model::ModelKind::DoubleSphere.gpu_id();
+    let model = crate::model::ModelKind::DoubleSphere.gpu_id();
     let got = constant(
         &recorded,
         PassKind::VertexRender,

@@ -2,16 +2,14 @@
 //! fisheye's own forward model (past 90° off the axis) and six pinhole cube faces warped by
 //! ray. They must agree; the warp path turns to the cube by itself and says why.
 
-mod common;
-
+use crate::host::plan::render_request as render_scene;
+use crate::imaging::Pixels;
+use crate::model::InverseMethod;
+use crate::model::{Camera, Fisheye, Intrinsics};
+use crate::plan::limits::pinhole_source_refusal;
+use crate::plan::{PathChoice, RenderRequest};
+use crate::scene::{Mesh, Scene, Vertex};
 use glam::DVec3;
-use vklens::internal::host::plan::render_request as render_scene;
-use vklens::internal::imaging::Pixels;
-use vklens::internal::model::InverseMethod;
-use vklens::internal::model::{Camera, Fisheye, Intrinsics};
-use vklens::internal::plan::limits::pinhole_source_refusal;
-use vklens::internal::plan::{PathChoice, RenderRequest};
-use vklens::internal::scene::{Mesh, Scene, Vertex};
 
 fn fisheye_200() -> Camera {
     let k = Intrinsics {
@@ -89,7 +87,7 @@ fn request(camera: &Camera, path: PathChoice) -> RenderRequest {
     RenderRequest::color(camera, path)
 }
 
-fn rgba8(r: &vklens::internal::pass::geometry::Rendered) -> Vec<[u8; 4]> {
+fn rgba8(r: &crate::pass::geometry::Rendered) -> Vec<[u8; 4]> {
     match &r.color.as_ref().expect("colour").pixels {
         Pixels::Rgba8(p) => p.clone(),
         _ => panic!("8-bit colour expected"),
@@ -98,7 +96,7 @@ fn rgba8(r: &vklens::internal::pass::geometry::Rendered) -> Vec<[u8; 4]> {
 
 #[test]
 fn the_vertex_path_and_the_cube_warp_agree_on_a_200_degree_fisheye() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let camera = fisheye_200();
     let scene = checker_room();
     let vertex = render_scene(
@@ -114,7 +112,7 @@ fn the_vertex_path_and_the_cube_warp_agree_on_a_200_degree_fisheye() {
         &mut |_| {},
     )
     .expect("vertex path");
-    let side = vklens::internal::model::overscan::cube_face_side(&camera, 2.0);
+    let side = crate::model::overscan::cube_face_side(&camera, 2.0);
     let cube = render_scene(
         &ctx,
         &scene,
@@ -158,12 +156,12 @@ fn the_vertex_path_and_the_cube_warp_agree_on_a_200_degree_fisheye() {
         (only_cube as f64) < 0.05 * seen as f64,
         "{only_cube} px only in the cube warp"
     );
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn the_warp_path_turns_to_a_cube_map_where_no_pinhole_source_fits_and_says_why() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let camera = fisheye_200();
     let why = pinhole_source_refusal(&camera, 1.0, 16384).expect("a 200° lens needs the cube");
     assert!(why.contains("90°"), "{why}");
@@ -206,7 +204,7 @@ fn the_warp_path_turns_to_a_cube_map_where_no_pinhole_source_fits_and_says_why()
     let why = pinhole_source_refusal(&wide, 8.0, 16384).expect("too large at density 8");
     assert!(why.contains("16384 px"), "{why}");
     assert!(pinhole_source_refusal(&wide, 1.0, 16384).is_none());
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 /// A fisheye whose domain reaches 180° (θ_d never folds, no `max_fov_deg`), a little off the
@@ -218,10 +216,8 @@ fn the_warp_path_turns_to_a_cube_map_where_no_pinhole_source_fits_and_says_why()
 /// curves (the image of the direction behind the lens is the whole rim).
 #[test]
 fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
-    use vklens::internal::pass::geometry::{
-        ColorFormat, Discard, GeometryDesc, Outputs, Projection,
-    };
-    let ctx = common::validated_context();
+    use crate::pass::geometry::{ColorFormat, Discard, GeometryDesc, Outputs, Projection};
+    let ctx = crate::testing::validated_context();
     let lens = Fisheye::new([0.0; 4], 0.0, None).expect("lens");
     assert!(
         lens.theta_max() >= std::f64::consts::PI - 1e-9,
@@ -244,7 +240,7 @@ fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
     );
     cube_request.pose.translation = DVec3::new(0.07, -0.05, 0.03);
     let pose = cube_request.pose;
-    let side = vklens::internal::model::overscan::cube_face_side(&camera, 2.0);
+    let side = crate::model::overscan::cube_face_side(&camera, 2.0);
     cube_request.path = PathChoice::Cube { side };
     let cube = render_scene(&ctx, &scene, &cube_request, &mut |_| {}).expect("cube path");
     let b = rgba8(&cube);
@@ -266,9 +262,8 @@ fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
             Outputs::color_only(Some(ColorFormat::Rgba8)),
         );
         desc.discard = discard;
-        let vertex =
-            vklens::internal::host::geometry::render(&ctx, desc, &scene.mesh, None, &pose, &pose)
-                .expect("vertex path");
+        let vertex = crate::host::geometry::render(&ctx, desc, &scene.mesh, None, &pose, &pose)
+            .expect("vertex path");
         let a = rgba8(&vertex);
         let far = centre
             .iter()
@@ -289,5 +284,5 @@ fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
         // wall (measured: 52 % without the rule); with it, checker edges differ (2.9 %).
         assert!(far < 0.05, "{}: {far}", discard.name());
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }

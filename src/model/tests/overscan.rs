@@ -1,11 +1,11 @@
 //! Overscan: the computed source covers every valid distorted pixel — for barrel, pincushion,
 //! mustache and folding lenses — where Lambers et al.'s four-corner rule does not.
 
+use crate::io::reference::load_reference;
+use crate::model::overscan::overscan;
+use crate::model::warp::WarpGeometry;
+use crate::model::{Camera, Intrinsics, InverseMethod};
 use glam::DVec2;
-use vklens::internal::io::reference::load_reference;
-use vklens::internal::model::overscan::overscan;
-use vklens::internal::model::warp::WarpGeometry;
-use vklens::internal::model::{Camera, Intrinsics, InverseMethod};
 
 /// Valid output pixels (inverse defined) whose source falls off the frame.
 fn uncovered(cam: &Camera, geometry: &WarpGeometry) -> usize {

@@ -2,9 +2,9 @@
 //! its vklens JSON twin describes (same model, same pixels), and malformed files are refused
 //! naming the file and the key. The files are small ones written here, in each tool's layout.
 
+use crate::io::camera::parse_camera_at;
+use crate::model::Camera;
 use glam::DVec3;
-use vklens::internal::io::camera::parse_camera_at;
-use vklens::internal::model::Camera;
 
 fn load(text: &str, origin: &str, index: Option<usize>) -> Camera {
     parse_camera_at(text, origin, index).unwrap_or_else(|e| panic!("{origin}: {e}"))
@@ -195,8 +195,8 @@ fn every_colmap_model_reads_from_cameras_txt_as_from_colmap_json() {
 /// file carries no fit or the key is not a boolean.
 #[test]
 fn fitted_inverse_reads_and_writes_in_vklens_json() {
-    use vklens::internal::io::models::camera_to_json;
-    use vklens::internal::model::samples::{fitted_inverse_cameras, sample_cameras};
+    use crate::io::models::camera_to_json;
+    use crate::model::samples::{fitted_inverse_cameras, sample_cameras};
     let exact: Vec<_> = sample_cameras().expect("samples");
     for (name, fitted) in fitted_inverse_cameras().expect("fitted") {
         let (_, plain) = exact

@@ -1,16 +1,14 @@
 //! Heidrich et al.'s image-based model rendered on the GPU against the CPU distribution ray tracer
 //! through the same lens and scene.
 
-mod common;
-
-use common::{
+use crate::lens::image_model::{ImageModel, ModelOptions, Optics};
+use crate::lens::reference::{psnr, render_reference, Channel};
+use crate::lens::LAMBDA_D;
+use crate::pass::lens_render::{LensRenderOptions, LensRenderer, ALL_CHANNELS};
+use crate::scene::builtin;
+use crate::testing::{
     assert_no_validation_messages, shipped_lens as shipped, upload_mesh, validated_context,
 };
-use vklens::internal::lens::image_model::{ImageModel, ModelOptions, Optics};
-use vklens::internal::lens::reference::{psnr, render_reference, Channel};
-use vklens::internal::lens::LAMBDA_D;
-use vklens::internal::pass::lens_render::{LensRenderOptions, LensRenderer, ALL_CHANNELS};
-use vklens::internal::scene::builtin;
 
 #[test]
 fn image_based_render_matches_the_reference() {
@@ -63,9 +61,9 @@ fn image_based_render_matches_the_reference() {
 }
 
 /// A white wall `distance` metres ahead, wider than any view.
-fn white_wall(distance: f64) -> vklens::internal::scene::Mesh {
+fn white_wall(distance: f64) -> crate::scene::Mesh {
+    use crate::scene::{Mesh, Vertex};
     use glam::DVec3;
-    use vklens::internal::scene::{Mesh, Vertex};
     let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
     Mesh {
         vertices: corners
@@ -85,8 +83,8 @@ fn white_wall(distance: f64) -> vklens::internal::scene::Mesh {
 
 #[test]
 fn vignetting_falls_off_as_the_reference_does() {
+    use crate::lens::reference::relative_illumination;
     use glam::DVec2;
-    use vklens::internal::lens::reference::relative_illumination;
     let ctx = validated_context();
     let p = shipped("dgauss.50mm.dat");
     let optics = Optics::new(&p, (180, 120), 0.2, 5.0, None).unwrap();
@@ -101,7 +99,7 @@ fn vignetting_falls_off_as_the_reference_does() {
     let wall = white_wall(5.0);
     let mesh = upload_mesh(&ctx, &wall, None);
     let frame = renderer
-        .render(&ctx, &mesh, &vklens::internal::scene::Pose::IDENTITY)
+        .render(&ctx, &mesh, &crate::scene::Pose::IDENTITY)
         .unwrap();
     let mut profile = Vec::new();
     for k in 0..=10 {
@@ -134,9 +132,9 @@ fn vignetting_falls_off_as_the_reference_does() {
 }
 
 /// A white square of side `side` centred at (x, 0, z), facing the camera.
-fn square(x: f64, z: f64, side: f64) -> vklens::internal::scene::Mesh {
+fn square(x: f64, z: f64, side: f64) -> crate::scene::Mesh {
+    use crate::scene::{Mesh, Vertex};
     use glam::DVec3;
-    use vklens::internal::scene::{Mesh, Vertex};
     let h = side / 2.0;
     let corners = [(-h, -h), (h, -h), (h, h), (-h, h)];
     Mesh {
@@ -166,15 +164,15 @@ fn moments(px: &[[f32; 4]], w: usize) -> [(f64, f64); 3] {
 
 #[test]
 fn chromatic_aberration_comes_out_of_the_glass() {
-    use vklens::internal::lens::image_model::channel_models;
-    use vklens::internal::lens::image_model::{RGB_CHANNELS, RGB_WAVELENGTHS};
-    use vklens::internal::lens::reference::Channel;
+    use crate::lens::image_model::channel_models;
+    use crate::lens::image_model::{RGB_CHANNELS, RGB_WAVELENGTHS};
+    use crate::lens::reference::Channel;
     let ctx = validated_context();
     // On the axis, 2 m away, in focus (d line): what differs between channels is where each
     // wavelength focuses (longitudinal colour), seen as the spot's spread.
     let mesh = square(0.0, 2.0, 0.05);
     let gpu_mesh = upload_mesh(&ctx, &mesh, None);
-    let scene = vklens::internal::scene::Scene {
+    let scene = crate::scene::Scene {
         name: "square".into(),
         mesh: mesh.clone(),
         texture: None,
@@ -193,7 +191,7 @@ fn chromatic_aberration_comes_out_of_the_glass() {
         let mut renderer =
             LensRenderer::new(ctx.gpu(), &models, LensRenderOptions::default()).unwrap();
         let frame = renderer
-            .render(&ctx, &gpu_mesh, &vklens::internal::scene::Pose::IDENTITY)
+            .render(&ctx, &gpu_mesh, &crate::scene::Pose::IDENTITY)
             .unwrap();
         let channels: Vec<Channel> = RGB_WAVELENGTHS
             .iter()
@@ -205,7 +203,7 @@ fn chromatic_aberration_comes_out_of_the_glass() {
             &channels,
             options.samples,
             &scene,
-            &vklens::internal::scene::Pose::IDENTITY,
+            &crate::scene::Pose::IDENTITY,
             &|_| {},
         )
         .unwrap();

@@ -1,17 +1,15 @@
 //! The GLSL f32 mirror against the f64 model and OpenCV's numbers, on lavapipe (or any GPU),
 //! with the validation layer on.
 
-mod common;
-
+use crate::host::points::run_points;
+use crate::io::reference::load_reference;
+use crate::model::{CameraModel, InverseMethod};
+use crate::pass::{PointsMode, Precision};
 use glam::DVec2;
-use vklens::internal::host::points::run_points;
-use vklens::internal::io::reference::load_reference;
-use vklens::internal::model::{CameraModel, InverseMethod};
-use vklens::internal::pass::{PointsMode, Precision};
 
 #[test]
 fn gpu_forward_within_2e3_px_of_opencv() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let reference = load_reference().expect("shared reference");
     for case in &reference.cases {
         let cam = case.camera().expect("camera");
@@ -34,7 +32,7 @@ fn gpu_forward_within_2e3_px_of_opencv() {
             case.name
         );
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 /// Newton on the GPU for every in-domain reference point: per point, the f32 forward error
@@ -44,7 +42,7 @@ fn gpu_forward_within_2e3_px_of_opencv() {
 type NewtonErrors = Vec<(String, Vec<(f64, Option<f64>)>)>;
 
 fn gpu_newton_errors(precision: Precision) -> NewtonErrors {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let reference = load_reference().expect("shared reference");
     let mut all = Vec::new();
     for case in &reference.cases {
@@ -83,7 +81,7 @@ fn gpu_newton_errors(precision: Precision) -> NewtonErrors {
         }
         all.push((case.name.clone(), rows));
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
     all
 }
 
@@ -142,7 +140,7 @@ fn gpu_newton_f32_within_1e3_px_where_well_conditioned_and_bounded_near_folds() 
 fn gpu_approximations_agree_with_their_cpu_twins() {
     // Heikkilä and fixed-point are approximations; the GPU must compute the *same*
     // approximation as the f64 code, not merely something close to the truth.
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let reference = load_reference().expect("shared reference");
     for case in &reference.cases {
         let cam = case.camera().expect("camera");
@@ -185,24 +183,22 @@ fn gpu_approximations_agree_with_their_cpu_twins() {
             assert!(worst <= 5e-3, "{} {method}: {worst}", case.name);
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn specialization_constants_compile_out_unused_terms() {
+    use crate::gpu::host_read_barrier;
+    use crate::gpu::{shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool};
+    use crate::pass::{spec, CameraParams, PointsPass};
     use ash::vk;
     use gpu_allocator::MemoryLocation;
-    use vklens::internal::gpu::host_read_barrier;
-    use vklens::internal::gpu::{
-        shaders, write_buffer_descriptors, Buffer, ComputePipeline, DescriptorPool,
-    };
-    use vklens::internal::pass::{spec, CameraParams, PointsPass};
 
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let gpu = ctx.gpu();
     let reference = load_reference().expect("shared reference");
     // A k1 k2 p1 p2 camera builds a pipeline with rational, prism and tilt switched off.
-    let fig2 = common::reference_camera("seed_fig2");
+    let fig2 = crate::testing::reference_camera("seed_fig2");
     let pass = PointsPass::new(gpu, &fig2, PointsMode::Distort, Precision::F32).unwrap();
     let c = &pass.pipeline().constants;
     assert_eq!(
@@ -225,7 +221,7 @@ fn specialization_constants_compile_out_unused_terms() {
         .unwrap();
     let cam = case.camera().unwrap();
     let mut terms = cam.distortion().terms();
-    let run = |terms: vklens::internal::model::Terms| -> Vec<[f32; 4]> {
+    let run = |terms: crate::model::Terms| -> Vec<[f32; 4]> {
         let constants = CameraParams::spec_constants(terms)
             .u32(spec::MODE, 0)
             .u32(spec::METHOD, 0)
@@ -310,7 +306,7 @@ fn specialization_constants_compile_out_unused_terms() {
     let mut cpu = cam.clone();
     let mut d = cam.distortion();
     (d.s1, d.s2, d.s3, d.s4) = (0.0, 0.0, 0.0, 0.0);
-    cpu = vklens::internal::model::Camera::new(cpu.width, cpu.height, cpu.intrinsics, d).unwrap();
+    cpu = crate::model::Camera::new(cpu.width, cpu.height, cpu.intrinsics, d).unwrap();
     let (mut moved, mut worst) = (0.0f64, 0.0f64);
     for ((p, a), b) in case.points.iter().zip(&full).zip(&no_prism) {
         moved = moved.max(((a[0] - b[0]) as f64).hypot((a[1] - b[1]) as f64));
@@ -329,5 +325,5 @@ fn specialization_constants_compile_out_unused_terms() {
         worst < 2e-3,
         "with VKL_PRISM=false the shader is not the prism-free model"
     );
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }

@@ -38,7 +38,7 @@ fn temp_file(tag: &str, ext: &str, body: &[u8]) -> std::path::PathBuf {
 fn camera_corpus() {
     replay("camera", |d| {
         if let Ok(text) = std::str::from_utf8(d) {
-            vklens::internal::io::camera::exercise(text);
+            crate::io::camera::exercise(text);
         }
     });
 }
@@ -47,7 +47,7 @@ fn camera_corpus() {
 fn lens_corpus() {
     replay("lens", |d| {
         if let Ok(text) = std::str::from_utf8(d) {
-            let _ = vklens::internal::lens::prescription::Prescription::parse(text, "corpus");
+            let _ = crate::lens::prescription::Prescription::parse(text, "corpus");
         }
     });
 }
@@ -56,7 +56,7 @@ fn lens_corpus() {
 fn scene_toml_corpus() {
     replay("scene_toml", |d| {
         if let Ok(text) = std::str::from_utf8(d) {
-            let _ = vklens::internal::plan::SceneFile::parse(text, Path::new("/corpus/scene.toml"));
+            let _ = crate::plan::SceneFile::parse(text, Path::new("/corpus/scene.toml"));
         }
     });
 }
@@ -65,7 +65,7 @@ fn scene_toml_corpus() {
 fn points_corpus() {
     replay("points", |d| {
         if let Ok(text) = std::str::from_utf8(d) {
-            let _ = vklens::internal::cli::parse_point_rows(text, true);
+            let _ = crate::internal::cli::parse_point_rows(text, true);
         }
     });
 }
@@ -77,7 +77,7 @@ fn mesh_corpus() {
             return;
         };
         let ext = ["obj", "gltf", "glb"][kind as usize % 3];
-        let _ = vklens::internal::scene::load::load_file(&temp_file("mesh", ext, body));
+        let _ = crate::scene::load::load_file(&temp_file("mesh", ext, body));
     });
 }
 
@@ -88,7 +88,7 @@ fn image_corpus() {
             return;
         };
         let ext = ["png", "exr"][kind as usize % 2];
-        let _ = vklens::internal::imaging::file::load(&temp_file("image", ext, body));
+        let _ = crate::imaging::file::load(&temp_file("image", ext, body));
     });
 }
 
@@ -104,7 +104,7 @@ fn an_image_header_claiming_more_than_its_file_can_hold_is_refused_before_decodi
     let (&kind, body) = data.split_first().unwrap();
     let ext = ["png", "exr"][kind as usize % 2];
     let start = std::time::Instant::now();
-    let e = vklens::internal::imaging::file::load(&temp_file("oom", ext, body))
+    let e = crate::imaging::file::load(&temp_file("oom", ext, body))
         .unwrap_err()
         .to_string();
     assert!(e.contains("cannot hold") || e.contains("budget"), "{e}");

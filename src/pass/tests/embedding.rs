@@ -4,14 +4,14 @@
 
 use std::sync::{Arc, Mutex};
 
+use crate::gpu::host_read_barrier;
+use crate::gpu::{Buffer, EnabledFeatures, Gpu};
+use crate::model::InverseMethod;
+use crate::pass::{PointsMode, PointsPass, Precision};
 use ash::vk;
 use glam::DVec2;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
-use vklens::internal::gpu::host_read_barrier;
-use vklens::internal::gpu::{Buffer, EnabledFeatures, Gpu};
-use vklens::internal::model::InverseMethod;
-use vklens::internal::pass::{PointsMode, PointsPass, Precision};
 
 #[test]
 fn a_pass_records_into_the_callers_command_buffer_on_the_callers_device() {
@@ -81,7 +81,7 @@ fn a_pass_records_into_the_callers_command_buffer_on_the_callers_device() {
                 EnabledFeatures::default(),
             )
             .unwrap();
-            let reference = vklens::internal::io::reference::load_reference().unwrap();
+            let reference = crate::io::reference::load_reference().unwrap();
             let case = &reference.cases[0];
             let cam = case.camera().unwrap();
             let pixels: Vec<[f32; 2]> = case

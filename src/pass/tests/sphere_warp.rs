@@ -1,15 +1,11 @@
 //! The warp from a 360° source (cube map or panorama): faces follow the documented convention,
 //! no seam at face edges, every lens sees the direction its inverse model says.
 
-mod common;
-
+use crate::host::sphere_warp::run_sphere_warp;
+use crate::imaging::{BitDepth, Pixels, Raster};
+use crate::model::{Camera, Fisheye, Intrinsics};
+use crate::pass::sphere_warp::{equirect_direction, CubeFace, SphereSource, SphereWarpOptions};
 use glam::{DVec2, DVec3};
-use vklens::internal::host::sphere_warp::run_sphere_warp;
-use vklens::internal::imaging::{BitDepth, Pixels, Raster};
-use vklens::internal::model::{Camera, Fisheye, Intrinsics};
-use vklens::internal::pass::sphere_warp::{
-    equirect_direction, CubeFace, SphereSource, SphereWarpOptions,
-};
 
 /// A 200° fisheye (what no pinhole source can hold).
 fn fisheye_200() -> Camera {
@@ -122,7 +118,7 @@ fn worst_error(camera: &Camera, out: &Raster, mask: &[u8]) -> f64 {
 
 #[test]
 fn a_cube_of_direction_colours_gives_every_pixel_its_direction() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let faces = direction_cube(256);
     for camera in [fisheye_200(), gopro()] {
         let (out, mask) =
@@ -132,12 +128,12 @@ fn a_cube_of_direction_colours_gives_every_pixel_its_direction() {
         // Bilinear interpolation of a smooth function over 256² faces: well under 1e-3.
         assert!(worst < 1e-3, "{}: {worst}", camera.model_name());
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn a_panorama_of_direction_colours_gives_every_pixel_its_direction() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let (w, h) = (1024, 512);
     let pano = float_raster(w, h, |u, v| colour_of(equirect_direction(u, v, (w, h))));
     for camera in [fisheye_200(), gopro()] {
@@ -148,12 +144,12 @@ fn a_panorama_of_direction_colours_gives_every_pixel_its_direction() {
         // Coarser than the cube near the poles; the seam at ±180° wraps.
         assert!(worst < 5e-3, "{}: {worst}", camera.model_name());
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn a_constant_cube_gives_a_constant_image_without_seams() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let colour = [77u8, 150, 200, 255];
     let face = Raster {
         width: 64,
@@ -171,12 +167,12 @@ fn a_constant_cube_gives_a_constant_image_without_seams() {
     let valid: Vec<_> = px.iter().zip(&mask).filter(|(_, m)| **m > 127).collect();
     assert!(valid.len() > 300_000, "{} valid pixels", valid.len());
     assert!(valid.iter().all(|(p, _)| **p == colour), "a seam or a hole");
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn chromatic_channels_see_their_own_magnified_directions() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let faces = direction_cube(256);
     let camera = fisheye_200();
     let scales = [1.01, 1.0, 0.99];
@@ -208,12 +204,12 @@ fn chromatic_channels_see_their_own_magnified_directions() {
         }
     }
     assert!(worst < 1e-3, "{worst}");
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn mismatched_faces_are_refused_naming_the_face() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let mut faces = direction_cube(32);
     faces[3] = float_raster(32, 16, |_, _| [0.0; 4]);
     let e = run_sphere_warp(&ctx, &fisheye_200(), SphereSource::Cube(&faces), &options())

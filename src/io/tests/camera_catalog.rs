@@ -1,18 +1,16 @@
 //! Which camera of a file, and in which format: cameras picked by index or by the name the
 //! file gives them, image sizes for files without one, what real files do to their text
 //! (CRLF, tabs, `key:value`, `%YAML:1.0` and comments, `e-002`, wrapped and aligned lists),
-//! `vklens cameras`, and `vklens convert` into every format that can hold a camera, read back
-//! to the same pixels. The files are small ones written here in each tool's layout.
+//! and the writers of every format that can hold a camera, read back to the same pixels. The
+//! files are small ones written here in each tool's layout (`tests/cli_cameras.rs` runs
+//! `vklens cameras` and `vklens convert` on them).
 
-use std::io::Write;
-use std::process::{Command, Output, Stdio};
-
+use crate::io::camera::{list_cameras, parse_camera_with};
+use crate::io::catalog::LoadOptions;
+use crate::io::writers::{write_camera, Format};
+use crate::model::samples::sample_cameras;
+use crate::model::Camera;
 use glam::DVec3;
-use vklens::internal::io::camera::{list_cameras, parse_camera_with};
-use vklens::internal::io::catalog::LoadOptions;
-use vklens::internal::io::writers::{write_camera, Format};
-use vklens::internal::model::samples::sample_cameras;
-use vklens::internal::model::Camera;
 
 fn load(text: &str, options: &LoadOptions) -> Camera {
     parse_camera_with(text, "test.yaml", options).unwrap_or_else(|e| panic!("{e}"))
@@ -222,7 +220,7 @@ fn convert_writes_every_format_that_holds_the_camera_and_reads_back_the_same_pix
                         "{name} → {}: {m}",
                         format.name()
                     );
-                    assert_eq!(e.kind(), vklens::ErrorKind::Unsupported, "{m}");
+                    assert_eq!(e.kind(), crate::ErrorKind::Unsupported, "{m}");
                     assert_ne!(
                         format,
                         Format::Vklens,
@@ -242,139 +240,6 @@ fn convert_writes_every_format_that_holds_the_camera_and_reads_back_the_same_pix
         .expect("ds");
     let e = write_camera(&ds, Format::Ros).expect_err("ros").to_string();
     assert!(e.contains("double_sphere"), "{e}");
-}
-
-fn vklens(args: &[&str], stdin: &str) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_vklens"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run vklens");
-    if let Some(mut s) = child.stdin.take() {
-        s.write_all(stdin.as_bytes()).ok();
-    }
-    child.wait_with_output().expect("vklens output")
-}
-
-#[test]
-fn the_command_line_lists_picks_and_converts() {
-    let dir = std::env::temp_dir().join(format!("vklens-catalog-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("tmp");
-    let chain = dir.join("camchain.yaml");
-    std::fs::write(&chain, KALIBR).expect("write");
-    let chain = chain.to_str().expect("utf-8");
-
-    let out = vklens(&["cameras", chain], "");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("a Kalibr camchain (2 cameras)"), "{text}");
-    assert!(
-        text.contains("cam10") && text.contains("opencv_fisheye") && text.contains("752x480"),
-        "{text}"
-    );
-    let out = vklens(&["cameras", chain, "--json"], "");
-    let rows: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("json line"))
-        .collect();
-    assert_eq!(rows.len(), 2);
-    assert_eq!(rows[1]["name"], "cam10");
-    assert_eq!(rows[1]["model"], "opencv_fisheye");
-    assert_eq!(rows[0]["format"], "Kalibr camchain");
-
-    // --camera-name picks the camera for any command.
-    let out = vklens(
-        &[
-            "points",
-            "distort",
-            "--camera",
-            chain,
-            "--camera-name",
-            "cam10",
-        ],
-        "[[0.1, 0.2]]",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let got: Vec<[f64; 2]> = serde_json::from_slice(&out.stdout).expect("json");
-    let want = load(KALIBR, &by_name("cam10"))
-        .project(DVec3::new(0.1, 0.2, 1.0))
-        .expect("px");
-    assert_eq!(got[0], want.to_array());
-
-    // convert: to Kalibr and back; refused where the format cannot hold it, file untouched.
-    let out_path = dir.join("cam10.txt");
-    let out = vklens(
-        &[
-            "convert",
-            "--camera",
-            chain,
-            "--camera-name",
-            "cam10",
-            "--to",
-            "colmap",
-            "--output",
-            out_path.to_str().expect("utf-8"),
-        ],
-        "",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let back = vklens::internal::io::load_camera(&out_path).expect("colmap back");
-    same_pixels(&back, &load(KALIBR, &by_name("cam10")), "cam10 → colmap");
-    let out = vklens(
-        &[
-            "convert",
-            "--camera",
-            chain,
-            "--camera-name",
-            "cam10",
-            "--to",
-            "opencv",
-            "--output",
-            out_path.to_str().expect("utf-8"),
-        ],
-        "",
-    );
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("OpenCV FileStorage YAML cannot hold this camera"),
-        "{err}"
-    );
-    assert!(std::fs::read_to_string(&out_path)
-        .expect("kept")
-        .contains("OPENCV_FISHEYE"));
-
-    // A file without a size: exit 2 naming the missing size; --size loads it.
-    let no_size = dir.join("orb.yaml");
-    std::fs::write(&no_size, "%YAML:1.0\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 500., 0., 320., 0., 500., 240., 0., 0., 1. ]\n").expect("write");
-    let path = no_size.to_str().expect("utf-8");
-    let out = vklens(&["points", "distort", "--camera", path], "[[0, 0]]");
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--size"));
-    let out = vklens(
-        &["points", "distort", "--camera", path, "--size", "640x480"],
-        "[[0, 0]]",
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Basalt's pinhole-radtan8 carries `rpmax`: its projection accepts undistorted normalized

@@ -3,13 +3,11 @@
 //! map within 2e-3 px, the inverse within 1e-3 px reprojected, and invalid exactly where the
 //! f64 model says (away from the domain's edge, where f32 rounding may decide either way).
 
-mod common;
-
+use crate::host::points::{run_project, run_unproject};
+use crate::model::samples::{fitted_inverse_cameras, sample_cameras};
+use crate::model::Camera;
+use crate::pass::Precision;
 use glam::{DVec2, DVec3};
-use vklens::internal::host::points::{run_project, run_unproject};
-use vklens::internal::model::samples::{fitted_inverse_cameras, sample_cameras};
-use vklens::internal::model::Camera;
-use vklens::internal::pass::Precision;
 
 /// Directions all around, from the axis to past the domain's edge.
 fn directions() -> Vec<[f64; 3]> {
@@ -39,7 +37,7 @@ fn clear_of_the_edge(camera: &Camera, p: DVec3) -> bool {
         && off((n + n.cross(side) * 1e-3).normalize()) == off(n)
 }
 
-fn precisions(ctx: &vklens::internal::host::Context) -> Vec<Precision> {
+fn precisions(ctx: &crate::host::Context) -> Vec<Precision> {
     let mut v = vec![Precision::F32];
     if ctx.gpu().supports_float64() {
         v.push(Precision::F64);
@@ -49,7 +47,7 @@ fn precisions(ctx: &vklens::internal::host::Context) -> Vec<Precision> {
 
 #[test]
 fn every_model_projects_on_the_gpu_as_on_the_cpu() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let points = directions();
     let fitted = fitted_inverse_cameras().expect("fitted samples");
     for (name, camera) in sample_cameras().expect("samples").into_iter().chain(fitted) {
@@ -94,12 +92,12 @@ fn every_model_projects_on_the_gpu_as_on_the_cpu() {
             assert!(worst <= bound, "{name} {precision}: {worst} px");
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn every_model_unprojects_on_the_gpu_within_1e_3_px() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let fitted = fitted_inverse_cameras().expect("fitted samples");
     for (name, camera) in sample_cameras().expect("samples").into_iter().chain(fitted) {
         let (w, h) = (camera.width as f64, camera.height as f64);
@@ -148,5 +146,5 @@ fn every_model_unprojects_on_the_gpu_within_1e_3_px() {
             assert!(worst <= bound, "{name} {precision}: {worst} px");
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }

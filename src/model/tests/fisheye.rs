@@ -3,12 +3,12 @@
 //! below 90° and the atan2 formula past it, the inverse recovers every direction of the
 //! domain and answers "invalid" exactly outside it.
 
+use crate::io::camera::{load_camera_at, parse_camera};
+use crate::io::load_camera;
+use crate::io::reference::shared_dir;
+use crate::model::{Camera, CameraModel, InverseMethod};
 use glam::{DVec2, DVec3};
 use serde_json::Value;
-use vklens::internal::io::camera::{load_camera_at, parse_camera};
-use vklens::internal::io::load_camera;
-use vklens::internal::io::reference::shared_dir;
-use vklens::internal::model::{Camera, CameraModel, InverseMethod};
 
 fn dir() -> std::path::PathBuf {
     shared_dir().join("reference").join("fisheye")

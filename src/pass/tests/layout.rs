@@ -3,9 +3,9 @@
 
 use std::mem::offset_of;
 
-use vklens::internal::gpu::SpecId;
-use vklens::internal::gpu::{reflect, shaders};
-use vklens::internal::pass::{spec, CameraParams, CameraParams64};
+use crate::gpu::SpecId;
+use crate::gpu::{reflect, shaders};
+use crate::pass::{spec, CameraParams, CameraParams64};
 
 macro_rules! host_offsets {
     ($t:ty) => {
@@ -150,7 +150,7 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
 
 #[test]
 fn geometry_frame_matches_the_glsl_block() {
-    use vklens::internal::pass::geometry::GeometryFrame;
+    use crate::pass::geometry::GeometryFrame;
     let host = vec![
         (
             "view_projection",
@@ -176,7 +176,7 @@ fn geometry_frame_matches_the_glsl_block() {
 
 #[test]
 fn discard_push_matches_the_glsl_block() {
-    use vklens::internal::pass::geometry::DiscardPush;
+    use crate::pass::geometry::DiscardPush;
     check(
         shaders::DISCARD_COMP,
         "DiscardPush",
@@ -189,7 +189,7 @@ fn discard_push_matches_the_glsl_block() {
 fn warp_push_matches_the_warp_and_map_blocks() {
     // One Rust struct for the warp's push constants and the map builds' (the map builds name
     // the fill slot `unused`).
-    use vklens::internal::pass::warp::WarpPush;
+    use crate::pass::warp::WarpPush;
     let warp = vec![
         ("ideal", offset_of!(WarpPush, ideal)),
         ("chromatic", offset_of!(WarpPush, chromatic)),
@@ -212,7 +212,7 @@ fn warp_push_matches_the_warp_and_map_blocks() {
 
 #[test]
 fn mesh_warp_push_matches_the_glsl_block() {
-    use vklens::internal::pass::mesh_warp::MeshWarpPush;
+    use crate::pass::mesh_warp::MeshWarpPush;
     let host = vec![("sizes", offset_of!(MeshWarpPush, sizes))];
     check(shaders::MESH_WARP_VERT, "MeshWarpPush", host.clone());
     check(shaders::MESH_WARP_FRAG, "MeshWarpPush", host);
@@ -220,7 +220,7 @@ fn mesh_warp_push_matches_the_glsl_block() {
 
 #[test]
 fn film_push_matches_the_glsl_block() {
-    use vklens::internal::pass::film::FilmPush;
+    use crate::pass::film::FilmPush;
     let host = vec![
         ("film_size", offset_of!(FilmPush, film_size)),
         ("channel_mask", offset_of!(FilmPush, channel_mask)),
@@ -235,19 +235,19 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
     // Simulate only what is asked for: a k1 k2 camera rendering colour only builds a vertex
     // stage with the rational/prism/tilt groups off and a fragment stage that writes no ID,
     // flow or depth.
+    use crate::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
     use ash::vk;
-    use vklens::internal::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
-    let ctx = vklens::internal::host::Context::new(vklens::internal::host::ContextOptions {
+    let ctx = crate::host::Context::new(crate::host::ContextOptions {
         validation: true,
         device: None,
         geometry_shader: true,
         geometry_shader_discard: false,
     })
     .unwrap();
-    let camera = vklens::internal::model::Camera::from_coeffs(
+    let camera = crate::model::Camera::from_coeffs(
         640,
         480,
-        vklens::internal::model::Intrinsics {
+        crate::model::Intrinsics {
             fx: 500.0,
             fy: 500.0,
             cx: 319.5,
@@ -313,7 +313,7 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
         Projection::Lens { delta: 0.1 },
         Outputs::COLOR,
     );
-    desc.discard = vklens::internal::pass::geometry::Discard::GeometryShader;
+    desc.discard = crate::pass::geometry::Discard::GeometryShader;
     let gs = GeometryPass::new(ctx.gpu(), desc).unwrap();
     assert!(gs
         .pipeline()
@@ -326,9 +326,9 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
 
 #[test]
 fn the_discard_leaves_the_domain_table_out_only_where_its_bound_needs_none() {
-    use vklens::internal::model::{Camera, Intrinsics, OpenCvDistortion};
-    use vklens::internal::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
-    let ctx = vklens::internal::host::Context::new(vklens::internal::host::ContextOptions {
+    use crate::model::{Camera, Intrinsics, OpenCvDistortion};
+    use crate::pass::geometry::{GeometryDesc, GeometryPass, Outputs, Projection};
+    let ctx = crate::host::Context::new(crate::host::ContextOptions {
         validation: true,
         device: None,
         geometry_shader: true,
@@ -381,7 +381,7 @@ fn the_discard_leaves_the_domain_table_out_only_where_its_bound_needs_none() {
 #[test]
 fn a_specialization_constant_set_twice_keeps_one_entry() {
     // Vulkan refuses a specialization map that names an id twice: the last value wins.
-    use vklens::internal::gpu::SpecConstants;
+    use crate::gpu::SpecConstants;
     let c = SpecConstants::new()
         .bool(spec::DOMAIN_TABLE, true)
         .u32(spec::NEWTON_ITERATIONS, 3)

@@ -1,15 +1,13 @@
 //! OpenCV's fisheye model in the shaders (`glsl/include/camera_model.glsl`, f32 and f64)
 //! against `cv2.fisheye.projectPoints` and the f64 model, under validation.
 
-mod common;
-
+use crate::host::points::{run_points, run_project, run_unproject};
+use crate::io::load_camera;
+use crate::io::reference::shared_dir;
+use crate::model::{Camera, InverseMethod};
+use crate::pass::{PointsMode, Precision};
 use glam::{DVec2, DVec3};
 use serde_json::Value;
-use vklens::internal::host::points::{run_points, run_project, run_unproject};
-use vklens::internal::io::load_camera;
-use vklens::internal::io::reference::shared_dir;
-use vklens::internal::model::{Camera, InverseMethod};
-use vklens::internal::pass::{PointsMode, Precision};
 
 fn dir() -> std::path::PathBuf {
     shared_dir().join("reference").join("fisheye")
@@ -48,7 +46,7 @@ fn angle(a: DVec3, b: DVec3) -> f64 {
 
 #[test]
 fn gpu_forward_within_2e3_px_of_opencv_and_the_formula() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     for (name, camera, pts) in cases() {
         let inside = &pts["inside"];
         let want = rows::<2>(&inside["pixel"]);
@@ -84,12 +82,12 @@ fn gpu_forward_within_2e3_px_of_opencv_and_the_formula() {
             "{name}: past the field of view"
         );
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn gpu_inverse_within_1e3_px_of_the_model_and_invalid_outside_the_domain() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     for (name, camera, pts) in cases() {
         let mut pixels = rows::<2>(&pts["inside"]["pixel"]);
         pixels.extend(rows::<2>(&pts["beyond90"]["pixel"]));
@@ -155,12 +153,12 @@ fn gpu_inverse_within_1e3_px_of_the_model_and_invalid_outside_the_domain() {
             assert!(err <= 1e-3, "{name} {p:?}: {err:e}");
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn the_standard_models_inverses_are_refused_for_a_fisheye() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let (_, camera, _) = cases().remove(0);
     for method in [InverseMethod::Heikkila, InverseMethod::FixedPoint(5)] {
         let e = run_points(
@@ -174,5 +172,5 @@ fn the_standard_models_inverses_are_refused_for_a_fisheye() {
         .to_string();
         assert!(e.contains("fisheye") && e.contains("newton"), "{e}");
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }

@@ -1,18 +1,16 @@
 //! The Durham radial-correction paper's Sec. II-B's mesh warp against the exact (f64) warp coordinates and the compute
 //! warp, validated.
 
-mod common;
-
-use common::{assert_no_validation_messages, reference_camera, validated_context};
+use crate::host::mesh_warp::run_mesh_warp;
+use crate::host::warp::run_warp;
+use crate::imaging::cpu_warp::Sampling;
+use crate::imaging::{BitDepth, Pixels, Raster};
+use crate::model::warp::WarpGeometry;
+use crate::model::InverseMethod;
+use crate::pass::mesh_warp::MeshWarpOutput;
+use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc};
+use crate::testing::{assert_no_validation_messages, reference_camera, validated_context};
 use glam::DVec2;
-use vklens::internal::host::mesh_warp::run_mesh_warp;
-use vklens::internal::host::warp::run_warp;
-use vklens::internal::imaging::cpu_warp::Sampling;
-use vklens::internal::imaging::{BitDepth, Pixels, Raster};
-use vklens::internal::model::warp::WarpGeometry;
-use vklens::internal::model::InverseMethod;
-use vklens::internal::pass::mesh_warp::MeshWarpOutput;
-use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc};
 
 #[test]
 fn mesh_error_shrinks_with_n_and_the_image_matches_the_compute_warp() {

@@ -1,15 +1,13 @@
 //! The warp where it is easy to go wrong: folding lenses (a clean masked border, no streaks),
 //! 1×1 and very large images, object IDs (never blended), sizes a device cannot hold.
 
-mod common;
-
+use crate::host::warp::run_warp;
+use crate::imaging::cpu_warp::Sampling;
+use crate::imaging::{BitDepth, Pixels, Raster};
+use crate::model::warp::WarpGeometry;
+use crate::model::{Camera, Intrinsics, InverseMethod};
+use crate::pass::warp::{Coordinates, PixelFormat, WarpDesc};
 use glam::DVec2;
-use vklens::internal::host::warp::run_warp;
-use vklens::internal::imaging::cpu_warp::Sampling;
-use vklens::internal::imaging::{BitDepth, Pixels, Raster};
-use vklens::internal::model::warp::WarpGeometry;
-use vklens::internal::model::{Camera, Intrinsics, InverseMethod};
-use vklens::internal::pass::warp::{Coordinates, PixelFormat, WarpDesc};
 
 fn flat(w: u32, h: u32, v: u8) -> Raster {
     Raster {
@@ -38,11 +36,11 @@ fn desc(
 
 #[test]
 fn folding_lenses_get_a_clean_masked_border_not_streaks() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     for name in ["rational_wide", "strong_pincushion"] {
-        let cam = common::reference_camera(name);
+        let cam = crate::testing::reference_camera(name);
         // Overscanned source, so every pixel without a source is one the lens cannot invert.
-        let o = vklens::internal::model::overscan::overscan(&cam, 1.0).unwrap();
+        let o = crate::model::overscan::overscan(&cam, 1.0).unwrap();
         let g = WarpGeometry::distort(cam.clone(), InverseMethod::Newton)
             .with_ideal(o.intrinsics, (o.width, o.height))
             .unwrap();
@@ -106,12 +104,12 @@ fn folding_lenses_get_a_clean_masked_border_not_streaks() {
             );
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn a_one_pixel_image_and_a_large_one() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let tiny = Camera::from_coeffs(
         1,
         1,
@@ -190,14 +188,14 @@ fn a_one_pixel_image_and_a_large_one() {
         .expect_err("refused");
         assert!(e.to_string().contains("larger than"), "{e}");
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn object_ids_are_never_blended_but_bilinear_colour_is() {
     // Lambers et al. Table 1: post-processing breaks data that cannot be interpolated. Nearest
     // sampling of R32_UINT keeps every ID exact; bilinear on the same numbers mixes them.
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let cam = Camera::from_coeffs(
         320,
         240,
@@ -259,7 +257,7 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
     println!("bilinear produced {mixed} pixels whose 'ID' exists nowhere in the source; nearest produced none");
     assert!(mixed > 1000);
     // R32_UINT refuses bilinear outright.
-    let e = vklens::internal::pass::warp::WarpPass::new(
+    let e = crate::pass::warp::WarpPass::new(
         ctx.gpu(),
         desc(
             WarpGeometry::distort(
@@ -283,5 +281,5 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
         ),
     );
     assert!(e.is_err());
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }

@@ -1,16 +1,14 @@
 //! The GPU warp against the f64 reference warp (same coordinates, same sampling) on the
 //! shared cameras, with the validation layer on. Differences are stated and bounded.
 
-mod common;
-
-use vklens::internal::host::warp::run_warp;
-use vklens::internal::host::warp_raster::run_raster_warp;
-use vklens::internal::imaging::cpu_warp::{self, Sampling};
-use vklens::internal::imaging::{BitDepth, Pixels, Raster};
-use vklens::internal::io::reference::load_reference;
-use vklens::internal::model::warp::WarpGeometry;
-use vklens::internal::model::InverseMethod;
-use vklens::internal::pass::warp::{Coordinates, MapInterpolation, PixelFormat, WarpDesc};
+use crate::host::warp::run_warp;
+use crate::host::warp_raster::run_raster_warp;
+use crate::imaging::cpu_warp::{self, Sampling};
+use crate::imaging::{BitDepth, Pixels, Raster};
+use crate::io::reference::load_reference;
+use crate::model::warp::WarpGeometry;
+use crate::model::InverseMethod;
+use crate::pass::warp::{Coordinates, MapInterpolation, PixelFormat, WarpDesc};
 
 /// A test image with edges and smooth gradients in every channel.
 fn test_image(w: u32, h: u32) -> Raster {
@@ -74,7 +72,7 @@ fn check(
     geometry: WarpGeometry,
     coordinates: Coordinates,
     format: PixelFormat,
-    ctx: &vklens::internal::host::Context,
+    ctx: &crate::host::Context,
 ) -> Diff {
     let (w, h) = geometry.source_size;
     let mut source = test_image(w, h);
@@ -110,7 +108,7 @@ fn check(
 
 #[test]
 fn gpu_warp_matches_the_f64_reference_on_every_shared_camera() {
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let reference = load_reference().unwrap();
     for case in &reference.cases {
         let cam = case.camera().unwrap();
@@ -140,13 +138,13 @@ fn gpu_warp_matches_the_f64_reference_on_every_shared_camera() {
             );
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn chromatic_undistort_and_8bit_variants_match_the_reference() {
-    let ctx = common::validated_context();
-    let fig2 = common::reference_camera("seed_fig2");
+    let ctx = crate::testing::validated_context();
+    let fig2 = crate::testing::reference_camera("seed_fig2");
     let total = (fig2.width * fig2.height) as usize;
     let chroma = WarpGeometry::distort(fig2.clone(), InverseMethod::Newton)
         .with_chromatic([1.01, 1.0, 0.99])
@@ -191,17 +189,17 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
             "{method}"
         );
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
+    use crate::host::warp::read_maps;
+    use crate::model::CameraModel;
     use glam::DVec2;
-    use vklens::internal::host::warp::read_maps;
-    use vklens::internal::model::CameraModel;
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     for name in ["prism_tilt", "rational_wide"] {
-        let cam = common::reference_camera(name);
+        let cam = crate::testing::reference_camera(name);
         let g = WarpGeometry::distort(cam.clone(), InverseMethod::Newton);
         let exact = &read_maps(&ctx, &g, Coordinates::Map).unwrap()[0];
         for (coords, bound) in [
@@ -273,22 +271,22 @@ fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
             }
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn a_full_camera_per_channel_matches_the_reference() {
     // The general form of lateral colour: each channel its own calibrated camera (here the
     // Lambers et al.'s Fig. 2 lens with slightly different k1 and focal length for R and B).
-    let ctx = common::validated_context();
-    let g_cam = common::reference_camera("seed_fig2");
+    let ctx = crate::testing::validated_context();
+    let g_cam = crate::testing::reference_camera("seed_fig2");
     let variant = |dk1: f64, df: f64| {
         let mut d = g_cam.distortion();
         d.k1 += dk1;
         let mut k = g_cam.intrinsics;
         k.fx *= 1.0 + df;
         k.fy *= 1.0 + df;
-        vklens::internal::model::Camera::new(g_cam.width, g_cam.height, k, d).unwrap()
+        crate::model::Camera::new(g_cam.width, g_cam.height, k, d).unwrap()
     };
     let mut geometry = WarpGeometry::distort(g_cam.clone(), InverseMethod::Newton);
     geometry.channel_cameras = Some(Box::new([
@@ -314,8 +312,8 @@ fn a_full_camera_per_channel_matches_the_reference() {
         fill: [0.0; 4],
         write_mask: true,
     };
-    assert!(vklens::internal::pass::warp::WarpPass::new(ctx.gpu(), desc).is_err());
-    common::assert_no_validation_messages(&ctx);
+    assert!(crate::pass::warp::WarpPass::new(ctx.gpu(), desc).is_err());
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
@@ -325,10 +323,10 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
     // must all get every pixel, within the accuracy of the interpolation of the f64 model.
     // Each map is of another camera (principal point moved by a third of a pixel), so that a
     // pixel left unwritten cannot pass on what an earlier map left in reused memory.
+    use crate::host::warp::read_maps;
+    use crate::model::{Camera, Intrinsics};
     use glam::DVec2;
-    use vklens::internal::host::warp::read_maps;
-    use vklens::internal::model::{Camera, Intrinsics};
-    let ctx = common::validated_context();
+    let ctx = crate::testing::validated_context();
     let mut variant = 0.0;
     for (w, h) in [(1, 1), (17, 9), (33, 20), (70, 9)] {
         for (stride, interpolation) in [
@@ -372,13 +370,13 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
             }
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
 fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
-    use vklens::internal::pass::warp::WarpPass;
-    let ctx = common::validated_context();
+    use crate::pass::warp::WarpPass;
+    let ctx = crate::testing::validated_context();
     let interpolations = [MapInterpolation::Bilinear, MapInterpolation::Cubic];
     for ((name, expect_check), interpolation) in [
         ("prism_tilt", false),
@@ -388,7 +386,7 @@ fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
     .into_iter()
     .flat_map(|case| interpolations.map(|i| (case, i)))
     {
-        let cam = common::reference_camera(name);
+        let cam = crate::testing::reference_camera(name);
         let g = WarpGeometry::distort(cam, InverseMethod::Newton);
         let estimate = g.coarse_interpolation_error(8, interpolation);
         if interpolation == MapInterpolation::Cubic && !expect_check {
@@ -419,7 +417,7 @@ fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
             "{name} {interpolation:?}"
         );
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 #[test]
@@ -427,8 +425,8 @@ fn the_fragment_shader_warp_matches_the_compute_warp() {
     // The same maps, the same sampling arithmetic, another way of walking the pixels: the two
     // outputs may differ only by the rounding of one store (bitwise equal in practice), with
     // and without chromatic aberration, float and 8-bit, fill where there is no source.
-    let ctx = common::validated_context();
-    let cam = common::reference_camera("rational_wide");
+    let ctx = crate::testing::validated_context();
+    let cam = crate::testing::reference_camera("rational_wide");
     let plain = WarpGeometry::distort(cam.clone(), InverseMethod::Newton);
     let chroma = plain.clone().with_chromatic([1.01, 1.0, 0.99]).unwrap();
     let float_source = test_image(cam.width, cam.height);
@@ -488,7 +486,7 @@ fn the_fragment_shader_warp_matches_the_compute_warp() {
             }
         }
     }
-    common::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(&ctx);
 }
 
 fn rgba(r: &Raster) -> Vec<[f32; 4]> {

@@ -2,12 +2,12 @@
 //! differences, the Sec. 3.1 projection, and the hard cases (fold-over, poles, the principal
 //! point, huge images, NaN/Inf) — correct value, explicit invalid, or typed error; no panic.
 
-use glam::{DVec2, DVec3, DVec4};
-use proptest::prelude::*;
-use vklens::internal::model::{
+use crate::model::{
     vulkan_projection, BrownRadial, Camera, CameraModel, Frustum, Intrinsics, InverseMethod,
     ModelError,
 };
+use glam::{DVec2, DVec3, DVec4};
+use proptest::prelude::*;
 
 fn camera(w: u32, h: u32, f: f64, coeffs: &[f64]) -> Camera {
     Camera::from_coeffs(

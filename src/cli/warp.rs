@@ -85,9 +85,17 @@ pub struct WarpArgs {
     #[arg(long, value_name = "OUT")]
     output: PathBuf,
     /// The pinhole side's camera, when it differs from CAM's intrinsics and size: for distort,
-    /// the input's (e.g. from `vklens overscan`); for undistort and precorrect, the output's.
-    #[arg(long, value_name = "SRC")]
+    /// the input's (e.g. from `vklens overscan`); for undistort and precorrect, the output's
+    /// (e.g. the "camera" of `vklens new-camera`).
+    #[arg(long, value_name = "SRC", conflicts_with_all = ["alpha", "balance"])]
     source_camera: Option<PathBuf>,
+    /// undistort only, instead of --source-camera: the output camera chosen as OpenCV chooses
+    /// it (--alpha A [--new-size WxH] [--center-principal-point] for the standard model,
+    /// --balance B [--fov-scale F] [--new-size WxH] for the fisheye); `vklens new-camera
+    /// --help` says what each means. Without either, the output camera is CAM's intrinsics
+    /// and size with no distortion.
+    #[command(flatten)]
+    rule: super::new_camera::RuleArgs,
     /// newton | lut | heikkila | fixed-point:N. lut builds a coordinate map once with Newton
     /// and samples it. Only distort solves an inverse; the other directions use the forward
     /// model and accept newton or lut.
@@ -139,6 +147,11 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         check_output(m, "mask", &["png"])?;
         super::output::distinct_outputs(&[("--output", &args.output), ("--mask", m)])?;
     }
+    if direction != WarpDirection::Undistort && args.rule.any() {
+        return Err(CliError::input(
+            "--alpha, --balance, --new-size and --center-principal-point choose the output camera of `vklens undistort`; distort and precorrect take --source-camera",
+        ));
+    }
     let cam = super::load_camera(&args.camera)?;
     if !args.input_cubemap.is_empty() || args.input_equirect.is_some() {
         return run_sphere(&args, direction, &cam);
@@ -158,6 +171,27 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     options.fill = args.fill.map(|f| f.map(|c| c as f32)).unwrap_or([0.0; 4]);
     if let Some(src) = &args.source_camera {
         options.source_camera = Some(pinhole(src)?);
+    }
+    if let Some((new, roi, rule)) = args.rule.choose(&cam)? {
+        eprintln!("{}", super::new_camera::describe(&new, roi, &rule));
+        options.source_camera = Some(new);
+    } else if direction == WarpDirection::Undistort {
+        let k = options
+            .source_camera
+            .as_ref()
+            .map_or(cam.intrinsics, |c| c.intrinsics);
+        let (w, h) = options
+            .source_camera
+            .as_ref()
+            .map_or((cam.width, cam.height), |c| (c.width, c.height));
+        let whose = match &args.source_camera {
+            Some(src) => src.display().to_string(),
+            None => format!("{}'s intrinsics and size", args.camera.display()),
+        };
+        eprintln!(
+            "output camera ({whose}): {w}×{h} pinhole, fx {} fy {} cx {} cy {}",
+            k.fx, k.fy, k.cx, k.cy
+        );
     }
     if !args.channel_cameras.is_empty() {
         let [r, g, b] = <[PathBuf; 3]>::try_from(args.channel_cameras.clone())

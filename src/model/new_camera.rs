@@ -25,9 +25,12 @@
 //! OpenCV's `undistortPoints` stops the standard model's fixed-point iteration after 5 steps
 //! (its default criteria), which has not converged on a strong lens near the image corners:
 //! there the two cameras differ slightly, vklens's being the one the rule means. OpenCV's
-//! fisheye `undistortPoints` runs Newton to 1e-8 and agrees. Two more differences, both where
-//! OpenCV's answer is not the lens's: `fisheye::undistortPoints` ignores the skew `K[0][1]`
-//! (vklens removes it), and clips a distorted radius past π/2 (vklens does not).
+//! fisheye `undistortPoints` runs Newton to 1e-8 and agrees. It also clips the distorted radius
+//! θ_d at π/2 (and then scales the point by θ_d / (π/2) again), which decides the camera of a
+//! lens past 180° whose edge midpoints lie outside its image circle; vklens clips as it does,
+//! so that such a lens gets OpenCV's camera too.
+//! One difference remains, where OpenCV's answer is not the lens's: `fisheye::undistortPoints`
+//! ignores the skew `K[0][1]`, which vklens removes.
 //!
 //! The valid ROI is OpenCV's: the inner rectangle in the new camera's pixels, rounded and cut
 //! to the new image. OpenCV's fisheye rule has none; vklens gives it the same one, where border
@@ -35,9 +38,13 @@
 //!
 //! Pixel-centre convention: OpenCV's, as everywhere in vklens ([`super`]).
 
+use std::f64::consts::FRAC_PI_2;
+
 use glam::DVec2;
 
-use super::{check_size, Camera, Intrinsics, InverseMethod, ModelKind, OpenCvDistortion};
+use super::{
+    check_size, Camera, Intrinsics, InverseMethod, ModelKind, OpenCvDistortion, ValidDomain,
+};
 use crate::{Error, Result};
 
 /// Points per side of the grid `getUndistortRectangles` undistorts (OpenCV's `N`).
@@ -194,8 +201,9 @@ fn centred(camera: &Camera, alpha: f64, new_w: u32, new_h: u32) -> Result<(Camer
 ///
 /// Refuses `balance` outside `0..=1` (OpenCV clamps it), `fov_scale` that is not a positive
 /// number (OpenCV ignores it then), a zero or oversized `new_size`, a camera of another model,
-/// and an edge midpoint that sees at or past 90° off the axis (it has no place on a pinhole
-/// image; OpenCV's answer there is not a camera).
+/// and an edge midpoint that sees (θ_d clipped at π/2 as OpenCV clips it) past what a pinhole
+/// image holds, or lies past the lens's fold or field of view: OpenCV's answer there is not a
+/// camera (a focal length near zero).
 pub fn fisheye_new_camera(
     camera: &Camera,
     balance: f64,
@@ -241,12 +249,14 @@ pub fn fisheye_new_camera(
     ];
     let mut points = [DVec2::ZERO; 4];
     for (slot, (edge, p)) in points.iter_mut().zip(midpoints) {
-        *slot = pinhole_point(camera, p).ok_or_else(|| {
+        *slot = clipped_pinhole_point(camera, p).ok_or_else(|| {
             Error::argument(
                 "camera",
                 format!(
-                    "the midpoint of the image's {edge} edge, pixel ({}, {}), sees at or past 90° off the axis (or outside the lens's field of view): no pinhole camera holds it, so the fisheye rule has no camera to give",
-                    p.x, p.y
+                    "the midpoint of the image's {edge} edge, pixel ({}, {}), sees {:.1}° or more off the axis even with its distorted radius clipped at π/2 as OpenCV clips it (or lies past the lens's field of view): no pinhole image holds it, so the fisheye rule has no camera to give",
+                    p.x,
+                    p.y,
+                    ValidDomain::RADIUS_CAP.atan().to_degrees()
                 ),
             )
         })?;
@@ -292,6 +302,17 @@ pub fn fisheye_new_camera(
     let (inner, _) = undistort_rectangles(camera, Unmapped::Skip, |x| {
         new_camera.intrinsics.to_pixel(x)
     })?;
+    // A side whose grid pixels all see past 90° bounds nothing and stays at ±FLT_MAX: cut to
+    // just outside the image first, so that rounding to whole pixels cannot overflow.
+    let (x0, y0) = (inner.x.max(-1.0), inner.y.max(-1.0));
+    let x1 = (inner.x + inner.width).min(new_w as f64 + 1.0);
+    let y1 = (inner.y + inner.height).min(new_h as f64 + 1.0);
+    let inner = Rect {
+        x: x0,
+        y: y0,
+        width: x1 - x0,
+        height: y1 - y0,
+    };
     Ok((new_camera, rounded_roi(inner, new_w, new_h)))
 }
 
@@ -320,6 +341,26 @@ fn pinhole(width: u32, height: u32, k: Intrinsics) -> Result<Camera> {
 fn pinhole_point(camera: &Camera, pixel: DVec2) -> Option<DVec2> {
     let ray = camera.unproject(pixel)?;
     (ray.z > 0.0).then(|| DVec2::new(ray.x / ray.z, ray.y / ray.z))
+}
+
+/// A fisheye edge midpoint on the pinhole plane z = 1 as OpenCV's `fisheye::undistortPoints`
+/// finds it: the distorted radius θ_d clipped at π/2 first. `None` where the point sees past
+/// the radius a pinhole image holds ([`ValidDomain::RADIUS_CAP`]) or the lens's domain.
+fn clipped_pinhole_point(camera: &Camera, pixel: DVec2) -> Option<DVec2> {
+    let lens = camera.fisheye_lens()?;
+    let y = camera.intrinsics.to_normalized(pixel);
+    let theta_d = lens.unskew(y).length();
+    // OpenCV solves for θ at the clipped radius, then scales the unclipped point by
+    // tan θ / θ_d with θ_d clipped: past π/2 the point lands θ_d / (π/2) farther out than the
+    // direction at θ. The skew is linear, so scaling the point scales its radius alike.
+    let (y, stretch) = if theta_d > FRAC_PI_2 {
+        (y * (FRAC_PI_2 / theta_d), theta_d / FRAC_PI_2)
+    } else {
+        (y, 1.0)
+    };
+    let ray = lens.undistort_ray(y)?;
+    let x = DVec2::new(ray.x / ray.z, ray.y / ray.z);
+    (ray.z > 0.0 && x.length() <= ValidDomain::RADIUS_CAP).then_some(x * stretch)
 }
 
 /// OpenCV's `getUndistortRectangles`: the inner and outer rectangles of a 9 × 9 grid of pixels

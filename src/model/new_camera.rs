@@ -1,7 +1,7 @@
 //! The pinhole camera an undistorted image is drawn into, chosen by OpenCV's two rules, so
 //! that a script built on them gets the same camera from vklens:
 //!
-//! * [`optimal_new_camera`]: `cv2.getOptimalNewCameraMatrix` (OpenCV, `modules/calib3d`,
+//! * [`optimal_new_camera`] is `cv2.getOptimalNewCameraMatrix` (OpenCV, `modules/calib3d`,
 //!   `getOptimalNewCameraMatrix` and `getUndistortRectangles`) for OpenCV's standard model. A
 //!   9 × 9 grid of pixels spanning the image is undistorted; the rectangle inside the left,
 //!   right, top and bottom columns and rows (*inner*: every pixel of it has a source) and the
@@ -10,7 +10,7 @@
 //!   `center_principal_point` the principal point is the new image's centre and one scale,
 //!   between the largest that keeps the inner rectangle's four sides and the smallest that
 //!   keeps the outer's, is blended instead.
-//! * [`fisheye_new_camera`]: `cv2.fisheye.estimateNewCameraMatrixForUndistortRectify`
+//! * [`fisheye_new_camera`] is `cv2.fisheye.estimateNewCameraMatrixForUndistortRectify`
 //!   (OpenCV, `fisheye.cpp`) for OpenCV's fisheye model, with `R` the identity. The midpoints
 //!   of the four image edges (OpenCV's: `(w/2, 0)`, `(w, h/2)`, `(w/2, h)`, `(0, h/2)`, in
 //!   whole pixels) are undistorted; their mean is the new principal point, each edge's distance

@@ -172,8 +172,11 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     if let Some(src) = &args.source_camera {
         options.source_camera = Some(pinhole(src)?);
     }
+    // Which camera the undistorted image is drawn into, said once the image is written (a
+    // failing run keeps its one line of error).
+    let mut output_camera = None;
     if let Some((new, roi, rule)) = args.rule.choose(&cam)? {
-        eprintln!("{}", super::new_camera::describe(&new, roi, &rule));
+        output_camera = Some(super::new_camera::describe(&new, roi, &rule));
         options.source_camera = Some(new);
     } else if direction == WarpDirection::Undistort {
         let k = options
@@ -188,10 +191,10 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
             Some(src) => src.display().to_string(),
             None => format!("{}'s intrinsics and size", args.camera.display()),
         };
-        eprintln!(
+        output_camera = Some(format!(
             "output camera ({whose}): {w}×{h} pinhole, fx {} fy {} cx {} cy {}",
             k.fx, k.fy, k.cx, k.cy
-        );
+        ));
     }
     if !args.channel_cameras.is_empty() {
         let [r, g, b] = <[PathBuf; 3]>::try_from(args.channel_cameras.clone())
@@ -258,6 +261,9 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         }
     };
     save_outputs(&args, &out, &mask, channels)?;
+    if let Some(line) = output_camera {
+        eprintln!("{line}");
+    }
     if direction == WarpDirection::Precorrect {
         report_round_trip(&cam);
     }

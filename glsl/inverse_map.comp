@@ -22,13 +22,16 @@ layout(push_constant) uniform MapPush {
     vec4 chromatic;  // x: this channel's magnification
     vec4 unused;
     uvec4 sizes;     // source w h, map w h
+    vec4 rectify[3]; // as WarpPush.rectify
 } pc;
 
 void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
     if (id.x >= int(pc.sizes.z) || id.y >= int(pc.sizes.w)) return;
     vec2 s;
-    bool ok = vkl_warp_source(vec2((id - RING) * int(STRIDE)), pc.ideal, pc.chromatic.x, s);
+    bool ok = vkl_warp_source(vec2((id - RING) * int(STRIDE)), pc.ideal,
+                              mat3(pc.rectify[0].xyz, pc.rectify[1].xyz, pc.rectify[2].xyz),
+                              pc.chromatic.x, s);
     float nan = uintBitsToFloat(0x7fc00000u);
     imageStore(map, id, ok ? vec4(s, 0.0, 0.0) : vec4(nan, nan, 0.0, 0.0));
 }

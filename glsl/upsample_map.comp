@@ -39,6 +39,7 @@ layout(push_constant) uniform MapPush {
     vec4 chromatic;  // x: this channel's magnification
     vec4 unused;
     uvec4 sizes;     // source w h, output w h
+    vec4 rectify[3]; // as WarpPush.rectify (unused: distort only)
 } pc;
 
 // Cubic Lagrange weights of the nodes -1, 0, 1, 2 at t (model::warp::lagrange_weights).

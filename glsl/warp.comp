@@ -52,7 +52,7 @@ bool coords(vec2 p, ivec2 id, int channel, float scale, out vec2 s) {
         s = m;
         return !isnan(m.x) && on_frame(m);
     }
-    return vkl_warp_source(p, pc.ideal, scale, s) && on_frame(s);
+    return vkl_warp_source(p, pc.ideal, vkl_rectify(), scale, s) && on_frame(s);
 }
 
 void main() {

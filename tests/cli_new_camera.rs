@@ -356,3 +356,47 @@ fn help_teaches_both_rules() {
         "{text}"
     );
 }
+
+#[test]
+fn a_camera_info_that_rectifies_needs_no_rectification_with_a_rule() {
+    // OpenCV's rules choose the camera for R = identity: a camera_info with a rotation R (a
+    // stereo pair's) is refused with them unless --no-rectification says to undistort with K
+    // alone.
+    let ros = std::fs::read_to_string(reference("calibration-files/seed_fig2.ros.yaml")).unwrap();
+    let (c, s) = (0.05f64.cos(), 0.05f64.sin());
+    let rotated = ros.replace(
+        "data: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]",
+        &format!("data: [{c}, 0.0, {s}, 0.0, 1.0, 0.0, {}, 0.0, {c}]", -s),
+    );
+    assert_ne!(ros, rotated);
+    let cam = tmp("stereo_left.yaml");
+    std::fs::write(&cam, rotated).unwrap();
+    let input = tmp("stereo.png");
+    write_png(&input, 800, 600);
+    let out = tmp("stereo_out.png");
+    let mut args = vec![
+        "undistort",
+        "--camera",
+        cam.to_str().unwrap(),
+        "--input",
+        input.to_str().unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--alpha",
+        "0",
+    ];
+    let r = vklens(&args);
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
+    assert!(stderr(&r).contains("--no-rectification"), "{}", stderr(&r));
+    assert!(!out.exists());
+    args.push("--no-rectification");
+    let r = vklens(&args);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(
+        stderr(&r).contains("getOptimalNewCameraMatrix"),
+        "{}",
+        stderr(&r)
+    );
+}

@@ -72,6 +72,7 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
         spec::USE_MAP,
         spec::NEAREST,
         spec::WRITE_MASK,
+        spec::RECTIFY,
     ]);
     let table: Vec<(&str, &[u8], Vec<SpecId>)> = vec![
         ("points.comp", shaders::POINTS_COMP, with(&coords)),
@@ -85,7 +86,7 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
         (
             "inverse_map.comp",
             shaders::INVERSE_MAP_COMP,
-            vec![spec::STRIDE],
+            vec![spec::STRIDE, spec::RECTIFY],
         ),
         (
             "upsample_map.comp",
@@ -182,6 +183,31 @@ fn discard_push_matches_the_glsl_block() {
         vec![("count", offset_of!(DiscardPush, count))],
     );
     assert_eq!(std::mem::size_of::<DiscardPush>(), 4);
+}
+
+#[test]
+fn warp_push_matches_the_warp_and_map_blocks() {
+    // One Rust struct for the warp's push constants and the map builds' (the map builds name
+    // the fill slot `unused`).
+    use vklens::internal::pass::warp::WarpPush;
+    let warp = vec![
+        ("ideal", offset_of!(WarpPush, ideal)),
+        ("chromatic", offset_of!(WarpPush, chromatic)),
+        ("fill", offset_of!(WarpPush, fill)),
+        ("sizes", offset_of!(WarpPush, sizes)),
+        ("rectify", offset_of!(WarpPush, rectify)),
+    ];
+    check(shaders::WARP_COMP, "WarpPush", warp.clone());
+    check(shaders::WARP_COMP_RGBA8, "WarpPush", warp.clone());
+    check(shaders::WARP_RASTER_FRAG, "WarpPush", warp.clone());
+    let mut map = warp;
+    map[2].0 = "unused";
+    check(shaders::INVERSE_MAP_COMP, "MapPush", map.clone());
+    check(shaders::UPSAMPLE_MAP_COMP, "MapPush", map);
+    assert!(
+        std::mem::size_of::<WarpPush>() <= 128,
+        "past the guaranteed push-constant size"
+    );
 }
 
 #[test]

@@ -212,6 +212,12 @@ typedef struct {
    frame N still executes.
    */
   uint32_t frames_in_flight;
+  /*
+   NULL, or 9 numbers: undistort and precorrect only, the rectification rotation R
+   (row-major, OpenCV's R of initUndistortRectifyMap(K, D, R, P), a ROS camera_info's R);
+   with source_camera as P's camera, a stereo pair's rectified view.
+   */
+  const double *rectification;
 } vkl_warp_options;
 
 /*

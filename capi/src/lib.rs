@@ -98,6 +98,7 @@ fn from_error(e: Error) -> vkl_error {
         "chromatic" => "options.chromatic",
         "source_camera" => "options.source_camera",
         "frames_in_flight" => "options.frames_in_flight",
+        "rectification" => "options.rectification",
         other => other,
     };
     let handle = error(kind, format!("{}: {}", c_name, e.message_only()));
@@ -783,6 +784,10 @@ pub struct vkl_warp_options {
     /// one descriptor set per frame, so frame N + 1 may be recorded, with other images, while
     /// frame N still executes.
     pub frames_in_flight: u32,
+    /// NULL, or 9 numbers: undistort and precorrect only, the rectification rotation R
+    /// (row-major, OpenCV's R of initUndistortRectifyMap(K, D, R, P), a ROS camera_info's R);
+    /// with source_camera as P's camera, a stereo pair's rectified view.
+    pub rectification: *const f64,
 }
 
 /// One of the caller's images: a 2D image with one mip level and layer, a view of it, and its
@@ -812,7 +817,7 @@ pub type vkl_warper = *mut vkl_warper_s;
 unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error> {
     // SAFETY: `o` is readable (the caller's contract); every read is of a plain field through
     // a raw pointer, and `direction` is read as the u32 it is stored as.
-    let (version, direction, method, chromatic, source, format, fill, frames) = unsafe {
+    let (version, direction, method, chromatic, source, format, fill, frames, rectification) = unsafe {
         (
             ptr::addr_of!((*o).version).read(),
             ptr::addr_of!((*o).direction).cast::<u32>().read(),
@@ -822,6 +827,7 @@ unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error>
             ptr::addr_of!((*o).format).read(),
             ptr::addr_of!((*o).fill).read(),
             ptr::addr_of!((*o).frames_in_flight).read(),
+            ptr::addr_of!((*o).rectification).read(),
         )
     };
     if version != VKL_API_VERSION {
@@ -872,6 +878,13 @@ unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error>
     options.fill = fill;
     if frames != 0 {
         options.frames_in_flight = frames as usize;
+    }
+    if !rectification.is_null() {
+        // SAFETY: 9 readable doubles (the caller's contract).
+        let r = unsafe { slice(rectification, 9, "options.rectification")? };
+        options.rectification = Some(std::array::from_fn(|i| {
+            std::array::from_fn(|j| r[3 * i + j])
+        }));
     }
     Ok(options)
 }

@@ -99,8 +99,8 @@ layout(constant_id = 7) const bool VKL_DOMAIN_TABLE = true;
 #define VKL_GENERIC (VKL_MODEL >= VKL_MODEL_OMNI)
 // Every model but the standard one maps camera-frame rays (and may see past 90°).
 #define VKL_RAY_MODEL (VKL_MODEL != VKL_MODEL_OPENCV)
-// model::ValidDomain::RADIUS_CAP: the pinhole side of a ray model ends here (88.9°).
-#define VKL_RADIUS_CAP 50.0
+// model::ValidDomain::RADIUS_CAP: the pinhole side of a ray model ends here (89.94°).
+#define VKL_RADIUS_CAP 1000.0
 // Below this radius (normalized) θ_d(atan r)/r is its series 1 + (k1 − 1/3) r²: the quotient
 // would lose digits, and the error of the series, O(r⁴), is far below rounding there.
 #define VKL_FISHEYE_SMALL 1e-4

@@ -5,6 +5,8 @@
 //   image with intrinsics `ideal` (possibly overscanned). Inverse model per pixel.
 // MODE 1 (undistort / precorrect): the output is a pinhole image with intrinsics `ideal`; the
 //   source is the lens image of `vkl_cam`. Forward model per pixel (initUndistortRectifyMap).
+//   RECTIFY: the output looks along a rotated frame (OpenCV's R, a ROS camera_info's R), and
+//   `rectify` (the homography Rᵀ·K_out⁻¹) takes an output pixel to the lens camera's ray.
 //
 // Lateral chromatic aberration (the Durham radial-correction paper Sec. III; Lensfun's linear TCA): channel c's image is
 // magnified by `scale` about the principal point, in distorted normalized coordinates.
@@ -15,9 +17,10 @@
 layout(constant_id = 8) const uint MODE = 0;
 layout(constant_id = 9) const uint METHOD = 0;  // 0 newton, 1 heikkila, 2 fixed-point
 layout(constant_id = 10) const uint FIXED_POINT_ITERATIONS = 5;
+layout(constant_id = 16) const bool RECTIFY = false;
 
 // Source pixel (OpenCV pixel-centre convention) for output pixel `p`; false: no valid source.
-bool vkl_warp_source(vec2 p, vec4 ideal, float scale, out vec2 src) {
+bool vkl_warp_source(vec2 p, vec4 ideal, mat3 rectify, float scale, out vec2 src) {
     src = vec2(0.0);
     if (MODE == 0u) {
         vec2 d = vkl_to_normalized(p) / scale;
@@ -34,6 +37,12 @@ bool vkl_warp_source(vec2 p, vec4 ideal, float scale, out vec2 src) {
         return ok;
     }
     vec2 x = (p - ideal.zw) / ideal.xy;
+    if (RECTIFY) {
+        vec3 ray = rectify * vec3(p, 1.0);
+        // A ray the rotation turns behind the lens camera has no image in it.
+        if (!(ray.z > 0.0)) return false;
+        x = ray.xy / ray.z;
+    }
     // The ideal point must be in the valid domain (beyond a fold the forward model wraps back
     // over valid pixels: sampling there would smear the image).
     if (!vkl_contains_ideal(x)) return false;

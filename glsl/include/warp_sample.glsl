@@ -26,7 +26,12 @@ layout(push_constant) uniform WarpPush {
     vec4 chromatic;  // per-channel magnification R G B, -
     vec4 fill;       // value for pixels without a source
     uvec4 sizes;     // source w h, output w h
+    vec4 rectify[3]; // columns of Rᵀ·K_out⁻¹ (undistort with RECTIFY only)
 } pc;
+
+mat3 vkl_rectify() {
+    return mat3(pc.rectify[0].xyz, pc.rectify[1].xyz, pc.rectify[2].xyz);
+}
 
 // Whether a source position lies on the source frame [-0.5, size - 0.5]².
 bool on_frame(vec2 s) {

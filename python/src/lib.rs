@@ -139,33 +139,31 @@ fn tuple(shape: &[usize]) -> String {
     }
 }
 
-/// `(N, D)` rows (also `(N, 1, D)` as OpenCV hands out points, and a single `(D,)` row).
+/// Points of `D` numbers along the last axis, in any leading shape (`(D,)`, `(N, D)`, OpenCV's
+/// `(N, 1, D)`, an image's `(H, W, D)`): the points and that leading shape, which the answer
+/// keeps.
 fn rows<const D: usize>(
     py: Python<'_>,
     value: &Bound<'_, PyAny>,
     name: &str,
-) -> PyResult<Vec<[f64; D]>> {
+) -> PyResult<(Vec<[f64; D]>, Vec<usize>)> {
     let (data, shape) = numbers(py, value, name)?;
-    let ok = match shape.as_slice() {
-        [n] => *n == D,
-        [_, d] => *d == D,
-        [_, 1, d] => *d == D,
-        _ => false,
-    };
-    if !ok {
+    let Some((&last, leading)) = shape.split_last().filter(|(&d, _)| d == D) else {
         return Err(input_arg(
             py,
             name,
             format!(
-                "shape {}; expected (N, {D}) (or (N, 1, {D}) as OpenCV hands them out)",
+                "shape {}; expected (..., {D}): {D} numbers per point, in any leading shape ((N, {D}), OpenCV's (N, 1, {D}), …)",
                 tuple(&shape)
             ),
         ));
-    }
-    Ok(data
+    };
+    debug_assert_eq!(last, D);
+    let points = data
         .chunks_exact(D)
         .map(|c| std::array::from_fn(|i| c[i]))
-        .collect())
+        .collect();
+    Ok((points, leading.to_vec()))
 }
 
 /// A vector of `n` numbers given as `(n,)`, `(1, n)` or `(n, 1)` (any `n` when `n` is None).
@@ -191,17 +189,64 @@ fn vector(
     Ok(data)
 }
 
-/// `(N, 2)` float64 rows, NaN where the model gave no answer.
+/// A finite 3×3 matrix (row-major), or the left 3×3 of a 3×4 one where `allow_3x4` (a
+/// projection matrix P, whose fourth column is a stereo baseline the warp does not use).
+fn matrix3(
+    py: Python<'_>,
+    value: &Bound<'_, PyAny>,
+    name: &str,
+    allow_3x4: bool,
+) -> PyResult<[[f64; 3]; 3]> {
+    let (data, shape) = numbers(py, value, name)?;
+    let cols = match shape.as_slice() {
+        [3, 3] => 3,
+        [3, 4] if allow_3x4 => 4,
+        _ => {
+            return Err(input_arg(
+                py,
+                name,
+                format!(
+                    "shape {}; expected (3, 3){}",
+                    tuple(&shape),
+                    if allow_3x4 { " or (3, 4)" } else { "" }
+                ),
+            ))
+        }
+    };
+    if data.iter().any(|v| !v.is_finite()) {
+        return Err(input_arg(py, name, "every entry must be a finite number"));
+    }
+    Ok(std::array::from_fn(|i| {
+        std::array::from_fn(|j| data[i * cols + j])
+    }))
+}
+
+/// The pinhole camera of a projection matrix P (its 3×3 part: `[[fx, 0, cx], [0, fy, cy],
+/// [0, 0, 1]]`) at `size`.
+fn camera_of_p(py: Python<'_>, p: [[f64; 3]; 3], size: (u32, u32)) -> PyResult<Camera> {
+    if p[0][1] != 0.0 || p[1][0] != 0.0 || p[2] != [0.0, 0.0, 1.0] {
+        return Err(input_arg(
+            py,
+            "P",
+            format!("{p:?}: expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew)"),
+        ));
+    }
+    Camera::from_opencv(p, &[0.0; 4], size).arg(py, "P")
+}
+
+/// Answers of `N` numbers per point, float64, in the points' leading shape; NaN where the
+/// model gave no answer.
 fn nan_rows<'py, const N: usize>(
     py: Python<'py>,
     v: Vec<Option<[f64; N]>>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let n = v.len();
+    leading: &[usize],
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let flat: Vec<f64> = v
         .into_iter()
         .flat_map(|p| p.unwrap_or([f64::NAN; N]))
         .collect();
-    PyArray1::from_vec(py, flat).reshape([n, N])
+    let shape: Vec<usize> = leading.iter().copied().chain([N]).collect();
+    PyArray1::from_vec(py, flat).reshape(shape)
 }
 
 fn method(py: Python<'_>, name: &str) -> PyResult<InverseMethod> {
@@ -549,50 +594,62 @@ impl PyCamera {
         self.inner.save(&path).py(py)
     }
 
-    /// Normalized undistorted ``(x, y)`` → distorted pixels, ``(N, 2)`` float64, exact (f64 on
+    /// Normalized undistorted ``(x, y)`` → distorted pixels, ``(..., 2)`` float64 in the
+    /// points' own leading shape, exact (f64 on
     /// the CPU); NaN rows where the model is undefined.
     fn distort_points<'py>(
         &self,
         py: Python<'py>,
         xy: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let xy = rows::<2>(py, xy, "xy")?;
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (xy, leading) = rows::<2>(py, xy, "xy")?;
         let uv = py.detach(|| self.inner.distort_points(&xy));
-        nan_rows(py, uv)
+        nan_rows(py, uv, &leading)
     }
 
     /// Distorted pixels → normalized undistorted ``(x, y)``; NaN rows outside the valid domain
     /// (where the lens folds over, or no preimage exists). ``method``: ``"newton"``,
-    /// ``"heikkila"`` or ``"fixed-point:N"``.
-    #[pyo3(signature = (uv, method = "newton"))]
+    /// ``"heikkila"`` or ``"fixed-point:N"``. With ``R`` (3×3 rectification rotation) and ``P``
+    /// (3×3 new camera matrix, or a 3×4 projection matrix) as ``cv2.undistortPoints(uv, K, D,
+    /// R, P)``: the ray turned by ``R``, then pixels of ``P`` (normalized coordinates without
+    /// it); NaN where the turned ray points behind the image plane.
+    #[pyo3(signature = (uv, method = "newton", R = None, P = None))]
+    #[allow(non_snake_case)]
     fn undistort_points<'py>(
         &self,
         py: Python<'py>,
         uv: &Bound<'py, PyAny>,
         method: &str,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        R: Option<&Bound<'py, PyAny>>,
+        P: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let m = self::method(py, method)?;
         self.inner
             .check_method(m)
             .map_err(|e| input_arg(py, "method", e))?;
-        let uv = rows::<2>(py, uv, "uv")?;
-        let xy = py.detach(|| self.inner.undistort_points(&uv, m));
-        nan_rows(py, xy)
+        let r = R.map(|r| matrix3(py, r, "R", false)).transpose()?;
+        let p = P.map(|p| matrix3(py, p, "P", true)).transpose()?;
+        let (uv, leading) = rows::<2>(py, uv, "uv")?;
+        let xy = py.detach(|| match (r, p) {
+            (None, None) => self.inner.undistort_points(&uv, m),
+            (r, p) => self.inner.undistort_points_rectified(&uv, m, r, p),
+        });
+        nan_rows(py, xy, &leading)
     }
 
-    /// Distorted pixels ``(N, 2)`` → unit camera-frame rays ``(N, 3)``; NaN rows outside the
+    /// Distorted pixels ``(..., 2)`` → unit camera-frame rays ``(..., 3)``; NaN rows outside the
     /// valid domain. A fisheye's rays reach past 90° off the axis (``z < 0``).
     fn unproject_points<'py>(
         &self,
         py: Python<'py>,
         uv: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let uv = rows::<2>(py, uv, "uv")?;
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (uv, leading) = rows::<2>(py, uv, "uv")?;
         let rays = py.detach(|| self.inner.unproject_points(&uv));
-        nan_rows(py, rays)
+        nan_rows(py, rays, &leading)
     }
 
-    /// World points ``(N, 3)`` → distorted pixels ``(N, 2)``, as ``cv2.projectPoints`` with
+    /// World points ``(..., 3)`` → distorted pixels ``(..., 2)``, as ``cv2.projectPoints`` with
     /// ``rvec`` (Rodrigues) and ``tvec``; NaN rows for points the lens does not see (at or
     /// behind the camera for the standard model; past its field of view for a fisheye).
     #[pyo3(signature = (points_3d, rvec = None, tvec = None))]
@@ -602,8 +659,8 @@ impl PyCamera {
         points_3d: &Bound<'py, PyAny>,
         rvec: Option<&Bound<'py, PyAny>>,
         tvec: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let points = rows::<3>(py, points_3d, "points_3d")?;
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (points, leading) = rows::<3>(py, points_3d, "points_3d")?;
         let r = match rvec {
             Some(r) => vector(py, r, "rvec", Some(3))?,
             None => vec![0.0; 3],
@@ -625,7 +682,7 @@ impl PyCamera {
             })
             .collect();
         let uv = py.detach(|| self.inner.project_points(&cam));
-        nan_rows(py, uv)
+        nan_rows(py, uv, &leading)
     }
 
     fn __repr__(&self) -> String {
@@ -866,9 +923,9 @@ struct PyWarper {
 impl PyWarper {
     #[new]
     #[pyo3(signature = (camera, direction = "distort", method = "lut", chromatic = None,
-                        source_camera = None, fill = None, device = None),
-           text_signature = "(camera, direction='distort', method='lut', chromatic=None, source_camera=None, fill=(0, 0, 0, 0), device=None)")]
-    #[allow(clippy::too_many_arguments)]
+                        source_camera = None, fill = None, device = None, R = None, P = None),
+           text_signature = "(camera, direction='distort', method='lut', chromatic=None, source_camera=None, fill=(0, 0, 0, 0), device=None, R=None, P=None)")]
+    #[allow(clippy::too_many_arguments, non_snake_case)]
     fn new(
         py: Python<'_>,
         camera: PyRef<'_, PyCamera>,
@@ -878,6 +935,8 @@ impl PyWarper {
         source_camera: Option<PyRef<'_, PyCamera>>,
         fill: Option<&Bound<'_, PyAny>>,
         device: Option<PyRef<'_, PyDevice>>,
+        R: Option<&Bound<'_, PyAny>>,
+        P: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let dir: WarpDirection = direction.parse().arg(py, "direction")?;
         let m: WarpMethod = method.parse().arg(py, "method")?;
@@ -892,6 +951,34 @@ impl PyWarper {
             options.chromatic = Some([c[0], c[1], c[2]]);
         }
         options.source_camera = source_camera.map(|c| c.inner.clone());
+        if let Some(r) = R {
+            if dir == WarpDirection::Distort {
+                return Err(input_arg(
+                    py,
+                    "R",
+                    "a rectification rotation applies to a pinhole output: direction='undistort'",
+                ));
+            }
+            options.rectification = Some(matrix3(py, r, "R", false)?);
+        }
+        if let Some(p) = P {
+            if dir == WarpDirection::Distort {
+                return Err(input_arg(
+                    py,
+                    "P",
+                    "the output camera P applies to a pinhole output: direction='undistort' (distort takes source_camera)",
+                ));
+            }
+            if options.source_camera.is_some() {
+                return Err(input_arg(
+                    py,
+                    "P",
+                    "give the output camera once: P or source_camera",
+                ));
+            }
+            let size = (camera.inner.width, camera.inner.height);
+            options.source_camera = Some(camera_of_p(py, matrix3(py, p, "P", true)?, size)?);
+        }
         let f = match fill {
             Some(f) => vector(py, f, "fill", Some(4))?,
             None => vec![0.0; 4],
@@ -981,11 +1068,13 @@ impl PyWarper {
             self.call_typed(py, a, out, return_mask)
         } else if let Ok(a) = image.cast::<PyArrayDyn<f32>>() {
             self.call_typed(py, a, out, return_mask)
+        } else if image.cast::<PyArrayDyn<f64>>().is_ok() {
+            self.call_f64(py, image, out, return_mask)
         } else if let Ok(a) = image.cast::<PyUntypedArray>() {
             Err(input(
                 py,
                 format!(
-                    "image: dtype {} is not supported; expected uint8, uint16 or float32 (convert it explicitly, e.g. image.astype(numpy.float32))",
+                    "image: dtype {} is not supported; expected uint8, uint16, float32 or float64 (convert it explicitly, e.g. image.astype(numpy.float32))",
                     a.dtype()
                 ),
             ))
@@ -1027,6 +1116,60 @@ impl PyWarper {
 }
 
 impl PyWarper {
+    /// A float64 image: warped in float32 (the device's sample type) and handed back as
+    /// float64, into `out` when given (a float64 array of the output's shape).
+    fn call_f64<'py>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+        out: Option<&Bound<'py, PyAny>>,
+        return_mask: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        if let Some(o) = out {
+            if o.cast::<PyArrayDyn<f64>>().is_err() {
+                return Err(input_arg(
+                    py,
+                    "out",
+                    "a float64 image is warped into a float64 out= array",
+                ));
+            }
+        }
+        let single = image.call_method1("astype", ("float32",))?;
+        let single = single
+            .cast::<PyArrayDyn<f32>>()
+            .map_err(|_| input_arg(py, "image", "expected a numpy array"))?;
+        let warped = self.call_typed(py, single, None, return_mask)?;
+        let (image_out, mask) = if return_mask {
+            let (i, m): (Bound<'py, PyAny>, Bound<'py, PyAny>) = warped.extract()?;
+            (i, Some(m))
+        } else {
+            (warped, None)
+        };
+        let double = match out {
+            Some(o) => {
+                let (want, got): (Vec<usize>, Vec<usize>) = (
+                    image_out.getattr("shape")?.extract()?,
+                    o.getattr("shape")?.extract()?,
+                );
+                if want != got {
+                    return Err(input_arg(
+                        py,
+                        "out",
+                        format!("shape {}; expected {}", tuple(&got), tuple(&want)),
+                    ));
+                }
+                o.call_method1("__setitem__", (py.Ellipsis(), &image_out))
+                    .map_err(|e| input_arg(py, "out", e))?;
+                o.clone()
+            }
+            None => image_out.call_method1("astype", ("float64",))?,
+        };
+        match mask {
+            Some(m) => Ok((double, m).into_pyobject(py)?.into_any()),
+            None => Ok(double),
+        }
+    }
+
     fn call_typed<'py, T: Sample>(
         &self,
         py: Python<'py>,

@@ -189,3 +189,42 @@ def test_bad_points_and_k_name_the_argument(reference):
         vklens.Camera.load("/nowhere.yml")
     # the kinds are also the standard exceptions
     assert issubclass(vklens.InputError, ValueError) and issubclass(vklens.GpuError, RuntimeError)
+
+
+@pytest.mark.parametrize("shape", [(2,), (7, 2), (7, 1, 2), (3, 4, 2), (0, 2)])
+def test_points_keep_any_leading_shape(reference, shape):
+    cam = camera_of(reference["webcam_plumb_bob"])
+    rng = np.random.default_rng(11)
+    xy = rng.uniform(-0.4, 0.4, shape)
+    uv = cam.distort_points(xy)
+    assert uv.shape == shape and uv.dtype == np.float64
+    back = cam.undistort_points(uv)
+    assert back.shape == shape
+    np.testing.assert_allclose(back, xy, atol=1e-12)
+    rays = cam.unproject_points(uv)
+    assert rays.shape == shape[:-1] + (3,)
+    pts = np.concatenate([xy, np.ones(shape[:-1] + (1,))], axis=-1) * 2.0
+    assert cam.project_points(pts).shape == shape
+    # The same numbers as the flat call, point for point.
+    np.testing.assert_array_equal(uv.reshape(-1, 2), cam.distort_points(xy.reshape(-1, 2)))
+    with pytest.raises(vklens.InputError, match="uv"):
+        cam.undistort_points(np.zeros(shape[:-1] + (3,)))
+
+
+@pytest.mark.parametrize("model", ["standard", "fisheye"])
+def test_points_89_5_to_89_9_degrees_off_axis_round_trip(model):
+    # As Kornia's round-trip tests do: undistort_points(distort_points(p)) == p up to the last
+    # tenth of a degree before 90°, where the point still has a preimage.
+    if model == "standard":
+        cam = vklens.Camera(width=640, height=480, fx=500, fy=500, cx=320, cy=240,
+                            dist_coeffs=[0.02, 0.001, 0.0, 0.0])
+    else:
+        cam = vklens.Camera(width=640, height=480, fx=300, fy=300, cx=320, cy=240,
+                            model="opencv_fisheye", dist_coeffs=[0.01, -0.002, 0.0005, -0.0001])
+    rng = np.random.default_rng(5)
+    theta = np.radians(rng.uniform(89.5, 89.9, 200))
+    phi = rng.uniform(0, 2 * np.pi, 200)
+    xy = np.stack([np.tan(theta) * np.cos(phi), np.tan(theta) * np.sin(phi)], axis=1)
+    back = cam.undistort_points(cam.distort_points(xy))
+    assert not np.isnan(back).any()
+    np.testing.assert_allclose(back, xy, rtol=1e-9)

@@ -105,18 +105,23 @@ class Camera:
     def save(self, path: PathLike) -> None:
         """Writes the camera as vklens JSON, atomically."""
     def distort_points(self, xy: ArrayLike) -> npt.NDArray[np.float64]:
-        """Normalized undistorted ``(N, 2)`` (x = X/Z, y = Y/Z; also ``(N, 1, 2)``) → distorted
-        pixels ``(N, 2)``, float64, exact; NaN rows where the model is undefined."""
-    def undistort_points(self, uv: ArrayLike, method: str = "newton") -> npt.NDArray[np.float64]:
-        """Distorted pixels ``(N, 2)`` → normalized undistorted ``(N, 2)``; NaN rows outside the
+        """Normalized undistorted ``(..., 2)`` (x = X/Z, y = Y/Z; any leading shape: ``(N, 2)``,
+        OpenCV's ``(N, 1, 2)``, ``(H, W, 2)``) → distorted pixels in the same shape, float64,
+        exact; NaN where the model is undefined."""
+    def undistort_points(self, uv: ArrayLike, method: str = "newton", R: Optional[ArrayLike] = None,
+                         P: Optional[ArrayLike] = None) -> npt.NDArray[np.float64]:
+        """Distorted pixels ``(..., 2)`` → normalized undistorted, same shape; NaN outside the
         valid domain (the lens folds over there, or no preimage exists). ``method``:
-        ``"newton"``, ``"heikkila"`` or ``"fixed-point:N"`` (OpenCV's own iteration)."""
+        ``"newton"``, ``"heikkila"`` or ``"fixed-point:N"`` (OpenCV's own iteration). With
+        ``R`` (3×3) and ``P`` (3×3 or 3×4) as ``cv2.undistortPoints(uv, K, D, R, P)``: the ray
+        turned by ``R``, then pixels of ``P``; NaN where the turned ray points behind the image
+        plane."""
     def unproject_points(self, uv: ArrayLike) -> NDArray[np.float64]:
-        """Distorted pixels ``(N, 2)`` → unit camera-frame rays ``(N, 3)``; NaN rows outside the
+        """Distorted pixels ``(..., 2)`` → unit camera-frame rays ``(..., 3)``; NaN outside the
         valid domain (a fisheye's rays reach past 90°: ``z < 0``)."""
     def project_points(self, points_3d: ArrayLike, rvec: Optional[ArrayLike] = None,
                        tvec: Optional[ArrayLike] = None) -> npt.NDArray[np.float64]:
-        """``(N, 3)`` points → ``(N, 2)`` pixels, as ``cv2.projectPoints`` (``rvec`` a Rodrigues
+        """``(..., 3)`` points → ``(..., 2)`` pixels, as ``cv2.projectPoints`` (``rvec`` a Rodrigues
         vector, ``rvec``/``tvec`` shaped ``(3,)``, ``(3, 1)`` or ``(1, 3)``); NaN rows for
         points at or behind the camera."""
 
@@ -141,15 +146,21 @@ class Warper:
 
     def __init__(self, camera: Camera, direction: str = "distort", method: str = "lut",
                  chromatic: Optional[Sequence[float]] = None, source_camera: Optional[Camera] = None,
-                 fill: Sequence[float] = (0, 0, 0, 0), device: Optional[Device] = None) -> None:
-        """``direction``: ``"distort"`` (a pinhole image in, the lens image out),
+                 fill: Sequence[float] = (0, 0, 0, 0), device: Optional[Device] = None,
+                 R: Optional[ArrayLike] = None, P: Optional[ArrayLike] = None) -> None:
+        """Images: uint8, uint16, float32 or float64 (warped in float32, returned float64).
+        ``direction``: ``"distort"`` (a pinhole image in, the lens image out),
         ``"undistort"`` (a lens image in, a pinhole image out) or ``"precorrect"`` (a headset
         pre-correction). ``method``: ``"lut"`` (a map built once), ``"newton"``, ``"heikkila"``
         or ``"fixed-point:N"`` (solved per pixel). ``chromatic``: R, G, B magnifications about
         the principal point (lateral chromatic aberration; channels are R, G, B in that
         order). ``source_camera``: the pinhole side's camera (for distort the input's, e.g.
         ``vklens.overscan(camera)``; otherwise the output's); None is the camera's own
-        intrinsics. ``fill``: R, G, B, A in 0..1 for pixels without a source."""
+        intrinsics. ``fill``: R, G, B, A in 0..1 for pixels without a source. ``R`` and
+        ``P`` (undistort and precorrect): the rectification rotation (3×3) and the output
+        camera (a 3×3 new camera matrix or a 3×4 projection matrix, at the camera's size), as
+        ``cv2.initUndistortRectifyMap(K, D, R, P)`` and ROS ``image_proc`` rectify a stereo
+        pair; ``P`` replaces ``source_camera``."""
     @property
     def camera(self) -> Camera: ...
     @property

@@ -96,6 +96,12 @@ pub struct WarpArgs {
     /// and size with no distortion.
     #[command(flatten)]
     rule: super::new_camera::RuleArgs,
+    /// undistort only: ignore the rectification a ROS camera_info carries (its R and P) and
+    /// undistort with K alone. By default undistort rectifies as ROS image_proc does:
+    /// `initUndistortRectifyMap(K, D, R, P)`, the output taking P's intrinsics (a stereo pair's
+    /// rectified image); it says on stderr which it used.
+    #[arg(long)]
+    no_rectification: bool,
     /// newton | lut | heikkila | fixed-point:N. lut builds a coordinate map once with Newton
     /// and samples it. Only distort solves an inverse; the other directions use the forward
     /// model and accept newton or lut.
@@ -140,6 +146,54 @@ fn pinhole(path: &Path) -> Result<Camera, CliError> {
     Ok(cam)
 }
 
+/// Undistort as ROS `image_proc` does: a camera_info's R and P, unless `--no-rectification`;
+/// says on stderr which camera the output has.
+fn rectify_as_image_proc(
+    args: &WarpArgs,
+    cam: &Camera,
+    options: &mut WarpOptions,
+) -> Result<(), CliError> {
+    let found = crate::io::camera::load_rectification(&args.camera)?
+        .filter(|r| !r.is_identity_for(&cam.intrinsics));
+    let Some(rect) = found else {
+        return Ok(());
+    };
+    let file = args.camera.display();
+    if args.no_rectification {
+        eprintln!(
+            "undistort: {file} carries a rectification (R, P); --no-rectification: undistorting with K alone"
+        );
+        return Ok(());
+    }
+    if args.rule.given() {
+        return Err(CliError::input(format!(
+            "{file} carries a rectification (R, P), and --alpha and --balance choose the output camera for R = identity as OpenCV's rules do: add --no-rectification to undistort with K alone into that camera"
+        )));
+    }
+    options.rectification = Some(rect.r);
+    let output = match &options.source_camera {
+        Some(_) => format!(
+            "the output camera of --source-camera {}",
+            args.source_camera
+                .as_deref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        ),
+        None => {
+            let k = rect.intrinsics;
+            options.source_camera = Some(Camera::from_coeffs(cam.width, cam.height, k, &[0.0; 4])?);
+            format!(
+                "P's camera (fx {:.6} fy {:.6} cx {:.6} cy {:.6})",
+                k.fx, k.fy, k.cx, k.cy
+            )
+        }
+    };
+    eprintln!(
+        "undistort: rectifying as image_proc does with {file}'s R and {output} (--no-rectification: K alone)"
+    );
+    Ok(())
+}
+
 /// Runs one of the three warp directions.
 pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     check_output(&args.output, "image", &["png", "exr"])?;
@@ -178,22 +232,31 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     if let Some((new, roi, rule)) = args.rule.choose(&cam)? {
         output_camera = Some(super::new_camera::describe(&new, roi, &rule));
         options.source_camera = Some(new);
-    } else if direction == WarpDirection::Undistort {
-        let k = options
-            .source_camera
-            .as_ref()
-            .map_or(cam.intrinsics, |c| c.intrinsics);
-        let (w, h) = options
-            .source_camera
-            .as_ref()
-            .map_or((cam.width, cam.height), |c| (c.width, c.height));
-        let whose = match &args.source_camera {
-            Some(src) => src.display().to_string(),
-            None => format!("{}'s intrinsics and size", args.camera.display()),
-        };
-        output_camera = Some(format!(
-            "output camera ({whose}): {w}×{h} pinhole, fx {} fy {} cx {} cy {}",
-            k.fx, k.fy, k.cx, k.cy
+    }
+    if direction == WarpDirection::Undistort {
+        rectify_as_image_proc(&args, &cam, &mut options)?;
+        if output_camera.is_none() {
+            let k = options
+                .source_camera
+                .as_ref()
+                .map_or(cam.intrinsics, |c| c.intrinsics);
+            let (w, h) = options
+                .source_camera
+                .as_ref()
+                .map_or((cam.width, cam.height), |c| (c.width, c.height));
+            let whose = match (&args.source_camera, &options.source_camera) {
+                (Some(src), _) => src.display().to_string(),
+                (None, Some(_)) => format!("{}'s rectified P", args.camera.display()),
+                (None, None) => format!("{}'s intrinsics and size", args.camera.display()),
+            };
+            output_camera = Some(format!(
+                "output camera ({whose}): {w}×{h} pinhole, fx {} fy {} cx {} cy {}",
+                k.fx, k.fy, k.cx, k.cy
+            ));
+        }
+    } else if args.no_rectification {
+        return Err(CliError::input(
+            "--no-rectification applies to undistort (a camera_info's R and P)",
         ));
     }
     if !args.channel_cameras.is_empty() {

@@ -204,6 +204,43 @@ impl Camera {
             .collect()
     }
 
+    /// [`Camera::undistort_points`], then as `cv2.undistortPoints(uv, K, D, R, P)`: the
+    /// normalized point's ray turned by the rectification `r` (row-major; `None`: the
+    /// identity) and projected by `p` (the 3×3 part of a new camera or projection matrix;
+    /// `None`: normalized coordinates). `None` also where the turned ray points at or behind
+    /// the image plane, where OpenCV returns meaningless numbers.
+    pub fn undistort_points_rectified(
+        &self,
+        uv: &[[f64; 2]],
+        method: InverseMethod,
+        r: Option<[[f64; 3]; 3]>,
+        p: Option<[[f64; 3]; 3]>,
+    ) -> Vec<Option<[f64; 2]>> {
+        let r = r.map(|r| glam::DMat3::from_cols_array_2d(&r).transpose());
+        let p = p.map(|p| glam::DMat3::from_cols_array_2d(&p).transpose());
+        uv.iter()
+            .map(|&[u, v]| {
+                let pixel = DVec2::new(u, v);
+                // The ray itself where the model gives one (a fisheye's past 90°, which R may
+                // turn into view); OpenCV's other inverses through their normalized point.
+                let ray = if self.model().is_ray_model() || method == InverseMethod::Newton {
+                    self.unproject(pixel)?
+                } else {
+                    let y = self.intrinsics.to_normalized(pixel);
+                    self.undistort_normalized(y, method)?.extend(1.0)
+                };
+                let ray = r.map_or(ray, |r| r * ray);
+                if !(ray.z > 0.0) {
+                    return None;
+                }
+                let q = p.map_or(ray, |p| p * ray);
+                (q.z != 0.0)
+                    .then(|| [q.x / q.z, q.y / q.z])
+                    .filter(|v| v.iter().all(|c| c.is_finite()))
+            })
+            .collect()
+    }
+
     /// Projects camera-frame points `(X, Y, Z)` to distorted pixels, as `cv2.projectPoints`
     /// with a zero pose; `None` for points at or behind the camera plane.
     pub fn project_points(&self, points: &[[f64; 3]]) -> Vec<Option<[f64; 2]>> {

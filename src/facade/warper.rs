@@ -105,6 +105,11 @@ pub struct WarpOptions {
     /// distort the input's (e.g. [`crate::overscan`]), for undistort and precorrect the
     /// output's. It must have no distortion.
     pub source_camera: Option<Camera>,
+    /// Undistort and precorrect: the rectification rotation R (row-major, OpenCV's R of
+    /// `initUndistortRectifyMap(K, D, R, P)`, a ROS `camera_info`'s R), the rotation from the
+    /// lens camera's frame to the frame the output looks along; with `source_camera` as P's
+    /// camera this is a stereo pair's rectification. `None`: the identity.
+    pub rectification: Option<[[f64; 3]; 3]>,
     /// The images' format (default 8-bit RGBA).
     pub format: PixelFormat,
     /// Bilinear for colour, nearest for data that must not be blended (IDs, depth).
@@ -125,6 +130,7 @@ impl WarpOptions {
             chromatic: None,
             channel_cameras: None,
             source_camera: None,
+            rectification: None,
             format: PixelFormat::Rgba8,
             sampling: Sampling::Bilinear,
             fill: [0.0; 4],
@@ -186,6 +192,11 @@ pub(crate) fn warp_geometry(camera: &Camera, options: &WarpOptions) -> Result<Wa
             ));
         }
         geometry = geometry.with_ideal(p.intrinsics, (p.width, p.height))?;
+    }
+    if let Some(r) = options.rectification {
+        geometry = geometry
+            .with_rectification(r)
+            .map_err(|e| Error::argument("rectification", e.to_string()))?;
     }
     if let Some(c) = options.chromatic {
         geometry = geometry

@@ -124,6 +124,122 @@ pub fn list_cameras(text: &str, origin: &str, size: Option<(u32, u32)>) -> Resul
     Ok(listing_from_tree(&tree, size))
 }
 
+/// What a ROS `camera_info` (or an OpenCV file in its layout) says about the rectified image
+/// beside the lens: the rectification rotation R and the projection P of the rectified
+/// pinhole camera, as `image_proc` applies them (`initUndistortRectifyMap(K, D, R, P)`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rectification {
+    /// R, row-major: the rotation from the lens camera's frame to the rectified frame.
+    pub r: [[f64; 3]; 3],
+    /// P, row-major: `[fx' 0 cx' Tx; 0 fy' cy' Ty; 0 0 1 0]` (Tx = −fx'·baseline on a stereo
+    /// pair's second camera; the warp uses the 3×3 part, as OpenCV does).
+    pub p: [[f64; 4]; 3],
+    /// P's 3×3 part as the rectified image's intrinsics.
+    pub intrinsics: Intrinsics,
+}
+
+impl Rectification {
+    /// Whether applying it changes nothing: R = I and P's 3×3 part = K.
+    pub fn is_identity_for(&self, k: &Intrinsics) -> bool {
+        let i = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        self.r == i && self.intrinsics == *k
+    }
+}
+
+/// The `rectification_matrix` and `projection_matrix` of a ROS `camera_info` file (`R`, `P`
+/// in the flat `sensor_msgs/CameraInfo` layout): `None` where the file has neither (every
+/// other format). A file with only one of them has P = K or R = I for the other, as ROS fills
+/// them. `origin` names the file in errors.
+pub fn rectification_of(text: &str, origin: &str) -> Result<Option<Rectification>> {
+    let err = |e: Error| e.context(origin);
+    let text = text.replace("\r\n", "\n").replace('\r', "\n");
+    let trimmed = text.trim_start_matches('\u{feff}').trim_start();
+    let tree = if trimmed.starts_with('{') || origin.to_ascii_lowercase().ends_with(".json") {
+        match serde_json::from_str::<StrictJson>(trimmed) {
+            Ok(v) => v.0,
+            Err(_) => return Ok(None),
+        }
+    } else if trimmed.starts_with('<') {
+        return Ok(None);
+    } else {
+        match yaml_to_tree(trimmed) {
+            Ok(t) => t,
+            Err(_) => return Ok(None),
+        }
+    };
+    let Some(obj) = tree.as_object() else {
+        return Ok(None);
+    };
+    let r = matrix_data(obj, &["rectification_matrix", "R"]).map_err(err)?;
+    let p = matrix_data(obj, &["projection_matrix", "P"]).map_err(err)?;
+    if r.is_none() && p.is_none() {
+        return Ok(None);
+    }
+    let (k, _) = intrinsics_from(obj, false).map_err(err)?;
+    let r = match r {
+        None => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        Some((key, v)) => {
+            let v: [f64; 9] = v.try_into().map_err(|v: Vec<f64>| {
+                err(Error::input(format!(
+                    "`{key}` must have 9 entries (3×3), got {}",
+                    v.len()
+                )))
+            })?;
+            [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]]
+        }
+    };
+    let p = match p {
+        None => [
+            [k.fx, 0.0, k.cx, 0.0],
+            [0.0, k.fy, k.cy, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ],
+        Some((key, v)) => {
+            let v: [f64; 12] = v.try_into().map_err(|v: Vec<f64>| {
+                err(Error::input(format!(
+                    "`{key}` must have 12 entries (3×4), got {}",
+                    v.len()
+                )))
+            })?;
+            let p = [
+                [v[0], v[1], v[2], v[3]],
+                [v[4], v[5], v[6], v[7]],
+                [v[8], v[9], v[10], v[11]],
+            ];
+            // All zeros is what an uncalibrated ROS driver publishes: nothing to apply.
+            if v.iter().all(|&x| x == 0.0) {
+                return Ok(None);
+            }
+            let pinhole = p[0][1] == 0.0
+                && p[1][0] == 0.0
+                && p[2][0] == 0.0
+                && p[2][1] == 0.0
+                && p[2][2] == 1.0
+                && p[2][3] == 0.0;
+            if !pinhole || !v.iter().all(|x| x.is_finite()) {
+                return Err(err(Error::input(format!(
+                    "`{key}` {v:?}: expected [fx' 0 cx' Tx; 0 fy' cy' Ty; 0 0 1 0] with finite entries"
+                ))));
+            }
+            p
+        }
+    };
+    let intrinsics = Intrinsics {
+        fx: p[0][0],
+        fy: p[1][1],
+        cx: p[0][2],
+        cy: p[1][2],
+    };
+    Ok(Some(Rectification { r, p, intrinsics }))
+}
+
+/// [`rectification_of`] a file.
+pub fn load_rectification(path: &Path) -> Result<Option<Rectification>> {
+    let text =
+        super::read_text(path).map_err(|e| Error::io(path, "cannot read camera file", &e))?;
+    rectification_of(&text, &path.display().to_string())
+}
+
 /// Everything a reader of untrusted text must survive, in one place for the fuzz target and
 /// its corpus replay: every detection (as a `.json`, a `.yaml` and a `.txt`), every camera of
 /// the listing with and without a size, picked by index and by name, its model evaluated and

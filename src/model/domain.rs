@@ -38,9 +38,10 @@ impl ValidDomain {
     /// (`CameraParams.domain` in `glsl/include/camera_model.glsl`), so CPU and GPU agree on
     /// what is valid up to f32 rounding.
     pub const SAMPLES: usize = 256;
-    /// Largest ideal radius considered (normalized units): tan(88.9°). A lens that never folds
+    /// Largest ideal radius considered (normalized units): tan(89.94°), past the 89.9° a point
+    /// round-trips from (Kornia's round-trip tests go that far). A lens that never folds
     /// is still bounded here: a perspective image cannot reach 90° off axis.
-    pub const RADIUS_CAP: f64 = 50.0;
+    pub const RADIUS_CAP: f64 = 1000.0;
 
     /// Computes the domain of a distortion given by its forward map `forward` (ideal → distorted,
     /// both in normalized coordinates centred on the principal point) and a local test

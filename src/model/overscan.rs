@@ -111,7 +111,7 @@ pub fn cube_face_side(camera: &Camera, density: f64) -> u32 {
 }
 
 /// Whether some valid pixel of `camera`'s frame sees a direction no pinhole source can hold
-/// (at or past the domain's radius cap, 88.9° off the axis): a fisheye of 180° and more, or
+/// (at or past the domain's radius cap, 89.94° off the axis): a fisheye of 180° and more, or
 /// one whose frame corners reach past 90°.
 pub fn beyond_a_pinhole(camera: &Camera) -> bool {
     let cap = super::ValidDomain::RADIUS_CAP.atan();

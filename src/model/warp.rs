@@ -3,7 +3,7 @@
 //! [`WarpGeometry::source_coordinate`] step for step; the CPU reference warp and the GPU warp
 //! both start here.
 
-use glam::DVec2;
+use glam::{DMat3, DVec2, DVec3};
 
 use super::{Camera, Intrinsics, InverseMethod, ModelError};
 
@@ -38,6 +38,10 @@ pub struct WarpGeometry {
     /// A full camera per channel (R, G, B), overriding `camera` — the general form of lateral
     /// colour. Only through a precomputed map on the GPU.
     pub channel_cameras: Option<Box<[Camera; 3]>>,
+    /// Undistort only: the rectification rotation R of OpenCV's `initUndistortRectifyMap` and a
+    /// ROS `camera_info` (the rotation from the lens camera's frame to the rectified frame the
+    /// output pinhole image looks along). `None` is the identity.
+    pub rectification: Option<DMat3>,
 }
 
 impl WarpGeometry {
@@ -53,6 +57,7 @@ impl WarpGeometry {
             method,
             chromatic: None,
             channel_cameras: None,
+            rectification: None,
         }
     }
 
@@ -96,6 +101,49 @@ impl WarpGeometry {
             Direction::Undistort => self.output_size = size,
         }
         Ok(self)
+    }
+
+    /// Rectifies as well (undistort only): the output pinhole image looks along the frame that
+    /// `r` (row-major, OpenCV's R) turns the lens camera's frame into, as
+    /// `cv2.initUndistortRectifyMap(K, D, R, P)` and ROS `image_proc` do. The identity is
+    /// stored as no rotation, so the plain path runs.
+    pub fn with_rectification(mut self, r: [[f64; 3]; 3]) -> Result<Self, ModelError> {
+        if self.direction != Direction::Undistort {
+            return Err(ModelError::Other(
+                "a rectification rotation applies to undistort (a pinhole output) only".into(),
+            ));
+        }
+        let m = DMat3::from_cols_array_2d(&r).transpose();
+        if !m.to_cols_array().iter().all(|v| v.is_finite()) {
+            return Err(ModelError::Other(format!("R {r:?} is not finite")));
+        }
+        // A rotation: RᵀR = I and det R = +1 (to the precision calibration files are written
+        // with); anything else would shear or mirror the output.
+        let off = (m.transpose() * m - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |a, v| a.max(v.abs()));
+        if !(off <= 1e-5) || !((m.determinant() - 1.0).abs() <= 1e-5) {
+            return Err(ModelError::Other(format!(
+                "R {r:?} is not a rotation (RᵀR differs from I by {off:.1e}, det R = {:.6})",
+                m.determinant()
+            )));
+        }
+        self.rectification = (m != DMat3::IDENTITY).then_some(m);
+        Ok(self)
+    }
+
+    /// The homography from an output pixel to the lens camera's ray (undistort): Rᵀ·K_out⁻¹,
+    /// or `None` without a rectification (then the plain `(p − c) / f`).
+    pub fn output_to_ray(&self) -> Option<DMat3> {
+        let r = self.rectification?;
+        let i = &self.ideal;
+        let k_inv = DMat3::from_cols(
+            DVec3::new(1.0 / i.fx, 0.0, 0.0),
+            DVec3::new(0.0, 1.0 / i.fy, 0.0),
+            DVec3::new(-i.cx / i.fx, -i.cy / i.fy, 1.0),
+        );
+        Some(r.transpose() * k_inv)
     }
 
     /// Adds lateral chromatic aberration as per-channel magnifications.
@@ -153,7 +201,17 @@ impl WarpGeometry {
                 Some(ideal.to_pixel(cam.undistort_normalized(d, self.method)?))
             }
             Direction::Undistort => {
-                let x = ideal.to_normalized(p);
+                let x = match self.output_to_ray() {
+                    None => ideal.to_normalized(p),
+                    Some(h) => {
+                        let ray = h * p.extend(1.0);
+                        // A ray the rotation turns behind the lens camera has no image in it.
+                        if !(ray.z > 0.0) {
+                            return None;
+                        }
+                        ray.truncate() / ray.z
+                    }
+                };
                 // Beyond a fold the forward model wraps back over valid pixels.
                 if !cam.domain().contains_ideal(x) {
                     return None;

@@ -43,6 +43,8 @@ pub const MODE: SpecId = SpecId::new("MODE", 8);
 pub const METHOD: SpecId = SpecId::new("METHOD", 9);
 /// Iterations of the fixed-point inverse.
 pub const FIXED_POINT_ITERATIONS: SpecId = SpecId::new("FIXED_POINT_ITERATIONS", 10);
+/// Undistort into a rotated (rectified) frame: the output pixel's ray through a homography.
+pub const RECTIFY: SpecId = SpecId::new("RECTIFY", 16);
 
 // glsl/warp.comp, glsl/warp_raster.frag, glsl/include/warp_sample.glsl.
 /// Three fetches, one per channel's lens (lateral chromatic aberration).

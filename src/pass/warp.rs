@@ -111,9 +111,13 @@ pub struct WarpPush {
     pub fill: [f32; 4],
     /// Source w h, output w h.
     pub sizes: [u32; 4],
+    /// Columns of the homography Rᵀ·K_out⁻¹ from an output pixel to the lens camera's ray
+    /// (undistort with a rectification rotation; `w` unused).
+    pub rectify: [[f32; 4]; 3],
 }
 
-const _: () = assert!(std::mem::size_of::<WarpPush>() == 64);
+// Within the 128 bytes of push constants every device offers.
+const _: () = assert!(std::mem::size_of::<WarpPush>() == 112);
 
 const MAP_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 /// Largest forward residual (px) a coarse-map pixel may have before it is marked invalid.
@@ -205,11 +209,13 @@ impl WarpPass {
             Direction::Distort => 0,
             Direction::Undistort => 1,
         };
+        let rectify = g.output_to_ray();
         let with_model = |cam: &Camera| {
             CameraParams::spec_constants(cam.terms())
                 .u32(spec::MODE, mode)
                 .u32(spec::METHOD, method)
                 .u32(spec::FIXED_POINT_ITERATIONS, iterations)
+                .bool(spec::RECTIFY, rectify.is_some())
         };
         let constants = with_model(&g.camera)
             .bool(spec::CHROMATIC, chromatic)
@@ -271,6 +277,9 @@ impl WarpPass {
                 g.output_size.0,
                 g.output_size.1,
             ],
+            rectify: rectify.map_or([[0.0; 4]; 3], |h| {
+                [h.x_axis, h.y_axis, h.z_axis].map(|c| f4([c.x, c.y, c.z, 0.0]))
+            }),
         };
 
         // Maps: real ones in map mode (one per channel that differs), 1×1 placeholders
@@ -311,7 +320,8 @@ impl WarpPass {
             let base = CameraParams::spec_constants(terms)
                 .u32(spec::MODE, mode)
                 .u32(spec::METHOD, method)
-                .u32(spec::FIXED_POINT_ITERATIONS, iterations);
+                .u32(spec::FIXED_POINT_ITERATIONS, iterations)
+                .bool(spec::RECTIFY, rectify.is_some());
             let (stride, refine, interpolation) = match desc.coordinates {
                 Coordinates::CoarseMap {
                     stride,

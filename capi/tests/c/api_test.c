@@ -215,7 +215,7 @@ static void gpu_and_warper(void) {
     double d[4] = {-0.05, 0.01, 0.03, -0.01};
     expect_ok("camera", vkl_camera_from_opencv(800, 600, K, d, 4, &c));
     vkl_warper w = NULL;
-    vkl_warp_options o = {VKL_API_VERSION, VKL_DISTORT, NULL, NULL, NULL, VK_FORMAT_R8G8B8A8_UNORM, {0, 0, 0, 0}, 0};
+    vkl_warp_options o = {VKL_API_VERSION, VKL_DISTORT, NULL, NULL, NULL, VK_FORMAT_R8G8B8A8_UNORM, {0, 0, 0, 0}, 0, NULL};
     vkl_warp_options bad = o;
     bad.direction = (vkl_direction)7;
     expect_error("direction 7", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "direction");
@@ -228,6 +228,17 @@ static void gpu_and_warper(void) {
     bad = o;
     bad.frames_in_flight = 9;
     expect_error("nine frames in flight", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "frames_in_flight");
+    double mirror[9] = {1, 0, 0, 0, 1, 0, 0, 0, -1};
+    double turn[9] = {0.9950041652780258, 0, 0.09983341664682815, 0, 1, 0, -0.09983341664682815, 0, 0.9950041652780258};
+    bad = o;
+    bad.rectification = turn;
+    expect_error("a rectification on distort", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "rectification");
+    bad.direction = VKL_UNDISTORT;
+    bad.rectification = mirror;
+    expect_error("a mirror for a rotation", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "rectification");
+    bad.rectification = turn;
+    expect_ok("a rectified undistort", vkl_warper_create(g, c, &bad, &w));
+    vkl_warper_free(&w);
     bad = o;
     bad.version = 0;
     expect_error("options version", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "version");

@@ -11,7 +11,10 @@
 //! * a [`SceneRenderer`]: a scene file through the lens, planned to the cheapest pipeline for
 //!   what it asks (per vertex with Lambers et al.'s Alg. 1 for IDs, flow and depth; the warp;
 //!   or Heidrich et al.'s image-based model for a real lens prescription);
-//! * [`overscan`]: the pinhole source camera that covers every valid pixel of a lens.
+//! * [`overscan`]: the pinhole source camera that covers every valid pixel of a lens;
+//!   [`optimal_new_camera`] and [`fisheye_new_camera`]: the pinhole camera to undistort into,
+//!   chosen as OpenCV's `getOptimalNewCameraMatrix` and
+//!   `fisheye.estimateNewCameraMatrixForUndistortRectify` choose it.
 //!
 //! ```
 //! use vklens::{Camera, InverseMethod};
@@ -54,6 +57,7 @@ pub use imaging::cpu_warp::Sampling;
 pub use imaging::{BitDepth, Pixels, Raster};
 pub use io::catalog::{Found, Listing, LoadOptions};
 pub use io::writers::Format as CameraFormat;
+pub use model::new_camera::{fisheye_new_camera, optimal_new_camera, Roi};
 pub use model::{Camera, Intrinsics, InverseMethod};
 pub use pass::warp::PixelFormat;
 

@@ -269,7 +269,7 @@ fn side(py: Python<'_>, v: i64, name: &str) -> PyResult<u32> {
 // Camera
 
 /// A calibrated camera: OpenCV's standard model (4, 5, 8, 12 or 14 coefficients, exactly as
-/// ``cv2.projectPoints``) or a Brown radial lens.
+/// ``cv2.projectPoints``), its fisheye model, a Brown radial lens or another model of the table.
 #[pyclass(name = "Camera", module = "vklens", frozen)]
 #[derive(Clone)]
 struct PyCamera {
@@ -414,14 +414,17 @@ impl PyCamera {
     }
 
     /// From OpenCV's ``K`` (3×3, row-major) and ``D`` (any OpenCV length, shaped ``(n,)``,
-    /// ``(1, n)`` or ``(n, 1)``) and the image size ``(width, height)``.
+    /// ``(1, n)`` or ``(n, 1)``) and the image size ``(width, height)``. With ``fisheye=True``
+    /// the camera is OpenCV's fisheye model (``cv2.fisheye``): ``D`` is its k1 k2 k3 k4 and
+    /// ``K[0][1]`` its skew; otherwise four coefficients are the standard model's k1 k2 p1 p2.
     #[staticmethod]
-    #[pyo3(name = "from_opencv")]
+    #[pyo3(name = "from_opencv", signature = (k, d, size, fisheye = false))]
     fn from_opencv_(
         py: Python<'_>,
         k: &Bound<'_, PyAny>,
         d: &Bound<'_, PyAny>,
         size: (i64, i64),
+        fisheye: bool,
     ) -> PyResult<Self> {
         let (kv, shape) = numbers(py, k, "K")?;
         if shape != [3, 3] {
@@ -437,9 +440,88 @@ impl PyCamera {
         ];
         let dv = vector(py, d, "D", None)?;
         let size = (side(py, size.0, "size")?, side(py, size.1, "size")?);
-        let inner =
-            Camera::from_opencv(km, &dv, size).map_err(|e| named(py, e, "K", "D", "size"))?;
+        let inner = if fisheye {
+            Camera::from_opencv_fisheye(km, &dv, size)
+        } else {
+            Camera::from_opencv(km, &dv, size)
+        }
+        .map_err(|e| named(py, e, "K", "D", "size"))?;
         Ok(PyCamera { inner })
+    }
+
+    /// The pinhole camera to undistort into, as OpenCV chooses it, and its valid ROI
+    /// ``(x, y, w, h)``: ``(Camera, roi)``.
+    ///
+    /// ``alpha`` (OpenCV's standard model): ``cv2.getOptimalNewCameraMatrix(K, D, size, alpha,
+    /// new_size, center_principal_point)``; 0 keeps only pixels that have a source, 1 every
+    /// source pixel. ``balance`` (its fisheye model):
+    /// ``cv2.fisheye.estimateNewCameraMatrixForUndistortRectify(K, D, size, I, balance=...,
+    /// new_size=..., fov_scale=...)``. Give one of the two.
+    #[pyo3(signature = (alpha = None, new_size = None, center_principal_point = false, *, balance = None, fov_scale = None))]
+    fn optimal_new_camera(
+        &self,
+        py: Python<'_>,
+        alpha: Option<f64>,
+        new_size: Option<(i64, i64)>,
+        center_principal_point: bool,
+        balance: Option<f64>,
+        fov_scale: Option<f64>,
+    ) -> PyResult<(PyCamera, (u32, u32, u32, u32))> {
+        let new_size = new_size
+            .map(|s| Ok::<_, PyErr>((side(py, s.0, "new_size")?, side(py, s.1, "new_size")?)))
+            .transpose()?;
+        let (camera, roi) = match (alpha, balance) {
+            (Some(_), Some(_)) => {
+                return Err(input_arg(
+                    py,
+                    "balance",
+                    "alpha and balance are exclusive: alpha chooses by cv2.getOptimalNewCameraMatrix's rule (OpenCV's standard model), balance by cv2.fisheye.estimateNewCameraMatrixForUndistortRectify's (its fisheye model); give one",
+                ))
+            }
+            (None, None) => {
+                return Err(input_arg(
+                    py,
+                    "alpha",
+                    format!(
+                        "give alpha= (OpenCV's standard model: cv2.getOptimalNewCameraMatrix) or balance= (its fisheye model: cv2.fisheye.estimateNewCameraMatrixForUndistortRectify); this camera is `{}`",
+                        self.inner.model_name()
+                    ),
+                ))
+            }
+            (Some(alpha), None) => {
+                if fov_scale.is_some() {
+                    return Err(input_arg(
+                        py,
+                        "fov_scale",
+                        "fov_scale goes with balance= (the fisheye rule); alpha's rule has none",
+                    ));
+                }
+                py.detach(|| {
+                    vklens::optimal_new_camera(
+                        &self.inner,
+                        alpha,
+                        new_size,
+                        center_principal_point,
+                    )
+                })
+                .py(py)?
+            }
+            (None, Some(balance)) => {
+                if center_principal_point {
+                    return Err(input_arg(
+                        py,
+                        "center_principal_point",
+                        "center_principal_point goes with alpha= (cv2.getOptimalNewCameraMatrix); the fisheye rule centres the edge midpoints itself",
+                    ));
+                }
+                let fov_scale = fov_scale.unwrap_or(1.0);
+                py.detach(|| {
+                    vklens::fisheye_new_camera(&self.inner, balance, fov_scale, new_size)
+                })
+                .py(py)?
+            }
+        };
+        Ok((PyCamera { inner: camera }, roi))
     }
 
     /// From a vklens JSON camera object (what ``to_dict`` returns).

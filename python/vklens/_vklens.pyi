@@ -40,9 +40,39 @@ class Camera:
         ``"kalibr"``, ``"colmap"``, ``"basalt"``. Raises ``UnsupportedError`` where the format
         cannot hold the camera exactly."""
     @staticmethod
-    def from_opencv(K: ArrayLike, D: ArrayLike, size: Tuple[int, int]) -> "Camera":
+    def from_opencv(K: ArrayLike, D: ArrayLike, size: Tuple[int, int],
+                    fisheye: bool = False) -> "Camera":
         """From OpenCV's ``K`` (3×3, row-major, no skew), ``D`` shaped ``(n,)``, ``(1, n)`` or
-        ``(n, 1)``, and ``size = (width, height)``."""
+        ``(n, 1)``, and ``size = (width, height)``. With ``fisheye=True``: OpenCV's fisheye
+        model (``cv2.fisheye``), ``D`` its four coefficients k1 k2 k3 k4 and ``K[0][1]`` its
+        skew; without it, four coefficients are the standard model's k1 k2 p1 p2."""
+    @overload
+    def optimal_new_camera(self, alpha: float, new_size: Optional[Tuple[int, int]] = None,
+                           center_principal_point: bool = False
+                           ) -> Tuple["Camera", Tuple[int, int, int, int]]: ...
+    @overload
+    def optimal_new_camera(self, *, balance: float, fov_scale: float = 1.0,
+                           new_size: Optional[Tuple[int, int]] = None
+                           ) -> Tuple["Camera", Tuple[int, int, int, int]]: ...
+    def optimal_new_camera(self, alpha: Optional[float] = None,
+                           new_size: Optional[Tuple[int, int]] = None,
+                           center_principal_point: bool = False, *,
+                           balance: Optional[float] = None, fov_scale: Optional[float] = None
+                           ) -> Tuple["Camera", Tuple[int, int, int, int]]:
+        """The pinhole camera to undistort into, as OpenCV chooses it, and its valid ROI
+        ``(x, y, w, h)``. ``alpha`` for OpenCV's standard model: the camera and ROI of
+        ``cv2.getOptimalNewCameraMatrix(K, D, size, alpha, new_size, center_principal_point)``
+        (0 keeps only pixels that have a source, 1 every source pixel). ``balance`` for its
+        fisheye model: ``cv2.fisheye.estimateNewCameraMatrixForUndistortRectify(K, D, size,
+        np.eye(3), balance=balance, new_size=new_size, fov_scale=fov_scale)``, with a valid
+        ROI found as for ``alpha``. ``alpha`` and ``balance`` are exclusive; ``fov_scale`` goes
+        with ``balance``, ``center_principal_point`` with ``alpha``.
+
+        vklens undistorts with its converged inverse where ``cv2.undistortPoints`` stops after
+        5 iterations: on a strong lens the cameras differ slightly (vklens's is the rule's
+        exact answer). Raises ``InputError`` naming the keyword: ``alpha`` or ``balance``
+        outside 0..1, ``fov_scale`` not positive, a zero ``new_size``, a camera of another
+        model than the rule's, a lens that folds inside its image."""
     @staticmethod
     def from_dict(d: dict) -> "Camera":
         """From a vklens JSON camera object (what ``to_dict`` returns)."""
@@ -63,7 +93,7 @@ class Camera:
     def cy(self) -> float: ...
     @property
     def model(self) -> str:
-        """``"opencv"`` or ``"brown"``."""
+        """``"opencv"``, ``"opencv_fisheye"``, ``"brown"`` or another model's name."""
     @property
     def K(self) -> npt.NDArray[np.float64]:
         """OpenCV's camera matrix, ``(3, 3)`` float64."""

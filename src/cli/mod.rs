@@ -27,6 +27,7 @@ mod calibration;
 mod cameras;
 mod demo;
 mod lens;
+mod new_camera;
 mod output;
 mod planned;
 mod points;
@@ -112,6 +113,8 @@ Examples:
   echo '[[10, 240]]' | vklens points undistort --camera camchain.yaml --camera-index 1 --rays
   vklens distort --camera cam.yml --input pinhole.png --output lens.png --mask valid.png
   vklens undistort --camera cam.yml --input photo.png --output rectified.png
+  vklens undistort --camera cam.yml --input photo.png --output rectified.png --alpha 0
+  vklens new-camera --camera fisheye.json --balance 0.5 > new.json
   vklens overscan --camera cam.yml > source.json
   vklens render --camera cam.yml --scene checkerboard:9x6 --output board.png --ids ids.png
   vklens render --camera cam.yml --scene boxes --output boxes.png --flow flow.exr --tessellate 8
@@ -176,6 +179,21 @@ enum Command {
     Precorrect(warp::WarpArgs),
     /// Print the pinhole source camera (JSON) that covers every valid distorted pixel.
     Overscan(warp::OverscanArgs),
+    /// Print the pinhole camera to undistort into, chosen as OpenCV chooses it, and its ROI.
+    ///
+    /// Prints {"camera": {...}, "roi": [x, y, w, h]}. --alpha A for OpenCV's standard model
+    /// (cv2.getOptimalNewCameraMatrix: 0 crops to pixels that all have a source, 1 keeps every
+    /// source pixel), --balance B [--fov-scale F] for its fisheye model
+    /// (cv2.fisheye.estimateNewCameraMatrixForUndistortRectify). The camera is a vklens JSON
+    /// camera: `--source-camera` of `vklens undistort` reads it, and so does every --camera.
+    /// `vklens undistort --alpha A` (or --balance B) picks it in one step.
+    ///
+    /// Examples:
+    ///   vklens new-camera --camera cam.yml --alpha 0
+    ///   vklens new-camera --camera cam.yml --alpha 1 --new-size 1920x1080 --center-principal-point
+    ///   vklens new-camera --camera fisheye.json --balance 0.5 --fov-scale 1.2
+    #[command(verbatim_doc_comment)]
+    NewCamera(new_camera::NewCameraArgs),
     /// Render a scene through the lens (Lambers et al.): per vertex with Alg. 1 (colour, IDs, flow,
     /// depth, all exact) or as a pinhole render plus the compute warp. With a scene file
     /// (--scene S.toml --out DIR) the planner picks the cheapest pipeline for what it asks.
@@ -438,6 +456,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Undistort(args) => warp::run(args, crate::WarpDirection::Undistort),
         Command::Precorrect(args) => warp::run(args, crate::WarpDirection::Precorrect),
         Command::Overscan(args) => warp::overscan_command(args),
+        Command::NewCamera(args) => new_camera::run(args),
         Command::Render(args) => render::run(args),
         Command::CalibrationSet(args) => calibration::run(args),
         Command::Lens(command) => lens::run(command),

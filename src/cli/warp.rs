@@ -85,9 +85,17 @@ pub struct WarpArgs {
     #[arg(long, value_name = "OUT")]
     output: PathBuf,
     /// The pinhole side's camera, when it differs from CAM's intrinsics and size: for distort,
-    /// the input's (e.g. from `vklens overscan`); for undistort and precorrect, the output's.
-    #[arg(long, value_name = "SRC")]
+    /// the input's (e.g. from `vklens overscan`); for undistort and precorrect, the output's
+    /// (e.g. the "camera" of `vklens new-camera`).
+    #[arg(long, value_name = "SRC", conflicts_with_all = ["alpha", "balance"])]
     source_camera: Option<PathBuf>,
+    /// undistort only, instead of --source-camera: the output camera chosen as OpenCV chooses
+    /// it (--alpha A [--new-size WxH] [--center-principal-point] for the standard model,
+    /// --balance B [--fov-scale F] [--new-size WxH] for the fisheye); `vklens new-camera
+    /// --help` says what each means. Without either, the output camera is CAM's intrinsics
+    /// and size with no distortion.
+    #[command(flatten)]
+    rule: super::new_camera::RuleArgs,
     /// undistort only: ignore the rectification a ROS camera_info carries (its R and P) and
     /// undistort with K alone. By default undistort rectifies as ROS image_proc does:
     /// `initUndistortRectifyMap(K, D, R, P)`, the output taking P's intrinsics (a stereo pair's
@@ -157,6 +165,11 @@ fn rectify_as_image_proc(
         );
         return Ok(());
     }
+    if args.rule.given() {
+        return Err(CliError::input(format!(
+            "{file} carries a rectification (R, P), and --alpha and --balance choose the output camera for R = identity as OpenCV's rules do: add --no-rectification to undistort with K alone into that camera"
+        )));
+    }
     options.rectification = Some(rect.r);
     let output = match &options.source_camera {
         Some(_) => format!(
@@ -188,6 +201,11 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         check_output(m, "mask", &["png"])?;
         super::output::distinct_outputs(&[("--output", &args.output), ("--mask", m)])?;
     }
+    if direction != WarpDirection::Undistort && args.rule.any() {
+        return Err(CliError::input(
+            "--alpha, --balance, --new-size and --center-principal-point choose the output camera of `vklens undistort`; distort and precorrect take --source-camera",
+        ));
+    }
     let cam = super::load_camera(&args.camera)?;
     if !args.input_cubemap.is_empty() || args.input_equirect.is_some() {
         return run_sphere(&args, direction, &cam);
@@ -208,8 +226,34 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     if let Some(src) = &args.source_camera {
         options.source_camera = Some(pinhole(src)?);
     }
+    // Which camera the undistorted image is drawn into, said once the image is written (a
+    // failing run keeps its one line of error).
+    let mut output_camera = None;
+    if let Some((new, roi, rule)) = args.rule.choose(&cam)? {
+        output_camera = Some(super::new_camera::describe(&new, roi, &rule));
+        options.source_camera = Some(new);
+    }
     if direction == WarpDirection::Undistort {
         rectify_as_image_proc(&args, &cam, &mut options)?;
+        if output_camera.is_none() {
+            let k = options
+                .source_camera
+                .as_ref()
+                .map_or(cam.intrinsics, |c| c.intrinsics);
+            let (w, h) = options
+                .source_camera
+                .as_ref()
+                .map_or((cam.width, cam.height), |c| (c.width, c.height));
+            let whose = match (&args.source_camera, &options.source_camera) {
+                (Some(src), _) => src.display().to_string(),
+                (None, Some(_)) => format!("{}'s rectified P", args.camera.display()),
+                (None, None) => format!("{}'s intrinsics and size", args.camera.display()),
+            };
+            output_camera = Some(format!(
+                "output camera ({whose}): {w}×{h} pinhole, fx {} fy {} cx {} cy {}",
+                k.fx, k.fy, k.cx, k.cy
+            ));
+        }
     } else if args.no_rectification {
         return Err(CliError::input(
             "--no-rectification applies to undistort (a camera_info's R and P)",
@@ -280,6 +324,9 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         }
     };
     save_outputs(&args, &out, &mask, channels)?;
+    if let Some(line) = output_camera {
+        eprintln!("{line}");
+    }
     if direction == WarpDirection::Precorrect {
         report_round_trip(&cam);
     }

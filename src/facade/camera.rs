@@ -5,7 +5,7 @@ use std::path::Path;
 
 use glam::{DVec2, DVec3};
 
-use crate::model::{Camera, Intrinsics, InverseMethod};
+use crate::model::{Camera, Fisheye, Intrinsics, InverseMethod};
 use crate::{Error, Result};
 
 impl Camera {
@@ -95,26 +95,68 @@ impl Camera {
             cx: k[0][2],
             cy: k[1][2],
         };
-        // Each refusal names the argument it is about, for the front ends to say in their words.
-        Camera::from_coeffs(size.0, size.1, intrinsics, dist_coeffs).map_err(|e| {
-            use crate::model::ModelError as M;
-            let argument = match &e {
-                M::BadSize { .. } => "size",
-                M::CoefficientCount(_) => "dist_coeffs",
-                M::NotFinite { name, .. }
-                | M::NotPositive { name, .. }
-                | M::TooSmall { name, .. }
-                | M::Absurd { name, .. } => {
-                    if ["fx", "fy", "cx", "cy"].contains(name) {
-                        "K"
-                    } else {
-                        "dist_coeffs"
-                    }
-                }
-                _ => return Error::from(e),
-            };
-            Error::argument(argument, e.to_string())
-        })
+        Camera::from_coeffs(size.0, size.1, intrinsics, dist_coeffs).map_err(opencv_argument)
+    }
+
+    /// Builds a camera of OpenCV's fisheye model (`cv2.fisheye`, Kannala–Brandt) from its
+    /// camera matrix `K` (row-major; a skew as `K[0][1] = α fx`, as `cv2.fisheye.calibrate`
+    /// writes it), its four coefficients `D` = k1 k2 k3 k4 and the image size.
+    /// [`Camera::from_opencv`] reads four coefficients as the standard model's k1 k2 p1 p2.
+    ///
+    /// ```
+    /// let k = [[300.0, 0.0, 639.5], [0.0, 300.0, 399.5], [0.0, 0.0, 1.0]];
+    /// let camera = vklens::Camera::from_opencv_fisheye(k, &[0.05, -0.01, 0.002, 0.0], (1280, 800))?;
+    /// assert_eq!(camera.model_name(), "opencv_fisheye");
+    /// # Ok::<(), vklens::Error>(())
+    /// ```
+    pub fn from_opencv_fisheye(
+        k: [[f64; 3]; 3],
+        dist_coeffs: &[f64],
+        size: (u32, u32),
+    ) -> Result<Camera> {
+        let bad = |what: &str| {
+            Error::argument(
+                "K",
+                format!("{what} (expected [fx, skew, cx; 0, fy, cy; 0, 0, 1])"),
+            )
+        };
+        if k.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(bad("every entry must be a finite number"));
+        }
+        if k[1][0] != 0.0 || k[2][0] != 0.0 || k[2][1] != 0.0 || k[2][2] != 1.0 {
+            return Err(bad("its last row must be 0 0 1 and K[1][0] must be 0"));
+        }
+        let coeffs: [f64; 4] = dist_coeffs.try_into().map_err(|_| {
+            Error::argument(
+                "dist_coeffs",
+                format!(
+                    "OpenCV's fisheye model has four coefficients k1 k2 k3 k4, got {}",
+                    dist_coeffs.len()
+                ),
+            )
+        })?;
+        let intrinsics = Intrinsics {
+            fx: k[0][0],
+            fy: k[1][1],
+            cx: k[0][2],
+            cy: k[1][2],
+        };
+        // A focal length that is not positive is refused below, naming fx; the skew is only
+        // read off K where it means something.
+        let skew = if intrinsics.fx > 0.0 {
+            k[0][1] / intrinsics.fx
+        } else {
+            0.0
+        };
+        if skew.abs() >= Fisheye::MAX_ALPHA {
+            return Err(bad(&format!(
+                "K[0][1] = {} is a skew of {skew} pixel widths per pixel height; below {} is a sensor",
+                k[0][1],
+                Fisheye::MAX_ALPHA
+            )));
+        }
+        let lens = Fisheye::new(coeffs, skew, None).map_err(opencv_argument)?;
+        Camera::fisheye(size.0, size.1, intrinsics, lens).map_err(opencv_argument)
     }
 
     /// OpenCV's camera matrix `K`, row-major (a fisheye's skew as `K[0][1] = α fx`).
@@ -321,4 +363,26 @@ impl Camera {
         let text = format!("{:#}\n", self.to_json());
         crate::imaging::file::write_atomically(path.as_ref(), |tmp| std::fs::write(tmp, &text))
     }
+}
+
+/// A model error of [`Camera::from_opencv`] or [`Camera::from_opencv_fisheye`] as the argument
+/// it is about (`K`, `dist_coeffs` or `size`), for the front ends to say in their words.
+fn opencv_argument(e: crate::model::ModelError) -> Error {
+    use crate::model::ModelError as M;
+    let argument = match &e {
+        M::BadSize { .. } => "size",
+        M::CoefficientCount(_) => "dist_coeffs",
+        M::NotFinite { name, .. }
+        | M::NotPositive { name, .. }
+        | M::TooSmall { name, .. }
+        | M::Absurd { name, .. } => {
+            if ["fx", "fy", "cx", "cy"].contains(name) {
+                "K"
+            } else {
+                "dist_coeffs"
+            }
+        }
+        _ => return Error::from(e),
+    };
+    Error::argument(argument, e.to_string())
 }

@@ -19,6 +19,8 @@
 //!   off the axis, with its Jacobian, its inverse by Newton on θ and its cone-shaped domain.
 //! * [`brown`] — the Durham radial-correction paper's Brown radial model for headset lenses (Eq. 1, Eq. 2).
 //! * [`domain`] — the valid (invertible) domain of a distortion, computed once per camera.
+//! * [`new_camera`] — the pinhole camera an undistorted image is drawn into, by OpenCV's
+//!   `getOptimalNewCameraMatrix` and `fisheye.estimateNewCameraMatrixForUndistortRectify`.
 //! * [`projection`] — the Sec. 3.1 frustum as a Vulkan projection matrix.
 //! * [`solve`] — the safeguarded 1D Newton both models' inverses start from.
 //! * [`CameraModel`] — the interface both models share: maps between the ideal (pinhole)
@@ -35,6 +37,7 @@ pub mod fov;
 pub mod ftheta;
 pub mod jet;
 pub mod lens;
+pub mod new_camera;
 pub mod ocam;
 pub mod omni;
 pub mod opencv;

@@ -110,18 +110,22 @@ pub fn list_cameras(text: &str, origin: &str, size: Option<(u32, u32)>) -> Resul
     if let Some(listing) = super::dso::listing_from_text(trimmed, size) {
         return Ok(listing);
     }
+    Ok(listing_from_tree(&parse_tree(trimmed, origin).map_err(err)?, size))
+}
+
+/// A JSON, XML or YAML camera file's text (line ends normalized, BOM and leading blanks
+/// trimmed) as a tree; the format from the content, or `.json` in `origin`.
+fn parse_tree(trimmed: &str, origin: &str) -> Result<Value> {
     // A `.json` file is JSON even when broken: its error must say JSON, not YAML.
-    let json = trimmed.starts_with('{') || origin.to_ascii_lowercase().ends_with(".json");
-    let tree = if json {
+    if trimmed.starts_with('{') || origin.to_ascii_lowercase().ends_with(".json") {
         serde_json::from_str::<StrictJson>(trimmed)
             .map(|v| v.0)
-            .map_err(|e| err(Error::input(format!("invalid JSON: {e}"))))?
+            .map_err(|e| Error::input(format!("invalid JSON: {e}")))
     } else if trimmed.starts_with('<') {
-        xml_to_tree(trimmed).map_err(err)?
+        xml_to_tree(trimmed)
     } else {
-        yaml_to_tree(trimmed).map_err(err)?
-    };
-    Ok(listing_from_tree(&tree, size))
+        yaml_to_tree(trimmed)
+    }
 }
 
 /// What a ROS `camera_info` (or an OpenCV file in its layout) says about the rectified image
@@ -154,18 +158,9 @@ pub fn rectification_of(text: &str, origin: &str) -> Result<Option<Rectification
     let err = |e: Error| e.context(origin);
     let text = text.replace("\r\n", "\n").replace('\r', "\n");
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
-    let tree = if trimmed.starts_with('{') || origin.to_ascii_lowercase().ends_with(".json") {
-        match serde_json::from_str::<StrictJson>(trimmed) {
-            Ok(v) => v.0,
-            Err(_) => return Ok(None),
-        }
-    } else if trimmed.starts_with('<') {
+    // A file that does not parse has no rectification to offer (its camera's reader says why).
+    let Ok(tree) = parse_tree(trimmed, origin) else {
         return Ok(None);
-    } else {
-        match yaml_to_tree(trimmed) {
-            Ok(t) => t,
-            Err(_) => return Ok(None),
-        }
     };
     let Some(obj) = tree.as_object() else {
         return Ok(None);

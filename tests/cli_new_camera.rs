@@ -3,18 +3,19 @@
 //! the undistorted image's camera; refusals exit 2 naming the flag.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-use vklens::internal::imaging::{file as image_io, BitDepth, Pixels, Raster};
-use vklens::internal::io::reference::shared_dir;
+mod common;
+
+use common::{shared_dir, stderr, vklens};
 use vklens::{fisheye_new_camera, optimal_new_camera, Camera};
 
-fn vklens(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vklens"))
-        .args(args)
-        .env("VKLENS_VALIDATION", "1")
-        .output()
-        .unwrap()
+fn tmp(name: &str) -> PathBuf {
+    common::scratch("newcam", name)
+}
+
+fn write_png(path: &Path, w: u32, h: u32) {
+    common::write_png(path, w, h, false);
 }
 
 fn reference(path: &str) -> String {
@@ -23,16 +24,6 @@ fn reference(path: &str) -> String {
         .join(path)
         .display()
         .to_string()
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vklens-newcam-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn stderr(r: &Output) -> String {
-    String::from_utf8_lossy(&r.stderr).into_owned()
 }
 
 /// The printed `{"camera", "roi"}`, the camera read back through vklens's own camera reader.
@@ -112,26 +103,6 @@ fn new_camera_prints_the_rules_camera_and_roi() {
             "{args:?}"
         );
     }
-}
-
-fn write_png(path: &Path, w: u32, h: u32) {
-    let pixels: Vec<[f32; 4]> = (0..w * h)
-        .map(|i| {
-            [
-                (i % w) as f32 / w as f32,
-                (i / w) as f32 / h as f32,
-                0.5,
-                1.0,
-            ]
-        })
-        .collect();
-    let raster = Raster {
-        width: w,
-        height: h,
-        pixels: Pixels::Rgba32F(pixels),
-        bit_depth: BitDepth::U8,
-    };
-    image_io::save(&raster, path).unwrap();
 }
 
 #[test]

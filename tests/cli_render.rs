@@ -2,25 +2,14 @@
 //! scene file, and one-line exit-2 errors that leave nothing behind.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 mod common;
 
-use common::shared_dir;
+use common::{shared_dir, stderr, vklens};
 use image::ColorType;
 
-fn vklens(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vklens"))
-        .args(args)
-        .env("VKLENS_VALIDATION", "1")
-        .output()
-        .unwrap()
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vklens-clirender-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::scratch("clirender", name)
 }
 
 fn fig2() -> String {
@@ -28,10 +17,6 @@ fn fig2() -> String {
         .join("reference/calibration-files/seed_fig2.opencv.yml")
         .display()
         .to_string()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 #[test]

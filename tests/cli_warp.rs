@@ -1,19 +1,14 @@
 //! `vklens distort | undistort | precorrect | overscan` as scripts use them.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 mod common;
 
-use common::shared_dir;
-use image::{ColorType, ImageBuffer, Rgba};
+use common::{shared_dir, vklens, write_png};
+use image::ColorType;
 
-fn vklens(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vklens"))
-        .args(args)
-        .env("VKLENS_VALIDATION", "1")
-        .output()
-        .unwrap()
+fn tmp(name: &str) -> PathBuf {
+    common::scratch("cliwarp", name)
 }
 
 fn cam(name: &str) -> String {
@@ -22,29 +17,6 @@ fn cam(name: &str) -> String {
         .join(name)
         .display()
         .to_string()
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vklens-cliwarp-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn write_png(path: &Path, w: u32, h: u32, sixteen: bool) {
-    let pixel = |x: u32, y: u32| [x as f32 / w as f32, y as f32 / h as f32, 0.5, 1.0];
-    if sixteen {
-        ImageBuffer::from_fn(w, h, |x, y| {
-            Rgba(pixel(x, y).map(|c| (c * 65535.0).round() as u16))
-        })
-        .save(path)
-        .unwrap();
-    } else {
-        ImageBuffer::from_fn(w, h, |x, y| {
-            Rgba(pixel(x, y).map(|c| (c * 255.0).round() as u8))
-        })
-        .save(path)
-        .unwrap();
-    }
 }
 
 fn s(p: &Path) -> &str {

@@ -110,7 +110,10 @@ pub fn list_cameras(text: &str, origin: &str, size: Option<(u32, u32)>) -> Resul
     if let Some(listing) = super::dso::listing_from_text(trimmed, size) {
         return Ok(listing);
     }
-    Ok(listing_from_tree(&parse_tree(trimmed, origin).map_err(err)?, size))
+    Ok(listing_from_tree(
+        &parse_tree(trimmed, origin).map_err(err)?,
+        size,
+    ))
 }
 
 /// A JSON, XML or YAML camera file's text (line ends normalized, BOM and leading blanks

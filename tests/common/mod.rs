@@ -1,9 +1,10 @@
 //! Shared helpers of the integration tests: the shared reference data (`../shared`), which is
 //! never copied into the repository, found where vklens finds it, and read as a test reads
-//! any data file.
+//! any data file; running the binary, and the scratch files a command-line test writes.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use serde::Deserialize;
 
@@ -74,4 +75,44 @@ pub fn reference_camera(name: &str) -> vklens::Camera {
     let k = [[c.fx, 0.0, c.cx], [0.0, c.fy, c.cy], [0.0, 0.0, 1.0]];
     vklens::Camera::from_opencv(k, &c.dist_coeffs, (c.width, c.height))
         .expect("reference cases are valid cameras")
+}
+
+/// Runs the release binary with `args`, the validation layer on.
+pub fn vklens(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args(args)
+        .env("VKLENS_VALIDATION", "1")
+        .output()
+        .unwrap()
+}
+
+/// What a run said on stderr.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// `name` in this process's scratch folder for the test file `tag` (made if missing).
+pub fn scratch(tag: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vklens-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// A `w × h` RGBA gradient PNG (red across, green down), 16-bit or 8-bit.
+pub fn write_png(path: &Path, w: u32, h: u32, sixteen: bool) {
+    use image::{ImageBuffer, Rgba};
+    let pixel = |x: u32, y: u32| [x as f32 / w as f32, y as f32 / h as f32, 0.5, 1.0];
+    if sixteen {
+        ImageBuffer::from_fn(w, h, |x, y| {
+            Rgba(pixel(x, y).map(|c| (c * 65535.0).round() as u16))
+        })
+        .save(path)
+        .unwrap();
+    } else {
+        ImageBuffer::from_fn(w, h, |x, y| {
+            Rgba(pixel(x, y).map(|c| (c * 255.0).round() as u8))
+        })
+        .save(path)
+        .unwrap();
+    }
 }

@@ -168,8 +168,16 @@ pub fn rectification_of(text: &str, origin: &str) -> Result<Option<Rectification
     let Some(obj) = tree.as_object() else {
         return Ok(None);
     };
-    let r = matrix_data(obj, &["rectification_matrix", "R"]).map_err(err)?;
-    let p = matrix_data(obj, &["projection_matrix", "P"]).map_err(err)?;
+    // The flat `R` and `P` are a CameraInfo message's only beside its `distortion_model`: an
+    // OpenCV stereo file's `R` is the rotation between its two cameras, not a rectification.
+    let ros = obj.contains_key("distortion_model");
+    let (r_keys, p_keys): (&[&str], &[&str]) = if ros {
+        (&["rectification_matrix", "R"], &["projection_matrix", "P"])
+    } else {
+        (&["rectification_matrix"], &["projection_matrix"])
+    };
+    let r = matrix_data(obj, r_keys).map_err(err)?;
+    let p = matrix_data(obj, p_keys).map_err(err)?;
     if r.is_none() && p.is_none() {
         return Ok(None);
     }

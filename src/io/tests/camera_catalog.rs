@@ -281,3 +281,43 @@ fn basalt_rpmax_bounds_the_domain() {
     .expect_err("negative");
     assert!(e.to_string().contains("rpmax"), "{e}");
 }
+
+#[test]
+fn only_a_camera_info_rectifies_an_opencv_stereo_files_r_is_the_pairs_rotation() {
+    use crate::io::camera::rectification_of;
+    let ros = "image_width: 64
+image_height: 48
+camera_name: left
+camera_matrix: {rows: 3, cols: 3, data: [60, 0, 31.5, 0, 60, 23.5, 0, 0, 1]}
+distortion_model: plumb_bob
+distortion_coefficients: {rows: 1, cols: 5, data: [-0.1, 0.01, 0, 0, 0]}
+rectification_matrix: {rows: 3, cols: 3, data: [0, -1, 0, 1, 0, 0, 0, 0, 1]}
+projection_matrix: {rows: 3, cols: 4, data: [55, 0, 30, -5.5, 0, 55, 24, 0, 0, 0, 1, 0]}
+";
+    let r = rectification_of(ros, "left.yaml")
+        .unwrap()
+        .expect("R and P");
+    assert_eq!(r.r, [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
+    assert_eq!(r.p[0], [55.0, 0.0, 30.0, -5.5]);
+    assert_eq!((r.intrinsics.fx, r.intrinsics.cy), (55.0, 24.0));
+    // The flat CameraInfo keys, beside its distortion_model.
+    let flat = "{\"width\": 64, \"height\": 48, \"distortion_model\": \"plumb_bob\",
+        \"K\": [60, 0, 31.5, 0, 60, 23.5, 0, 0, 1], \"D\": [0, 0, 0, 0, 0],
+        \"R\": [1, 0, 0, 0, 1, 0, 0, 0, 1], \"P\": [50, 0, 31.5, 0, 0, 50, 23.5, 0, 0, 0, 1, 0]}";
+    let r = rectification_of(flat, "info.json")
+        .unwrap()
+        .expect("R and P");
+    assert_eq!(r.intrinsics.fx, 50.0);
+    // An OpenCV stereo file's R (and T) relate its two cameras: nothing to rectify a camera by,
+    // and undistorting one of its cameras must not trip over them.
+    let stereo = "%YAML:1.0
+image_width: 64
+image_height: 48
+M1: {rows: 3, cols: 3, data: [60, 0, 31.5, 0, 60, 23.5, 0, 0, 1]}
+D1: {rows: 1, cols: 5, data: [-0.1, 0.01, 0, 0, 0]}
+R: {rows: 3, cols: 3, data: [0.995, 0, 0.0998, 0, 1, 0, -0.0998, 0, 0.995]}
+T: {rows: 3, cols: 1, data: [-0.1, 0, 0]}
+";
+    assert_eq!(rectification_of(stereo, "stereo.yml").unwrap(), None);
+    assert_eq!(load(stereo, &LoadOptions::default()).width, 64);
+}

@@ -148,7 +148,7 @@ fn rows<const D: usize>(
     name: &str,
 ) -> PyResult<(Vec<[f64; D]>, Vec<usize>)> {
     let (data, shape) = numbers(py, value, name)?;
-    let Some((&last, leading)) = shape.split_last().filter(|(&d, _)| d == D) else {
+    let Some((_, leading)) = shape.split_last().filter(|(&d, _)| d == D) else {
         return Err(input_arg(
             py,
             name,
@@ -158,7 +158,6 @@ fn rows<const D: usize>(
             ),
         ));
     };
-    debug_assert_eq!(last, D);
     let points = data
         .chunks_exact(D)
         .map(|c| std::array::from_fn(|i| c[i]))

@@ -171,14 +171,8 @@ fn rectify_as_image_proc(
         )));
     }
     options.rectification = Some(rect.r);
-    let output = match &options.source_camera {
-        Some(_) => format!(
-            "the output camera of --source-camera {}",
-            args.source_camera
-                .as_deref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default()
-        ),
+    let output = match &args.source_camera {
+        Some(path) => format!("the output camera of --source-camera {}", path.display()),
         None => {
             let k = rect.intrinsics;
             options.source_camera = Some(Camera::from_coeffs(cam.width, cam.height, k, &[0.0; 4])?);
@@ -236,14 +230,8 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
     if direction == WarpDirection::Undistort {
         rectify_as_image_proc(&args, &cam, &mut options)?;
         if output_camera.is_none() {
-            let k = options
-                .source_camera
-                .as_ref()
-                .map_or(cam.intrinsics, |c| c.intrinsics);
-            let (w, h) = options
-                .source_camera
-                .as_ref()
-                .map_or((cam.width, cam.height), |c| (c.width, c.height));
+            let out = options.source_camera.as_ref().unwrap_or(&cam);
+            let (k, w, h) = (out.intrinsics, out.width, out.height);
             let whose = match (&args.source_camera, &options.source_camera) {
                 (Some(src), _) => src.display().to_string(),
                 (None, Some(_)) => format!("{}'s rectified P", args.camera.display()),

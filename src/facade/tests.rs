@@ -2,41 +2,15 @@
 //! GPU, and recording into a caller's command buffer with images made the way an engine makes
 //! them (the crate's own owning types stand in for the engine's).
 
-use crate::host::ContextOptions;
-use crate::host::{geometry_shader_discard_from_env, geometry_shader_from_env, Context};
 use crate::imaging::cpu_warp;
+use crate::testing::reference_camera;
 use ash::vk;
 
 use crate::gpu::{image_transition, record_compute_download, Access, Buffer, Image};
-use crate::{
-    Camera, Device, ImageRef, InverseMethod, Pixels, Raster, WarpMethod, WarpOptions, Warper,
-};
+use crate::{Device, ImageRef, InverseMethod, Pixels, Raster, WarpMethod, WarpOptions, Warper};
 
 fn device() -> Device {
-    Device::from_context(
-        Context::new(ContextOptions {
-            validation: true,
-            device: std::env::var("VKLENS_DEVICE")
-                .ok()
-                .filter(|s| !s.is_empty()),
-            geometry_shader: geometry_shader_from_env(),
-            geometry_shader_discard: geometry_shader_discard_from_env(),
-        })
-        .expect(
-            "a Vulkan device with the validation layer (README: the test command installs both)",
-        ),
-    )
-}
-
-fn reference_camera(name: &str) -> Camera {
-    crate::io::reference::load_reference()
-        .expect("shared reference file")
-        .cases
-        .iter()
-        .find(|c| c.name == name)
-        .unwrap_or_else(|| panic!("no reference case {name}"))
-        .camera()
-        .expect("a valid reference camera")
+    Device::from_context(crate::testing::validated_context())
 }
 
 fn pattern(width: u32, height: u32) -> Raster {

@@ -330,50 +330,62 @@ pub fn render_request(
     out.ok_or_else(|| Error::internal("the plan rendered no frame"))
 }
 
+/// Which output a route's image is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Output {
+    /// Colour from the warp or the cube map.
+    Colour,
+    /// The lens film (its alpha the accumulated weight).
+    Film,
+    Ids,
+    Depth,
+}
+
+/// The images of `recorder`'s outputs that its geometry targets do not hold, each with the
+/// layout a frame leaves it in: one list, so that the buffers and the copies agree.
+fn route_images(recorder: &PlanRecorder) -> Vec<(Output, &crate::gpu::Image, Left)> {
+    let mut images = Vec::new();
+    if let Some(l) = recorder.lens_renderer() {
+        images.push((Output::Film, &l.film().image, Left::ColorAttachment));
+    }
+    if let Some(c) = recorder.cube_stage() {
+        images.push((Output::Colour, &c.output, Left::ComputeGeneral));
+    }
+    if let Some(st) = recorder.warp_stage() {
+        if recorder.outputs().color {
+            images.push((Output::Colour, &st.output, Left::ComputeGeneral));
+        }
+        if let Some(d) = &st.ids {
+            images.push((Output::Ids, &d.output, Left::ComputeGeneral));
+        }
+        if let Some(d) = &st.depth {
+            images.push((Output::Depth, &d.output, Left::ComputeGeneral));
+        }
+    }
+    images
+}
+
 /// Host buffers for every output a [`PlanRecorder`]'s plan asks for, and their reading into a
 /// [`Rendered`]: the headless path's readback (an engine samples the recorder's images in
 /// place instead, see [`PlanRecorder::images`]).
 pub struct PlanReadback {
     geometry: Option<TargetsReadback>,
-    /// The warp's, the cube's or the lens film's colour, whichever route made it.
-    colour: Option<Download>,
-    ids: Option<Download>,
-    depth: Option<Download>,
+    /// The other outputs, in the order of [`route_images`].
+    others: Vec<(Output, Download)>,
 }
 
 impl PlanReadback {
     /// Buffers for the outputs `recorder` renders.
     pub fn new(gpu: &crate::gpu::Gpu, recorder: &PlanRecorder) -> Result<Self> {
-        let o = recorder.outputs();
         let geometry = recorder
             .geometry_targets()
             .map(|t| TargetsReadback::new(gpu, t))
             .transpose()?;
-        let mut colour = None;
-        let (mut ids, mut depth) = (None, None);
-        if let Some(l) = recorder.lens_renderer() {
-            colour = Some(Download::new(gpu, &l.film().image, "film.download")?);
-        }
-        if let Some(c) = recorder.cube_stage() {
-            colour = Some(Download::new(gpu, &c.output, "cube_stage.download")?);
-        }
-        if let Some(st) = recorder.warp_stage() {
-            if o.color {
-                colour = Some(Download::new(gpu, &st.output, "warp_path.download")?);
-            }
-            if let Some(d) = &st.ids {
-                ids = Some(Download::new(gpu, &d.output, "warp_path.ids.download")?);
-            }
-            if let Some(d) = &st.depth {
-                depth = Some(Download::new(gpu, &d.output, "warp_path.depth.download")?);
-            }
-        }
-        Ok(PlanReadback {
-            geometry,
-            colour,
-            ids,
-            depth,
-        })
+        let others = route_images(recorder)
+            .into_iter()
+            .map(|(output, image, _)| Ok((output, Download::new(gpu, image, "plan.download")?)))
+            .collect::<Result<_>>()?;
+        Ok(PlanReadback { geometry, others })
     }
 
     /// Records the copies of the outputs of the frame `recorder` just recorded.
@@ -388,29 +400,14 @@ impl PlanReadback {
         cmd: ash::vk::CommandBuffer,
         recorder: &PlanRecorder,
     ) -> Result<()> {
-        // SAFETY (every block below): the caller upholds this function's contract; each image
-        // is in the layout `PlanRecorder::record` documents for it, named by `Left`, and each
+        // SAFETY (both blocks): the caller upholds this function's contract; each image is in
+        // the layout `PlanRecorder::record` documents for it, named by `Left`, and each
         // `Download::record` checks the image is the one its buffer was made for.
         if let (Some(r), Some(t)) = (&self.geometry, recorder.geometry_targets()) {
             unsafe { r.record(gpu, cmd, t, ash::vk::ImageLayout::TRANSFER_SRC_OPTIMAL) }?;
         }
-        if let (Some(d), Some(l)) = (&self.colour, recorder.lens_renderer()) {
-            unsafe { d.record(gpu, cmd, &l.film().image, Left::ColorAttachment) }?;
-        }
-        if let (Some(d), Some(c)) = (&self.colour, recorder.cube_stage()) {
-            unsafe { d.record(gpu, cmd, &c.output, Left::ComputeGeneral) }?;
-        }
-        if let Some(st) = recorder.warp_stage() {
-            let pairs = [
-                (&self.colour, Some(&st.output)),
-                (&self.ids, st.ids.as_ref().map(|d| &d.output)),
-                (&self.depth, st.depth.as_ref().map(|d| &d.output)),
-            ];
-            for (download, image) in pairs {
-                if let (Some(d), Some(image)) = (download, image) {
-                    unsafe { d.record(gpu, cmd, image, Left::ComputeGeneral) }?;
-                }
-            }
+        for ((_, d), (_, image, left)) in self.others.iter().zip(route_images(recorder)) {
+            unsafe { d.record(gpu, cmd, image, left) }?;
         }
         Ok(())
     }
@@ -423,20 +420,21 @@ impl PlanReadback {
             Some(g) => g.read()?,
             None => Rendered::default(),
         };
-        if let Some(d) = &self.colour {
-            let colour = if recorder.lens_renderer().is_some() {
-                film_colour(d, recorder.keeps_vignetting(), o.exr)?
-            } else {
-                d.read_rgba()?
-            };
-            (out.width, out.height) = (colour.width, colour.height);
-            out.color = Some(colour);
-        }
-        if let Some(d) = &self.ids {
-            out.ids = Some(d.read()?);
-        }
-        if let Some(d) = &self.depth {
-            out.depth = Some(d.read()?);
+        for (output, d) in &self.others {
+            let e = d.extent();
+            (out.width, out.height) = (e.width, e.height);
+            match output {
+                Output::Colour | Output::Film => {
+                    let colour = if *output == Output::Film {
+                        film_colour(d, recorder.keeps_vignetting(), o.exr)?
+                    } else {
+                        d.read_rgba()?
+                    };
+                    out.color = Some(colour);
+                }
+                Output::Ids => out.ids = Some(d.read()?),
+                Output::Depth => out.depth = Some(d.read()?),
+            }
         }
         if !o.color {
             out.color = None;
@@ -485,22 +483,8 @@ fn film_colour(film: &Download, vignetting: bool, float: bool) -> Result<Raster>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::host::{geometry_shader_discard_from_env, geometry_shader_from_env, ContextOptions};
     use crate::plan::scene_file::{Antialias, SceneFile};
-
-    fn context() -> Context {
-        Context::new(ContextOptions {
-            validation: true,
-            device: std::env::var("VKLENS_DEVICE")
-                .ok()
-                .filter(|s| !s.is_empty()),
-            geometry_shader: geometry_shader_from_env(),
-            geometry_shader_discard: geometry_shader_discard_from_env(),
-        })
-        .expect(
-            "a Vulkan device with the validation layer (README: the test command installs both)",
-        )
-    }
+    use crate::testing::{assert_no_validation_messages, validated_context as context};
 
     /// An example scene's plan, one sample per pixel, with at least two different poses.
     fn two_pose_plan(name: &str) -> (Plan, Scene) {
@@ -630,8 +614,6 @@ mod tests {
                 "{name}: with one frame in flight the first frame should show the second pose"
             );
         }
-        if let Err(e) = ctx.check_validation() {
-            panic!("{e}");
-        }
+        assert_no_validation_messages(&ctx);
     }
 }

@@ -4,8 +4,10 @@
 // the source image once per channel. With chromatic aberration on, R, G and B each have their
 // own coordinate; each channel is still interpolated exactly once.
 //
-// Pixels with no valid source (outside the valid domain, or outside the source frame) get the
-// fill value and mask 0; they are never smeared edge pixels.
+// Pixels with no valid source (outside the valid domain, or, with the constant border, outside
+// the source frame) get the fill value and mask 0; they are never smeared edge pixels. The
+// replicate and reflect borders (OpenCV's remap borders) give off-frame positions the edge or
+// the mirror image instead, and mask 1.
 //
 // Variants: default rgba32f images; VKL_RGBA8 rgba8 (8-bit data); VKL_R32UI r32ui (object IDs,
 // nearest sampling only: IDs are never blended); VKL_R32F r32f (depth, nearest only: the host
@@ -50,9 +52,9 @@ bool coords(vec2 p, ivec2 id, int channel, float scale, out vec2 s) {
                : channel == 2 ? imageLoad(map_b, id).xy
                : imageLoad(map_g, id).xy;
         s = m;
-        return !isnan(m.x) && on_frame(m);
+        return !isnan(m.x) && has_source(m);
     }
-    return vkl_warp_source(p, pc.ideal, vkl_rectify(), scale, s) && on_frame(s);
+    return vkl_warp_source(p, pc.ideal, vkl_rectify(), scale, s) && has_source(s);
 }
 
 void main() {

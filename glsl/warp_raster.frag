@@ -21,7 +21,7 @@ layout(set = 0, binding = 2, rg32f) uniform readonly image2D map_b;
 layout(location = 0) out vec4 out_color;
 
 bool map_source(vec2 m) {
-    return !isnan(m.x) && on_frame(m);
+    return !isnan(m.x) && has_source(m);
 }
 
 void main() {

@@ -53,7 +53,7 @@ pub use gpu::{EnabledFeatures, Gpu};
 /// How [`Device::with_options`] opens a device: which one, the validation layer, the
 /// geometry-shader feature.
 pub use host::ContextOptions as DeviceOptions;
-pub use imaging::cpu_warp::Sampling;
+pub use imaging::cpu_warp::{Border, Sampling};
 pub use imaging::{BitDepth, Pixels, Raster};
 pub use io::catalog::{Found, Listing, LoadOptions};
 pub use io::writers::Format as CameraFormat;

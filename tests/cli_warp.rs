@@ -432,3 +432,95 @@ fn a_fov_lens_warps_on_the_gpu_as_the_f64_reference_and_ftheta_asks_for_a_source
     );
     assert!(!tmp("never_ft.png").exists());
 }
+
+#[test]
+fn interpolation_and_border_run_alike_on_both_backends() {
+    let fig2 = cam("seed_fig2.opencv4.yml");
+    let input = tmp("filter_in.png");
+    write_png(&input, 800, 600, false);
+    let run = |backend: &str, interpolation: &str, border: &str| {
+        let out = tmp(&format!("filter_{backend}_{interpolation}_{border}.png"));
+        let mask = tmp(&format!(
+            "filter_{backend}_{interpolation}_{border}.mask.png"
+        ));
+        let r = vklens(&[
+            "distort",
+            "--camera",
+            &fig2,
+            "--input",
+            s(&input),
+            "--output",
+            s(&out),
+            "--mask",
+            s(&mask),
+            "--backend",
+            backend,
+            "--interpolation",
+            interpolation,
+            "--border",
+            border,
+        ]);
+        assert!(r.status.success(), "{}", common::stderr(&r));
+        (
+            image::open(&out).unwrap().to_rgba8(),
+            image::open(&mask).unwrap().to_luma8(),
+        )
+    };
+    for (interpolation, border) in [("bicubic", "reflect"), ("nearest", "replicate")] {
+        let (gpu, gpu_mask) = run("gpu", interpolation, border);
+        let (cpu, cpu_mask) = run("cpu", interpolation, border);
+        // Every pixel of this barrel lens has a source position: off-frame ones read the border.
+        assert!(gpu_mask.pixels().all(|m| m.0[0] == 255));
+        assert!(cpu_mask.pixels().all(|m| m.0[0] == 255));
+        let differ = gpu
+            .pixels()
+            .zip(cpu.pixels())
+            .filter(|(a, b)| (0..4).any(|c| a.0[c].abs_diff(b.0[c]) > 1))
+            .count();
+        // Nearest may pick the other neighbour where f32 and f64 positions straddle a
+        // half-pixel.
+        assert!(
+            differ < 800 * 600 / 1000,
+            "{interpolation} {border}: {differ} px"
+        );
+    }
+    // The constant border leaves the corners that see past the source unfilled.
+    let (_, constant_mask) = run("gpu", "bicubic", "constant");
+    assert!(constant_mask.pixels().filter(|m| m.0[0] == 0).count() > 800 * 600 / 100);
+    // The older flag name still works; unknown values are named.
+    let out = tmp("filter_alias.png");
+    let r = vklens(&[
+        "distort",
+        "--camera",
+        &fig2,
+        "--input",
+        s(&input),
+        "--output",
+        s(&out),
+        "--sampling",
+        "nearest",
+    ]);
+    assert!(r.status.success(), "{}", common::stderr(&r));
+    for (flag, value, word) in [
+        ("--border", "wrap", "unknown border `wrap`"),
+        (
+            "--interpolation",
+            "lanczos",
+            "unknown interpolation `lanczos`",
+        ),
+    ] {
+        let r = vklens(&[
+            "distort",
+            "--camera",
+            &fig2,
+            "--input",
+            s(&input),
+            "--output",
+            s(&out),
+            flag,
+            value,
+        ]);
+        assert_eq!(r.status.code(), Some(2));
+        assert!(common::stderr(&r).contains(word), "{}", common::stderr(&r));
+    }
+}

@@ -218,6 +218,17 @@ typedef struct {
    with source_camera as P's camera, a stereo pair's rectified view.
    */
   const double *rectification;
+  /*
+   NULL = "bilinear"; else "nearest", "bilinear" or "bicubic" (cv2.remap's INTER_NEAREST,
+   INTER_LINEAR, INTER_CUBIC).
+   */
+  const char *interpolation;
+  /*
+   NULL = "constant"; else what a source position off the source image reads, as
+   cv2.remap's borders: "constant" (the fill), "replicate" (the edge pixel repeats) or
+   "reflect" (the image mirrors, edge pixel included).
+   */
+  const char *border;
 } vkl_warp_options;
 
 /*

@@ -21,8 +21,8 @@ use std::sync::{Arc, Mutex};
 
 use ash::vk;
 use vklens_core::{
-    Camera, EnabledFeatures, Error, ErrorKind, Gpu, ImageRef, PixelFormat, WarpMethod, WarpOptions,
-    Warper,
+    Border, Camera, EnabledFeatures, Error, ErrorKind, Gpu, ImageRef, PixelFormat, Sampling,
+    WarpMethod, WarpOptions, Warper,
 };
 
 /// The version of this header's structs: set every `version` field to it.
@@ -788,6 +788,13 @@ pub struct vkl_warp_options {
     /// (row-major, OpenCV's R of initUndistortRectifyMap(K, D, R, P), a ROS camera_info's R);
     /// with source_camera as P's camera, a stereo pair's rectified view.
     pub rectification: *const f64,
+    /// NULL = "bilinear"; else "nearest", "bilinear" or "bicubic" (cv2.remap's INTER_NEAREST,
+    /// INTER_LINEAR, INTER_CUBIC).
+    pub interpolation: *const c_char,
+    /// NULL = "constant"; else what a source position off the source image reads, as
+    /// cv2.remap's borders: "constant" (the fill), "replicate" (the edge pixel repeats) or
+    /// "reflect" (the image mirrors, edge pixel included).
+    pub border: *const c_char,
 }
 
 /// One of the caller's images: a 2D image with one mip level and layer, a view of it, and its
@@ -830,6 +837,13 @@ unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error>
             ptr::addr_of!((*o).rectification).read(),
         )
     };
+    // SAFETY: as above.
+    let (interpolation, border) = unsafe {
+        (
+            ptr::addr_of!((*o).interpolation).read(),
+            ptr::addr_of!((*o).border).read(),
+        )
+    };
     if version != VKL_API_VERSION {
         return Err(input(format!(
             "options.version: {version} (expected VKL_API_VERSION = {VKL_API_VERSION})"
@@ -845,14 +859,21 @@ unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error>
             )))
         }
     };
-    if !method.is_null() {
-        // SAFETY: non-null and NUL-terminated (the caller's contract).
-        let m = unsafe { CStr::from_ptr(method) }
-            .to_str()
-            .map_err(|_| input("options.method: not UTF-8"))?;
+    // SAFETY (each): NULL or NUL-terminated (the caller's contract).
+    if let Some(m) = unsafe { option_str(method, "options.method")? } {
         options.method = m
             .parse::<WarpMethod>()
             .map_err(|e| input(format!("options.method: {e}")))?;
+    }
+    if let Some(i) = unsafe { option_str(interpolation, "options.interpolation")? } {
+        options.sampling = i
+            .parse::<Sampling>()
+            .map_err(|e| input(format!("options.interpolation: {e}")))?;
+    }
+    if let Some(b) = unsafe { option_str(border, "options.border")? } {
+        options.border = b
+            .parse::<Border>()
+            .map_err(|e| input(format!("options.border: {e}")))?;
     }
     if !chromatic.is_null() {
         // SAFETY: 3 readable doubles (the caller's contract).
@@ -887,6 +908,21 @@ unsafe fn read_options(o: *const vkl_warp_options) -> Result<WarpOptions, Error>
         }));
     }
     Ok(options)
+}
+
+/// An options string: `None` for NULL.
+///
+/// # Safety
+/// `p` is NULL or NUL-terminated.
+unsafe fn option_str<'a>(p: *const c_char, name: &str) -> Result<Option<&'a str>, Error> {
+    if p.is_null() {
+        return Ok(None);
+    }
+    // SAFETY: non-null and NUL-terminated (the caller's contract).
+    let s = unsafe { CStr::from_ptr(p) };
+    s.to_str()
+        .map(Some)
+        .map_err(|_| input(format!("{name}: not UTF-8")))
 }
 
 /// Builds a warper: its pipelines, and for "lut" its map images (filled on the GPU by

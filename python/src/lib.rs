@@ -15,8 +15,9 @@ use pyo3::types::{PyDict, PyTuple, PyType};
 use serde::Deserialize;
 
 use vklens::{
-    Camera, Device, ErrorKind, HostImage, HostImageMut, HostPixels, HostPixelsMut, InverseMethod,
-    PixelFormat, Pixels, SceneRenderer, WarpDirection, WarpMethod, WarpOptions, Warper,
+    Border, Camera, Device, ErrorKind, HostImage, HostImageMut, HostPixels, HostPixelsMut,
+    InverseMethod, PixelFormat, Pixels, Sampling, SceneRenderer, WarpDirection, WarpMethod,
+    WarpOptions, Warper,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -922,8 +923,9 @@ struct PyWarper {
 impl PyWarper {
     #[new]
     #[pyo3(signature = (camera, direction = "distort", method = "lut", chromatic = None,
-                        source_camera = None, fill = None, device = None, R = None, P = None),
-           text_signature = "(camera, direction='distort', method='lut', chromatic=None, source_camera=None, fill=(0, 0, 0, 0), device=None, R=None, P=None)")]
+                        source_camera = None, fill = None, device = None, R = None, P = None,
+                        interpolation = "bilinear", border = "constant"),
+           text_signature = "(camera, direction='distort', method='lut', chromatic=None, source_camera=None, fill=(0, 0, 0, 0), device=None, R=None, P=None, interpolation='bilinear', border='constant')")]
     #[allow(clippy::too_many_arguments, non_snake_case)]
     fn new(
         py: Python<'_>,
@@ -936,15 +938,21 @@ impl PyWarper {
         device: Option<PyRef<'_, PyDevice>>,
         R: Option<&Bound<'_, PyAny>>,
         P: Option<&Bound<'_, PyAny>>,
+        interpolation: &str,
+        border: &str,
     ) -> PyResult<Self> {
         let dir: WarpDirection = direction.parse().arg(py, "direction")?;
         let m: WarpMethod = method.parse().arg(py, "method")?;
+        let sampling: Sampling = interpolation.parse().arg(py, "interpolation")?;
+        let border: Border = border.parse().arg(py, "border")?;
         let mut options = match dir {
             WarpDirection::Distort => WarpOptions::distort(),
             WarpDirection::Undistort => WarpOptions::undistort(),
             WarpDirection::Precorrect => WarpOptions::precorrect(),
         };
         options.method = m;
+        options.sampling = sampling;
+        options.border = border;
         if let Some(c) = chromatic {
             let c = vector(py, c, "chromatic", Some(3))?;
             options.chromatic = Some([c[0], c[1], c[2]]);
@@ -1041,6 +1049,16 @@ impl PyWarper {
     #[getter]
     fn method(&self) -> &str {
         &self.method
+    }
+    /// ``"nearest"``, ``"bilinear"`` or ``"bicubic"``.
+    #[getter]
+    fn interpolation(&self) -> &'static str {
+        self.options.sampling.name()
+    }
+    /// ``"constant"``, ``"replicate"`` or ``"reflect"``.
+    #[getter]
+    fn border(&self) -> &'static str {
+        self.options.border.name()
     }
     #[getter]
     fn device(&self) -> PyDevice {

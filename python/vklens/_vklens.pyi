@@ -147,7 +147,8 @@ class Warper:
     def __init__(self, camera: Camera, direction: str = "distort", method: str = "lut",
                  chromatic: Optional[Sequence[float]] = None, source_camera: Optional[Camera] = None,
                  fill: Sequence[float] = (0, 0, 0, 0), device: Optional[Device] = None,
-                 R: Optional[ArrayLike] = None, P: Optional[ArrayLike] = None) -> None:
+                 R: Optional[ArrayLike] = None, P: Optional[ArrayLike] = None,
+                 interpolation: str = "bilinear", border: str = "constant") -> None:
         """Images: uint8, uint16, float32 or float64 (warped in float32, returned float64).
         ``direction``: ``"distort"`` (a pinhole image in, the lens image out),
         ``"undistort"`` (a lens image in, a pinhole image out) or ``"precorrect"`` (a headset
@@ -160,7 +161,13 @@ class Warper:
         ``P`` (undistort and precorrect): the rectification rotation (3×3) and the output
         camera (a 3×3 new camera matrix or a 3×4 projection matrix, at the camera's size), as
         ``cv2.initUndistortRectifyMap(K, D, R, P)`` and ROS ``image_proc`` rectify a stereo
-        pair; ``P`` replaces ``source_camera``."""
+        pair; ``P`` replaces ``source_camera``. ``interpolation``: ``"nearest"``,
+        ``"bilinear"`` or ``"bicubic"`` (``cv2.INTER_NEAREST``, ``INTER_LINEAR``,
+        ``INTER_CUBIC``; bicubic is OpenCV's kernel, overshoot included). ``border``: what a
+        source position off the input reads, as ``cv2.remap``'s borders: ``"constant"`` (the
+        pixel takes ``fill``, mask False), ``"replicate"`` (the edge repeats) or ``"reflect"``
+        (the image mirrors, edge pixel included); pixels past the lens's valid domain take
+        ``fill`` whatever the border."""
     @property
     def camera(self) -> Camera: ...
     @property
@@ -176,6 +183,10 @@ class Warper:
     def direction(self) -> str: ...
     @property
     def method(self) -> str: ...
+    @property
+    def interpolation(self) -> str: ...
+    @property
+    def border(self) -> str: ...
     @property
     def device(self) -> Device: ...
     @overload

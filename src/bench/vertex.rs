@@ -414,6 +414,7 @@ pub fn run(
                 geometry: geometry.clone(),
                 coordinates,
                 sampling: Sampling::Bilinear,
+                border: crate::Border::Constant,
                 format: PixelFormat::Rgba8,
                 fill: [0.0; 4],
                 write_mask: false,

@@ -214,6 +214,7 @@ pub fn run(
             geometry: g.clone(),
             coordinates,
             sampling: Sampling::Bilinear,
+            border: crate::Border::Constant,
             format: PixelFormat::Rgba8,
             fill: [0.0; 4],
             write_mask: false,
@@ -329,9 +330,43 @@ pub fn run(
                 }
             }
         }
+
+        // What the interpolation and border choices cost over the default map warp: the same
+        // map and source, only the sampling differs.
+        for (label, sampling, border) in FILTERS {
+            progress(&format!("{w}×{h} {label}"));
+            let filtered = WarpDesc {
+                sampling,
+                border,
+                ..desc(&plain, Coordinates::Map)
+            };
+            let mut pass = WarpPass::new(gpu, filtered)?;
+            // SAFETY: no submission using it is pending (`submit` waits on its fence).
+            unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
+            ctx.submit(|cmd| {
+                // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render
+                // pass, on a compute queue; `pass` is new, so no prepare of it is pending.
+                unsafe { pass.record_prepare(cmd) };
+                Ok(())
+            })?;
+            // SAFETY: as for the map warp above: images uploaded, pass prepared and bound.
+            let (frame_ms, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd) })?;
+            let (err, _) = coordinate_error(ctx, &plain, Coordinates::Map)?;
+            rows.push(json!({
+                "bench": "warp", "kind": "warp", "width": w, "height": h, "method": label, "chromatic": false,
+                "frame_ms": frame_ms, "gpu_ms": gpu_ms, "max_err_px": err,
+            }));
+        }
     }
     Ok(rows)
 }
+
+/// The map warp with other interpolations and borders than bilinear and constant.
+const FILTERS: [(&str, Sampling, crate::Border); 3] = [
+    ("map nearest", Sampling::Nearest, crate::Border::Constant),
+    ("map bicubic", Sampling::Bicubic, crate::Border::Constant),
+    ("map reflect", Sampling::Bilinear, crate::Border::Reflect),
+];
 
 /// The ms of a row: a map build's single build, every other kind's frame.
 pub(crate) fn row_ms(r: &Value) -> Option<f64> {

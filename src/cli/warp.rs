@@ -8,7 +8,7 @@ use glam::DVec2;
 use super::output::check_output;
 use super::{context, CliError};
 use crate::facade::warp_geometry;
-use crate::imaging::cpu_warp::{self, Sampling};
+use crate::imaging::cpu_warp::{self, Border, Sampling};
 use crate::imaging::{file as image_io, BitDepth, Pixels, Raster};
 use crate::model::overscan::overscan;
 use crate::model::{Camera, CameraModel, InverseMethod};
@@ -47,6 +47,10 @@ fn parse_fill(s: &str) -> Result<[f64; 4], String> {
 
 // clap shows a value parser's error as text.
 fn parse_sampling(s: &str) -> Result<Sampling, String> {
+    s.parse().map_err(|e: crate::Error| e.to_string())
+}
+
+fn parse_border(s: &str) -> Result<Border, String> {
     s.parse().map_err(|e: crate::Error| e.to_string())
 }
 
@@ -126,9 +130,25 @@ pub struct WarpArgs {
     /// Also write the validity mask (8-bit PNG: 255 valid, 0 filled).
     #[arg(long, value_name = "MASK.png")]
     mask: Option<PathBuf>,
-    /// bilinear (colour) or nearest (IDs, flow: exact values, rounded positions).
-    #[arg(long, default_value = "bilinear", value_parser = parse_sampling)]
-    sampling: Sampling,
+    /// nearest | bilinear | bicubic, as cv2.remap's INTER_NEAREST, INTER_LINEAR, INTER_CUBIC.
+    /// bilinear for colour; bicubic is sharper (16 source reads a pixel instead of 4) and
+    /// overshoots at hard edges as OpenCV's does; nearest for IDs and flow (exact values,
+    /// rounded positions). --sampling is the older name.
+    #[arg(
+        long,
+        visible_alias = "sampling",
+        value_name = "INTERPOLATION",
+        default_value = "bilinear",
+        value_parser = parse_sampling
+    )]
+    interpolation: Sampling,
+    /// constant | replicate | reflect, as cv2.remap's BORDER_CONSTANT, BORDER_REPLICATE,
+    /// BORDER_REFLECT: what a source position off the input image reads. constant: the pixel
+    /// takes --fill (and the mask 0); replicate: the edge pixel repeats; reflect: the image
+    /// mirrors. Pixels the lens gives no source at all (past its valid domain) take --fill
+    /// whatever the border.
+    #[arg(long, default_value = "constant", value_parser = parse_border)]
+    border: Border,
     /// Where to run: gpu (Vulkan; lavapipe counts) or cpu (the f64 reference warp).
     #[arg(long, value_enum, default_value_t = super::Backend::Gpu)]
     backend: super::Backend,
@@ -214,7 +234,8 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         WarpDirection::Precorrect => WarpOptions::precorrect(),
     };
     options.method = args.method;
-    options.sampling = args.sampling;
+    options.sampling = args.interpolation;
+    options.border = args.border;
     options.chromatic = args.chromatic;
     options.fill = args.fill.map(|f| f.map(|c| c as f32)).unwrap_or([0.0; 4]);
     if let Some(src) = &args.source_camera {
@@ -299,7 +320,13 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
                     )));
                 }
             }
-            let (out, mask) = cpu_warp::warp(&geometry, &source, args.sampling, options.fill);
+            let (out, mask) = cpu_warp::warp(
+                &geometry,
+                &source,
+                args.interpolation,
+                args.border,
+                options.fill,
+            );
             (out, mask.iter().map(|&m| m > 127).collect::<Vec<_>>())
         }
         super::Backend::Gpu => {
@@ -400,6 +427,12 @@ fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result
     if args.method != WarpMethod::PerPixel(InverseMethod::Newton) {
         return Err(CliError::input(format!(
             "{flag}: the 360° warp inverts the lens by Newton per pixel; --method must be newton"
+        )));
+    }
+    if args.interpolation != Sampling::Bilinear || args.border != Border::Constant {
+        // A panorama or cube map has no border to extend, and its sampler is bilinear.
+        return Err(CliError::input(format!(
+            "{flag}: the 360° warp samples bilinearly and has no border; --interpolation and --border are for --input"
         )));
     }
     let options = SphereWarpOptions {

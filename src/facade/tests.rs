@@ -46,6 +46,7 @@ fn a_warper_matches_the_f64_reference_warp_and_its_maps_are_the_exact_coordinate
         warper.geometry(),
         &input,
         crate::Sampling::Bilinear,
+        crate::Border::Constant,
         [0.0; 4],
     );
     let mut worst = 0f32;

@@ -10,7 +10,7 @@ use ash::vk;
 use super::image::{check_host_shape, host_to_texels, texels_to_host};
 use crate::gpu::{Gpu, Image};
 use crate::host::warp_images::WarpImages;
-use crate::imaging::cpu_warp::Sampling;
+use crate::imaging::cpu_warp::{Border, Sampling};
 use crate::imaging::{Pixels, Raster};
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, InverseMethod};
@@ -112,8 +112,13 @@ pub struct WarpOptions {
     pub rectification: Option<[[f64; 3]; 3]>,
     /// The images' format (default 8-bit RGBA).
     pub format: PixelFormat,
-    /// Bilinear for colour, nearest for data that must not be blended (IDs, depth).
+    /// The interpolation (OpenCV's `INTER_*`): bilinear (default) or bicubic for colour,
+    /// nearest for data that must not be blended (IDs, depth).
     pub sampling: Sampling,
+    /// What source positions off the source image read (OpenCV's `BORDER_*`): the fill
+    /// (default), the edge pixel repeated, or the image mirrored. Pixels the lens gives no
+    /// source at all (outside the model's valid domain) take the fill whatever the border.
+    pub border: Border,
     /// Value of output pixels with no source, in 0..1 (default transparent black).
     pub fill: [f32; 4],
     /// Frames [`Warper::record`] may have in flight at once (default 2, at most 8): the
@@ -133,6 +138,7 @@ impl WarpOptions {
             rectification: None,
             format: PixelFormat::Rgba8,
             sampling: Sampling::Bilinear,
+            border: Border::Constant,
             fill: [0.0; 4],
             frames_in_flight: DEFAULT_FRAMES_IN_FLIGHT,
         }
@@ -280,7 +286,7 @@ impl Warper {
     /// GPU by [`Warper::record_prepare`] or the first [`Warper::run`]).
     pub fn new(gpu: &Gpu, camera: &Camera, options: &WarpOptions) -> Result<Self> {
         if matches!(options.format, PixelFormat::R32Uint | PixelFormat::R32Float)
-            && options.sampling == Sampling::Bilinear
+            && options.sampling != Sampling::Nearest
         {
             return Err(Error::input(
                 "object IDs and depth must be warped with nearest sampling",
@@ -301,6 +307,7 @@ impl Warper {
                 WarpMethod::PerPixel(_) => Coordinates::Analytic,
             },
             sampling: options.sampling,
+            border: options.border,
             format: options.format,
             fill: options.fill,
             write_mask: true,

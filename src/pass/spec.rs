@@ -53,6 +53,10 @@ pub const CHROMATIC: SpecId = SpecId::new("CHROMATIC", 11);
 pub const USE_MAP: SpecId = SpecId::new("USE_MAP", 12);
 /// Nearest sampling (IDs, depth) instead of bilinear.
 pub const NEAREST: SpecId = SpecId::new("NEAREST", 13);
+/// Bicubic sampling (OpenCV's `INTER_CUBIC`) instead of bilinear.
+pub const BICUBIC: SpecId = SpecId::new("BICUBIC", 17);
+/// What positions off the source read: `Border::gpu_id` (0 constant, 1 replicate, 2 reflect).
+pub const BORDER: SpecId = SpecId::new("BORDER", 18);
 /// Write the validity mask.
 pub const WRITE_MASK: SpecId = SpecId::new("WRITE_MASK", 14);
 

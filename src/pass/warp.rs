@@ -15,7 +15,7 @@ use crate::gpu::{
     global_barrier, shaders, write_buffer_descriptors, write_storage_image_descriptors, Access,
     Buffer, ComputePipeline, DescriptorPool, Error, Gpu, Image, Result,
 };
-use crate::imaging::cpu_warp::Sampling;
+use crate::imaging::cpu_warp::{Border, Sampling};
 use crate::imaging::{Pixels, Raster};
 pub use crate::model::warp::MapInterpolation;
 use crate::model::warp::{coarse_cells, coarse_size, Direction, WarpGeometry};
@@ -92,6 +92,8 @@ pub struct WarpDesc {
     pub geometry: WarpGeometry,
     pub coordinates: Coordinates,
     pub sampling: Sampling,
+    /// What source positions off the source image read.
+    pub border: Border,
     pub format: PixelFormat,
     /// Value of pixels without a source (transparent black by default; for IDs, `.x` is the ID).
     pub fill: [f32; 4],
@@ -221,6 +223,8 @@ impl WarpPass {
             .bool(spec::CHROMATIC, chromatic)
             .bool(spec::USE_MAP, desc.coordinates.uses_map())
             .bool(spec::NEAREST, desc.sampling == Sampling::Nearest)
+            .bool(spec::BICUBIC, desc.sampling == Sampling::Bicubic)
+            .u32(spec::BORDER, desc.border.gpu_id())
             .bool(spec::WRITE_MASK, desc.write_mask);
         let spirv = match desc.format {
             PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,

@@ -66,7 +66,9 @@ impl RasterWarpPass {
                         spirv,
                         constants: SpecConstants::new()
                             .bool(spec::CHROMATIC, desc.geometry.is_chromatic())
-                            .bool(spec::NEAREST, desc.sampling == Sampling::Nearest),
+                            .bool(spec::NEAREST, desc.sampling == Sampling::Nearest)
+                            .bool(spec::BICUBIC, desc.sampling == Sampling::Bicubic)
+                            .u32(spec::BORDER, desc.border.gpu_id()),
                     },
                 ],
                 bindings: &[vk::DescriptorType::STORAGE_IMAGE; 4],

@@ -116,6 +116,7 @@ impl WarpStage {
                 geometry,
                 coordinates,
                 sampling: Sampling::Bilinear,
+                border: crate::Border::Constant,
                 format: pixel_format,
                 fill: background,
                 write_mask: false,
@@ -153,6 +154,7 @@ impl WarpStage {
                 WarpDesc {
                     geometry: plain.clone(),
                     sampling: Sampling::Nearest,
+                    border: crate::Border::Constant,
                     format,
                     fill,
                     ..warp.desc().clone()

@@ -215,7 +215,7 @@ static void gpu_and_warper(void) {
     double d[4] = {-0.05, 0.01, 0.03, -0.01};
     expect_ok("camera", vkl_camera_from_opencv(800, 600, K, d, 4, &c));
     vkl_warper w = NULL;
-    vkl_warp_options o = {VKL_API_VERSION, VKL_DISTORT, NULL, NULL, NULL, VK_FORMAT_R8G8B8A8_UNORM, {0, 0, 0, 0}, 0, NULL};
+    vkl_warp_options o = {VKL_API_VERSION, VKL_DISTORT, NULL, NULL, NULL, VK_FORMAT_R8G8B8A8_UNORM, {0, 0, 0, 0}, 0, NULL, NULL, NULL};
     vkl_warp_options bad = o;
     bad.direction = (vkl_direction)7;
     expect_error("direction 7", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "direction");
@@ -238,6 +238,16 @@ static void gpu_and_warper(void) {
     expect_error("a mirror for a rotation", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "rectification");
     bad.rectification = turn;
     expect_ok("a rectified undistort", vkl_warper_create(g, c, &bad, &w));
+    vkl_warper_free(&w);
+    bad = o;
+    bad.interpolation = "lanczos";
+    expect_error("unknown interpolation", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "interpolation");
+    bad = o;
+    bad.border = "wrap";
+    expect_error("unknown border", vkl_warper_create(g, c, &bad, &w), VKL_ERROR_INPUT, "border");
+    bad.border = "reflect";
+    bad.interpolation = "bicubic";
+    expect_ok("a bicubic warp with a mirrored border", vkl_warper_create(g, c, &bad, &w));
     vkl_warper_free(&w);
     bad = o;
     bad.version = 0;

@@ -76,6 +76,7 @@ fn mesh_error_shrinks_with_n_and_the_image_matches_the_compute_warp() {
             geometry: g.clone(),
             coordinates: Coordinates::Analytic,
             sampling: Sampling::Bilinear,
+            border: crate::Border::Constant,
             format: PixelFormat::Rgba8,
             fill: [0.0; 4],
             write_mask: false,

@@ -28,6 +28,7 @@ fn desc(
         geometry,
         coordinates: Coordinates::Analytic,
         sampling,
+        border: crate::Border::Constant,
         format,
         fill,
         write_mask: true,

@@ -438,12 +438,9 @@ fn interpolation_and_border_run_alike_on_both_backends() {
     let fig2 = cam("seed_fig2.opencv4.yml");
     let input = tmp("filter_in.png");
     write_png(&input, 800, 600, false);
-    let run = |backend: &str, interpolation: &str, border: &str| {
-        let out = tmp(&format!("filter_{backend}_{interpolation}_{border}.png"));
-        let mask = tmp(&format!(
-            "filter_{backend}_{interpolation}_{border}.mask.png"
-        ));
-        let r = vklens(&[
+    let out = tmp("filter_out.png");
+    let distort = |extra: &[&str]| {
+        let mut args = vec![
             "distort",
             "--camera",
             &fig2,
@@ -451,6 +448,13 @@ fn interpolation_and_border_run_alike_on_both_backends() {
             s(&input),
             "--output",
             s(&out),
+        ];
+        args.extend(extra);
+        vklens(&args)
+    };
+    let run = |backend: &str, interpolation: &str, border: &str| {
+        let mask = tmp("filter_out.mask.png");
+        let r = distort(&[
             "--mask",
             s(&mask),
             "--backend",
@@ -488,18 +492,7 @@ fn interpolation_and_border_run_alike_on_both_backends() {
     let (_, constant_mask) = run("gpu", "bicubic", "constant");
     assert!(constant_mask.pixels().filter(|m| m.0[0] == 0).count() > 800 * 600 / 100);
     // The older flag name still works; unknown values are named.
-    let out = tmp("filter_alias.png");
-    let r = vklens(&[
-        "distort",
-        "--camera",
-        &fig2,
-        "--input",
-        s(&input),
-        "--output",
-        s(&out),
-        "--sampling",
-        "nearest",
-    ]);
+    let r = distort(&["--sampling", "nearest"]);
     assert!(r.status.success(), "{}", common::stderr(&r));
     for (flag, value, word) in [
         ("--border", "wrap", "unknown border `wrap`"),
@@ -509,17 +502,7 @@ fn interpolation_and_border_run_alike_on_both_backends() {
             "unknown interpolation `lanczos`",
         ),
     ] {
-        let r = vklens(&[
-            "distort",
-            "--camera",
-            &fig2,
-            "--input",
-            s(&input),
-            "--output",
-            s(&out),
-            flag,
-            value,
-        ]);
+        let r = distort(&[flag, value]);
         assert_eq!(r.status.code(), Some(2));
         assert!(common::stderr(&r).contains(word), "{}", common::stderr(&r));
     }

@@ -281,15 +281,7 @@ pub fn run(
                     "{w}×{h} {label}{}",
                     if chromatic { " chromatic" } else { "" }
                 ));
-                let mut pass = WarpPass::new(gpu, desc(&g, coordinates))?;
-                // SAFETY: no submission using it is pending (`submit` waits on its fence).
-                unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
-                ctx.submit(|cmd| {
-                    // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render
-                    // pass, on a compute queue; `pass` is new, so no prepare of it is pending.
-                    unsafe { pass.record_prepare(cmd) };
-                    Ok(())
-                })?;
+                let pass = prepared_pass(ctx, desc(&g, coordinates), &images)?;
                 // SAFETY: `time_batch` calls the closure only with a buffer `ctx.submit` is
                 // recording, outside any render pass, and waits for each submission; the
                 // images were uploaded and the pass prepared and bound above.
@@ -340,15 +332,7 @@ pub fn run(
                 border,
                 ..desc(&plain, Coordinates::Map)
             };
-            let mut pass = WarpPass::new(gpu, filtered)?;
-            // SAFETY: no submission using it is pending (`submit` waits on its fence).
-            unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
-            ctx.submit(|cmd| {
-                // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render
-                // pass, on a compute queue; `pass` is new, so no prepare of it is pending.
-                unsafe { pass.record_prepare(cmd) };
-                Ok(())
-            })?;
+            let pass = prepared_pass(ctx, filtered, &images)?;
             // SAFETY: as for the map warp above: images uploaded, pass prepared and bound.
             let (frame_ms, gpu_ms) = time_batch(ctx, &|cmd| unsafe { pass.record(cmd) })?;
             let (err, _) = coordinate_error(ctx, &plain, Coordinates::Map)?;
@@ -359,6 +343,20 @@ pub fn run(
         }
     }
     Ok(rows)
+}
+
+/// A warp pass bound to `images` with its one-off work (maps, layouts) done.
+fn prepared_pass(ctx: &Context, desc: WarpDesc, images: &WarpImages) -> Result<WarpPass> {
+    let mut pass = WarpPass::new(ctx.gpu(), desc)?;
+    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+    unsafe { pass.bind(images.source.view, images.output.view, images.mask.view) };
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // a compute queue; `pass` is new, so no prepare of it is pending.
+        unsafe { pass.record_prepare(cmd) };
+        Ok(())
+    })?;
+    Ok(pass)
 }
 
 /// The map warp with other interpolations and borders than bilinear and constant.

@@ -255,6 +255,7 @@ fn the_pose_follows_slerp_and_a_straight_centre_line() {
 #[test]
 fn the_solve_matches_an_independent_bisection_for_every_model_and_readout() {
     let (start, end) = moving();
+    let mut worst_of_all = 0.0f64;
     for (name, camera) in [
         ("standard", standard()),
         ("fisheye", fisheye()),
@@ -289,10 +290,12 @@ fn the_solve_matches_an_independent_bisection_for_every_model_and_readout() {
             }
             assert!(seen >= 250, "{name} {readout}: {seen} of 300 seen");
             assert!(worst <= 1e-6, "{name} {readout}: {worst:e} px");
+            worst_of_all = worst_of_all.max(worst);
             // The motion is real: the rolling image is far from the first line's.
             assert!(moved > 5.0, "{name} {readout}: moved {moved} px");
         }
     }
+    eprintln!("three models, four readouts: the solve is off by {worst_of_all:.1e} px at most");
 }
 
 #[test]

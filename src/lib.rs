@@ -61,6 +61,33 @@ pub use model::new_camera::{fisheye_new_camera, optimal_new_camera, Roi};
 pub use model::{Camera, Intrinsics, InverseMethod};
 pub use pass::warp::PixelFormat;
 
+/// Rolling-shutter sensors: a world point seen through a camera that moves while its lines are
+/// read appears where its own line's readout time agrees with the pose it was seen from
+/// (`docs/rolling-shutter.md`).
+///
+/// ```
+/// use vklens::rolling_shutter::{project_rolling, Readout, WorldToCamera};
+/// let k = [[1000.0, 0.0, 959.5], [0.0, 1000.0, 539.5], [0.0, 0.0, 1.0]];
+/// let camera = vklens::Camera::from_opencv(k, &[-0.1, 0.02, 0.0, 0.0], (1920, 1080))?;
+/// let start = WorldToCamera::from_rows([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [0.0; 3]);
+/// // Panning right by 1° while the rows are read, top to bottom.
+/// let (s, c) = 1f64.to_radians().sin_cos();
+/// let end = WorldToCamera::from_rows([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]], [0.0; 3]);
+/// let x = glam::DVec3::new(0.5, 0.4, 4.0);
+/// let p = project_rolling(&camera, &start, &end, Readout::TopToBottom, x).unwrap();
+/// // Below the image's centre, the point is read after mid-frame, from a pose turned by more
+/// // than half the pan: further left than the first line's pose shows it.
+/// let first = camera.project_points(&[[0.5, 0.4, 4.0]])[0].unwrap();
+/// assert!(p.s > 0.5 && p.pixel.x < first[0] - 5.0 && p.depth > 3.9);
+/// # Ok::<(), vklens::Error>(())
+/// ```
+pub mod rolling_shutter {
+    pub use crate::model::rolling_shutter::{
+        line_time, project_rolling, FrameMotion, Projection, Readout, WorldToCamera, MAX_ERROR_PX,
+        MAX_REFINE_STEPS, PIXEL_TOLERANCE, SCAN_CELLS,
+    };
+}
+
 /// The layers behind the public surface, bottom first: `model`, `lens`, `io`, `imaging` and
 /// `scene` (no Vulkan), `gpu` (one owning type per Vulkan object), `pass` (record-only GPU
 /// passes), `plan` (what to record for a scene, and its recorder), then `bench` and `cli` on top.

@@ -14,6 +14,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 use serde::Deserialize;
 
+use vklens::rolling_shutter::{Readout, WorldToCamera};
 use vklens::{
     Border, Camera, Device, ErrorKind, HostImage, HostImageMut, HostPixels, HostPixelsMut,
     InverseMethod, PixelFormat, Pixels, Sampling, SceneRenderer, WarpDirection, WarpMethod,
@@ -652,36 +653,98 @@ impl PyCamera {
     /// World points ``(..., 3)`` → distorted pixels ``(..., 2)``, as ``cv2.projectPoints`` with
     /// ``rvec`` (Rodrigues) and ``tvec``; NaN rows for points the lens does not see (at or
     /// behind the camera for the standard model; past its field of view for a fisheye).
-    #[pyo3(signature = (points_3d, rvec = None, tvec = None))]
+    ///
+    /// Through a rolling shutter (``rolling_shutter``: ``"top_to_bottom"``,
+    /// ``"bottom_to_top"``, ``"left_to_right"``, ``"right_to_left"``; default: the camera
+    /// file's own readout, else a global shutter), ``rvec``/``tvec`` are the pose when the first
+    /// line is read and ``end_rvec``/``end_tvec`` when the last is (default: the same pose);
+    /// each point lands where its own line's readout time agrees with the pose it is seen from.
+    #[pyo3(signature = (points_3d, rvec = None, tvec = None, end_rvec = None, end_tvec = None, rolling_shutter = None))]
+    #[allow(clippy::too_many_arguments)]
     fn project_points<'py>(
         &self,
         py: Python<'py>,
         points_3d: &Bound<'py, PyAny>,
         rvec: Option<&Bound<'py, PyAny>>,
         tvec: Option<&Bound<'py, PyAny>>,
+        end_rvec: Option<&Bound<'py, PyAny>>,
+        end_tvec: Option<&Bound<'py, PyAny>>,
+        rolling_shutter: Option<&str>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let (points, leading) = rows::<3>(py, points_3d, "points_3d")?;
-        let r = match rvec {
-            Some(r) => vector(py, r, "rvec", Some(3))?,
-            None => vec![0.0; 3],
+        let pose =
+            |r: Option<&Bound<'py, PyAny>>, t: Option<&Bound<'py, PyAny>>, names: [&str; 2]| {
+                let r = match r {
+                    Some(r) => vector(py, r, names[0], Some(3))?,
+                    None => vec![0.0; 3],
+                };
+                let t = match t {
+                    Some(t) => vector(py, t, names[1], Some(3))?,
+                    None => vec![0.0; 3],
+                };
+                if r.iter().chain(&t).any(|v| !v.is_finite()) {
+                    return Err(input(
+                        py,
+                        format!(
+                            "{}, {}: every entry must be a finite number",
+                            names[0], names[1]
+                        ),
+                    ));
+                }
+                Ok((rodrigues([r[0], r[1], r[2]]), [t[0], t[1], t[2]]))
+            };
+        let (rot, t) = pose(rvec, tvec, ["rvec", "tvec"])?;
+        let end = match (end_rvec, end_tvec) {
+            (None, None) => None,
+            (Some(_), Some(_)) => Some(pose(end_rvec, end_tvec, ["end_rvec", "end_tvec"])?),
+            (given, _) => {
+                let (has, missing) = if given.is_some() {
+                    ("end_rvec", "end_tvec")
+                } else {
+                    ("end_tvec", "end_rvec")
+                };
+                return Err(input_arg(
+                    py,
+                    missing,
+                    format!("missing beside {has}: end_rvec and end_tvec come together (the pose when the last line is read)"),
+                ));
+            }
         };
-        let t = match tvec {
-            Some(t) => vector(py, t, "tvec", Some(3))?,
-            None => vec![0.0; 3],
+        let readout = match rolling_shutter {
+            Some(name) => Some(
+                name.parse::<Readout>()
+                    .map_err(|e| input_arg(py, "rolling_shutter", e))?,
+            ),
+            None => self.inner.readout(),
         };
-        if r.iter().chain(&t).any(|v| !v.is_finite()) {
-            return Err(input(py, "rvec, tvec: every entry must be a finite number"));
-        }
-        let rot = rodrigues([r[0], r[1], r[2]]);
-        let cam: Vec<[f64; 3]> = points
-            .iter()
-            .map(|p| {
-                std::array::from_fn(|i| {
-                    rot[i][0] * p[0] + rot[i][1] * p[1] + rot[i][2] * p[2] + t[i]
+        let Some(readout) = readout else {
+            if end.is_some() {
+                return Err(input_arg(
+                    py,
+                    "end_rvec",
+                    "a pose when the last line is read needs a rolling shutter, and the shutter is global (every line read at once, from rvec, tvec): give rolling_shutter=\"top_to_bottom\" (or bottom_to_top, left_to_right, right_to_left)",
+                ));
+            }
+            let cam: Vec<[f64; 3]> = points
+                .iter()
+                .map(|p| {
+                    std::array::from_fn(|i| {
+                        rot[i][0] * p[0] + rot[i][1] * p[1] + rot[i][2] * p[2] + t[i]
+                    })
                 })
-            })
-            .collect();
-        let uv = py.detach(|| self.inner.project_points(&cam));
+                .collect();
+            let uv = py.detach(|| self.inner.project_points(&cam));
+            return nan_rows(py, uv, &leading);
+        };
+        let start = WorldToCamera::from_rows(rot, t);
+        let end = end.map_or(start, |(r, t)| WorldToCamera::from_rows(r, t));
+        let uv: Vec<Option<[f64; 2]>> = py.detach(|| {
+            self.inner
+                .project_points_rolling(&points, &start, &end, readout)
+                .into_iter()
+                .map(|p| p.map(|p| p.pixel.to_array()))
+                .collect()
+        });
         nan_rows(py, uv, &leading)
     }
 

@@ -120,10 +120,21 @@ class Camera:
         """Distorted pixels ``(..., 2)`` → unit camera-frame rays ``(..., 3)``; NaN outside the
         valid domain (a fisheye's rays reach past 90°: ``z < 0``)."""
     def project_points(self, points_3d: ArrayLike, rvec: Optional[ArrayLike] = None,
-                       tvec: Optional[ArrayLike] = None) -> npt.NDArray[np.float64]:
-        """``(..., 3)`` points → ``(..., 2)`` pixels, as ``cv2.projectPoints`` (``rvec`` a Rodrigues
-        vector, ``rvec``/``tvec`` shaped ``(3,)``, ``(3, 1)`` or ``(1, 3)``); NaN rows for
-        points at or behind the camera."""
+                       tvec: Optional[ArrayLike] = None, end_rvec: Optional[ArrayLike] = None,
+                       end_tvec: Optional[ArrayLike] = None,
+                       rolling_shutter: Optional[str] = None) -> npt.NDArray[np.float64]:
+        """``(..., 3)`` world points → ``(..., 2)`` pixels, as ``cv2.projectPoints`` (``rvec`` a
+        Rodrigues vector, ``rvec``/``tvec`` shaped ``(3,)``, ``(3, 1)`` or ``(1, 3)``); NaN rows
+        for points the lens does not see (at or behind the camera; past a wide lens's field).
+
+        Through a rolling shutter (``rolling_shutter``: ``"top_to_bottom"``, ``"bottom_to_top"``,
+        ``"left_to_right"`` or ``"right_to_left"``; default: the camera file's own readout, an
+        NCore ``shutter_type``, else a global shutter): ``rvec``/``tvec`` are the pose when the
+        first line is read, ``end_rvec``/``end_tvec`` (together) when the last is, the rotation
+        slerped and the centre moved linearly between; each point lands where its own line's
+        readout time agrees with the pose it is seen from (solved to 1e-9 px; the first such
+        time in readout order). ``end_rvec`` without a rolling shutter raises ``InputError``.
+        See ``docs/rolling-shutter.md``."""
 
 class Device:
     """A headless Vulkan device. ``VKLENS_DEVICE`` picks it as for the command line (``cpu``,

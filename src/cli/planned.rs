@@ -44,6 +44,7 @@ fn plan_json(p: &Plan, frames: &[(usize, f64)]) -> serde_json::Value {
         "steps": p.steps.iter().map(|s| json!({"pass": s.stage.name(), "why": s.why})).collect::<Vec<_>>(),
         "expected_error_px": p.expected_error_px,
         "budget_px": p.budget_px,
+        "shutter": p.shutter.name(),
         "antialias": {"supersample": p.antialias.supersample, "jitter": p.antialias.jitter},
         "estimated_ms": if p.estimated_ms.is_finite() { json!(p.estimated_ms) } else { json!(null) },
         "frames": frames.iter().map(|(i, ms)| json!({"frame": i, "ms": ms})).collect::<Vec<_>>(),

@@ -1,4 +1,4 @@
-//! `vklens points distort|undistort`.
+//! `vklens points distort|undistort|project`.
 
 use std::io::{Read, Write};
 use std::path::Path;
@@ -8,8 +8,10 @@ use serde_json::Value;
 
 use super::{context, finish, load_camera, Backend, CliError};
 use crate::host::points::{run_points, run_project, run_unproject};
+use crate::model::rolling_shutter::{FrameMotion, Readout, WorldToCamera};
 use crate::model::InverseMethod;
 use crate::pass::{PointsMode, Precision};
+use crate::scene::Pose;
 
 /// Most points accepted on stdin (a 16k × 16k image worth).
 const MAX_POINTS: usize = 1 << 28;
@@ -158,4 +160,52 @@ fn read_points() -> Result<Vec<[f64; 2]>, CliError> {
         .into_iter()
         .map(|r| [r[0], r[1]])
         .collect())
+}
+
+/// `points project`: world points `[X, Y, Z]` seen from `pose` → distorted pixels, through a
+/// global shutter, or through a rolling shutter read in `rolling` order (default: the camera
+/// file's) while the camera moves to `end_pose`.
+pub fn project(
+    camera: &Path,
+    pose: &str,
+    end_pose: Option<&str>,
+    rolling: Option<Readout>,
+) -> Result<(), CliError> {
+    let cam = load_camera(camera)?;
+    let parse = |argument, text| {
+        Pose::parse(text).map_err(|e| CliError::argument(argument, e.message_only()))
+    };
+    let start = WorldToCamera::from(parse("pose", pose)?);
+    let end = end_pose.map(|p| parse("end_pose", p)).transpose()?;
+    let readout = rolling.or_else(|| cam.readout());
+    if end.is_some() && readout.is_none() {
+        return Err(CliError::argument(
+            "end_pose",
+            format!(
+                "a pose when the last line is read needs a rolling shutter, and the shutter is global (every line read at once, from --pose): give --rolling-shutter ({}); {} states no rolling readout",
+                Readout::ALL.map(Readout::name).join(", "),
+                camera.display()
+            ),
+        ));
+    }
+    let rows = read_rows(true)?;
+    if let Some(i) = rows.iter().position(|r| r.len() != 3) {
+        return Err(CliError::input(format!(
+            "stdin: element {i} must be a world point [X, Y, Z], got {:?}",
+            rows[i]
+        )));
+    }
+    let points = rows.iter().map(|r| glam::DVec3::new(r[0], r[1], r[2]));
+    let results: Vec<Option<[f64; 2]>> = match readout {
+        None => points
+            .map(|x| cam.project(start.apply(x)).map(|p| p.to_array()))
+            .collect(),
+        Some(readout) => {
+            let motion = FrameMotion::new(start, end.map_or(start, WorldToCamera::from));
+            points
+                .map(|x| motion.project(&cam, readout, x).map(|p| p.pixel.to_array()))
+                .collect()
+        }
+    };
+    write_results(&results)
 }

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use glam::{DVec2, DVec3};
 
+use crate::model::rolling_shutter::{FrameMotion, Projection, Readout, WorldToCamera};
 use crate::model::{Camera, Fisheye, Intrinsics, InverseMethod};
 use crate::{Error, Result};
 
@@ -247,6 +248,26 @@ impl Camera {
         points
             .iter()
             .map(|&p| self.project(DVec3::from_array(p)).map(|d| d.to_array()))
+            .collect()
+    }
+
+    /// Projects world points through a rolling shutter read out in `readout` order while the
+    /// camera moves from `start` (the pose when the first line is read) to `end` (the last):
+    /// each point where its own line's readout time agrees with the pose it is seen from,
+    /// with that time and its depth then ([`rolling_shutter`](crate::rolling_shutter));
+    /// `None` where the lens does not see it. With `end == start`, the pixels are those of
+    /// [`Camera::project_points`] on `start`'s camera-frame points, bit for bit.
+    pub fn project_points_rolling(
+        &self,
+        points: &[[f64; 3]],
+        start: &WorldToCamera,
+        end: &WorldToCamera,
+        readout: Readout,
+    ) -> Vec<Option<Projection>> {
+        let motion = FrameMotion::new(*start, *end);
+        points
+            .iter()
+            .map(|&p| motion.project(self, readout, DVec3::from_array(p)))
             .collect()
     }
 

@@ -23,6 +23,8 @@
 //!   `getOptimalNewCameraMatrix` and `fisheye.estimateNewCameraMatrixForUndistortRectify`.
 //! * [`projection`] — the Sec. 3.1 frustum as a Vulkan projection matrix.
 //! * [`solve`] — the safeguarded 1D Newton both models' inverses start from.
+//! * [`rolling_shutter`] — a rolling-shutter sensor's line times, the pose during its readout
+//!   and the self-consistent projection of a world point through any of the models.
 //! * [`CameraModel`] — the interface both models share: maps between the ideal (pinhole)
 //!   pixel and the distorted pixel, in both directions, with an explicit "invalid".
 
@@ -44,6 +46,7 @@ pub mod opencv;
 pub mod overscan;
 pub mod poly;
 pub mod projection;
+pub mod rolling_shutter;
 pub mod samples;
 pub mod solve;
 #[cfg(test)]

@@ -7,15 +7,16 @@ use std::path::Path;
 use super::choice::choose;
 use super::cost::{estimate_ms, Cost};
 use super::search::search_candidates;
-use super::{chromatic_scales, explain, file_plan, Optics, Plan, Route, SceneFile};
+use super::{chromatic_scales, explain, file_plan, Optics, Plan, Route, SceneFile, Shutter};
+use crate::model::rolling_shutter::Readout;
 use crate::model::{Camera, OpenCvDistortion};
 use crate::scene::{Pose, Scene};
 use crate::{Error, Result};
 
 /// The file's camera as the search needs it: loaded, refused where the file asks for effects
 /// a calibrated camera cannot have, and its distortion dropped where `[effects]
-/// distortion = false`.
-fn checked_camera(file: &SceneFile, path: &Path) -> Result<Camera> {
+/// distortion = false`; with the readout its file states (kept when the distortion is dropped).
+fn checked_camera(file: &SceneFile, path: &Path) -> Result<(Camera, Option<Readout>)> {
     let src = file.source.display();
     let e = &file.effects;
     let camera =
@@ -30,23 +31,25 @@ fn checked_camera(file: &SceneFile, path: &Path) -> Result<Camera> {
             "{src}: [effects] {key}: a calibrated camera (OpenCV model) has no {key}; give a lens prescription (optics.lens)"
         )));
     }
+    let readout = camera.readout();
     if e.distortion {
-        return Ok(camera);
+        return Ok((camera, readout));
     }
-    Camera::new(
+    let pinhole = Camera::new(
         camera.width,
         camera.height,
         camera.intrinsics,
         OpenCvDistortion::default(),
-    )
-    .map_err(Error::from)
+    )?;
+    Ok((pinhole, readout))
 }
 
 /// A calibrated camera's plan: a camera without distortion (or without the distortion
 /// wanted) and without chromatic aberration is a pinhole render; any other goes by the
 /// cheapest candidate route that meets the budget.
 pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Result<Plan> {
-    let camera = checked_camera(file, path)?;
+    let (camera, readout) = checked_camera(file, path)?;
+    let shutter = super::shutter::resolve(file, readout)?;
     let poses = if file.poses.is_empty() {
         vec![scene.default_pose(&camera)]
     } else {
@@ -54,7 +57,7 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
     };
     let terms = camera.terms();
     if terms == Default::default() && chromatic_scales(file).is_none() {
-        return Ok(pinhole_plan(file, scene, camera, poses));
+        return Ok(pinhole_plan(file, scene, camera, (poses, shutter)));
     }
     let candidates = search_candidates(file, scene, &camera, &poses)?;
     let choice = choose(file, &candidates)?;
@@ -65,13 +68,18 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
         choice.route(),
         steps,
         Optics::Camera(camera),
-        poses,
+        (poses, shutter),
         (choice.expected_error_px(), choice.estimated_ms()),
     ))
 }
 
 /// The plan of a camera with no lens work: its pinhole projection alone.
-fn pinhole_plan(file: &SceneFile, scene: &Scene, camera: Camera, poses: Vec<Pose>) -> Plan {
+fn pinhole_plan(
+    file: &SceneFile,
+    scene: &Scene,
+    camera: Camera,
+    poses: (Vec<Pose>, Shutter),
+) -> Plan {
     let mut steps = vec![explain::pinhole_step(file.effects.distortion)];
     steps.extend(explain::antialias_step(file.antialias, file.outputs.color));
     let ms = estimate_ms(

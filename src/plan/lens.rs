@@ -98,6 +98,8 @@ pub(super) fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Resu
         prescription,
         pitch_mm,
     } = check_lens(file, &spec)?;
+    // A prescription states no readout: the scene's key alone decides.
+    let shutter = super::shutter::resolve(file, None)?;
     let LensSpec {
         path,
         focus_m,
@@ -159,7 +161,7 @@ pub(super) fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Resu
             f_number,
             models,
         }),
-        poses,
+        (poses, shutter),
         (cells.max_angle_deg / px_deg, f64::NAN),
     ))
 }

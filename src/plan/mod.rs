@@ -30,6 +30,7 @@ pub mod record;
 mod request;
 pub mod scene_file;
 mod search;
+pub mod shutter;
 #[cfg(test)]
 mod tests;
 
@@ -45,6 +46,7 @@ pub use antialias::{
 pub use record::{PassKind, PlanRecorder, RecordedPipeline};
 pub use request::{PathChoice, RenderRequest};
 pub use scene_file::{SceneFile, SceneFileError};
+pub use shutter::{ReadoutSource, Shutter};
 
 use camera::plan_camera;
 // `request` weighs the cube path's error as the planner does.
@@ -203,6 +205,8 @@ pub struct Plan {
     pub background: [f32; 4],
     /// Colour anti-aliasing (`[render] supersample`, `jitter`); camera files only.
     pub antialias: scene_file::Antialias,
+    /// The sensor's shutter, and where its readout came from.
+    pub shutter: Shutter,
     /// Estimated frame time from the measured tables (ms, lavapipe), for comparison.
     pub estimated_ms: f64,
 }
@@ -277,7 +281,7 @@ fn file_plan(
     route: Route,
     steps: Vec<Step>,
     optics: Optics,
-    poses: Vec<Pose>,
+    (poses, shutter): (Vec<Pose>, Shutter),
     (expected_error_px, estimated_ms): (f64, f64),
 ) -> Plan {
     Plan {
@@ -293,6 +297,7 @@ fn file_plan(
         outputs: file.outputs,
         background: file.background,
         antialias: file.antialias,
+        shutter,
         estimated_ms,
     }
 }

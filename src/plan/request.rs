@@ -278,6 +278,7 @@ impl Plan {
             outputs: o,
             background: request.background,
             antialias: aa,
+            shutter: super::Shutter::Global,
             estimated_ms: f64::NAN,
         })
     }

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 use toml::{Table, Value};
 
+use crate::model::rolling_shutter::Readout;
 use crate::scene::Pose;
 
 /// What is wrong with a scene file: one line, `file: [table] key: problem`.
@@ -70,6 +71,14 @@ pub struct OutputSpec {
     pub exr: bool,
 }
 
+/// The sensor (`[sensor]`): how it reads its lines.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SensorSpec {
+    /// `rolling_shutter`: the readout the scene asks for, over the camera file's own
+    /// (`shutter_type`); `None`: the camera file's, or a global shutter.
+    pub rolling_shutter: Option<Readout>,
+}
+
 /// A parsed scene file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneFile {
@@ -82,8 +91,13 @@ pub struct SceneFile {
     pub outputs: OutputSpec,
     /// The accuracy budget: largest geometric error in output pixels.
     pub max_error_px: f64,
-    /// The poses to render; empty: the scene centred in the view.
+    /// The poses to render; empty: the scene centred in the view. With a rolling shutter,
+    /// the pose when the first line of the frame is read.
     pub poses: Vec<Pose>,
+    /// One per pose: the pose when the last line of the frame is read (`end_rvec`,
+    /// `end_tvec`); `None`: the camera does not move during that frame.
+    pub end_poses: Vec<Option<Pose>>,
+    pub sensor: SensorSpec,
     pub background: [f32; 4],
     /// Anti-aliasing of colour (`[render]`): the same meaning as `vklens render`'s flags.
     pub antialias: Antialias,
@@ -269,6 +283,44 @@ impl Reader<'_> {
         let tv = self.numbers::<3>(get("tvec")?, &format!("{key}.tvec"))?;
         Ok(Pose::from_rvec_tvec(DVec3::from(r), DVec3::from(tv)))
     }
+
+    /// A `[[poses]]` table: `rvec`, `tvec` (the pose when the first line is read) and,
+    /// together or not at all, `end_rvec`, `end_tvec` (when the last one is).
+    fn frame_pose(&self, v: &Value, key: &str) -> Result<(Pose, Option<Pose>), SceneFileError> {
+        let Value::Table(t) = v else {
+            return Err(self.err(key, "expected a table with rvec and tvec"));
+        };
+        const KEYS: [&str; 4] = ["rvec", "tvec", "end_rvec", "end_tvec"];
+        if let Some(k) = t.keys().find(|k| !KEYS.contains(&k.as_str())) {
+            return Err(self.err(
+                &format!("{key}.{k}"),
+                format!("unknown key; expected {}", KEYS.join(", ")),
+            ));
+        }
+        let mut start = t.clone();
+        start.retain(|k, _| k == "rvec" || k == "tvec");
+        let pose = self.pose(&Value::Table(start), key)?;
+        let end = match (t.get("end_rvec"), t.get("end_tvec")) {
+            (None, None) => None,
+            (Some(r), Some(tv)) => {
+                let r = self.numbers::<3>(r, &format!("{key}.end_rvec"))?;
+                let tv = self.numbers::<3>(tv, &format!("{key}.end_tvec"))?;
+                Some(Pose::from_rvec_tvec(DVec3::from(r), DVec3::from(tv)))
+            }
+            (given, _) => {
+                let (has, missing) = if given.is_some() {
+                    ("end_rvec", "end_tvec")
+                } else {
+                    ("end_tvec", "end_rvec")
+                };
+                return Err(self.err(
+                    &format!("{key}.{missing}"),
+                    format!("missing beside {has}: end_rvec and end_tvec come together (the pose when the last line of the frame is read)"),
+                ));
+            }
+        };
+        Ok((pose, end))
+    }
 }
 
 impl SceneFile {
@@ -290,9 +342,10 @@ impl SceneFile {
         let root: Table = text
             .parse()
             .map_err(|e: toml::de::Error| r.err("", format!("not valid TOML: {}", e.message())))?;
-        const TABLES: [&str; 8] = [
+        const TABLES: [&str; 9] = [
             "geometry",
             "optics",
+            "sensor",
             "effects",
             "outputs",
             "accuracy",
@@ -498,12 +551,26 @@ impl SceneFile {
                 .unwrap_or(1),
         };
 
+        let sensor_t = r.table(&root, "sensor", &["rolling_shutter"])?;
+        let sensor = SensorSpec {
+            rolling_shutter: r
+                .string(sensor_t, "sensor", "rolling_shutter")?
+                .map(|s| {
+                    s.parse::<Readout>()
+                        .map_err(|e| r.err("[sensor] rolling_shutter", e.to_string()))
+                })
+                .transpose()?,
+        };
+
         let mut poses = Vec::new();
+        let mut end_poses = Vec::new();
         match root.get("poses") {
             None => {}
             Some(Value::Array(a)) => {
                 for (i, v) in a.iter().enumerate() {
-                    poses.push(r.pose(v, &format!("[[poses]] #{}", i + 1))?);
+                    let (pose, end) = r.frame_pose(v, &format!("[[poses]] #{}", i + 1))?;
+                    poses.push(pose);
+                    end_poses.push(end);
                 }
             }
             Some(v) => {
@@ -541,6 +608,7 @@ impl SceneFile {
                 None => return Err(r.err("[pose_sequence] frames", "missing")),
             };
             poses = interpolate(&from, &to, frames);
+            end_poses = vec![None; frames];
         }
 
         Ok(SceneFile {
@@ -551,6 +619,8 @@ impl SceneFile {
             outputs,
             max_error_px,
             poses,
+            end_poses,
+            sensor,
             background,
             antialias,
         })

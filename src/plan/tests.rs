@@ -241,6 +241,34 @@ fn scene_file_errors_name_the_file_the_key_and_what_was_expected() {
             "[render] jitter: expected a whole number 1..=64, found 2.5",
         ),
         (
+            format!("{base}[sensor]\nrolling_shutter = \"diagonal\"\n"),
+            "[sensor] rolling_shutter: unknown rolling-shutter readout \"diagonal\"; expected one of top_to_bottom, bottom_to_top, left_to_right, right_to_left",
+        ),
+        (
+            format!("{base}[sensor]\nrolling_shutter = 1\n"),
+            "[sensor] rolling_shutter: expected a string",
+        ),
+        (
+            format!("{base}[sensor]\nreadout_ms = 30\n"),
+            "[sensor] readout_ms: unknown key; expected one of rolling_shutter",
+        ),
+        (
+            format!("{base}[[poses]]\nrvec = [0, 0, 0]\ntvec = [0, 0, 1]\nend_rvec = [0, 0.1, 0]\n"),
+            "[[poses]] #1.end_tvec: missing beside end_rvec",
+        ),
+        (
+            format!("{base}[[poses]]\nrvec = [0, 0, 0]\ntvec = [0, 0, 1]\nend_tvec = [0, 0, 1]\n"),
+            "[[poses]] #1.end_rvec: missing beside end_tvec",
+        ),
+        (
+            format!("{base}[[poses]]\nrvec = [0, 0, 0]\ntvec = [0, 0, 1]\nend_rvec = [0, 0, 0]\nend_tvec = [nan, 0, 1]\n"),
+            "[[poses]] #1.end_tvec: expected a finite number, found NaN",
+        ),
+        (
+            format!("{base}[[poses]]\nrvec = [0, 0, 0]\ntvec = [0, 0, 1]\nend_pose = [0, 0, 0]\n"),
+            "[[poses]] #1.end_pose: unknown key; expected rvec, tvec, end_rvec, end_tvec",
+        ),
+        (
             format!("{base}[render]\nantialias = 4\n"),
             "[render] antialias: unknown key; expected one of background, supersample, jitter",
         ),
@@ -663,4 +691,121 @@ fn a_double_sphere_scene_runs_alg1_specialized_for_its_model() {
         why.iter().any(|w| w.contains("compiled in: double_sphere")),
         "{why:?}"
     );
+}
+
+/// A scene file at `at` of two frames through `camera` (relative to `at`), the second moving
+/// during its readout unless `still`, with `extra` tables.
+fn two_frames_at(at: &Path, camera: &str, still: bool, extra: &str) -> SceneFile {
+    let end = if still {
+        "[0.0, 0.0, 0.0]"
+    } else {
+        "[0.0, 0.05, 0.0]"
+    };
+    let text = format!(
+        "[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"{camera}\"\n[effects]\ndistortion = false\n\
+         [[poses]]\nrvec = [0.0, 0.0, 0.0]\ntvec = [0.0, 0.0, 4.0]\n\
+         [[poses]]\nrvec = [0.0, 0.0, 0.0]\ntvec = [0.0, 0.0, 4.0]\nend_rvec = {end}\nend_tvec = [0.0, 0.0, 4.0]\n{extra}"
+    );
+    SceneFile::parse(&text, at).unwrap()
+}
+
+fn two_frames(camera: &str, still: bool, extra: &str) -> SceneFile {
+    two_frames_at(&examples().join("test.toml"), camera, still, extra)
+}
+
+#[test]
+fn a_rolling_shutter_is_explained_with_its_source_and_refused_where_the_camera_moves() {
+    let barrel = "../cameras/barrel_k1k2.json";
+    let planned = |file: &SceneFile| plan(file, &load_geometry(file).unwrap());
+    let rolling = "[sensor]\nrolling_shutter = \"top_to_bottom\"\n";
+    // Still frames: global by default, the readout named where the scene gives one.
+    let p = planned(&two_frames(barrel, true, "")).unwrap();
+    assert_eq!(p.shutter, crate::plan::Shutter::Global);
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains("shutter: global: every line is read at once"),
+        "{text}"
+    );
+    let p = planned(&two_frames(barrel, true, rolling)).unwrap();
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains("shutter: rolling, top_to_bottom, from [sensor] rolling_shutter;")
+            && text.contains("the global shutter's, exactly"),
+        "{text}"
+    );
+    // A moving camera: refused through a rolling shutter (naming the key), and through a
+    // global one (the end pose contradicts it), never rendered as a global shutter.
+    let e = planned(&two_frames(barrel, false, rolling)).unwrap_err();
+    assert_eq!(e.kind(), crate::ErrorKind::Unsupported);
+    let e = e.to_string();
+    assert!(
+        e.contains("[sensor] rolling_shutter") && e.contains("[[poses]] #2 moves"),
+        "{e}"
+    );
+    let e = planned(&two_frames(barrel, false, "")).unwrap_err();
+    assert_eq!(e.kind(), crate::ErrorKind::Input);
+    let e = e.to_string();
+    assert!(
+        e.contains("[[poses]] #2.end_rvec") && e.contains("the shutter is global"),
+        "{e}"
+    );
+    // A lens prescription states no readout; the scene's key refuses the same way.
+    let lens = std::fs::read_to_string(examples().join("lens_chromatic.toml")).unwrap();
+    let lens = scene_file(&format!(
+        "{lens}\n{rolling}[[poses]]\nrvec = [0, 0, 0]\ntvec = [0, 0, 1]\nend_rvec = [0, 0, 0]\nend_tvec = [0.1, 0, 1]\n"
+    ));
+    let e = planned(&lens).unwrap_err().to_string();
+    assert!(e.contains("[sensor] rolling_shutter"), "{e}");
+}
+
+#[test]
+fn a_camera_files_readout_is_the_default_and_the_scene_key_overrides_it() {
+    // An NCore f-theta camera read left to right, beside its scenes in a scratch folder.
+    let dir = std::env::temp_dir().join(format!("vklens-plan-shutter-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("ncore.json"),
+        r#"{"camera_model_type": "ftheta", "camera_model_parameters": {
+        "resolution": [640, 480], "principal_point": [319.5, 239.5],
+        "reference_poly": "PIXELDIST_TO_ANGLE",
+        "pixeldist_to_angle_poly": [0.0, 2.0e-3, 0.0, 0.0, 0.0, 0.0],
+        "angle_to_pixeldist_poly": [0.0, 500.0, 0.0, 0.0, 0.0, 0.0],
+        "linear_cde": [1.0, 0.0, 0.0], "max_angle": 0.9,
+        "shutter_type": "ROLLING_LEFT_TO_RIGHT"}}"#,
+    )
+    .unwrap();
+    let file = |still, extra| two_frames_at(&dir.join("s.toml"), "ncore.json", still, extra);
+    let planned = |f: &SceneFile| plan(f, &load_geometry(f).unwrap());
+    let p = planned(&file(true, "")).unwrap();
+    assert_eq!(
+        p.shutter,
+        crate::plan::Shutter::Rolling {
+            readout: crate::model::rolling_shutter::Readout::LeftToRight,
+            from: crate::plan::ReadoutSource::CameraFile,
+        }
+    );
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains(
+            "rolling, left_to_right, from the camera file's shutter_type ROLLING_LEFT_TO_RIGHT"
+        ),
+        "{text}"
+    );
+    let p = planned(&file(
+        true,
+        "[sensor]\nrolling_shutter = \"bottom_to_top\"\n",
+    ))
+    .unwrap();
+    assert!(
+        p.explain(None, &[])
+            .contains("rolling, bottom_to_top, from [sensor] rolling_shutter;"),
+        "{:?}",
+        p.shutter
+    );
+    let e = planned(&file(false, "")).unwrap_err().to_string();
+    assert!(
+        e.contains("[sensor] rolling_shutter") && e.contains("shutter_type ROLLING_LEFT_TO_RIGHT"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

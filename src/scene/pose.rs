@@ -111,6 +111,16 @@ impl Pose {
     }
 }
 
+/// The model layer's world → camera transform (the rolling-shutter projection takes it).
+impl From<Pose> for crate::model::rolling_shutter::WorldToCamera {
+    fn from(p: Pose) -> Self {
+        crate::model::rolling_shutter::WorldToCamera {
+            rotation: p.rotation,
+            translation: p.translation,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

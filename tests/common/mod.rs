@@ -116,3 +116,19 @@ pub fn write_png(path: &Path, w: u32, h: u32, sixteen: bool) {
         .unwrap();
     }
 }
+
+/// Runs the release binary with `args` and `stdin` piped in, the validation layer on.
+pub fn vklens_with_stdin(args: &[&str], stdin: &str) -> Output {
+    use std::io::Write;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vklens"))
+        .args(args)
+        .env("VKLENS_VALIDATION", "1")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(stdin.as_bytes()).ok();
+    child.wait_with_output().unwrap()
+}

@@ -21,6 +21,8 @@
 //! * [`domain`] — the valid (invertible) domain of a distortion, computed once per camera.
 //! * [`new_camera`] — the pinhole camera an undistorted image is drawn into, by OpenCV's
 //!   `getOptimalNewCameraMatrix` and `fisheye.estimateNewCameraMatrixForUndistortRectify`.
+//! * [`stereo`] — stereo rectification of a calibrated pair, by OpenCV's `stereoRectify` and
+//!   `fisheye.stereoRectify`.
 //! * [`projection`] — the Sec. 3.1 frustum as a Vulkan projection matrix.
 //! * [`solve`] — the safeguarded 1D Newton both models' inverses start from.
 //! * [`CameraModel`] — the interface both models share: maps between the ideal (pinhole)
@@ -46,6 +48,7 @@ pub mod poly;
 pub mod projection;
 pub mod samples;
 pub mod solve;
+pub mod stereo;
 #[cfg(test)]
 mod suite;
 pub mod table;

@@ -382,10 +382,12 @@ def test_the_command_writes_opencvs_rectification_and_rectified_pair(cli, tmp_pa
         cams = [vklens.Camera.from_opencv(K, D, size) for K, D in [(K1, D1), (K2, D2)]]
         rectify, options = cv2.stereoRectify, {"alpha": 0.0}
         flags = ["--alpha", "0"]
+        _, rtol = FIVE_ITERATIONS["plumb_bob"]
     else:
         cams, (K1, D1, K2, D2), size = fisheye_cameras("fish_wide160")
         rectify, options = cv2.fisheye.stereoRectify, {"balance": 0.5, "fov_scale": 1.2}
         flags = ["--balance", "0.5", "--fov-scale", "1.2"]
+        rtol = 1e-11
     rvec, T = PAIRS["horizontal"]
     R1, R2, P1, P2 = rectify(K1, D1, K2, D2, size, rotation(rvec), T.reshape(3, 1),
                              flags=cv2.CALIB_ZERO_DISPARITY, **options)[:4]
@@ -399,7 +401,8 @@ def test_the_command_writes_opencvs_rectification_and_rectified_pair(cli, tmp_pa
     out = tmp_path / "rectified"
     r = subprocess.run(
         [str(cli), "stereo-rectify", "--camera", paths[0], "--camera", paths[1],
-         "--rotation", ",".join(map(repr, rvec)), "--translation", ",".join(map(repr, T)),
+         "--rotation", ",".join(map(repr, rvec.tolist())),
+         "--translation", ",".join(map(repr, T.tolist())),
          *flags, "--out", str(out), "--left", str(tmp_path / "photo0.png"),
          "--right", str(tmp_path / "photo1.png")],
         capture_output=True, text=True)
@@ -412,12 +415,12 @@ def test_the_command_writes_opencvs_rectification_and_rectified_pair(cli, tmp_pa
         np.testing.assert_allclose(ros_matrix(text, "rectification_matrix", 3, 3), R,
                                    rtol=0, atol=1e-14)
         np.testing.assert_allclose(ros_matrix(text, "projection_matrix", 3, 4), P, rtol=0,
-                                   atol=1e-11 * np.abs(P).max())
+                                   atol=rtol * np.abs(P).max())
         np.testing.assert_array_equal(ros_matrix(text, "camera_matrix", 3, 3), K)
         ours = cv2.imread(str(out / f"{side}.png"))[:, :, ::-1]
         theirs, inside = remapped(photos[i], K, D, R, P, size, model == "fisheye")
         valid = inside & (ours.sum(axis=2) > 0)
         d = np.abs(ours.astype(int) - theirs.astype(int))[valid]
-        # About a grey level: vklens samples in f32 where cv2.remap quantizes its maps to 1/32
-        # px; measured mean 0.03, largest 1.
-        assert valid.mean() > 0.8 and d.mean() <= 0.1 and d.max() <= 2, (d.mean(), d.max())
+        # Within a grey level: vklens samples in f32 where cv2.remap quantizes its maps to 1/32
+        # px, which moves a few pixels across a rounding step (measured: mean 5e-4, largest 1).
+        assert valid.mean() > 0.8 and d.mean() <= 0.01 and d.max() <= 1, (d.mean(), d.max())

@@ -229,23 +229,37 @@ pub struct StereoPair {
     pub translation: [f64; 3],
 }
 
+/// R and T: X2 = R·X1 + T.
+pub type Extrinsics = (PairRotation, [f64; 3]);
+
 /// [`parse_stereo_pair`] of a file.
-pub fn load_stereo_pair(path: &Path, size: Option<(u32, u32)>) -> Result<StereoPair> {
+pub fn load_stereo_pair(
+    path: &Path,
+    size: Option<(u32, u32)>,
+    extrinsics: Option<Extrinsics>,
+) -> Result<StereoPair> {
     let text =
         super::read_text(path).map_err(|e| Error::io(path, "cannot read stereo pair file", &e))?;
-    parse_stereo_pair(&text, &path.display().to_string(), size)
+    parse_stereo_pair(&text, &path.display().to_string(), size, extrinsics)
 }
 
 /// The pair a file's text holds: an OpenCV stereo calibration file with `R` and `T`, or a
 /// Kalibr camchain's first two cameras and the second's `T_cn_cnm1`. `size` is the image size
-/// for a file that gives none; `origin` names the file in errors.
-pub fn parse_stereo_pair(text: &str, origin: &str, size: Option<(u32, u32)>) -> Result<StereoPair> {
+/// for a file that gives none; `extrinsics`, where given, are R and T instead of the file's
+/// (which it then need not have: `stereo_calib.cpp` writes them to a file of their own);
+/// `origin` names the file in errors.
+pub fn parse_stereo_pair(
+    text: &str,
+    origin: &str,
+    size: Option<(u32, u32)>,
+    extrinsics: Option<Extrinsics>,
+) -> Result<StereoPair> {
     let tree = super::camera::text_tree(text, origin).map_err(|e| e.context(origin))?;
     let listing = super::camera::listing_from_tree(&tree, size);
     let obj = tree.as_object();
     let pair = match (listing.format, obj) {
-        (super::camera::KALIBR_FORMAT, Some(obj)) => kalibr_pair(obj, listing),
-        (FORMAT, Some(obj)) => opencv_pair(obj, listing),
+        (super::camera::KALIBR_FORMAT, Some(obj)) => kalibr_pair(obj, listing, extrinsics),
+        (FORMAT, Some(obj)) => opencv_pair(obj, listing, extrinsics),
         (format, _) => Err(Error::input(format!(
             "not a stereo pair: read as {} with {} camera(s); a pair is an OpenCV stereo calibration file (M1 D1 M2 D2 R T, or K1/K2, cameraMatrix1/2, cameraMatrixL/R) or a Kalibr camchain (cam0, cam1 and cam1's T_cn_cnm1); two camera files and R and T do as well",
             format,
@@ -268,7 +282,11 @@ fn two_cameras(listing: Listing, a: &str, b: &str) -> Result<(Camera, Camera)> {
 }
 
 /// The pair of a Kalibr camchain: its first two cameras, and the second's `T_cn_cnm1`.
-fn kalibr_pair(obj: &Map<String, Value>, listing: Listing) -> Result<StereoPair> {
+fn kalibr_pair(
+    obj: &Map<String, Value>,
+    listing: Listing,
+    extrinsics: Option<Extrinsics>,
+) -> Result<StereoPair> {
     let names: Vec<String> = listing.cameras.iter().map(|f| f.name.clone()).collect();
     let [a, b] = match names.as_slice() {
         [a, b, ..] => [a.clone(), b.clone()],
@@ -280,9 +298,26 @@ fn kalibr_pair(obj: &Map<String, Value>, listing: Listing) -> Result<StereoPair>
         )))
         }
     };
+    let (rotation, translation) = match extrinsics {
+        Some(rt) => rt,
+        None => kalibr_transform(obj, &a, &b)?,
+    };
+    let (left, right) = two_cameras(listing, &a, &b)?;
+    Ok(StereoPair {
+        format: super::camera::KALIBR_FORMAT,
+        names: [a, b],
+        left,
+        right,
+        rotation,
+        translation,
+    })
+}
+
+/// R and T of `b`'s `T_cn_cnm1`, the transform from `a`'s frame to `b`'s.
+fn kalibr_transform(obj: &Map<String, Value>, a: &str, b: &str) -> Result<Extrinsics> {
     let key = format!("{b}.T_cn_cnm1");
     let m = obj
-        .get(&b)
+        .get(b)
         .and_then(|cam| cam.get("T_cn_cnm1"))
         .ok_or_else(|| {
             Error::input(format!(
@@ -323,21 +358,16 @@ fn kalibr_pair(obj: &Map<String, Value>, listing: Listing) -> Result<StereoPair>
         [rows[4], rows[5], rows[6]],
         [rows[8], rows[9], rows[10]],
     ]);
-    let translation = [rows[3], rows[7], rows[11]];
-    let (left, right) = two_cameras(listing, &a, &b)?;
-    Ok(StereoPair {
-        format: super::camera::KALIBR_FORMAT,
-        names: [a, b],
-        left,
-        right,
-        rotation,
-        translation,
-    })
+    Ok((rotation, [rows[3], rows[7], rows[11]]))
 }
 
 /// The pair of an OpenCV stereo calibration file: the first layout whose two camera matrices
 /// it holds, and its `R` and `T`.
-fn opencv_pair(obj: &Map<String, Value>, listing: Listing) -> Result<StereoPair> {
+fn opencv_pair(
+    obj: &Map<String, Value>,
+    listing: Listing,
+    extrinsics: Option<Extrinsics>,
+) -> Result<StereoPair> {
     let present: Vec<&str> = listing.cameras.iter().map(|f| f.name.as_str()).collect();
     let Some([(a, _), (b, _)]) = CAMERAS
         .chunks_exact(2)
@@ -349,7 +379,10 @@ fn opencv_pair(obj: &Map<String, Value>, listing: Listing) -> Result<StereoPair>
             present.iter().map(|m| format!("`{m}`")).collect::<Vec<_>>().join(", ")
         )));
     };
-    let (rotation, translation) = extrinsics_of(obj)?;
+    let (rotation, translation) = match extrinsics {
+        Some(rt) => rt,
+        None => extrinsics_of(obj)?,
+    };
     let (left, right) = two_cameras(listing, a, b)?;
     Ok(StereoPair {
         format: FORMAT,
@@ -364,7 +397,7 @@ fn opencv_pair(obj: &Map<String, Value>, listing: Listing) -> Result<StereoPair>
 /// `R` and `T` of an OpenCV FileStorage tree (a stereo calibration file, or
 /// `stereo_calib.cpp`'s `extrinsics.yml`): R a 3×3 matrix or a Rodrigues vector, T three
 /// numbers; the error names the key.
-pub fn extrinsics_of(obj: &Map<String, Value>) -> Result<(PairRotation, [f64; 3])> {
+pub fn extrinsics_of(obj: &Map<String, Value>) -> Result<Extrinsics> {
     for (key, what) in [
         (
             "R",
@@ -400,7 +433,7 @@ pub fn extrinsics_of(obj: &Map<String, Value>) -> Result<(PairRotation, [f64; 3]
 }
 
 /// [`extrinsics_of`] a file's text; `origin` names it in errors.
-pub fn parse_extrinsics(text: &str, origin: &str) -> Result<(PairRotation, [f64; 3])> {
+pub fn parse_extrinsics(text: &str, origin: &str) -> Result<Extrinsics> {
     let tree = super::camera::text_tree(text, origin).map_err(|e| e.context(origin))?;
     let obj = tree.as_object().ok_or_else(|| {
         Error::input(format!(
@@ -411,7 +444,7 @@ pub fn parse_extrinsics(text: &str, origin: &str) -> Result<(PairRotation, [f64;
 }
 
 /// [`parse_extrinsics`] of a file.
-pub fn load_extrinsics(path: &Path) -> Result<(PairRotation, [f64; 3])> {
+pub fn load_extrinsics(path: &Path) -> Result<Extrinsics> {
     let text =
         super::read_text(path).map_err(|e| Error::io(path, "cannot read extrinsics file", &e))?;
     parse_extrinsics(&text, &path.display().to_string())
@@ -690,7 +723,7 @@ T: !!opencv-matrix
 
     #[test]
     fn an_opencv_stereo_file_gives_its_pair() {
-        let pair = parse_stereo_pair(STEREO_CALIBRATE, "stereo.yml", None).expect("a pair");
+        let pair = parse_stereo_pair(STEREO_CALIBRATE, "stereo.yml", None, None).expect("a pair");
         assert_eq!(pair.format, FORMAT);
         assert_eq!(pair.names, ["K1".to_string(), "K2".to_string()]);
         same(
@@ -721,6 +754,19 @@ T: !!opencv-matrix
             ]
         );
         assert_eq!(pair.translation, [-0.12, 3e-3, 1e-3]);
+        // stereo_calib.cpp's intrinsics.yml has no R and T: its extrinsics.yml gives them.
+        let given = (PairRotation::Rodrigues([0.0, 0.1, 0.0]), [-0.1, 0.0, 0.0]);
+        let pair = parse_stereo_pair(INTRINSICS, "intrinsics.yml", Some((640, 480)), Some(given))
+            .expect("a pair");
+        assert_eq!(pair.names, ["M1".to_string(), "M2".to_string()]);
+        assert_eq!((pair.rotation, pair.translation), given);
+        let e = parse_stereo_pair(INTRINSICS, "intrinsics.yml", Some((640, 480)), None)
+            .expect_err("no R")
+            .to_string();
+        assert!(
+            e.starts_with("intrinsics.yml") && e.contains("missing `R`"),
+            "{e}"
+        );
         // A Rodrigues vector for R, and R and T alone (stereo_calib.cpp's extrinsics.yml).
         let tree =
             json!({"R": [0.01, -0.02, 0.005], "T": {"rows": 3, "cols": 1, "data": [1, 2, 3]}});
@@ -750,7 +796,7 @@ cam1:
 
     #[test]
     fn a_kalibr_camchain_gives_its_first_two_cameras() {
-        let pair = parse_stereo_pair(CAMCHAIN, "camchain.yaml", None).expect("a pair");
+        let pair = parse_stereo_pair(CAMCHAIN, "camchain.yaml", None, None).expect("a pair");
         assert_eq!(pair.format, crate::io::camera::KALIBR_FORMAT);
         assert_eq!(pair.names, ["cam0".to_string(), "cam1".to_string()]);
         same(
@@ -786,7 +832,7 @@ cam1:
     #[test]
     fn pair_errors_name_the_file_and_key() {
         let error = |text: &str| -> String {
-            parse_stereo_pair(text, "pair.yaml", Some((640, 480)))
+            parse_stereo_pair(text, "pair.yaml", Some((640, 480)), None)
                 .expect_err("refused")
                 .to_string()
         };

@@ -259,7 +259,7 @@ fn check_options(model: ModelKind, options: &StereoOptions) -> Result<()> {
             return Err(Error::argument(
                 name,
                 format!(
-                    "is an argument of cv2.fisheye.stereoRectify (got {value}); this pair is OpenCV's standard model, whose cv2.stereoRectify takes alpha instead"
+                    "cv2.fisheye.stereoRectify's {name} (got {value}) is for a fisheye pair; this pair is OpenCV's standard model, whose cv2.stereoRectify takes alpha instead"
                 ),
             ));
         }
@@ -303,13 +303,22 @@ fn rotation_vector(rotation: PairRotation) -> Result<DVec3> {
                 .into_iter()
                 .fold(0.0f64, |a, x| a.max(x.abs()));
             let det = r.determinant();
-            if !(off <= PairRotation::TOLERANCE && det > 0.0) {
+            let mut why = Vec::new();
+            if !(off <= PairRotation::TOLERANCE) {
+                why.push(format!(
+                    "RᵀR differs from the identity by up to {off:.1e} (at most {:.0e} is taken as rounding)",
+                    PairRotation::TOLERANCE
+                ));
+            }
+            if !(det > 0.0) {
+                why.push(format!(
+                    "det R is {det:.6} (a rotation's is +1; this one mirrors)"
+                ));
+            }
+            if !why.is_empty() {
                 return Err(Error::argument(
                     "R",
-                    format!(
-                        "{m:?} is not a rotation: RᵀR differs from the identity by up to {off:.1e} (at most {:.0e} is taken as rounding) and det R is {det:.6} (a rotation's is +1)",
-                        PairRotation::TOLERANCE
-                    ),
+                    format!("{m:?} is not a rotation: {}", why.join("; ")),
                 ));
             }
             Ok(rodrigues_of(nearest_rotation(r)))

@@ -81,7 +81,7 @@ pub struct StereoRectifyArgs {
 }
 
 fn parse_rotation(s: &str) -> Result<PairRotation, String> {
-    let v = numbers(s, "--rotation")?;
+    let v = finite_numbers(s, "--rotation")?;
     match v.as_slice() {
         [x, y, z] => Ok(PairRotation::Rodrigues([*x, *y, *z])),
         [a, b, c, d, e, f, g, h, i] => Ok(PairRotation::Matrix([
@@ -97,7 +97,7 @@ fn parse_rotation(s: &str) -> Result<PairRotation, String> {
 }
 
 fn parse_translation(s: &str) -> Result<[f64; 3], String> {
-    let v = numbers(s, "--translation")?;
+    let v = finite_numbers(s, "--translation")?;
     <[f64; 3]>::try_from(v.as_slice())
         .map_err(|_| format!("--translation: expected TX,TY,TZ, got {} numbers", v.len()))
 }
@@ -106,17 +106,13 @@ fn parse_new_size(s: &str) -> Result<(u32, u32), String> {
     crate::io::catalog::parse_size(s).map_err(|e| e.message_only())
 }
 
-/// Comma-separated finite numbers.
-fn numbers(s: &str, flag: &str) -> Result<Vec<f64>, String> {
-    s.split(',')
-        .map(|t| {
-            t.trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("{flag}: `{}` is not a finite number", t.trim()))
-        })
-        .collect()
+/// Comma-separated finite numbers, as many as given.
+fn finite_numbers(s: &str, flag: &str) -> Result<Vec<f64>, String> {
+    let v = super::warp::number_list(s, flag)?;
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("{flag}: numbers must be finite"));
+    }
+    Ok(v)
 }
 
 /// Where each input came from, for errors about it: the files (with the camera's name in
@@ -292,12 +288,6 @@ fn summary(s: &StereoRectification, lens: &Camera) -> String {
     } else {
         "rows"
     };
-    let turn = |r: [[f64; 3]; 3]| {
-        ((r[0][0] + r[1][1] + r[2][2] - 1.0) * 0.5)
-            .clamp(-1.0, 1.0)
-            .acos()
-            .to_degrees()
-    };
     let rule = if lens.fisheye_lens().is_some() {
         "cv2.fisheye.stereoRectify"
     } else {
@@ -308,8 +298,8 @@ fn summary(s: &StereoRectification, lens: &Camera) -> String {
          rectified {}×{} pinhole, focal length {:.6} px, principal points ({:.6}, {:.6}) and ({:.6}, {:.6})\n\
          valid ROI left x {} y {} w {} h {}, right x {} y {} w {} h {}",
         s.baseline(),
-        turn(s.r1),
-        turn(s.r2),
+        s.turn_degrees()[0],
+        s.turn_degrees()[1],
         s.left.width,
         s.left.height,
         a.fx,

@@ -19,15 +19,19 @@ fn parse_warp_method(s: &str) -> Result<WarpMethod, String> {
     s.parse().map_err(|e: crate::Error| e.to_string())
 }
 
-fn parse_numbers<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
-    let v: Vec<f64> = s
-        .split(',')
+/// Comma-separated numbers, as many as given; `what` names the flag in errors.
+pub(super) fn number_list(s: &str, what: &str) -> Result<Vec<f64>, String> {
+    s.split(',')
         .map(|t| {
             t.trim()
                 .parse::<f64>()
                 .map_err(|_| format!("{what}: `{t}` is not a number"))
         })
-        .collect::<Result<_, _>>()?;
+        .collect()
+}
+
+fn parse_numbers<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
+    let v = number_list(s, what)?;
     let arr: [f64; N] = v
         .try_into()
         .map_err(|_| format!("{what}: expected {N} comma-separated numbers, got `{s}`"))?;

@@ -153,14 +153,8 @@ fn centred(camera: &Camera, alpha: f64, new_w: u32, new_h: u32) -> Result<(Camer
     let cx = (new_w as f64 - 1.0) * 0.5;
     let cy = (new_h as f64 - 1.0) * 0.5;
     let (cx0, cy0) = (k.cx, k.cy);
-    let ratios = |r: Rect| {
-        [
-            cx / (cx0 - r.x),
-            cy / (cy0 - r.y),
-            cx / (r.x + r.width - cx0),
-            cy / (r.y + r.height - cy0),
-        ]
-    };
+    let (from, to) = (DVec2::new(cx0, cy0), DVec2::new(cx, cy));
+    let ratios = |r: Rect| side_scales(r, from, to, new_w, new_h);
     let s0 = ratios(inner).into_iter().fold(f64::NEG_INFINITY, f64::max);
     let s1 = ratios(outer).into_iter().fold(f64::INFINITY, f64::min);
     let s = s0 * (1.0 - alpha) + s1 * alpha;
@@ -179,19 +173,43 @@ fn centred(camera: &Camera, alpha: f64, new_w: u32, new_h: u32) -> Result<(Camer
         cy,
     };
     let new_camera = pinhole(new_w, new_h, new)?;
-    // OpenCV's ROI here is the inner rectangle scaled about the principal point, its corner
-    // rounded up and its size down.
-    let roi = intersect(
+    Ok((new_camera, scaled_roi(inner, from, to, s, new_w, new_h)))
+}
+
+/// For each side of rectangle `r` (left, top, right, bottom; in pixels of a camera whose
+/// principal point is `from`), the scale about the principal point that puts it on that edge
+/// of a `width`×`height` image whose principal point is `to`: OpenCV's scales of
+/// `getOptimalNewCameraMatrix`'s centred camera and of `stereoRectify`'s alpha.
+pub(super) fn side_scales(r: Rect, from: DVec2, to: DVec2, width: u32, height: u32) -> [f64; 4] {
+    [
+        to.x / (from.x - r.x),
+        to.y / (from.y - r.y),
+        (width as f64 - 1.0 - to.x) / (r.x + r.width - from.x),
+        (height as f64 - 1.0 - to.y) / (r.y + r.height - from.y),
+    ]
+}
+
+/// OpenCV's ROI of a camera scaled by `s` about its principal point (`from`, moved to `to` in a
+/// `width`×`height` image): the inner rectangle scaled so, its corner rounded up and its size
+/// down, cut to the image.
+pub(super) fn scaled_roi(
+    inner: Rect,
+    from: DVec2,
+    to: DVec2,
+    s: f64,
+    width: u32,
+    height: u32,
+) -> Roi {
+    intersect(
         [
-            saturate(((inner.x - cx0) * s + cx).ceil()),
-            saturate(((inner.y - cy0) * s + cy).ceil()),
+            saturate(((inner.x - from.x) * s + to.x).ceil()),
+            saturate(((inner.y - from.y) * s + to.y).ceil()),
             saturate((inner.width * s).floor()),
             saturate((inner.height * s).floor()),
         ],
-        new_w,
-        new_h,
-    );
-    Ok((new_camera, roi))
+        width,
+        height,
+    )
 }
 
 /// `cv2.fisheye.estimateNewCameraMatrixForUndistortRectify(K, D, size, R = I, balance,
@@ -459,7 +477,7 @@ pub(super) fn undistort_rectangles(
 }
 
 /// `saturate_cast<int>` of a whole or rounded number: clamped to `int`'s range (NaN to 0).
-pub(super) fn saturate(v: f64) -> i64 {
+fn saturate(v: f64) -> i64 {
     v.clamp(i32::MIN as f64, i32::MAX as f64) as i64
 }
 
@@ -474,7 +492,7 @@ fn rounded_roi(r: Rect, width: u32, height: u32) -> Roi {
 }
 
 /// OpenCV's `r &= Rect(0, 0, width, height)`: the overlap, or all zero where there is none.
-pub(super) fn intersect([x, y, w, h]: [i64; 4], width: u32, height: u32) -> Roi {
+fn intersect([x, y, w, h]: [i64; 4], width: u32, height: u32) -> Roi {
     if w <= 0 || h <= 0 {
         return (0, 0, 0, 0);
     }

@@ -41,7 +41,7 @@
 use glam::{DMat3, DVec2, DVec3};
 
 use super::new_camera::{
-    checked_size, fisheye_rule, intersect, pinhole, saturate, undistort_rectangles, Rect, Roi,
+    checked_size, fisheye_rule, pinhole, scaled_roi, side_scales, undistort_rectangles, Rect, Roi,
     Unmapped,
 };
 use super::{Camera, Intrinsics, InverseMethod, ModelKind};
@@ -146,6 +146,11 @@ impl StereoRectification {
     pub fn baseline(&self) -> f64 {
         let row = usize::from(self.vertical);
         (self.p2[row][3] / self.p2[0][0]).abs()
+    }
+
+    /// How far rectifying turns each camera, in degrees (R1's angle, R2's).
+    pub fn turn_degrees(&self) -> [f64; 2] {
+        [turn_degrees(mat3(self.r1)), turn_degrees(mat3(self.r2))]
     }
 }
 
@@ -597,14 +602,7 @@ fn standard_pair(
         Some(alpha) => {
             // Per side of each image: the scale that puts that side of the rectangle on the
             // new image's edge.
-            let ratios = |r: Rect, k: usize| {
-                [
-                    c[k].x / (c0[k].x - r.x),
-                    c[k].y / (c0[k].y - r.y),
-                    (nw - 1.0 - c[k].x) / (r.x + r.width - c0[k].x),
-                    (nh - 1.0 - c[k].y) / (r.y + r.height - c0[k].y),
-                ]
-            };
+            let ratios = |r: Rect, k: usize| side_scales(r, c0[k], c[k], new_w, new_h);
             let inner = [ratios(rects[0].0, 0), ratios(rects[1].0, 1)];
             let outer = [ratios(rects[0].1, 0), ratios(rects[1].1, 1)];
             let s0 = inner
@@ -626,18 +624,7 @@ fn standard_pair(
     let f = fc * s;
     let t_idx = turns.t[idx];
     let (p1, p2, q) = projections(f, c, idx, t_idx, t_idx * fc * s);
-    let roi = |(inner, _): (Rect, Rect), k: usize| {
-        intersect(
-            [
-                saturate(((inner.x - c0[k].x) * s + c[k].x).ceil()),
-                saturate(((inner.y - c0[k].y) * s + c[k].y).ceil()),
-                saturate((inner.width * s).floor()),
-                saturate((inner.height * s).floor()),
-            ],
-            new_w,
-            new_h,
-        )
-    };
+    let roi = |(inner, _): (Rect, Rect), k: usize| scaled_roi(inner, c0[k], c[k], s, new_w, new_h);
     Ok(StereoRectification {
         r1: rows3(turns.r1),
         r2: rows3(turns.r2),

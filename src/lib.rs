@@ -14,7 +14,9 @@
 //! * [`overscan`]: the pinhole source camera that covers every valid pixel of a lens;
 //!   [`optimal_new_camera`] and [`fisheye_new_camera`]: the pinhole camera to undistort into,
 //!   chosen as OpenCV's `getOptimalNewCameraMatrix` and
-//!   `fisheye.estimateNewCameraMatrixForUndistortRectify` choose it.
+//!   `fisheye.estimateNewCameraMatrixForUndistortRectify` choose it; [`stereo_rectify`]: the
+//!   rectification of a calibrated pair, as `cv2.stereoRectify` and
+//!   `cv2.fisheye.stereoRectify` compute it.
 //!
 //! ```
 //! use vklens::{Camera, InverseMethod};
@@ -58,6 +60,7 @@ pub use imaging::{BitDepth, Pixels, Raster};
 pub use io::catalog::{Found, Listing, LoadOptions};
 pub use io::writers::Format as CameraFormat;
 pub use model::new_camera::{fisheye_new_camera, optimal_new_camera, Roi};
+pub use model::stereo::{stereo_rectify, PairRotation, StereoOptions, StereoRectification};
 pub use model::{Camera, Intrinsics, InverseMethod};
 pub use pass::warp::PixelFormat;
 

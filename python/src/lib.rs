@@ -1401,6 +1401,161 @@ fn overscan(py: Python<'_>, camera: PyRef<'_, PyCamera>, density: f64) -> PyResu
 }
 
 // ---------------------------------------------------------------------------------------------
+// Stereo rectification
+
+/// A row-major matrix as a float64 ndarray of its shape.
+fn ndarray<'py, const R: usize, const C: usize>(
+    py: Python<'py>,
+    m: &[[f64; C]; R],
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    PyArray1::from_vec(py, m.iter().flatten().copied().collect()).reshape([R, C])
+}
+
+/// What ``vklens.stereo_rectify`` returns: ``cv2.stereoRectify``'s ``R1, R2, P1, P2, Q,
+/// validPixROI1, validPixROI2``, and the two rectified pinhole cameras.
+#[pyclass(name = "StereoRectification", module = "vklens", frozen)]
+struct PyStereoRectification {
+    inner: vklens::StereoRectification,
+}
+
+#[pymethods]
+impl PyStereoRectification {
+    /// The first camera's rectification rotation, ``(3, 3)`` float64.
+    #[getter(R1)]
+    fn r1<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        ndarray(py, &self.inner.r1)
+    }
+    /// The second camera's rectification rotation, ``(3, 3)`` float64.
+    #[getter(R2)]
+    fn r2<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        ndarray(py, &self.inner.r2)
+    }
+    /// The first rectified camera's projection, ``(3, 4)`` float64.
+    #[getter(P1)]
+    fn p1<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        ndarray(py, &self.inner.p1)
+    }
+    /// The second rectified camera's projection (its baseline times the focal length in the
+    /// fourth column), ``(3, 4)`` float64.
+    #[getter(P2)]
+    fn p2<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        ndarray(py, &self.inner.p2)
+    }
+    /// The disparity-to-depth matrix (``cv2.reprojectImageTo3D``'s), ``(4, 4)`` float64.
+    #[getter(Q)]
+    fn q<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        ndarray(py, &self.inner.q)
+    }
+    /// ``(x, y, w, h)``: the first rectified image's valid pixels (the whole image for a
+    /// fisheye pair).
+    #[getter]
+    fn roi1(&self) -> (u32, u32, u32, u32) {
+        self.inner.roi1
+    }
+    /// ``(x, y, w, h)``: the second's.
+    #[getter]
+    fn roi2(&self) -> (u32, u32, u32, u32) {
+        self.inner.roi2
+    }
+    /// The first rectified camera (pinhole, at the new size).
+    #[getter]
+    fn left(&self) -> PyCamera {
+        PyCamera {
+            inner: self.inner.left.clone(),
+        }
+    }
+    /// The second rectified camera.
+    #[getter]
+    fn right(&self) -> PyCamera {
+        PyCamera {
+            inner: self.inner.right.clone(),
+        }
+    }
+    /// Whether the baseline runs along the image columns (OpenCV's vertical stereo).
+    #[getter]
+    fn vertical(&self) -> bool {
+        self.inner.vertical
+    }
+    /// The distance between the camera centres, in the units of ``T``.
+    #[getter]
+    fn baseline(&self) -> f64 {
+        self.inner.baseline()
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.inner;
+        format!(
+            "StereoRectification({}, baseline={}, f={}, size={}×{}, roi1={:?}, roi2={:?})",
+            if s.vertical { "vertical" } else { "horizontal" },
+            s.baseline(),
+            s.p1[0][0],
+            s.left.width,
+            s.left.height,
+            s.roi1,
+            s.roi2
+        )
+    }
+}
+
+/// ``R`` as ``cv2.stereoRectify`` takes it: a 3×3 matrix, or a Rodrigues vector shaped
+/// ``(3,)``, ``(3, 1)`` or ``(1, 3)``.
+fn pair_rotation(py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<vklens::PairRotation> {
+    let (data, shape) = numbers(py, value, "R")?;
+    match shape.as_slice() {
+        [3, 3] => Ok(vklens::PairRotation::Matrix(std::array::from_fn(|i| {
+            std::array::from_fn(|j| data[i * 3 + j])
+        }))),
+        [3] | [3, 1] | [1, 3] => Ok(vklens::PairRotation::Rodrigues([data[0], data[1], data[2]])),
+        _ => Err(input_arg(
+            py,
+            "R",
+            format!(
+                "shape {}; expected a rotation matrix (3, 3) or a Rodrigues vector (3,), (3, 1) or (1, 3)",
+                tuple(&shape)
+            ),
+        )),
+    }
+}
+
+/// The rectification of a calibrated pair, as ``cv2.stereoRectify(K1, D1, K2, D2, size, R, T,
+/// flags, alpha, new_size)`` computes it for OpenCV's standard model and
+/// ``cv2.fisheye.stereoRectify(..., flags, new_size, balance, fov_scale)`` for its fisheye
+/// model. ``left`` is the first camera, ``right`` the second: X2 = R X1 + T.
+#[pyfunction]
+#[pyo3(signature = (left, right, R, T, *, alpha = None, new_size = None, zero_disparity = true, balance = 0.0, fov_scale = 1.0))]
+#[allow(clippy::too_many_arguments, non_snake_case)]
+fn stereo_rectify(
+    py: Python<'_>,
+    left: PyRef<'_, PyCamera>,
+    right: PyRef<'_, PyCamera>,
+    R: &Bound<'_, PyAny>,
+    T: &Bound<'_, PyAny>,
+    alpha: Option<f64>,
+    new_size: Option<(i64, i64)>,
+    zero_disparity: bool,
+    balance: f64,
+    fov_scale: f64,
+) -> PyResult<PyStereoRectification> {
+    let rotation = pair_rotation(py, R)?;
+    let t = vector(py, T, "T", Some(3))?;
+    let new_size = new_size
+        .map(|s| Ok::<_, PyErr>((side(py, s.0, "new_size")?, side(py, s.1, "new_size")?)))
+        .transpose()?;
+    let options = vklens::StereoOptions {
+        alpha,
+        new_size,
+        zero_disparity,
+        balance,
+        fov_scale,
+    };
+    let (a, b) = (&left.inner, &right.inner);
+    let inner = py
+        .detach(|| vklens::stereo_rectify(a, b, rotation, [t[0], t[1], t[2]], &options))
+        .py(py)?;
+    Ok(PyStereoRectification { inner })
+}
+
+// ---------------------------------------------------------------------------------------------
 // Scenes
 
 /// A dict of the scene file's tables as TOML text (the scene parser reads TOML).
@@ -1492,6 +1647,8 @@ fn _vklens(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyCamera>()?;
     m.add_class::<PyDevice>()?;
     m.add_class::<PyWarper>()?;
+    m.add_class::<PyStereoRectification>()?;
+    m.add_function(wrap_pyfunction!(stereo_rectify, m)?)?;
     m.add_function(wrap_pyfunction!(overscan, m)?)?;
     m.add_function(wrap_pyfunction!(render_scene, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -12,12 +12,15 @@ array([[399.5, 299.5]])
 """
 
 from ._errors import Error, GpuError, InputError, InternalError, IoError, UnsupportedError
-from ._vklens import Camera, Device, Warper, __version__, overscan, render_scene
+from ._vklens import (Camera, Device, StereoRectification, Warper, __version__, overscan,
+                      render_scene, stereo_rectify)
 
 __all__ = [
     "Camera",
     "Device",
     "Warper",
+    "StereoRectification",
+    "stereo_rectify",
     "overscan",
     "render_scene",
     "Error",

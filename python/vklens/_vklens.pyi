@@ -220,6 +220,73 @@ def overscan(camera: Camera, density: float = 1.0) -> Camera:
     """The pinhole camera whose image covers every valid pixel of ``camera`` with ``density``
     source pixels per output pixel at the principal point (the distort warp's source)."""
 
+class StereoRectification:
+    """What ``stereo_rectify`` returns: ``cv2.stereoRectify``'s ``R1, R2, P1, P2, Q,
+    validPixROI1, validPixROI2`` and the two rectified pinhole cameras. Read-only."""
+
+    @property
+    def R1(self) -> npt.NDArray[np.float64]:
+        """The first camera's rectification rotation, ``(3, 3)`` float64."""
+    @property
+    def R2(self) -> npt.NDArray[np.float64]:
+        """The second camera's rectification rotation, ``(3, 3)`` float64."""
+    @property
+    def P1(self) -> npt.NDArray[np.float64]:
+        """The first rectified camera's projection, ``(3, 4)`` float64."""
+    @property
+    def P2(self) -> npt.NDArray[np.float64]:
+        """The second's, its baseline times the focal length in the fourth column (row 1 for
+        a vertical pair), ``(3, 4)`` float64."""
+    @property
+    def Q(self) -> npt.NDArray[np.float64]:
+        """The disparity-to-depth matrix (``cv2.reprojectImageTo3D``'s), ``(4, 4)`` float64."""
+    @property
+    def roi1(self) -> Tuple[int, int, int, int]:
+        """``(x, y, w, h)``: the first rectified image's valid pixels, as cv2's
+        ``validPixROI1`` (the whole image for a fisheye pair)."""
+    @property
+    def roi2(self) -> Tuple[int, int, int, int]:
+        """``(x, y, w, h)``: the second's."""
+    @property
+    def left(self) -> Camera:
+        """The first rectified camera: pinhole, at the new size (``P1``'s 3×3 part)."""
+    @property
+    def right(self) -> Camera:
+        """The second rectified camera (``P2``'s 3×3 part)."""
+    @property
+    def vertical(self) -> bool:
+        """Whether the baseline runs along the image columns (OpenCV's vertical stereo,
+        ``|T_y| > |T_x|``; never for a fisheye pair, which OpenCV always lays along the rows)."""
+    @property
+    def baseline(self) -> float:
+        """The distance between the camera centres, in the units of ``T``."""
+
+def stereo_rectify(left: Camera, right: Camera, R: ArrayLike, T: ArrayLike, *,
+                   alpha: Optional[float] = None, new_size: Optional[Tuple[int, int]] = None,
+                   zero_disparity: bool = True, balance: float = 0.0,
+                   fov_scale: float = 1.0) -> StereoRectification:
+    """The rectification of a calibrated pair, as OpenCV computes it: for two cameras of its
+    standard model ``cv2.stereoRectify(K1, D1, K2, D2, size, R, T, flags=flags, alpha=alpha,
+    newImageSize=new_size)``, for two of its fisheye model ``cv2.fisheye.stereoRectify(K1, D1,
+    K2, D2, size, R, T, flags=flags, newImageSize=new_size, balance=balance,
+    fov_scale=fov_scale)``, ``flags`` being ``cv2.CALIB_ZERO_DISPARITY`` when
+    ``zero_disparity`` (OpenCV's default) and 0 otherwise. ``left`` is the first camera,
+    ``right`` the second: X2 = R X1 + T, as ``cv2.stereoCalibrate`` reports them. ``R``: a 3×3
+    rotation or a Rodrigues vector ``(3,)``, ``(3, 1)`` or ``(1, 3)``; ``T``: ``(3,)``,
+    ``(3, 1)`` or ``(1, 3)``.
+
+    ``alpha`` (standard model): None is OpenCV's -1 (no scaling), 0 keeps only pixels with a
+    source in both images, 1 every source pixel of both. ``balance`` and ``fov_scale``
+    (fisheye model) as ``cv2.fisheye.estimateNewCameraMatrixForUndistortRectify``'s.
+    ``new_size``: the rectified images' ``(width, height)``; None is the cameras' own.
+
+    vklens undistorts the image corners with its converged inverse where OpenCV's
+    ``undistortPoints`` stops after 5 iterations: on a strong lens the rectified cameras differ
+    slightly. Raises ``InputError`` naming the keyword: a camera of another model, two models
+    or two image sizes (``left``, ``right``), an ``R`` that is not a rotation, a zero ``T``,
+    ``alpha`` outside 0..1 or on a fisheye pair, ``balance`` or ``fov_scale`` on a standard
+    pair, a lens or baseline OpenCV's rule has no camera for."""
+
 def render_scene(scene: Union[PathLike, dict], device: Optional[Device] = None,
                  base: Optional[PathLike] = None) -> list:
     """Renders a scene file, or the same tables as a dict (relative paths resolved against

@@ -32,6 +32,7 @@ mod output;
 mod planned;
 mod points;
 mod render;
+mod stereo_rectify;
 #[cfg(test)]
 mod tests;
 mod warp;
@@ -118,6 +119,7 @@ Examples:
   vklens undistort --camera cam.yml --input photo.png --output rectified.png --alpha 0
   vklens new-camera --camera fisheye.json --balance 0.5 > new.json
   vklens overscan --camera cam.yml > source.json
+  vklens stereo-rectify stereo.yml --alpha 0 --out rect/ --left l.png --right r.png
   vklens render --camera cam.yml --scene checkerboard:9x6 --output board.png --ids ids.png
   vklens render --camera cam.yml --scene boxes --output boxes.png --flow flow.exr --tessellate 8
   vklens calibration-set --camera cam.yml --out set/ && python3 tests/calibrate.py set/
@@ -196,6 +198,33 @@ enum Command {
     ///   vklens new-camera --camera fisheye.json --balance 0.5 --fov-scale 1.2
     #[command(verbatim_doc_comment)]
     NewCamera(new_camera::NewCameraArgs),
+    /// Rectify a calibrated stereo pair as OpenCV does: camera_info files with its R and P.
+    ///
+    /// Computes what cv2.stereoRectify (OpenCV's standard model) or cv2.fisheye.stereoRectify
+    /// (its fisheye model) returns for the pair, and writes DIR/left.yaml and DIR/right.yaml:
+    /// ROS camera_info files with each lens's K and D and the pair's R1, P1 (R2, P2), which
+    /// `vklens undistort --camera DIR/left.yaml` and ROS image_proc rectify with. With --left
+    /// and --right it also writes the rectified images, DIR/left.png and DIR/right.png, in
+    /// which a point shows on the same row in both (the same column for a vertical pair).
+    /// Prints the baseline, the rectified focal length and principal points and the valid
+    /// ROIs on stderr.
+    ///
+    /// The pair: a PAIR_FILE (an OpenCV stereo file with R and T, or a Kalibr camchain), or
+    /// --camera LEFT --camera RIGHT with --rotation and --translation (or --extrinsics FILE).
+    /// R and T are cv2.stereoCalibrate's: X2 = R·X1 + T takes a point from the first
+    /// camera's frame to the second's. The baseline is laid along the rows, or along the
+    /// columns where it is more vertical than horizontal (standard model only: OpenCV's
+    /// fisheye rule always takes the rows, turning a vertical pair's images a quarter turn).
+    ///
+    /// Examples:
+    ///   vklens stereo-rectify stereo.yml --alpha 0 --out rect/
+    ///   vklens stereo-rectify intrinsics.yml --extrinsics extrinsics.yml --size 640x480 --out rect/
+    ///   vklens stereo-rectify camchain.yaml --balance 0.5 --out rect/ --left l.png --right r.png
+    ///   vklens stereo-rectify --camera left.yml --camera right.yml \
+    ///       --rotation 0.01,-0.02,0.005 --translation -0.12,0.003,0.001 --out rect/
+    ///   vklens undistort --camera rect/left.yaml --input l.png --output l_rect.png
+    #[command(verbatim_doc_comment)]
+    StereoRectify(stereo_rectify::StereoRectifyArgs),
     /// Render a scene through the lens (Lambers et al.): per vertex with Alg. 1 (colour, IDs, flow,
     /// depth, all exact) or as a pinhole render plus the compute warp. With a scene file
     /// (--scene S.toml --out DIR) the planner picks the cheapest pipeline for what it asks.
@@ -517,6 +546,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Precorrect(args) => warp::run(args, crate::WarpDirection::Precorrect),
         Command::Overscan(args) => warp::overscan_command(args),
         Command::NewCamera(args) => new_camera::run(args),
+        Command::StereoRectify(args) => stereo_rectify::run(args),
         Command::Render(args) => render::run(args),
         Command::CalibrationSet(args) => calibration::run(args),
         Command::Lens(command) => lens::run(command),

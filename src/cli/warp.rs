@@ -19,15 +19,19 @@ fn parse_warp_method(s: &str) -> Result<WarpMethod, String> {
     s.parse().map_err(|e: crate::Error| e.to_string())
 }
 
-fn parse_numbers<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
-    let v: Vec<f64> = s
-        .split(',')
+/// Comma-separated numbers, as many as given; `what` names the flag in errors.
+pub(super) fn number_list(s: &str, what: &str) -> Result<Vec<f64>, String> {
+    s.split(',')
         .map(|t| {
             t.trim()
                 .parse::<f64>()
                 .map_err(|_| format!("{what}: `{t}` is not a number"))
         })
-        .collect::<Result<_, _>>()?;
+        .collect()
+}
+
+fn parse_numbers<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
+    let v = number_list(s, what)?;
     let arr: [f64; N] = v
         .try_into()
         .map_err(|_| format!("{what}: expected {N} comma-separated numbers, got `{s}`"))?;
@@ -351,6 +355,24 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
 /// Largest side of an image the CPU reference warp takes: the GPU path's usual limit.
 const CPU_MAX_SIDE: u32 = 16384;
 
+/// The channels a warped image is written with: the input's, and an alpha channel where
+/// `filled` pixels have no source and the fill is transparent (said on stderr).
+pub(super) fn output_channels(
+    input: image_io::Channels,
+    filled: usize,
+    fill_alpha: f64,
+) -> image_io::Channels {
+    if !input.has_alpha() && filled > 0 && fill_alpha < 1.0 {
+        eprintln!(
+            "the output has an alpha channel the input lacks: {filled} px have no source and the fill is transparent (--fill R,G,B,1 keeps {})",
+            if input.0 == 1 { "grey" } else { "RGB" }
+        );
+        image_io::Channels(input.0 + 1)
+    } else {
+        input
+    }
+}
+
 /// Writes the image (with the input's channels, and alpha only where the fill needs it) and,
 /// when asked, the mask; reports what was filled.
 fn save_outputs(
@@ -361,15 +383,7 @@ fn save_outputs(
 ) -> Result<(), CliError> {
     let filled = mask.iter().filter(|&&m| !m).count();
     let fill_alpha = args.fill.map_or(0.0, |f| f[3]);
-    let channels = if !input.has_alpha() && filled > 0 && fill_alpha < 1.0 {
-        eprintln!(
-            "the output has an alpha channel the input lacks: {filled} px have no source and the fill is transparent (--fill R,G,B,1 keeps {})",
-            if input.0 == 1 { "grey" } else { "RGB" }
-        );
-        image_io::Channels(input.0 + 1)
-    } else {
-        input
-    };
+    let channels = output_channels(input, filled, fill_alpha);
     // Both outputs, or neither, as far as writing goes: both are staged before either is
     // renamed into place (a rename failing in between, which a writable folder does not do,
     // would leave the first).

@@ -322,6 +322,32 @@ impl Camera {
     /// `K` (the raw camera). A camera ROS cannot describe (thin prism or tilt terms) is an
     /// `Unsupported` error that says which terms.
     pub fn to_ros_camera_info(&self) -> Result<String> {
+        self.ros_camera_info(None)
+    }
+
+    /// [`Camera::to_ros_camera_info`] with a stereo pair's rectification: `R` (the rotation
+    /// from the camera's frame to its rectified frame) and `P` (the rectified camera's 3×4
+    /// projection), both row-major, as `cv2.stereoRectify` gives them and `image_proc`
+    /// applies them (`initUndistortRectifyMap(K, D, R, P)`). `K` and `D` stay the lens's.
+    pub fn to_ros_camera_info_rectified(
+        &self,
+        r: [[f64; 3]; 3],
+        p: [[f64; 4]; 3],
+    ) -> Result<String> {
+        if !r
+            .iter()
+            .flatten()
+            .chain(p.iter().flatten())
+            .all(|v| v.is_finite())
+        {
+            return Err(Error::input(
+                "a camera_info's rectification R and projection P must have finite entries",
+            ));
+        }
+        self.ros_camera_info(Some((r, p)))
+    }
+
+    fn ros_camera_info(&self, rectification: Option<RectifyingPair>) -> Result<String> {
         let k = self.intrinsics;
         let (skew, model, coeffs) = if let Some(f) = self.fisheye_lens() {
             (f.alpha * k.fx, "equidistant", f.k.to_vec())
@@ -357,19 +383,29 @@ impl Camera {
             .and_then(|f| f.max_fov_deg())
             .map(|f| format!("# max_fov_deg: {f} (no camera_info field; camera.json carries it)\n"))
             .unwrap_or_default();
+        // The raw camera's P is K: image_proc then undistorts into the lens's own intrinsics.
+        let (r, p) = rectification.unwrap_or((
+            [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            [
+                [k.fx, skew, k.cx, 0.0],
+                [0.0, k.fy, k.cy, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+            ],
+        ));
         Ok(format!(
             "{fov}image_width: {}\nimage_height: {}\ncamera_name: vklens\n\
              camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{}]\n\
              distortion_model: {model}\n\
              distortion_coefficients:\n  rows: 1\n  cols: {}\n  data: [{}]\n\
-             rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]\n\
+             rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [{}]\n\
              projection_matrix:\n  rows: 3\n  cols: 4\n  data: [{}]\n",
             self.width,
             self.height,
             list(&[k.fx, skew, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0]),
             coeffs.len(),
             list(&coeffs),
-            list(&[k.fx, skew, k.cx, 0.0, 0.0, k.fy, k.cy, 0.0, 0.0, 0.0, 1.0, 0.0]),
+            list(r.as_flattened()),
+            list(p.as_flattened()),
         ))
     }
 
@@ -385,6 +421,9 @@ impl Camera {
         crate::imaging::file::write_atomically(path.as_ref(), |tmp| std::fs::write(tmp, &text))
     }
 }
+
+/// A camera_info's rectification rotation R and projection P, row-major.
+type RectifyingPair = ([[f64; 3]; 3], [[f64; 4]; 3]);
 
 /// A model error of [`Camera::from_opencv`] or [`Camera::from_opencv_fisheye`] as the argument
 /// it is about (`K`, `dist_coeffs` or `size`), for the front ends to say in their words.

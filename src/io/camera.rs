@@ -34,6 +34,9 @@ use crate::model::omni::Omni;
 use crate::model::{BrownRadial, Camera, Fisheye, Intrinsics, Lens, ModelError};
 use crate::{Error, Result};
 
+/// The format name of a Kalibr camchain.
+pub const KALIBR_FORMAT: &str = "Kalibr camchain";
+
 /// Reads a camera file (format detected from its content). A Brown lens file gives a camera
 /// that remembers it ([`Camera::brown`]).
 pub fn load_camera(path: &Path) -> Result<Camera> {
@@ -114,6 +117,14 @@ pub fn list_cameras(text: &str, origin: &str, size: Option<(u32, u32)>) -> Resul
         &parse_tree(trimmed, origin).map_err(err)?,
         size,
     ))
+}
+
+/// A JSON, XML or YAML file's text as a tree, its line ends normalized and a BOM and leading
+/// blanks trimmed first, as every camera file's are; the format from the content, or `.json`
+/// in `origin`.
+pub(super) fn text_tree(text: &str, origin: &str) -> Result<Value> {
+    let text = text.replace("\r\n", "\n").replace('\r', "\n");
+    parse_tree(text.trim_start_matches('\u{feff}').trim_start(), origin)
 }
 
 /// A JSON, XML or YAML camera file's text (line ends normalized, BOM and leading blanks
@@ -292,10 +303,10 @@ pub fn exercise(text: &str) {
 
 /// Any camera layout's tree (Kalibr, vklens JSON of every model, FileStorage, ROS, the SLAM
 /// systems' configs) → its cameras.
-fn listing_from_tree(tree: &Value, size: Option<(u32, u32)>) -> Listing {
+pub(super) fn listing_from_tree(tree: &Value, size: Option<(u32, u32)>) -> Listing {
     if let Some(cams) = kalibr_cameras(tree) {
         return Listing {
-            format: "Kalibr camchain",
+            format: KALIBR_FORMAT,
             cameras: cams
                 .into_iter()
                 .map(|(name, cam)| {

@@ -24,11 +24,20 @@
 //!
 //! The extrinsics (`R`, `T`, `E`, `F`, `R1`, `R2`, `P1`, `P2`, `Q`) are not a camera: a file
 //! holding only them (`stereo_calib.cpp`'s `extrinsics.yml`) is not taken for this format.
+//!
+//! A calibrated pair ([`StereoPair`], what stereo rectification needs) is read from a file of
+//! this format that also holds `R` and `T` (`cv2.stereoCalibrate`'s, X2 = R·X1 + T: R a 3×3
+//! matrix or a Rodrigues vector, T three numbers) or from a Kalibr camchain (`cam0`, `cam1`,
+//! and `cam1.T_cn_cnm1`, the 4×4 transform from cam0's frame to cam1's); R and T alone from an
+//! extrinsics file ([`extrinsics_of`]).
+
+use std::path::Path;
 
 use serde_json::{Map, Value};
 
 use super::camera::{as_number, image_side_of, number_list};
 use super::catalog::{size_or, Found, Listing};
+use crate::model::stereo::PairRotation;
 use crate::model::{Camera, Intrinsics, ModelError};
 use crate::{Error, Result};
 
@@ -201,6 +210,244 @@ fn image_size(obj: &Map<String, Value>) -> Result<Option<(u32, u32)>> {
         )));
     }
     Ok(Some(first))
+}
+
+/// A calibrated pair as a file gives it: two cameras and the transform between them.
+#[derive(Debug, Clone)]
+pub struct StereoPair {
+    /// The format the file was read as ([`FORMAT`] or a Kalibr camchain).
+    pub format: &'static str,
+    /// The cameras' names as the file writes them (`M1` and `M2`, `cam0` and `cam1`, …).
+    pub names: [String; 2],
+    /// The first camera.
+    pub left: Camera,
+    /// The second camera.
+    pub right: Camera,
+    /// R: X2 = R·X1 + T.
+    pub rotation: PairRotation,
+    /// T, in the file's units.
+    pub translation: [f64; 3],
+}
+
+/// R and T: X2 = R·X1 + T.
+pub type Extrinsics = (PairRotation, [f64; 3]);
+
+/// [`parse_stereo_pair`] of a file.
+pub fn load_stereo_pair(
+    path: &Path,
+    size: Option<(u32, u32)>,
+    extrinsics: Option<Extrinsics>,
+) -> Result<StereoPair> {
+    let text =
+        super::read_text(path).map_err(|e| Error::io(path, "cannot read stereo pair file", &e))?;
+    parse_stereo_pair(&text, &path.display().to_string(), size, extrinsics)
+}
+
+/// The pair a file's text holds: an OpenCV stereo calibration file with `R` and `T`, or a
+/// Kalibr camchain's first two cameras and the second's `T_cn_cnm1`. `size` is the image size
+/// for a file that gives none; `extrinsics`, where given, are R and T instead of the file's
+/// (which it then need not have: `stereo_calib.cpp` writes them to a file of their own);
+/// `origin` names the file in errors.
+pub fn parse_stereo_pair(
+    text: &str,
+    origin: &str,
+    size: Option<(u32, u32)>,
+    extrinsics: Option<Extrinsics>,
+) -> Result<StereoPair> {
+    let tree = super::camera::text_tree(text, origin).map_err(|e| e.context(origin))?;
+    let listing = super::camera::listing_from_tree(&tree, size);
+    let obj = tree.as_object();
+    let pair = match (listing.format, obj) {
+        (super::camera::KALIBR_FORMAT, Some(obj)) => kalibr_pair(obj, listing, extrinsics),
+        (FORMAT, Some(obj)) => opencv_pair(obj, listing, extrinsics),
+        (format, _) => Err(Error::input(format!(
+            "not a stereo pair: read as {} with {} camera(s); a pair is an OpenCV stereo calibration file (M1 D1 M2 D2 R T, or K1/K2, cameraMatrix1/2, cameraMatrixL/R) or a Kalibr camchain (cam0, cam1 and cam1's T_cn_cnm1); two camera files and R and T do as well",
+            format,
+            listing.cameras.len()
+        ))),
+    };
+    pair.map_err(|e| e.context(origin))
+}
+
+/// The cameras named `a` and `b` of a listing, each loaded (or why not, naming it).
+fn two_cameras(listing: Listing, a: &str, b: &str) -> Result<(Camera, Camera)> {
+    let mut found = listing.cameras.into_iter();
+    let mut take = |name: &str| -> Result<Camera> {
+        let f = found
+            .find(|f| f.name == name)
+            .ok_or_else(|| Error::internal(format!("camera `{name}` was listed but not found")))?;
+        f.camera.map_err(|e| e.context(format!("`{name}`")))
+    };
+    Ok((take(a)?, take(b)?))
+}
+
+/// The pair of a Kalibr camchain: its first two cameras, and the second's `T_cn_cnm1`.
+fn kalibr_pair(
+    obj: &Map<String, Value>,
+    listing: Listing,
+    extrinsics: Option<Extrinsics>,
+) -> Result<StereoPair> {
+    let names: Vec<String> = listing.cameras.iter().map(|f| f.name.clone()).collect();
+    let [a, b] = match names.as_slice() {
+        [a, b, ..] => [a.clone(), b.clone()],
+        _ => {
+            return Err(Error::input(format!(
+            "a Kalibr camchain with {} camera(s) ({}): a pair needs two, the second with T_cn_cnm1",
+            names.len(),
+            names.join(", ")
+        )))
+        }
+    };
+    let (rotation, translation) = match extrinsics {
+        Some(rt) => rt,
+        None => kalibr_transform(obj, &a, &b)?,
+    };
+    let (left, right) = two_cameras(listing, &a, &b)?;
+    Ok(StereoPair {
+        format: super::camera::KALIBR_FORMAT,
+        names: [a, b],
+        left,
+        right,
+        rotation,
+        translation,
+    })
+}
+
+/// R and T of `b`'s `T_cn_cnm1`, the transform from `a`'s frame to `b`'s.
+fn kalibr_transform(obj: &Map<String, Value>, a: &str, b: &str) -> Result<Extrinsics> {
+    let key = format!("{b}.T_cn_cnm1");
+    let m = obj
+        .get(b)
+        .and_then(|cam| cam.get("T_cn_cnm1"))
+        .ok_or_else(|| {
+            Error::input(format!(
+                "missing `{key}`, the 4×4 transform from {a}'s frame to {b}'s that Kalibr writes for the second camera of a chain"
+            ))
+        })?;
+    let rows: Vec<f64> = match m {
+        Value::Array(rows) if rows.iter().all(Value::is_array) => {
+            let mut all = Vec::new();
+            for (i, row) in rows.iter().enumerate() {
+                let row = number_list(row, &format!("{key}[{i}]"))?;
+                if row.len() != 4 {
+                    return Err(Error::input(format!(
+                        "`{key}` must be 4 rows of 4 numbers; row {i} has {}",
+                        row.len()
+                    )));
+                }
+                all.extend(row);
+            }
+            all
+        }
+        other => number_list(other, &key)?,
+    };
+    if rows.len() != 16 {
+        return Err(Error::input(format!(
+            "`{key}` must be a 4×4 matrix (4 rows of 4 numbers), got {} numbers",
+            rows.len()
+        )));
+    }
+    let last = [rows[12], rows[13], rows[14], rows[15]];
+    if last != [0.0, 0.0, 0.0, 1.0] {
+        return Err(Error::input(format!(
+            "`{key}`'s last row is {last:?}; a rigid transform's is [0, 0, 0, 1]"
+        )));
+    }
+    let rotation = PairRotation::Matrix([
+        [rows[0], rows[1], rows[2]],
+        [rows[4], rows[5], rows[6]],
+        [rows[8], rows[9], rows[10]],
+    ]);
+    Ok((rotation, [rows[3], rows[7], rows[11]]))
+}
+
+/// The pair of an OpenCV stereo calibration file: the first layout whose two camera matrices
+/// it holds, and its `R` and `T`.
+fn opencv_pair(
+    obj: &Map<String, Value>,
+    listing: Listing,
+    extrinsics: Option<Extrinsics>,
+) -> Result<StereoPair> {
+    let present: Vec<&str> = listing.cameras.iter().map(|f| f.name.as_str()).collect();
+    let Some([(a, _), (b, _)]) = CAMERAS
+        .chunks_exact(2)
+        .find(|pair| pair.iter().all(|(m, _)| present.contains(m)))
+        .and_then(|pair| <[(&str, &str); 2]>::try_from(pair).ok())
+    else {
+        return Err(Error::input(format!(
+            "holds the camera matrix {} only: a pair needs both cameras' (M1 and M2, K1 and K2, cameraMatrix1 and cameraMatrix2, or cameraMatrixL and cameraMatrixR)",
+            present.iter().map(|m| format!("`{m}`")).collect::<Vec<_>>().join(", ")
+        )));
+    };
+    let (rotation, translation) = match extrinsics {
+        Some(rt) => rt,
+        None => extrinsics_of(obj)?,
+    };
+    let (left, right) = two_cameras(listing, a, b)?;
+    Ok(StereoPair {
+        format: FORMAT,
+        names: [a.to_string(), b.to_string()],
+        left,
+        right,
+        rotation,
+        translation,
+    })
+}
+
+/// `R` and `T` of an OpenCV FileStorage tree (a stereo calibration file, or
+/// `stereo_calib.cpp`'s `extrinsics.yml`): R a 3×3 matrix or a Rodrigues vector, T three
+/// numbers; the error names the key.
+pub fn extrinsics_of(obj: &Map<String, Value>) -> Result<Extrinsics> {
+    for (key, what) in [
+        (
+            "R",
+            "the rotation from the first camera's frame to the second's",
+        ),
+        ("T", "the translation between them"),
+    ] {
+        if !obj.contains_key(key) {
+            return Err(Error::input(format!(
+                "missing `{key}`, {what} (X2 = R·X1 + T, as cv2.stereoCalibrate gives them)"
+            )));
+        }
+    }
+    let r = matrix_values(obj, "R")?;
+    let rotation = match r.as_slice() {
+        [a, b, c, d, e, f, g, h, i] => {
+            PairRotation::Matrix([[*a, *b, *c], [*d, *e, *f], [*g, *h, *i]])
+        }
+        [x, y, z] => PairRotation::Rodrigues([*x, *y, *z]),
+        _ => {
+            return Err(Error::input(format!(
+                "`R` must have 9 entries (a 3×3 rotation) or 3 (a Rodrigues vector), got {}",
+                r.len()
+            )))
+        }
+    };
+    let t = matrix_values(obj, "T")?;
+    let translation: [f64; 3] = t
+        .as_slice()
+        .try_into()
+        .map_err(|_| Error::input(format!("`T` must have 3 entries, got {}", t.len())))?;
+    Ok((rotation, translation))
+}
+
+/// [`extrinsics_of`] a file's text; `origin` names it in errors.
+pub fn parse_extrinsics(text: &str, origin: &str) -> Result<Extrinsics> {
+    let tree = super::camera::text_tree(text, origin).map_err(|e| e.context(origin))?;
+    let obj = tree.as_object().ok_or_else(|| {
+        Error::input(format!(
+            "{origin}: expected a mapping of keys (R, T), got {tree}"
+        ))
+    })?;
+    extrinsics_of(obj).map_err(|e| e.context(origin))
+}
+
+/// [`parse_extrinsics`] of a file.
+pub fn load_extrinsics(path: &Path) -> Result<Extrinsics> {
+    let text =
+        super::read_text(path).map_err(|e| Error::io(path, "cannot read extrinsics file", &e))?;
+    parse_extrinsics(&text, &path.display().to_string())
 }
 
 #[cfg(test)]
@@ -429,5 +676,244 @@ D2: !!opencv-matrix
         ] {
             assert!(listing_from_tree(&tree, None).is_none(), "{tree}");
         }
+    }
+
+    /// The pair's R and T as a test compares them: a matrix row-major, or the vector.
+    fn matrix_of(r: PairRotation) -> [[f64; 3]; 3] {
+        match r {
+            PairRotation::Matrix(m) => m,
+            PairRotation::Rodrigues(v) => panic!("expected a matrix, got the vector {v:?}"),
+        }
+    }
+
+    const STEREO_CALIBRATE: &str = "%YAML:1.0
+---
+imageSize: [ 640, 480 ]
+K1: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 600., 0., 330.25, 0., 610., 236.5, 0., 0., 1. ]
+D1: !!opencv-matrix
+   rows: 1
+   cols: 5
+   dt: d
+   data: [ -0.05, 0.01, 1.0e-03, -1.5e-03, 0. ]
+K2: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 605., 0., 322.25, 0., 603., 240.125, 0., 0., 1. ]
+D2: !!opencv-matrix
+   rows: 1
+   cols: 5
+   dt: d
+   data: [ -0.06, 0.012, -5.0e-04, 1.0e-03, 0. ]
+R: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 0.5, -0.75, 0.25, 0.125, 0.5, 0.875, -0.375, 0.0625, 1. ]
+T: !!opencv-matrix
+   rows: 3
+   cols: 1
+   dt: d
+   data: [ -0.12, 3.0e-03, 1.0e-03 ]
+";
+
+    #[test]
+    fn an_opencv_stereo_file_gives_its_pair() {
+        let pair = parse_stereo_pair(STEREO_CALIBRATE, "stereo.yml", None, None).expect("a pair");
+        assert_eq!(pair.format, FORMAT);
+        assert_eq!(pair.names, ["K1".to_string(), "K2".to_string()]);
+        same(
+            &pair.left,
+            &standard(
+                [600.0, 610.0, 330.25, 236.5],
+                &[-0.05, 0.01, 1e-3, -1.5e-3, 0.0],
+                640,
+                480,
+            ),
+        );
+        same(
+            &pair.right,
+            &standard(
+                [605.0, 603.0, 322.25, 240.125],
+                &[-0.06, 0.012, -5e-4, 1e-3, 0.0],
+                640,
+                480,
+            ),
+        );
+        // R as the file writes it (whether it is a rotation is the rectification's to say).
+        assert_eq!(
+            matrix_of(pair.rotation),
+            [
+                [0.5, -0.75, 0.25],
+                [0.125, 0.5, 0.875],
+                [-0.375, 0.0625, 1.0]
+            ]
+        );
+        assert_eq!(pair.translation, [-0.12, 3e-3, 1e-3]);
+        // stereo_calib.cpp's intrinsics.yml has no R and T: its extrinsics.yml gives them.
+        let given = (PairRotation::Rodrigues([0.0, 0.1, 0.0]), [-0.1, 0.0, 0.0]);
+        let pair = parse_stereo_pair(INTRINSICS, "intrinsics.yml", Some((640, 480)), Some(given))
+            .expect("a pair");
+        assert_eq!(pair.names, ["M1".to_string(), "M2".to_string()]);
+        assert_eq!((pair.rotation, pair.translation), given);
+        let e = parse_stereo_pair(INTRINSICS, "intrinsics.yml", Some((640, 480)), None)
+            .expect_err("no R")
+            .to_string();
+        assert!(
+            e.starts_with("intrinsics.yml") && e.contains("missing `R`"),
+            "{e}"
+        );
+        // A Rodrigues vector for R, and R and T alone (stereo_calib.cpp's extrinsics.yml).
+        let tree =
+            json!({"R": [0.01, -0.02, 0.005], "T": {"rows": 3, "cols": 1, "data": [1, 2, 3]}});
+        let (r, t) = extrinsics_of(tree.as_object().expect("a mapping")).expect("R and T");
+        assert_eq!(r, PairRotation::Rodrigues([0.01, -0.02, 0.005]));
+        assert_eq!(t, [1.0, 2.0, 3.0]);
+    }
+
+    const CAMCHAIN: &str = "cam0:
+  camera_model: pinhole
+  intrinsics: [461.5, 460.25, 363.0, 248.125]
+  distortion_model: radtan
+  distortion_coeffs: [-0.2917, 0.0823, 5.3e-05, -1.6e-04]
+  resolution: [752, 480]
+cam1:
+  T_cn_cnm1:
+  - [0.5, -0.75, 0.25, -0.11]
+  - [0.125, 0.5, 0.875, 0.0004]
+  - [-0.375, 0.0625, 1.0, 0.0012]
+  - [0.0, 0.0, 0.0, 1.0]
+  camera_model: pinhole
+  intrinsics: [458.75, 457.25, 367.25, 248.375]
+  distortion_model: radtan
+  distortion_coeffs: [-0.2834, 0.0739, -1.9e-04, 1.8e-05]
+  resolution: [752, 480]
+";
+
+    #[test]
+    fn a_kalibr_camchain_gives_its_first_two_cameras() {
+        let pair = parse_stereo_pair(CAMCHAIN, "camchain.yaml", None, None).expect("a pair");
+        assert_eq!(pair.format, crate::io::camera::KALIBR_FORMAT);
+        assert_eq!(pair.names, ["cam0".to_string(), "cam1".to_string()]);
+        same(
+            &pair.left,
+            &standard(
+                [461.5, 460.25, 363.0, 248.125],
+                &[-0.2917, 0.0823, 5.3e-05, -1.6e-04],
+                752,
+                480,
+            ),
+        );
+        same(
+            &pair.right,
+            &standard(
+                [458.75, 457.25, 367.25, 248.375],
+                &[-0.2834, 0.0739, -1.9e-04, 1.8e-05],
+                752,
+                480,
+            ),
+        );
+        // T_cn_cnm1 maps cam0's frame to cam1's: X1 = R X0 + T, OpenCV's R and T.
+        assert_eq!(
+            matrix_of(pair.rotation),
+            [
+                [0.5, -0.75, 0.25],
+                [0.125, 0.5, 0.875],
+                [-0.375, 0.0625, 1.0]
+            ]
+        );
+        assert_eq!(pair.translation, [-0.11, 0.0004, 0.0012]);
+    }
+
+    #[test]
+    fn pair_errors_name_the_file_and_key() {
+        let error = |text: &str| -> String {
+            parse_stereo_pair(text, "pair.yaml", Some((640, 480)), None)
+                .expect_err("refused")
+                .to_string()
+        };
+        let without = |key: &str| {
+            let mut out = String::new();
+            let mut skipping = false;
+            for line in STEREO_CALIBRATE.lines() {
+                if !line.starts_with(' ') {
+                    skipping = line.starts_with(&format!("{key}:"));
+                }
+                if !skipping {
+                    out.push_str(line);
+                    out.push('\n');
+                }
+            }
+            out
+        };
+        let e = error(&without("T"));
+        assert!(
+            e.starts_with("pair.yaml") && e.contains("missing `T`"),
+            "{e}"
+        );
+        let e = error(&without("R"));
+        assert!(e.contains("missing `R`"), "{e}");
+        let e = error(
+            &STEREO_CALIBRATE
+                .replace("rows: 3\n   cols: 1", "rows: 4\n   cols: 1")
+                .replace(
+                    "[ -0.12, 3.0e-03, 1.0e-03 ]",
+                    "[ -0.12, 3.0e-03, 1.0e-03, 5. ]",
+                ),
+        );
+        assert!(e.contains("`T` must have 3 entries, got 4"), "{e}");
+        let e = error(
+            &STEREO_CALIBRATE
+                .replace("0.0625, 1. ]", "0.0625 ]")
+                .replace(
+                    "R: !!opencv-matrix\n   rows: 3\n   cols: 3",
+                    "R: !!opencv-matrix\n   rows: 1\n   cols: 8",
+                ),
+        );
+        assert!(
+            e.contains("`R` must have 9 entries") && e.contains("got 8"),
+            "{e}"
+        );
+        let e = error(&without("K2"));
+        assert!(e.contains("`K1` only") && e.contains("pair"), "{e}");
+        let e = error(&STEREO_CALIBRATE.replace("data: [ -0.06", "data: [ oops"));
+        assert!(e.contains("`K2`") && e.contains("D2"), "{e}");
+        // Kalibr: the transform's key, its shape and its last row.
+        let e = error(&CAMCHAIN.replace("  T_cn_cnm1:", "  T_other:"));
+        assert!(e.contains("missing `cam1.T_cn_cnm1`"), "{e}");
+        let e = error(&CAMCHAIN.replace("  - [0.0, 0.0, 0.0, 1.0]\n", ""));
+        assert!(
+            e.contains("`cam1.T_cn_cnm1` must be a 4×4 matrix") && e.contains("12"),
+            "{e}"
+        );
+        let e = error(&CAMCHAIN.replace("[0.5, -0.75, 0.25, -0.11]", "[0.5, -0.75, 0.25]"));
+        assert!(
+            e.contains("`cam1.T_cn_cnm1`") && e.contains("row 0 has 3"),
+            "{e}"
+        );
+        let e = error(&CAMCHAIN.replace("[0.0, 0.0, 0.0, 1.0]", "[0.0, 0.0, 0.1, 1.0]"));
+        assert!(e.contains("last row"), "{e}");
+        let first = CAMCHAIN.split("cam1:").next().expect("cam0");
+        let e = error(first);
+        assert!(e.contains("1 camera(s)") && e.contains("cam0"), "{e}");
+        // A file that is no pair says what one is.
+        let e = error(
+            "{\"width\": 640, \"height\": 480, \"fx\": 500, \"fy\": 500, \"cx\": 320, \"cy\": 240}",
+        );
+        assert!(
+            e.contains("not a stereo pair") && e.contains("T_cn_cnm1"),
+            "{e}"
+        );
+        let e = parse_extrinsics("R: [1, 0, 0]\n", "extrinsics.yml")
+            .expect_err("no T")
+            .to_string();
+        assert!(
+            e.starts_with("extrinsics.yml") && e.contains("missing `T`"),
+            "{e}"
+        );
     }
 }

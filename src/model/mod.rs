@@ -21,6 +21,8 @@
 //! * [`domain`] — the valid (invertible) domain of a distortion, computed once per camera.
 //! * [`new_camera`] — the pinhole camera an undistorted image is drawn into, by OpenCV's
 //!   `getOptimalNewCameraMatrix` and `fisheye.estimateNewCameraMatrixForUndistortRectify`.
+//! * [`stereo`] — stereo rectification of a calibrated pair, by OpenCV's `stereoRectify` and
+//!   `fisheye.stereoRectify`.
 //! * [`projection`] — the Sec. 3.1 frustum as a Vulkan projection matrix.
 //! * [`solve`] — the safeguarded 1D Newton both models' inverses start from.
 //! * [`rolling_shutter`] — a rolling-shutter sensor's line times, the pose during its readout
@@ -49,6 +51,7 @@ pub mod projection;
 pub mod rolling_shutter;
 pub mod samples;
 pub mod solve;
+pub mod stereo;
 #[cfg(test)]
 mod suite;
 pub mod table;

@@ -40,7 +40,7 @@
 
 use std::f64::consts::FRAC_PI_2;
 
-use glam::DVec2;
+use glam::{DMat3, DVec2};
 
 use super::{
     check_size, Camera, Intrinsics, InverseMethod, ModelKind, OpenCvDistortion, ValidDomain,
@@ -56,16 +56,16 @@ pub type Roi = (u32, u32, u32, u32);
 
 /// An axis-aligned rectangle in f64, OpenCV's `Rect_<double>`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Rect {
-    x: f64,
-    y: f64,
-    width: f64,
-    height: f64,
+pub(super) struct Rect {
+    pub(super) x: f64,
+    pub(super) y: f64,
+    pub(super) width: f64,
+    pub(super) height: f64,
 }
 
 /// What to do with a grid pixel the inverse has no answer for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Unmapped {
+pub(super) enum Unmapped {
     /// Refuse: OpenCV's rule needs every grid pixel.
     Refuse,
     /// Skip it: it sees at or past 90° off the axis, where the pinhole plane reaches without
@@ -114,7 +114,7 @@ pub fn optimal_new_camera(
         return centred(camera, alpha, new_w, new_h);
     }
     // The rectangles in normalized coordinates (OpenCV passes no new matrix).
-    let (inner, outer) = undistort_rectangles(camera, Unmapped::Refuse, |x| x)?;
+    let (inner, outer) = undistort_rectangles(camera, Unmapped::Refuse, Some)?;
     if !(inner.width > 0.0 && inner.height > 0.0) {
         return Err(Error::argument(
             "camera",
@@ -138,7 +138,7 @@ pub fn optimal_new_camera(
     let new_camera = pinhole(new_w, new_h, intrinsics)?;
     // OpenCV undistorts the grid again straight into the new camera for its ROI.
     let (inner, _) = undistort_rectangles(camera, Unmapped::Refuse, |x| {
-        new_camera.intrinsics.to_pixel(x)
+        Some(new_camera.intrinsics.to_pixel(x))
     })?;
     Ok((new_camera, rounded_roi(inner, new_w, new_h)))
 }
@@ -149,18 +149,12 @@ pub fn optimal_new_camera(
 fn centred(camera: &Camera, alpha: f64, new_w: u32, new_h: u32) -> Result<(Camera, Roi)> {
     let k = camera.intrinsics;
     // The rectangles in the camera's own pixels (OpenCV passes K as the new matrix).
-    let (inner, outer) = undistort_rectangles(camera, Unmapped::Refuse, |x| k.to_pixel(x))?;
+    let (inner, outer) = undistort_rectangles(camera, Unmapped::Refuse, |x| Some(k.to_pixel(x)))?;
     let cx = (new_w as f64 - 1.0) * 0.5;
     let cy = (new_h as f64 - 1.0) * 0.5;
     let (cx0, cy0) = (k.cx, k.cy);
-    let ratios = |r: Rect| {
-        [
-            cx / (cx0 - r.x),
-            cy / (cy0 - r.y),
-            cx / (r.x + r.width - cx0),
-            cy / (r.y + r.height - cy0),
-        ]
-    };
+    let (from, to) = (DVec2::new(cx0, cy0), DVec2::new(cx, cy));
+    let ratios = |r: Rect| side_scales(r, from, to, new_w, new_h);
     let s0 = ratios(inner).into_iter().fold(f64::NEG_INFINITY, f64::max);
     let s1 = ratios(outer).into_iter().fold(f64::INFINITY, f64::min);
     let s = s0 * (1.0 - alpha) + s1 * alpha;
@@ -179,19 +173,43 @@ fn centred(camera: &Camera, alpha: f64, new_w: u32, new_h: u32) -> Result<(Camer
         cy,
     };
     let new_camera = pinhole(new_w, new_h, new)?;
-    // OpenCV's ROI here is the inner rectangle scaled about the principal point, its corner
-    // rounded up and its size down.
-    let roi = intersect(
+    Ok((new_camera, scaled_roi(inner, from, to, s, new_w, new_h)))
+}
+
+/// For each side of rectangle `r` (left, top, right, bottom; in pixels of a camera whose
+/// principal point is `from`), the scale about the principal point that puts it on that edge
+/// of a `width`×`height` image whose principal point is `to`: OpenCV's scales of
+/// `getOptimalNewCameraMatrix`'s centred camera and of `stereoRectify`'s alpha.
+pub(super) fn side_scales(r: Rect, from: DVec2, to: DVec2, width: u32, height: u32) -> [f64; 4] {
+    [
+        to.x / (from.x - r.x),
+        to.y / (from.y - r.y),
+        (width as f64 - 1.0 - to.x) / (r.x + r.width - from.x),
+        (height as f64 - 1.0 - to.y) / (r.y + r.height - from.y),
+    ]
+}
+
+/// OpenCV's ROI of a camera scaled by `s` about its principal point (`from`, moved to `to` in a
+/// `width`×`height` image): the inner rectangle scaled so, its corner rounded up and its size
+/// down, cut to the image.
+pub(super) fn scaled_roi(
+    inner: Rect,
+    from: DVec2,
+    to: DVec2,
+    s: f64,
+    width: u32,
+    height: u32,
+) -> Roi {
+    intersect(
         [
-            saturate(((inner.x - cx0) * s + cx).ceil()),
-            saturate(((inner.y - cy0) * s + cy).ceil()),
+            saturate(((inner.x - from.x) * s + to.x).ceil()),
+            saturate(((inner.y - from.y) * s + to.y).ceil()),
             saturate((inner.width * s).floor()),
             saturate((inner.height * s).floor()),
         ],
-        new_w,
-        new_h,
-    );
-    Ok((new_camera, roi))
+        width,
+        height,
+    )
 }
 
 /// `cv2.fisheye.estimateNewCameraMatrixForUndistortRectify(K, D, size, R = I, balance,
@@ -210,6 +228,37 @@ pub fn fisheye_new_camera(
     fov_scale: f64,
     new_size: Option<(u32, u32)>,
 ) -> Result<(Camera, Roi)> {
+    let new_camera = fisheye_rule(camera, DMat3::IDENTITY, balance, fov_scale, new_size)?;
+    let (new_w, new_h) = (new_camera.width, new_camera.height);
+    let (inner, _) = undistort_rectangles(camera, Unmapped::Skip, |x| {
+        Some(new_camera.intrinsics.to_pixel(x))
+    })?;
+    // A side whose grid pixels all see past 90° bounds nothing and stays at ±FLT_MAX: cut to
+    // just outside the image first, so that rounding to whole pixels cannot overflow.
+    let (x0, y0) = (inner.x.max(-1.0), inner.y.max(-1.0));
+    let x1 = (inner.x + inner.width).min(new_w as f64 + 1.0);
+    let y1 = (inner.y + inner.height).min(new_h as f64 + 1.0);
+    let inner = Rect {
+        x: x0,
+        y: y0,
+        width: x1 - x0,
+        height: y1 - y0,
+    };
+    Ok((new_camera, rounded_roi(inner, new_w, new_h)))
+}
+
+/// The camera of [`fisheye_new_camera`]'s rule with OpenCV's `R` argument: the undistorted
+/// edge midpoints are turned by `rotation` (a rectification) before the search, as
+/// `cv2.fisheye.stereoRectify` asks for each camera of a pair. Refuses what
+/// [`fisheye_new_camera`] refuses, and a midpoint the rotation turns to or behind the new
+/// image plane.
+pub(super) fn fisheye_rule(
+    camera: &Camera,
+    rotation: DMat3,
+    balance: f64,
+    fov_scale: f64,
+    new_size: Option<(u32, u32)>,
+) -> Result<Camera> {
     if !(0.0..=1.0).contains(&balance) {
         return Err(Error::argument(
             "balance",
@@ -249,7 +298,7 @@ pub fn fisheye_new_camera(
     ];
     let mut points = [DVec2::ZERO; 4];
     for (slot, (edge, p)) in points.iter_mut().zip(midpoints) {
-        *slot = clipped_pinhole_point(camera, p).ok_or_else(|| {
+        let x = clipped_pinhole_point(camera, p).ok_or_else(|| {
             Error::argument(
                 "camera",
                 format!(
@@ -260,6 +309,18 @@ pub fn fisheye_new_camera(
                 ),
             )
         })?;
+        // OpenCV turns the point on the plane z = 1 by R and projects it again.
+        let turned = rotation * x.extend(1.0);
+        if !(turned.z > 0.0) {
+            return Err(Error::argument(
+                "camera",
+                format!(
+                    "the midpoint of the image's {edge} edge, pixel ({}, {}), is turned to or behind the rectified image plane by the rectification: no pinhole image holds it, so the fisheye rule has no camera to give",
+                    p.x, p.y
+                ),
+            ));
+        }
+        *slot = DVec2::new(turned.x / turned.z, turned.y / turned.z);
     }
     let k = camera.intrinsics;
     let aspect = k.fx / k.fy;
@@ -298,26 +359,11 @@ pub fn fisheye_new_camera(
         cx: c.x * rx,
         cy: c.y / aspect * ry,
     };
-    let new_camera = pinhole(new_w, new_h, intrinsics)?;
-    let (inner, _) = undistort_rectangles(camera, Unmapped::Skip, |x| {
-        new_camera.intrinsics.to_pixel(x)
-    })?;
-    // A side whose grid pixels all see past 90° bounds nothing and stays at ±FLT_MAX: cut to
-    // just outside the image first, so that rounding to whole pixels cannot overflow.
-    let (x0, y0) = (inner.x.max(-1.0), inner.y.max(-1.0));
-    let x1 = (inner.x + inner.width).min(new_w as f64 + 1.0);
-    let y1 = (inner.y + inner.height).min(new_h as f64 + 1.0);
-    let inner = Rect {
-        x: x0,
-        y: y0,
-        width: x1 - x0,
-        height: y1 - y0,
-    };
-    Ok((new_camera, rounded_roi(inner, new_w, new_h)))
+    pinhole(new_w, new_h, intrinsics)
 }
 
 /// The new image's size: `new_size`, or the camera's own.
-fn checked_size(camera: &Camera, new_size: Option<(u32, u32)>) -> Result<(u32, u32)> {
+pub(super) fn checked_size(camera: &Camera, new_size: Option<(u32, u32)>) -> Result<(u32, u32)> {
     let Some((w, h)) = new_size else {
         return Ok((camera.width, camera.height));
     };
@@ -327,7 +373,7 @@ fn checked_size(camera: &Camera, new_size: Option<(u32, u32)>) -> Result<(u32, u
 
 /// The pinhole camera of the new image; a camera the rule makes absurd (a focal length of
 /// 1e9 px from a lens that hardly bends its edges) is refused, saying so.
-fn pinhole(width: u32, height: u32, k: Intrinsics) -> Result<Camera> {
+pub(super) fn pinhole(width: u32, height: u32, k: Intrinsics) -> Result<Camera> {
     Camera::new(width, height, k, OpenCvDistortion::default()).map_err(|e| {
         Error::argument(
             "camera",
@@ -364,11 +410,13 @@ fn clipped_pinhole_point(camera: &Camera, pixel: DVec2) -> Option<DVec2> {
 }
 
 /// OpenCV's `getUndistortRectangles`: the inner and outer rectangles of a 9 × 9 grid of pixels
-/// spanning the image (centres 0..=w-1, 0..=h-1), undistorted and mapped by `to`.
-fn undistort_rectangles(
+/// spanning the image (centres 0..=w-1, 0..=h-1), undistorted and mapped by `to` (`None`
+/// where the mapped point has no place in the new image, which `unmapped` decides on as for
+/// a pixel without an undistorted position).
+pub(super) fn undistort_rectangles(
     camera: &Camera,
     unmapped: Unmapped,
-    to: impl Fn(DVec2) -> DVec2,
+    to: impl Fn(DVec2) -> Option<DVec2>,
 ) -> Result<(Rect, Rect)> {
     let step_x = (camera.width as f64 - 1.0) / (GRID - 1) as f64;
     let step_y = (camera.height as f64 - 1.0) / (GRID - 1) as f64;
@@ -387,21 +435,20 @@ fn undistort_rectangles(
             } else {
                 pinhole_point(camera, pixel)
             };
-            let Some(ideal) = ideal else {
+            let Some(p) = ideal.and_then(&to) else {
                 match unmapped {
                     Unmapped::Skip => continue,
                     Unmapped::Refuse => {
                         return Err(Error::argument(
                             "camera",
                             format!(
-                                "pixel ({}, {}) of the image has no undistorted position (the lens folds over before it): OpenCV's rule needs every pixel of its 9 × 9 grid; `vklens overscan` gives a camera for the valid region instead",
+                                "pixel ({}, {}) of the image has no undistorted position (the lens folds over before it, or the rectification turns it behind the image plane): OpenCV's rule needs every pixel of its 9 × 9 grid; `vklens overscan` gives a camera for the valid region instead",
                                 pixel.x, pixel.y
                             ),
                         ))
                     }
                 }
             };
-            let p = to(ideal);
             ox0 = ox0.min(p.x);
             ox1 = ox1.max(p.x);
             oy0 = oy0.min(p.y);

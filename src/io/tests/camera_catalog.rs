@@ -321,3 +321,51 @@ T: {rows: 3, cols: 1, data: [-0.1, 0, 0]}
     assert_eq!(rectification_of(stereo, "stereo.yml").unwrap(), None);
     assert_eq!(load(stereo, &LoadOptions::default()).width, 64);
 }
+
+#[test]
+fn a_rectified_camera_info_reads_back_its_r_and_p_and_its_lens() {
+    use crate::io::camera::rectification_of;
+    let k = crate::model::Intrinsics {
+        fx: 600.25,
+        fy: 610.5,
+        cx: 330.2,
+        cy: 236.9,
+    };
+    let d = [-0.05, 0.01, 0.001, -0.0015, 0.0002];
+    let lens = Camera::from_coeffs(640, 480, k, &d).unwrap();
+    let fish = Camera::fisheye(
+        640,
+        480,
+        k,
+        crate::model::Fisheye::new([0.02, -0.004, 0.001, -0.0002], 0.0, None).unwrap(),
+    )
+    .unwrap();
+    // Entries no short decimal writes exactly: the file must carry every bit.
+    let third = 1.0f64 / 3.0;
+    let r = [
+        [third.sqrt(), 0.1, 0.2],
+        [-0.1, 0.7, std::f64::consts::FRAC_1_SQRT_2],
+        [0.3, -0.4, 0.9],
+    ];
+    let p = [
+        [607.123456789, 0.0, 321.7, -72.0 * third],
+        [0.0, 607.123456789, 239.1, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
+    for camera in [&lens, &fish] {
+        let text = camera.to_ros_camera_info_rectified(r, p).unwrap();
+        let back = rectification_of(&text, "left.yaml")
+            .unwrap()
+            .expect("R and P");
+        assert_eq!((back.r, back.p), (r, p));
+        // K and D are the lens's: the file loads back to the same camera.
+        let again = Camera::parse(&text, "left.yaml").unwrap();
+        assert_eq!(again.intrinsics, camera.intrinsics);
+        assert_eq!(again.dist_coeffs(), camera.dist_coeffs());
+        assert_eq!(again.model(), camera.model());
+    }
+    let mut bad = p;
+    bad[0][3] = f64::NAN;
+    let e = lens.to_ros_camera_info_rectified(r, bad).unwrap_err();
+    assert!(e.to_string().contains("finite"), "{e}");
+}

@@ -24,10 +24,6 @@ pytestmark = pytest.mark.usefixtures("device")
 # cv2's undistortPoints iterated until it has converged (its default stops after 5 steps).
 TIGHT = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-15)
 
-needs_stereo = pytest.mark.skipif(not hasattr(vklens, "stereo_rectify"),
-                                  reason="vklens.stereo_rectify is not in this build")
-
-
 def k_of(fx, fy, cx, cy):
     return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
 
@@ -625,7 +621,6 @@ def assert_rectification(ours, theirs, rtol):
         np.testing.assert_allclose(a, b, rtol=rtol, atol=rtol * np.abs(b).max())
 
 
-@needs_stereo
 @pytest.mark.parametrize("alpha", [-1, 0.0, 1.0])
 @pytest.mark.parametrize("flags", [0, cv2.CALIB_ZERO_DISPARITY])
 def test_stereo_rectify_equals_cv2(alpha, flags):
@@ -647,7 +642,6 @@ def test_stereo_rectify_equals_cv2(alpha, flags):
     assert_rectification(got, theirs, 1e-6)
 
 
-@needs_stereo
 @pytest.mark.parametrize("balance", [0.0, 1.0])
 @pytest.mark.parametrize("flags", [0, cv2.CALIB_ZERO_DISPARITY])
 def test_fisheye_stereo_rectify_equals_cv2(balance, flags):

@@ -390,12 +390,9 @@ def real(value, name):
 
 
 def stereo_rectify():
-    """The Rust-backed stereo rectification, where this build of vklens has it."""
-    import vklens
+    """The Rust-backed stereo rectification (imported late: vklens imports this package)."""
+    from .._vklens import stereo_rectify as rectify
 
-    rectify = getattr(vklens, "stereo_rectify", None)
-    if rectify is None:
-        raise NotImplementedError("this build of vklens has no stereo_rectify")
     return rectify
 
 

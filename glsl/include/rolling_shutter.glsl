@@ -157,6 +157,12 @@ bool vkl_rs_refine(VklMotion m, vec3 x, VklRsSample a, VklRsSample b, out VklRsS
 // readout order (`ok` false where the lens does not see it; then `clip` is a finite clip
 // position of the point at some readout time, for the rasterizer's clipping alone). Points no
 // line reads keep their position at the nearer end of the readout.
+//
+// The scan stops at the first sign change and the refinement runs outside it: the lanes of one
+// SIMD batch find their brackets in different cells, and a refinement inside the scan would run
+// once per cell that any lane brackets, the others idle; here they refine together. A bracket
+// that closes on a jump of the lens map rather than a root resumes the scan after it, as on the
+// CPU.
 VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
     VklRsSample previous;
     VklRsSample first;
@@ -164,22 +170,32 @@ VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
     bool has_previous = false;
     bool seen_everywhere = true;
     bool crossed = false;
-    for (uint k = 0u; k <= VKL_RS_SCAN_CELLS; k++) {
-        VklRsSample c = vkl_rs_sample(m, x, float(k) / float(VKL_RS_SCAN_CELLS));
-        if (c.ok) {
-            if (c.g == 0.0) return c;
-            if (has_previous && ((previous.g < 0.0) != (c.g < 0.0))) {
-                crossed = true;
-                VklRsSample root;
-                if (vkl_rs_refine(m, x, previous, c, root)) return root;
+    uint k = 0u;
+    for (uint attempt = 0u; attempt <= VKL_RS_SCAN_CELLS; attempt++) {
+        bool found = false;
+        VklRsSample a;
+        VklRsSample b;
+        for (; k <= VKL_RS_SCAN_CELLS && !found; k++) {
+            VklRsSample c = vkl_rs_sample(m, x, float(k) / float(VKL_RS_SCAN_CELLS));
+            if (c.ok) {
+                if (c.g == 0.0) return c;
+                if (has_previous && ((previous.g < 0.0) != (c.g < 0.0))) {
+                    crossed = true;
+                    found = true;
+                    a = previous;
+                    b = c;
+                }
+            } else {
+                seen_everywhere = false;
             }
-        } else {
-            seen_everywhere = false;
+            if (k == 0u) first = c;
+            last = c;
+            previous = c;
+            has_previous = c.ok;
         }
-        if (k == 0u) first = c;
-        last = c;
-        previous = c;
-        has_previous = c.ok;
+        if (!found) break;
+        VklRsSample root;
+        if (vkl_rs_refine(m, x, a, b, root)) return root;
     }
     VklRsSample end = first.g > 0.0 ? first : last;
     end.ok = !crossed && seen_everywhere;

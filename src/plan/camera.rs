@@ -66,7 +66,16 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
     if terms == Default::default() && chromatic_scales(file).is_none() {
         return Ok(pinhole_plan(file, scene, camera, (poses, shutter)));
     }
-    let candidates = search_candidates(file, scene, &camera, &poses)?;
+    // The first frame that moves during its readout: the tessellation is measured through its
+    // motion (edges bend more when each line sees its own pose).
+    let moving = match shutter {
+        Shutter::Moving { readout, frame, .. } => {
+            let end = file.end_poses.get(frame).copied().flatten();
+            poses.get(frame).zip(end).map(|(p, e)| (readout, *p, e))
+        }
+        _ => None,
+    };
+    let candidates = search_candidates(file, scene, &camera, &poses, moving)?;
     let choice = if shutter.moving_readout().is_some() {
         super::choice::choose_moving_rolling_shutter(file, &candidates)?
     } else {

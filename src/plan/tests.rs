@@ -920,3 +920,34 @@ fn a_camera_files_readout_is_the_default_and_the_scene_key_overrides_it() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_rolling_shutter_example_and_its_global_twin_render_and_differ() {
+    let ctx = validated_context();
+    let render = |name: &str| {
+        let file = SceneFile::load(&examples().join(name)).unwrap();
+        let scene = load_geometry(&file).unwrap();
+        let p = plan(&file, &scene).unwrap();
+        let mut out = None;
+        execute(&ctx, &p, &scene, 0..1, &mut |f| {
+            out = Some(f.rendered);
+            Ok(())
+        })
+        .unwrap();
+        (p, out.unwrap())
+    };
+    let (moving, panned) = render("rolling_shutter.toml");
+    let (global, still) = render("rolling_shutter_global.toml");
+    assert!(moving.shutter.moving_readout().is_some());
+    assert!(matches!(moving.route, Route::Vertex { .. }));
+    assert_eq!(global.shutter, crate::plan::Shutter::Global);
+    let (a, b) = (panned.ids.unwrap(), still.ids.unwrap());
+    let board = b.iter().filter(|&&id| id != 0).count();
+    let changed = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+    assert!(board > 50_000, "the board fills the frame ({board} px)");
+    assert!(
+        changed > board / 10,
+        "{changed} of {board} px change square"
+    );
+    assert_no_validation_messages(&ctx);
+}

@@ -951,3 +951,37 @@ fn the_rolling_shutter_example_and_its_global_twin_render_and_differ() {
     );
     assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn a_moving_rolling_shutter_without_distortion_renders_through_the_pinhole_pass() {
+    // Distortion dropped: the pinhole route's vertex shader solves each vertex's readout time.
+    let ctx = validated_context();
+    let barrel = "../cameras/barrel_k1k2.json";
+    let rolling = "[sensor]\nrolling_shutter = \"top_to_bottom\"\n[outputs]\nids = true\n";
+    let frames = |file: &SceneFile| {
+        let scene = load_geometry(file).unwrap();
+        let p = plan(file, &scene).unwrap();
+        assert_eq!(p.route, Route::Pinhole);
+        let mut out = Vec::new();
+        execute(&ctx, &p, &scene, 0..2, &mut |f| {
+            out.push(f.rendered.ids.unwrap());
+            Ok(())
+        })
+        .unwrap();
+        out
+    };
+    let moving = frames(&two_frames(barrel, false, rolling));
+    let still = frames(&two_frames(barrel, true, rolling));
+    assert_eq!(moving[0], still[0], "the still first frame is the same");
+    assert!(moving[0].iter().any(|&id| id != 0));
+    let changed = moving[1]
+        .iter()
+        .zip(&still[1])
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        changed > 500,
+        "{changed} pixels change object under the turn"
+    );
+    assert_no_validation_messages(&ctx);
+}

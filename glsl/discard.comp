@@ -45,7 +45,9 @@ layout(set = 0, binding = 2, std430) readonly buffer Vertices { float vertex_dat
 // Per vertex, read by the draw as vertex attributes: the distorted NDC, and the flow (xy) with
 // whether both poses see the vertex (z).
 layout(set = 0, binding = 3, std430) writeonly buffer Positions { vec2 positions[]; };
-layout(set = 0, binding = 4, std430) writeonly buffer Motion { vec4 motion[]; };
+// With a moving rolling shutter, w holds the vertex's solved readout time: the draw and stage 2
+// rebuild its camera-frame point from it without solving again.
+layout(set = 0, binding = 4, std430) buffer Motion { vec4 motion[]; };
 // The dropped vertices (and, marked with VKL_CHECK_BIT, kept vertices whose triangles are
 // tested for wrapping behind the lens), and the indirect dispatch that visits them: `groups` is
 // ceil(count / 64), `one_y` and `one_z` stay 1 (VkDispatchIndirectCommand). The host resets
@@ -74,17 +76,45 @@ vec4 vkl_world(uint v) {
 }
 
 #include "alg1.glsl"
+#include "rolling_shutter.glsl"
+
+// Vertex v's camera-frame position: at the readout time stage 0 solved, for a moving rolling
+// shutter.
+vec3 vkl_camera(uint v) {
+    vec4 world = vkl_world(v);
+    if (VKL_READOUT != 0u && vkl_rs_moving()) {
+        return vkl_rs_camera_point(vkl_motion_current(), world.xyz, motion[v].w);
+    }
+    return (frame.view * world).xyz;
+}
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
     if (STAGE == 0u) {
         if (i >= pc.count) return;
         vec4 world = vkl_world(i);
-        vec4 clip = frame.view_projection * world;
+        vec4 clip;
         vec2 distorted_ndc, pixel, ndc;
-        bool ok = alg1_ndc(clip, distorted_ndc, pixel, ndc);
+        bool ok;
+        if (VKL_READOUT != 0u) {
+            VklRsSample r = vkl_rs_current(world.xyz);
+            clip = r.clip;
+            distorted_ndc = r.distorted_ndc;
+            pixel = r.pixel;
+            ndc = r.ndc;
+            ok = r.ok;
+            vec4 m = vec4(0.0, 0.0, 0.0, r.s);
+            if (WRITE_FLOW) {
+                VklRsSample q = vkl_rs_previous(world.xyz);
+                m.xyz = vec3(r.pixel - q.pixel, (r.ok && q.ok) ? 1.0 : 0.0);
+            }
+            motion[i] = m;
+        } else {
+            clip = frame.view_projection * world;
+            ok = alg1_ndc(clip, distorted_ndc, pixel, ndc);
+        }
         positions[i] = distorted_ndc;
-        if (WRITE_FLOW) {
+        if (WRITE_FLOW && VKL_READOUT == 0u) {
             vec2 previous_ndc, previous_pixel, previous_undistorted;
             bool previous_ok = alg1_ndc(frame.previous_view_projection * world, previous_ndc,
                                         previous_pixel, previous_undistorted);
@@ -113,9 +143,9 @@ void main() {
             } else {
                 bool drop = true;
                 if (check) {
-                    vec3 p = (frame.view * vkl_world(a)).xyz;
-                    vec3 q = (frame.view * vkl_world(indices[t + 1u])).xyz;
-                    vec3 r = (frame.view * vkl_world(indices[t + 2u])).xyz;
+                    vec3 p = vkl_camera(a);
+                    vec3 q = vkl_camera(indices[t + 1u]);
+                    vec3 r = vkl_camera(indices[t + 2u]);
                     drop = alg1_spans_behind(p, q, r);
                 }
                 if (drop) {

@@ -55,6 +55,7 @@ layout(location = 5) in vec4 in_motion;
 #endif
 
 #include "alg1.glsl"
+#include "rolling_shutter.glsl"
 
 void main() {
     vec4 world = vec4(in_position, 1.0);
@@ -63,13 +64,42 @@ void main() {
     v_id = in_id;
     v_depth = (frame.view * world).z;
 #ifdef VKL_PULLED
-    gl_Position = alg1_clip(frame.view_projection * world, in_distorted_ndc);
 #ifdef VKL_PULLED_FLOW
-    v_flow = in_motion.xyz;
+    if (VKL_READOUT != 0u && vkl_rs_moving()) {
+        // The discard pass solved the vertex's readout time (in_motion.w): its camera-frame
+        // point then is one rotation away, the lens is not evaluated again.
+        vec3 p = vkl_rs_camera_point(vkl_motion_current(), in_position, in_motion.w);
+        v_depth = p.z;
+        gl_Position = alg1_clip(frame.projection * vec4(p, 1.0), in_distorted_ndc);
+    } else {
+        gl_Position = alg1_clip(frame.view_projection * world, in_distorted_ndc);
+    }
+    v_flow = WRITE_FLOW ? in_motion.xyz : vec3(0.0);
 #else
+    gl_Position = alg1_clip(frame.view_projection * world, in_distorted_ndc);
     v_flow = vec3(0.0);
 #endif
 #else
+    if (VKL_READOUT != 0u) {
+        // A moving rolling shutter: the vertex where its own line reads it, and flow from
+        // where the previous frame's lines read it.
+        VklRsSample r = vkl_rs_current(in_position);
+        gl_Position = r.ok ? alg1_clip(r.clip, r.distorted_ndc) : r.clip;
+        v_depth = r.camera.z;
+        bool previous_ok = r.ok;
+        vec2 previous_pixel = r.pixel;
+        if (WRITE_FLOW) {
+            VklRsSample q = vkl_rs_previous(in_position);
+            previous_ok = q.ok;
+            previous_pixel = q.pixel;
+        }
+        v_flow = vec3(r.pixel - previous_pixel, (r.ok && previous_ok) ? 1.0 : 0.0);
+#ifndef VKL_PINHOLE
+        v_undistorted = vec3(r.ndc, r.ok ? 1.0 : 0.0);
+        v_camera = r.camera;
+#endif
+        return;
+    }
     vec4 clip = frame.view_projection * world;
     vec4 distorted;
     vec2 pixel, ndc;

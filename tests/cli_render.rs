@@ -317,3 +317,71 @@ fn render_scene_cli_writes_every_output_of_every_frame() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("[render] supersample"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The 16-bit object IDs of a PNG written by `vklens render --ids`.
+fn ids_of(path: &Path) -> Vec<u16> {
+    image::open(path)
+        .unwrap()
+        .to_rgba16()
+        .pixels()
+        .map(|p| p[0])
+        .collect()
+}
+
+#[test]
+fn render_pans_through_a_rolling_shutter_with_end_pose() {
+    let cam = fig2();
+    let render = |name: &str, extra: &[&str]| {
+        let (color, ids) = (tmp(&format!("{name}.png")), tmp(&format!("{name}_ids.png")));
+        let mut a = vec![
+            "render",
+            "--camera",
+            cam.as_str(),
+            "--scene",
+            "grid:8",
+            "--pose",
+            "0,0,0,0,0,2",
+            "--output",
+            color.to_str().unwrap(),
+            "--ids",
+            ids.to_str().unwrap(),
+        ];
+        a.extend(extra.iter().copied());
+        let o = vklens(&a);
+        (o, ids)
+    };
+    let (o, global) = render("rs_global", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rolling = ["--rolling-shutter", "top_to_bottom"];
+    // The end pose equal to the pose: the global shutter's frame, exactly.
+    let (o, still) = render(
+        "rs_still",
+        &[&rolling[..], &["--end-pose", "0,0,0,0,0,2"]].concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(ids_of(&global), ids_of(&still));
+    // A pan during the readout: the lower lines see the grid from further round.
+    let pan = ["--end-pose", "0,0.1,0,0.05,0,2"];
+    let (o, moving) = render("rs_moving", &[&rolling[..], &pan[..]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (a, b) = (ids_of(&global), ids_of(&moving));
+    let changed = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+    assert!(changed > 10_000, "{changed} pixels change ID under the pan");
+    // The first line is read from --pose: the top row is the global frame's.
+    let w = 800;
+    let top = a[..w].iter().zip(&b[..w]).filter(|(x, y)| x != y).count();
+    assert!(top < 10, "{top} pixels of the first line differ");
+    // Without a rolling shutter an end pose contradicts the global one; through the warp a
+    // moving camera would be drawn from one pose. Both refused, naming what to change.
+    for (extra, expect) in [
+        (&pan[..], "--end-pose"),
+        (
+            &[&rolling[..], &pan[..], &["--path", "warp"]].concat()[..],
+            "vertex path",
+        ),
+    ] {
+        let (o, _) = render("rs_refused", extra);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains(expect), "{}", stderr(&o));
+    }
+}

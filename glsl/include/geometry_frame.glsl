@@ -10,6 +10,18 @@ layout(set = 0, binding = 1, std140) uniform GeometryFrame {
     vec4 viewport;                  // x, y: image width, height (px); z: the discard bound
                                     // 1 + δ + D on |undistorted NDC|; w: near (a
                                     // fisheye's vertices are dropped nearer than it)
+    // A moving rolling shutter (rolling_shutter.glsl; unread where VKL_READOUT is 0): the
+    // camera-frame point at the solved readout time goes through this Sec. 3.1 projection, and
+    // the frame's motion runs from `view` (the first line's pose) as below.
+    mat4 projection;
+    mat4 previous_view;             // the first line's pose of the frame flow starts from
+    vec4 turn;                      // xyz: unit axis, w: angle of R_wc0ᵀ R_wc1 (radians)
+    vec4 start_centre;              // xyz: the camera centre when the first line is read;
+                                    // w: 1 where the camera moves during the frame, else 0
+    vec4 end_centre;                // xyz: ... when the last line is read
+    vec4 previous_turn;             // the same three for the frame flow starts from
+    vec4 previous_start_centre;
+    vec4 previous_end_centre;
 } frame;
 
 #endif

@@ -6,6 +6,7 @@ pub mod lens;
 pub mod models;
 pub mod plan;
 pub mod report;
+pub mod rolling_shutter;
 pub mod vertex;
 pub mod warp;
 pub mod wide;

@@ -14,8 +14,16 @@ use crate::{Error, Result};
 
 /// What `vklens bench all` runs, in the order it runs and writes them: the seven benches, then
 /// the Python package's frame loop beside `cv2.remap` (`python -m vklens.bench`).
-pub const BENCHES: [&str; 8] = [
-    "inverse", "warp", "vertex", "lens", "wide", "models", "plan", "python",
+pub const BENCHES: [&str; 9] = [
+    "inverse",
+    "warp",
+    "vertex",
+    "lens",
+    "wide",
+    "rolling-shutter",
+    "models",
+    "plan",
+    "python",
 ];
 
 /// The `bench` of the rows that describe the run rather than measure: `{"ran": NAME,
@@ -35,6 +43,9 @@ pub const VERTEX_X_PINHOLE: f64 = 1.10;
 /// The image-based lens model against the CPU reference ray tracer (Heidrich et al.'s ratio:
 /// 14 frames a second against 4.5 minutes a frame).
 pub const LENS_SPEEDUP: f64 = 100.0;
+/// The vertex path through a moving rolling shutter (each vertex's readout time solved)
+/// against the global shutter's vertex path, the same scene and run.
+pub const ROLLING_X_GLOBAL: f64 = 1.3;
 /// A camera model's inverse over a 1080p frame against the standard model's Newton.
 pub const MODEL_X_STANDARD: f64 = 1.3;
 
@@ -72,6 +83,7 @@ pub fn goals(bench: &str, rows: &[Value]) -> Vec<Goal> {
         "vertex" => vertex_goals(rows),
         "lens" => lens_goals(rows),
         "wide" => wide_goals(rows),
+        "rolling-shutter" => rolling_shutter_goals(rows),
         "models" => models_goals(rows),
         "plan" => plan_goals(rows),
         _ => Vec::new(),
@@ -332,6 +344,29 @@ fn lens_goals(rows: &[Value]) -> Vec<Goal> {
     )]
 }
 
+fn rolling_shutter_goals(rows: &[Value]) -> Vec<Goal> {
+    let exact: Vec<(String, f64)> = rows
+        .iter()
+        .filter(|r| r["path"] == "exact")
+        .map(|r| {
+            (
+                format!("grid {}", r["grid"].as_str().unwrap_or("?")),
+                r["x_global"].as_f64().unwrap_or(f64::NAN),
+            )
+        })
+        .collect();
+    vec![bound(
+        format!(
+            "a moving rolling shutter, exact per vertex, ≤ {ROLLING_X_GLOBAL:.2}× the global \
+             shutter's vertex path"
+        ),
+        &exact,
+        ROLLING_X_GLOBAL,
+        false,
+        ratio,
+    )]
+}
+
 fn wide_goals(rows: &[Value]) -> Vec<Goal> {
     // Lenses past a pinhole's reach: those whose warp path was refused for want of a source.
     let beyond = |camera: &Value| {
@@ -486,6 +521,7 @@ pub fn tables(bench: &str, rows: &[Value]) -> Result<String> {
         "vertex" => vertex::table(rows),
         "lens" => lens::table(rows),
         "wide" => wide::table(rows),
+        "rolling-shutter" => super::rolling_shutter::table(rows),
         "models" => models::table(&typed(bench, rows)?),
         "plan" => plan::table(rows),
         "python" => python_table(rows),
@@ -657,6 +693,29 @@ mod tests {
 
     fn verdicts(goals: &[Goal]) -> Vec<Verdict> {
         goals.iter().map(|g| g.verdict).collect()
+    }
+
+    #[test]
+    fn the_rolling_shutter_goal_judges_every_grid_against_the_global_path() {
+        let rows = |small: f64, big: f64| {
+            vec![
+                serde_json::json!({"grid": "128²", "path": "global", "frame_ms": 10.0}),
+                serde_json::json!({"grid": "128²", "path": "exact", "frame_ms": 10.0 * small, "x_global": small}),
+                serde_json::json!({"grid": "512²", "path": "global", "frame_ms": 40.0}),
+                serde_json::json!({"grid": "512²", "path": "exact", "frame_ms": 40.0 * big, "x_global": big}),
+            ]
+        };
+        assert_eq!(
+            verdicts(&rolling_shutter_goals(&rows(1.1, 1.25))),
+            [Verdict::Met]
+        );
+        let goals = rolling_shutter_goals(&rows(1.1, 2.5));
+        assert_eq!(verdicts(&goals), [Verdict::NotMet]);
+        assert!(goals[0].measured.contains("2.50×"), "{}", goals[0].measured);
+        assert_eq!(
+            verdicts(&rolling_shutter_goals(&[])),
+            [Verdict::NotMeasured]
+        );
     }
 
     #[test]

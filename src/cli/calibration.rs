@@ -118,6 +118,7 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
         },
         background: [0.5, 0.5, 0.5, 1.0],
         chromatic: None,
+        rolling_shutter: None,
     };
     let mut plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
     plan.poses = poses.clone();

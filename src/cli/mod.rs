@@ -359,6 +359,11 @@ enum BenchCommand {
     /// each with its coordinate error against the f64 model and its frame time × a plain
     /// pinhole render, and the cube face size each needs.
     Wide(bench::WideArgs),
+    /// A camera panning during a rolling shutter's readout, drawn exactly (each vertex's
+    /// readout time solved on the GPU) beside the global shutter's vertex path: frame time and
+    /// ratio, on grids of 128² and 512² quads.
+    #[command(name = "rolling-shutter")]
+    RollingShutter(bench::WideArgs),
     /// Every camera model of the table (one realistic camera each) beside OpenCV's standard
     /// model: CPU forward and inverse time and round-trip error, the GPU's f32 error and time,
     /// the inverse over a 1080p frame as a ratio to the standard model, and the error of the
@@ -538,6 +543,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Lens(args)) => bench::lens(args),
         Command::Bench(BenchCommand::Plan(args)) => bench::plan(args),
         Command::Bench(BenchCommand::Wide(args)) => bench::wide(args),
+        Command::Bench(BenchCommand::RollingShutter(args)) => bench::rolling_shutter(args),
         Command::Bench(BenchCommand::Models(args)) => bench::models(args),
         Command::Bench(BenchCommand::All(args)) => bench::all(args),
         Command::Demo(args) => demo::run(args),

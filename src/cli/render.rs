@@ -7,6 +7,7 @@ use clap::{Args, ValueEnum};
 use super::output::{check_output, write_outputs, Targets};
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
 use crate::host::plan::render_request;
+use crate::model::rolling_shutter::Readout;
 use crate::model::InverseMethod;
 use crate::pass::geometry::DEFAULT_DELTA;
 use crate::plan::scene_file::{Antialias, OutputSpec};
@@ -108,6 +109,16 @@ pub struct RenderArgs {
     /// its distance to the scene centre.
     #[arg(long, value_name = "POSE", allow_hyphen_values = true)]
     previous_pose: Option<String>,
+    /// The pose when the frame's last line is read (same form; --pose is the first line's):
+    /// the camera moves during the readout of a rolling shutter, and each vertex is drawn
+    /// where its own line reads it. Needs a rolling shutter (--rolling-shutter, or the camera
+    /// file's shutter_type) and the vertex or pinhole path.
+    #[arg(long, value_name = "POSE", allow_hyphen_values = true)]
+    end_pose: Option<String>,
+    /// The order the sensor reads its lines: top_to_bottom, bottom_to_top, left_to_right or
+    /// right_to_left. Default: the camera file's shutter_type (global where it states none).
+    #[arg(long, value_name = "READOUT", value_parser = parse_readout)]
+    rolling_shutter: Option<Readout>,
     /// Lambers et al. Sec. 3.2's discard tolerance δ (D is added automatically).
     #[arg(long, default_value_t = DEFAULT_DELTA)]
     delta: f64,
@@ -133,6 +144,10 @@ pub struct RenderArgs {
 
 #[derive(Debug, Clone, Copy)]
 pub struct Background(pub [f32; 4]);
+
+fn parse_readout(s: &str) -> Result<Readout, String> {
+    s.parse::<Readout>().map_err(|e| e.to_string())
+}
 
 fn parse_background(s: &str) -> Result<Background, String> {
     let v: Vec<f32> = s
@@ -240,6 +255,19 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         Some(p) => Pose::parse(p)?,
         None => nudged(&pose, &scene),
     };
+    let readout = args.rolling_shutter.or_else(|| camera.readout());
+    let rolling_shutter = match (readout, &args.end_pose) {
+        (Some(r), end) => Some((
+            r,
+            end.as_deref().map(Pose::parse).transpose()?.unwrap_or(pose),
+        )),
+        (None, Some(_)) => {
+            return Err(CliError::input(
+                "--end-pose: the camera moves during the frame, but the shutter is global (no --rolling-shutter, and no rolling shutter_type in the camera file): a global shutter reads every line at once, from --pose. Give --rolling-shutter top_to_bottom (or bottom_to_top, left_to_right, right_to_left), or drop --end-pose",
+            ));
+        }
+        (None, None) => None,
+    };
     let outputs = OutputSpec {
         color: true,
         ids: args.ids.is_some(),
@@ -266,6 +294,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         },
         background: args.background.0,
         chromatic: None,
+        rolling_shutter,
     };
     let ctx = context()?;
     progress_line(&format!(
@@ -299,8 +328,10 @@ impl RenderArgs {
             Some("--output")
         } else if self.ids.is_some() || self.flow.is_some() || self.depth.is_some() {
             Some("--ids/--flow/--depth (the scene file's [outputs] asks for them)")
-        } else if self.pose.is_some() || self.previous_pose.is_some() {
+        } else if self.pose.is_some() || self.previous_pose.is_some() || self.end_pose.is_some() {
             Some("--pose (the scene file's [[poses]] gives them)")
+        } else if self.rolling_shutter.is_some() {
+            Some("--rolling-shutter (the scene file's [sensor] rolling_shutter)")
         } else if self.supersample != 1 || self.jitter != 1 {
             Some("--supersample/--jitter (the scene file's [render] supersample and jitter)")
         } else {

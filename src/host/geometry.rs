@@ -16,13 +16,28 @@ pub fn render(
     pose: &Pose,
     previous: &Pose,
 ) -> Result<Rendered> {
+    render_moving(ctx, desc, mesh, texture, (pose, pose), (previous, previous))
+}
+
+/// As [`render`] for a camera that moves during the readout: `(pose, end)` are the poses when
+/// the frame's first and last lines are read, `previous` the same pair for the frame flow
+/// starts from (a rolling shutter's readout in `desc.readout`; see
+/// [`GeometryPass::set_moving_frame`]).
+pub fn render_moving(
+    ctx: &Context,
+    desc: GeometryDesc,
+    mesh: &Mesh,
+    texture: Option<&Raster>,
+    motion: (&Pose, &Pose),
+    previous: (&Pose, &Pose),
+) -> Result<Rendered> {
     let gpu = ctx.gpu();
     let buffers = MeshBuffers::new(gpu, mesh, texture)?;
     let mut pass = GeometryPass::new(gpu, desc)?;
     // SAFETY: no submission using it is pending (`submit` waits on its fence).
     unsafe { pass.bind_mesh(&buffers) };
     // SAFETY: no submission using it is pending (`submit` waits on its fence).
-    unsafe { pass.set_frame(pose, previous) }?;
+    unsafe { pass.set_moving_frame(motion, previous) }?;
     let targets = GeometryTargets::new(gpu, &pass)?;
     let readback = TargetsReadback::new(gpu, &targets)?;
     ctx.submit(|cmd| {

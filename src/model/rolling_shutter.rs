@@ -122,6 +122,17 @@ impl Readout {
             })
     }
 
+    /// The shaders' id of the readout (`VKL_READOUT` in `glsl/include/rolling_shutter.glsl`,
+    /// where 0 is the global shutter).
+    pub fn gpu_id(self) -> u32 {
+        match self {
+            Readout::TopToBottom => 1,
+            Readout::BottomToTop => 2,
+            Readout::LeftToRight => 3,
+            Readout::RightToLeft => 4,
+        }
+    }
+
     /// Whether the lines are rows (the readout runs down or up the image).
     pub fn is_vertical(self) -> bool {
         matches!(self, Readout::TopToBottom | Readout::BottomToTop)
@@ -278,6 +289,17 @@ impl FrameMotion {
     /// The pose when the last line is read.
     pub fn end(&self) -> WorldToCamera {
         self.end
+    }
+
+    /// The unit axis of the turn from the first line's camera frame to the last line's
+    /// (log(R_wc0ᵀ R_wc1) = angle · axis; any unit vector where the angle is 0).
+    pub fn axis(&self) -> DVec3 {
+        self.axis
+    }
+
+    /// The camera centres when the first and the last line are read.
+    pub fn centres(&self) -> [DVec3; 2] {
+        self.centres
     }
 
     /// The angle the camera turns through during the readout (radians).

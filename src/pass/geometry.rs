@@ -27,6 +27,7 @@ use crate::gpu::{
 pub use crate::imaging::Rendered;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
+use crate::model::rolling_shutter::{FrameMotion, Readout};
 use crate::model::{vulkan_projection, Camera, Frustum};
 use crate::scene::{Mesh, Pose, Vertex};
 
@@ -152,6 +153,10 @@ pub struct GeometryDesc {
     pub final_layout: vk::ImageLayout,
     /// Where the triangle discard runs ([`Projection::Lens`] only).
     pub discard: Discard,
+    /// A rolling shutter's readout, for frames whose camera moves during the readout
+    /// ([`GeometryPass::set_moving_frame`]): each vertex is drawn where its own line reads
+    /// it. `None`: every line at once, and the per-vertex solve is compiled out.
+    pub readout: Option<Readout>,
 }
 
 impl GeometryDesc {
@@ -165,6 +170,7 @@ impl GeometryDesc {
             background: [0.0; 4],
             final_layout: vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             discard: Discard::Auto,
+            readout: None,
         }
     }
 }
@@ -176,8 +182,56 @@ pub struct GeometryFrame {
     pub view_projection: [[f32; 4]; 4],
     pub previous_view_projection: [[f32; 4]; 4],
     pub view: [[f32; 4]; 4],
-    /// width, height, discard bound 1 + δ + D, unused.
+    /// width, height, discard bound 1 + δ + D, near.
     pub viewport: [f32; 4],
+    /// The Sec. 3.1 projection alone: a moving rolling shutter's camera-frame points go
+    /// through it at their own readout time.
+    pub projection: [[f32; 4]; 4],
+    /// The first line's pose of the frame flow starts from (`view` is this frame's).
+    pub previous_view: [[f32; 4]; 4],
+    /// xyz: the unit axis, w: the angle of the turn from the first line's camera frame to
+    /// the last line's ([`FrameMotion::axis`], [`FrameMotion::angle`]).
+    pub turn: [f32; 4],
+    /// xyz: the camera centres when the first and when the last line is read.
+    pub start_centre: [f32; 4],
+    pub end_centre: [f32; 4],
+    /// The same three for the frame flow starts from.
+    pub previous_turn: [f32; 4],
+    pub previous_start_centre: [f32; 4],
+    pub previous_end_centre: [f32; 4],
+}
+
+/// One frame's poses: when the first line is read, and when the last is (the same for a
+/// camera that does not move during the frame).
+#[derive(Debug, Clone, Copy)]
+struct Motion {
+    pose: Pose,
+    end: Pose,
+}
+
+impl Motion {
+    fn new(pose: Pose, end: Pose) -> Self {
+        Motion { pose, end }
+    }
+
+    fn still(pose: Pose) -> Self {
+        Motion { pose, end: pose }
+    }
+
+    fn is_still(&self) -> bool {
+        self.pose == self.end
+    }
+
+    /// The turn (unit axis, angle) and the two camera centres as `GeometryFrame` holds them.
+    fn gpu(&self) -> ([f32; 4], [[f32; 4]; 2]) {
+        let m = FrameMotion::new(self.pose.into(), self.end.into());
+        let axis = m.axis().as_vec3();
+        // w: whether the shaders solve the readout time at all (a still frame takes the
+        // global shutter's arithmetic, bit for bit).
+        let moving = if self.is_still() { 0.0 } else { 1.0 };
+        let [c0, c1] = m.centres().map(|c| c.as_vec3().extend(moving).to_array());
+        (axis.extend(m.angle() as f32).to_array(), [c0, c1])
+    }
 }
 
 /// Lambers et al. Sec. 3.2's D for a camera: how far past ±1 the undistorted NDC of the distorted
@@ -260,6 +314,8 @@ const MOTION_BINDING: VertexBinding = (16, &[(5, vk::Format::R32G32B32A32_SFLOAT
 /// The draw's vertex bindings: the mesh's vertices, then (`pulled`: the compute discard ran)
 /// its positions and, with `flow`, its motion. The pipeline is built with these and the draw
 /// binds one buffer for each.
+/// A moving rolling shutter reads the motion binding for its solved readout times (its `w`)
+/// with flow or without.
 fn vertex_bindings(pulled: bool, flow: bool) -> &'static [VertexBinding<'static>] {
     match (pulled, flow) {
         (true, true) => &[MESH_BINDING, POSITION_BINDING, MOTION_BINDING],
@@ -420,7 +476,7 @@ impl MeshBuffers {
                 gpu,
                 name,
                 n as u64 * bytes,
-                U::VERTEX_BUFFER | storage,
+                U::VERTEX_BUFFER | storage | U::TRANSFER_SRC,
                 MemoryLocation::GpuOnly,
             )
         };
@@ -469,6 +525,14 @@ impl MeshBuffers {
         })
     }
 
+    /// The compute discard's per-vertex results of the last draw: the distorted NDC (two
+    /// floats), and the motion (flow, its validity, and a moving rolling shutter's solved
+    /// readout time; four floats). Transfer sources, for tests to read back.
+    #[cfg(test)]
+    pub(crate) fn discard_results(&self) -> [&Buffer; 2] {
+        [&self.discard.positions, &self.discard.motion]
+    }
+
     /// Records the texture upload (see [`Texture::record_upload`]).
     ///
     /// # Safety
@@ -494,10 +558,10 @@ pub struct GeometryPass {
     render_pass: RenderPass,
     sampler: Sampler,
     discard_bound: f64,
-    /// The pose and previous pose of the last [`GeometryPass::set_frame`]: the frame block
-    /// is a function of the camera too (its projection, its viewport), so a new camera
-    /// rewrites it for them.
-    last_frame: std::cell::Cell<(Pose, Pose)>,
+    /// The motion and previous motion of the last [`GeometryPass::set_frame`] or
+    /// [`GeometryPass::set_moving_frame`]: the frame block is a function of the camera too
+    /// (its projection, its viewport), so a new camera rewrites it for them.
+    last_frame: std::cell::Cell<(Motion, Motion)>,
     /// Whether the compute discard was built with the valid domain's table
     /// ([`discard_needs_domain_table`]).
     domain_table: bool,
@@ -576,7 +640,8 @@ impl GeometryPass {
         )?;
         let vertex_constants = CameraParams::spec_constants(cam.terms())
             .bool(spec::DISTORT, lens)
-            .bool(spec::WRITE_FLOW, desc.outputs.flow);
+            .bool(spec::WRITE_FLOW, desc.outputs.flow)
+            .u32(spec::READOUT, desc.readout.map_or(0, Readout::gpu_id));
         let o = desc.outputs;
         let fragment_constants = SpecConstants::new()
             .bool(spec::WRITE_COLOR, o.color.is_some())
@@ -587,7 +652,9 @@ impl GeometryPass {
         // With the compute discard, Alg. 1 runs there once per vertex and pose, and the draw
         // reads its positions and flow as vertex attributes.
         let pulled = lens && !geometry_stage;
-        let flow = desc.outputs.flow;
+        // The pulled draw of a moving rolling shutter reads each vertex's solved readout time
+        // from the motion binding, flow or not.
+        let flow = desc.outputs.flow || desc.readout.is_some();
         let mut stages = vec![Stage {
             stage: vk::ShaderStageFlags::VERTEX,
             spirv: match (geometry_stage, pulled, flow) {
@@ -683,7 +750,10 @@ impl GeometryPass {
             pipeline,
             render_pass,
             discard_bound,
-            last_frame: std::cell::Cell::new((Pose::IDENTITY, Pose::IDENTITY)),
+            last_frame: std::cell::Cell::new((
+                Motion::still(Pose::IDENTITY),
+                Motion::still(Pose::IDENTITY),
+            )),
             domain_table,
         };
         for i in 0..frames {
@@ -778,9 +848,9 @@ impl GeometryPass {
         // The frame block holds the old camera's projection: a jittered pass (a moved
         // principal point) drew with the previous pass's projection, and the average of the
         // passes was shifted by the last pass's offset.
-        let (pose, previous) = self.last_frame.get();
+        let (motion, previous) = self.last_frame.get();
         // SAFETY: the caller upholds this function's contract, which is set_frame's.
-        unsafe { self.set_frame(&pose, &previous) }
+        unsafe { self.write_frame(motion, previous) }
     }
 
     /// Sets the pose to render from and the pose flow is measured from (and the pass's
@@ -791,11 +861,49 @@ impl GeometryPass {
     /// may be pending on the GPU (wait for its fence first), as Vulkan requires of memory the
     /// device reads.
     pub unsafe fn set_frame(&self, pose: &Pose, previous: &Pose) -> Result<()> {
-        self.last_frame.set((*pose, *previous));
+        // SAFETY: the caller upholds this function's contract, which is write_frame's.
+        unsafe { self.write_frame(Motion::still(*pose), Motion::still(*previous)) }
+    }
+
+    /// As [`Self::set_frame`] for a camera that moves during the readout: `pose` and `end`
+    /// are this frame's poses when its first and its last line are read, `previous` and
+    /// `previous_end` those of the frame flow starts from. A pass built without a readout
+    /// ([`GeometryDesc::readout`]) draws every line from one pose, so it refuses a frame that
+    /// moves.
+    ///
+    /// # Safety
+    /// As [`Self::set_frame`].
+    pub unsafe fn set_moving_frame(
+        &self,
+        (pose, end): (&Pose, &Pose),
+        (previous, previous_end): (&Pose, &Pose),
+    ) -> Result<()> {
+        let (motion, before) = (
+            Motion::new(*pose, *end),
+            Motion::new(*previous, *previous_end),
+        );
+        if self.desc.readout.is_none() && !(motion.is_still() && before.is_still()) {
+            return Err(Error::Input(
+                "the camera moves during the frame, but the pass was built for a global \
+                 shutter (GeometryDesc::readout is None): every line would be drawn from the \
+                 first line's pose"
+                    .into(),
+            ));
+        }
+        // SAFETY: the caller upholds this function's contract, which is write_frame's.
+        unsafe { self.write_frame(motion, before) }
+    }
+
+    /// Writes the selected frame's uniforms.
+    ///
+    /// # Safety
+    /// As [`Self::set_frame`].
+    unsafe fn write_frame(&self, motion: Motion, previous: Motion) -> Result<()> {
+        self.last_frame.set((motion, previous));
         let slot = &self.frames[self.current];
         let camera = CameraParams::from_camera(&self.desc.camera);
         slot.camera.write(0, bytemuck::bytes_of(&camera))?;
-        let frame = self.frame_data(&self.desc.camera, self.discard_bound, pose, previous);
+        let frame = self.frame_data(&self.desc.camera, self.discard_bound, motion, previous);
         slot.frame.write(0, bytemuck::bytes_of(&frame))
     }
 
@@ -803,8 +911,8 @@ impl GeometryPass {
         &self,
         c: &Camera,
         discard_bound: f64,
-        pose: &Pose,
-        previous: &Pose,
+        motion: Motion,
+        previous: Motion,
     ) -> GeometryFrame {
         let p = vulkan_projection(
             &Frustum::from_intrinsics(&c.intrinsics, c.width, c.height),
@@ -812,9 +920,12 @@ impl GeometryPass {
             self.desc.far,
         );
         let m = |m: DMat4| m.as_mat4().to_cols_array_2d();
+        let (pose, before) = (motion.pose, previous.pose);
+        let (turn, centres) = motion.gpu();
+        let (previous_turn, previous_centres) = previous.gpu();
         GeometryFrame {
             view_projection: m(p * pose.matrix()),
-            previous_view_projection: m(p * previous.matrix()),
+            previous_view_projection: m(p * before.matrix()),
             view: m(pose.matrix()),
             viewport: [
                 c.width as f32,
@@ -822,6 +933,14 @@ impl GeometryPass {
                 discard_bound.min(f32::MAX as f64) as f32,
                 self.desc.near as f32,
             ],
+            projection: m(p),
+            previous_view: m(before.matrix()),
+            turn,
+            start_centre: centres[0],
+            end_centre: centres[1],
+            previous_turn,
+            previous_start_centre: previous_centres[0],
+            previous_end_centre: previous_centres[1],
         }
     }
 
@@ -897,7 +1016,12 @@ impl GeometryPass {
         let bound = discard_bound(&self.desc.projection, camera)?;
         slot.camera
             .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))?;
-        let frame = self.frame_data(camera, bound, pose, previous);
+        let frame = self.frame_data(
+            camera,
+            bound,
+            Motion::still(*pose),
+            Motion::still(*previous),
+        );
         slot.frame.write(0, bytemuck::bytes_of(&frame))
     }
 
@@ -1049,7 +1173,8 @@ impl GeometryPass {
         let m = &mesh.discard;
         // One buffer per binding the pipeline was built with (`vertex_bindings`, in order).
         let buffers = [mesh.vertices.raw, m.positions.raw, m.motion.raw];
-        let bound = vertex_bindings(self.discard.is_some(), self.desc.outputs.flow).len();
+        let moving = self.desc.readout.is_some();
+        let bound = vertex_bindings(self.discard.is_some(), self.desc.outputs.flow || moving).len();
         let indices = match (&self.discard, discard_set) {
             // SAFETY: as above, and the discard's set was written for `mesh` by `bind_mesh`
             // (the contract's "mesh must be bound"); `record_slot` never reaches here with a

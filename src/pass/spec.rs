@@ -84,6 +84,11 @@ pub const WRITE_FLOW: SpecId = SpecId::new("WRITE_FLOW", 22);
 /// Camera depth.
 pub const WRITE_DEPTH: SpecId = SpecId::new("WRITE_DEPTH", 23);
 
+// glsl/include/rolling_shutter.glsl (glsl/geometry.vert, glsl/discard.comp).
+/// A moving rolling shutter's readout, `Readout::gpu_id` (0: a global shutter or a still
+/// camera, and none of the per-vertex solve is compiled in).
+pub const READOUT: SpecId = SpecId::new("VKL_READOUT", 24);
+
 // glsl/discard.comp (also DISTORT).
 /// 0: one flag per vertex; 1: one index triple per triangle.
 pub const DISCARD_STAGE: SpecId = SpecId::new("STAGE", 9);

@@ -56,11 +56,31 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
         file.poses.clone()
     };
     let terms = camera.terms();
+    if chromatic_scales(file).is_some() {
+        shutter.refuse_one_pose_route(
+            &file.source.display().to_string(),
+            "the warp",
+            "[effects] chromatic_aberration needs the warp (Alg. 1 cannot give each channel its own lens)",
+        )?;
+    }
     if terms == Default::default() && chromatic_scales(file).is_none() {
         return Ok(pinhole_plan(file, scene, camera, (poses, shutter)));
     }
-    let candidates = search_candidates(file, scene, &camera, &poses)?;
-    let choice = choose(file, &candidates)?;
+    // The first frame that moves during its readout: the tessellation is measured through its
+    // motion (edges bend more when each line sees its own pose).
+    let moving = match shutter {
+        Shutter::Moving { readout, frame, .. } => {
+            let end = file.end_poses.get(frame).copied().flatten();
+            poses.get(frame).zip(end).map(|(p, e)| (readout, *p, e))
+        }
+        _ => None,
+    };
+    let candidates = search_candidates(file, scene, &camera, &poses, moving)?;
+    let choice = if shutter.moving_readout().is_some() {
+        super::choice::choose_moving_rolling_shutter(file, &candidates)?
+    } else {
+        choose(file, &candidates)?
+    };
     let mut steps = explain::camera_steps(&choice, &candidates, terms);
     steps.extend(explain::antialias_step(file.antialias, file.outputs.color));
     Ok(file_plan(

@@ -43,6 +43,9 @@ pub(super) enum VertexReason {
     NoPinholeWarp { why: String, cube: CubeLoss },
     /// No dearer than the warp (`warp_ms`), or no warp meets the budget (`None`).
     Cheaper { warp_ms: Option<f64> },
+    /// The camera moves during a frame read out by a rolling shutter: only the vertex path
+    /// draws each line from its own pose.
+    MovingRollingShutter,
 }
 
 /// Why the cube map did not carry a lens no pinhole source holds.
@@ -190,6 +193,26 @@ fn choose_warp(
         warp,
         vertex,
         chromatic,
+    })
+}
+
+/// The route of a camera that moves during a rolling shutter's readout: Alg. 1 solving each
+/// vertex's readout time, whatever the warp would cost, for the warp and the cube map draw a
+/// frame from one pose (an approximation by bands of lines is not planned).
+pub(super) fn choose_moving_rolling_shutter(
+    file: &SceneFile,
+    candidates: &Candidates,
+) -> Result<Choice> {
+    let Some(vertex) = candidates.vertex else {
+        return Err(Error::input(format!(
+            "{}: [accuracy] max_error_px = {}: even 1 px edges do not meet it, and a moving rolling shutter ([sensor] rolling_shutter with end_rvec, end_tvec) needs the vertex path",
+            file.source.display(),
+            file.max_error_px
+        )));
+    };
+    Ok(Choice::Vertex {
+        vertex,
+        why: VertexReason::MovingRollingShutter,
     })
 }
 

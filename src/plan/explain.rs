@@ -339,6 +339,9 @@ fn vertex_reason(why: &VertexReason, vertex_ms: f64) -> String {
                 CubeLoss::ColourAlone => "a cube map carries colour alone".into(),
             }
         ),
+        VertexReason::MovingRollingShutter => format!(
+            "the camera moves during a rolling shutter's readout: each vertex is drawn where its own line reads it (its readout time solved per vertex, estimated {vertex_ms:.1} ms); the warp and the cube map draw a frame from one pose, which would be a global shutter's image"
+        ),
         VertexReason::Cheaper { warp_ms } => format!(
             "estimated {vertex_ms:.1} ms against {} for pinhole + warp",
             warp_ms

@@ -100,6 +100,11 @@ pub(super) fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Resu
     } = check_lens(file, &spec)?;
     // A prescription states no readout: the scene's key alone decides.
     let shutter = super::shutter::resolve(file, None)?;
+    shutter.refuse_one_pose_route(
+        &file.source.display().to_string(),
+        "the image-based lens model",
+        "optics is a lens prescription",
+    )?;
     let LensSpec {
         path,
         focus_m,

@@ -195,6 +195,10 @@ pub struct Plan {
     pub expected_error_px: f64,
     pub budget_px: f64,
     pub poses: Vec<Pose>,
+    /// One per pose, the pose when the frame's last line is read (a rolling shutter's
+    /// `end_rvec`, `end_tvec`); empty, or equal to the pose, where the camera does not move
+    /// during the frame ([`Plan::end_pose`]).
+    pub end_poses: Vec<Pose>,
     /// The pose the first frame's flow starts from (`None`: the first frame does not move).
     pub previous_pose: Option<Pose>,
     /// Lambers et al. Sec. 3.2's discard tolerance δ of Alg. 1 (D is added per camera).
@@ -218,6 +222,13 @@ impl Plan {
             Optics::Camera(c) => Some(c),
             Optics::Lens(_) => None,
         }
+    }
+
+    /// The pose when frame `index`'s last line is read: its end pose, or its pose where the
+    /// camera does not move during the frame. `None` past the last frame.
+    pub fn end_pose(&self, index: usize) -> Option<Pose> {
+        let pose = *self.poses.get(index)?;
+        Some(self.end_poses.get(index).copied().unwrap_or(pose))
     }
 
     /// The lens prescription and its setting, if the optics are one.
@@ -290,6 +301,11 @@ fn file_plan(
         optics,
         expected_error_px,
         budget_px: file.max_error_px,
+        end_poses: poses
+            .iter()
+            .enumerate()
+            .map(|(i, p)| file.end_poses.get(i).copied().flatten().unwrap_or(*p))
+            .collect(),
         poses,
         previous_pose: None,
         delta: crate::pass::geometry::DEFAULT_DELTA,

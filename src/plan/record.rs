@@ -130,6 +130,8 @@ pub struct PlanRecorder {
     lens: Option<LensRenderer>,
     mesh: MeshBuffers,
     poses: Vec<Pose>,
+    /// One per pose: when the frame's last line is read ([`Plan::end_pose`]).
+    end_poses: Vec<Pose>,
     /// The pose the first frame's flow starts from.
     previous_pose: Option<Pose>,
     /// Names of the passes in recording order (for timings).
@@ -205,6 +207,7 @@ impl PlanRecorder {
         let geometry = |camera: &Camera, projection, outputs| -> Result<_> {
             let mut desc = GeometryDesc::new(camera.clone(), projection, outputs);
             desc.background = plan.background;
+            desc.readout = plan.shutter.moving_readout();
             let pass = GeometryPass::with_frames(gpu, desc, frames)?;
             let targets = GeometryTargets::new(gpu, &pass)?;
             Ok((pass, targets))
@@ -248,6 +251,9 @@ impl PlanRecorder {
             lens: None,
             mesh: MeshBuffers::new(gpu, mesh, texture)?,
             poses: plan.poses.clone(),
+            end_poses: (0..plan.poses.len())
+                .filter_map(|i| plan.end_pose(i))
+                .collect(),
             previous_pose: plan.previous_pose,
             names: Vec::new(),
             warp_source: None,
@@ -263,6 +269,13 @@ impl PlanRecorder {
             pipelines: Vec::new(),
         };
         let lens_delta = Projection::Lens { delta: plan.delta };
+        if plan.shutter.moving_readout().is_some()
+            && !matches!(plan.route, Route::Pinhole | Route::Vertex { .. })
+        {
+            return Err(internal(
+                "a camera moving during a rolling shutter's readout is drawn by the vertex path alone: the planner routes it there",
+            ));
+        }
         match &plan.route {
             Route::LensModel { .. } => {
                 let setting = plan
@@ -513,14 +526,22 @@ impl PlanRecorder {
             .poses
             .get(index)
             .ok_or_else(|| Error::input(format!("no frame {index}")))?;
+        let end = self.end_poses.get(index).copied().unwrap_or(pose);
+        // Flow starts from the previous frame, with its own readout.
         let previous = match index {
-            0 => self.previous_pose.unwrap_or(pose),
-            i => self.poses[i - 1],
+            0 => {
+                let p = self.previous_pose.unwrap_or(pose);
+                (p, p)
+            }
+            i => {
+                let p = self.poses[i - 1];
+                (p, self.end_poses.get(i - 1).copied().unwrap_or(p))
+            }
         };
         // SAFETY (every block below): this function's contract: no recorded work of the
         // selected frame, whose uniforms and sets these are, is pending.
         if let Some((pass, _)) = &self.geometry {
-            unsafe { pass.set_frame(&pose, &previous) }?;
+            unsafe { pass.set_moving_frame((&pose, &end), (&previous.0, &previous.1)) }?;
         }
         if let Some(st) = &self.warp {
             unsafe { st.pass.set_frame(&pose, &pose) }?;

@@ -5,6 +5,7 @@
 //! nearest-sampled, for instance), within what the route can deliver honestly.
 
 use crate::model::overscan::{beyond_a_pinhole, cube_face_side};
+use crate::model::rolling_shutter::Readout;
 use crate::model::{Camera, InverseMethod};
 use crate::pass::geometry::DEFAULT_DELTA;
 use crate::scene::Pose;
@@ -54,6 +55,10 @@ pub struct RenderRequest {
     pub background: [f32; 4],
     /// Lateral chromatic aberration (warp and cube paths): per-channel radial scales R, G, B.
     pub chromatic: Option<[f64; 3]>,
+    /// A rolling shutter: its readout, and the pose when the frame's last line is read
+    /// (`pose` is the first line's). With the two poses apart only the vertex and pinhole
+    /// paths draw it, each vertex where its own line reads it. `None`: a global shutter.
+    pub rolling_shutter: Option<(Readout, Pose)>,
 }
 
 impl RenderRequest {
@@ -72,6 +77,7 @@ impl RenderRequest {
             antialias: Antialias::default(),
             background: [0.0; 4],
             chromatic: None,
+            rolling_shutter: None,
         }
     }
 }
@@ -113,6 +119,29 @@ impl Plan {
         let step = |stage, why: String| Step { stage, why };
         let mut delta = DEFAULT_DELTA;
         let mut density = 1.0;
+        let shutter = match request.rolling_shutter {
+            None => super::Shutter::Global,
+            Some((readout, end)) if end == request.pose => super::Shutter::Rolling {
+                readout,
+                from: super::ReadoutSource::Request,
+            },
+            Some((readout, _)) => {
+                if !matches!(
+                    request.path,
+                    PathChoice::Vertex { .. } | PathChoice::Pinhole
+                ) {
+                    return Err(Error::argument(
+                        "rolling_shutter",
+                        format!("the camera moves during the {readout} readout: only the vertex path draws each line from its own pose (the warp and cube paths draw a frame from one pose, a global shutter's image); use the vertex path"),
+                    ));
+                }
+                super::Shutter::Moving {
+                    readout,
+                    from: super::ReadoutSource::Request,
+                    frame: 0,
+                }
+            }
+        };
         let (route, expected) = match request.path {
             PathChoice::Vertex { .. } | PathChoice::Pinhole if chromatic.is_some() => {
                 return Err(Error::argument(
@@ -272,13 +301,17 @@ impl Plan {
             expected_error_px: expected,
             budget_px: f64::INFINITY,
             poses: vec![request.pose],
+            end_poses: request
+                .rolling_shutter
+                .map(|(_, end)| vec![end])
+                .unwrap_or_default(),
             previous_pose: Some(request.previous_pose),
             delta,
             density,
             outputs: o,
             background: request.background,
             antialias: aa,
-            shutter: super::Shutter::Global,
+            shutter,
             estimated_ms: f64::NAN,
         })
     }

@@ -9,6 +9,7 @@ use super::cost::{
     MAP_WARP_CHROMATIC_NS, MAP_WARP_NS, PLANNED_CUBE_MAX_SIDE,
 };
 use super::{chromatic_scales, limits, SceneFile, MAP_COORDINATES};
+use crate::model::rolling_shutter::{FrameMotion, Readout};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::warp::Coordinates;
 use crate::scene::{Pose, Scene};
@@ -92,13 +93,17 @@ pub(super) struct TessellationChoice {
 }
 
 /// The coarsest tessellation of `scene` whose straight-line error at `pose` meets `budget`
-/// (none beyond 4 million triangles).
+/// (none beyond 4 million triangles). `moving`: the readout and the pose the frame's last line
+/// is read from (`pose` the first's), where the camera moves during the frame; the error is
+/// measured through that motion.
 pub(super) fn search_tessellation(
     scene: &Scene,
     pose: &Pose,
     camera: &Camera,
     budget: f64,
+    moving: Option<(Readout, Pose)>,
 ) -> Result<Option<TessellationChoice>> {
+    let motion = moving.map(|(r, end)| (r, FrameMotion::new((*pose).into(), end.into())));
     const EDGES: [Option<f64>; 8] = [
         None,
         Some(64.0),
@@ -117,7 +122,12 @@ pub(super) fn search_tessellation(
         if mesh.triangle_count() > 4_000_000 {
             break;
         }
-        let err = crate::scene::tessellate::straight_line_error(camera, pose, &mesh);
+        let err = match &motion {
+            Some((readout, m)) => {
+                crate::scene::tessellate::straight_line_error_moving(camera, m, *readout, &mesh)
+            }
+            None => crate::scene::tessellate::straight_line_error(camera, pose, &mesh),
+        };
         if err <= budget {
             return Ok(Some(TessellationChoice {
                 edge_px: l,
@@ -195,6 +205,7 @@ pub(super) fn search_candidates(
     scene: &Scene,
     camera: &Camera,
     poses: &[Pose],
+    moving: Option<(Readout, Pose, Pose)>,
 ) -> Result<Candidates> {
     let budget = file.max_error_px;
     let o = &file.outputs;
@@ -202,9 +213,14 @@ pub(super) fn search_candidates(
     let pixels = camera.width as f64 * camera.height as f64;
     let triangles = scene.mesh.triangle_count() as f64;
     let data_needs_vertex = o.ids || o.flow;
-    let vertex = match poses.first() {
+    // A frame that moves during its readout is measured through its motion.
+    let (first, motion) = match moving {
+        Some((readout, start, end)) => (Some(start), Some((readout, end))),
+        None => (poses.first().copied(), None),
+    };
+    let vertex = match first {
         Some(pose) if chromatic.is_none() || data_needs_vertex => {
-            search_tessellation(scene, pose, camera, budget)?
+            search_tessellation(scene, &pose, camera, budget, motion)?
         }
         _ => None,
     }

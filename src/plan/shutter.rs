@@ -2,11 +2,13 @@
 //! `[sensor] rolling_shutter`, else the camera file's `shutter_type`), and the refusal of what
 //! the renderer cannot draw yet.
 //!
-//! Every route draws a frame from one pose. That is exactly a rolling shutter's image where the
-//! camera does not move during the frame (every line sees the same pose); where it moves
-//! (`end_rvec`, `end_tvec` differ from `rvec`, `tvec`), each line sees another pose, and
-//! drawing the frame from one of them would be a global shutter's image under another name.
-//! So a moving rolling shutter is refused, naming the key, never rendered as a global one.
+//! Where the camera does not move during a frame, every line sees the same pose and a rolling
+//! shutter's image is the global shutter's, exactly: every route draws it. Where it moves
+//! (`end_rvec`, `end_tvec` differ from `rvec`, `tvec`), each line sees another pose. The vertex
+//! path draws that exactly, solving per vertex the readout time at which its own line reads it
+//! (`glsl/include/rolling_shutter.glsl`); the warp and cube routes draw a frame from one pose,
+//! which would be a global shutter's image under another name, so a moving rolling shutter is
+//! routed to the vertex path, and refused (naming the key) where only those routes could draw.
 
 use super::SceneFile;
 use crate::model::rolling_shutter::Readout;
@@ -19,6 +21,9 @@ pub enum ReadoutSource {
     SceneKey,
     /// The camera file's `shutter_type` (NCore's).
     CameraFile,
+    /// A render request's own (`vklens render --rolling-shutter`, or the camera file's
+    /// `shutter_type` it defaulted to).
+    Request,
 }
 
 /// The shutter a plan's frames are rendered with.
@@ -32,6 +37,13 @@ pub enum Shutter {
         readout: Readout,
         from: ReadoutSource,
     },
+    /// Lines read one after another, the camera moving during frame `frame` (the first that
+    /// moves, counted from 0) and maybe others: each line sees its own pose.
+    Moving {
+        readout: Readout,
+        from: ReadoutSource,
+        frame: usize,
+    },
 }
 
 impl Shutter {
@@ -43,14 +55,46 @@ impl Shutter {
                 "rolling, {readout}, from {}; the camera does not move during any frame (no end_rvec, end_tvec apart from rvec, tvec), so every line sees the frame's one pose and the image is the global shutter's, exactly",
                 source_words(readout, from)
             ),
+            Shutter::Moving { readout, from, frame } => format!(
+                "rolling, {readout}, from {}; the camera moves during frame {} (end_rvec, end_tvec apart from rvec, tvec), so each line sees the pose of its own readout time (slerp and a linear centre between the two poses), drawn exactly per vertex",
+                source_words(readout, from),
+                frame + 1
+            ),
         }
+    }
+
+    /// The readout of a camera that moves during a frame (what the vertex path solves per
+    /// vertex); `None` where every line of every frame sees one pose.
+    pub fn moving_readout(self) -> Option<Readout> {
+        match self {
+            Shutter::Moving { readout, .. } => Some(readout),
+            _ => None,
+        }
+    }
+
+    /// The refusal of a route that draws each frame from one pose, where the camera moves
+    /// during a frame: `route` names it, `why` says why the plan needed it.
+    pub(super) fn refuse_one_pose_route(self, source: &str, route: &str, why: &str) -> Result<()> {
+        let Shutter::Moving {
+            readout,
+            from,
+            frame,
+        } = self
+        else {
+            return Ok(());
+        };
+        Err(Error::unsupported(format!(
+            "{source}: [sensor] rolling_shutter: the readout is {readout} (from {}) and [[poses]] #{} moves during its frame, which only the vertex path draws (each vertex where its own line reads it); {why}, and {route} draws a frame from one pose, so it would render a global shutter's image under another name. Drop what needs it, or drop end_rvec and end_tvec to render the frame still",
+            source_words(readout, from),
+            frame + 1
+        )))
     }
 
     /// The readout's name, or `global` (plan.json).
     pub fn name(self) -> &'static str {
         match self {
             Shutter::Global => "global",
-            Shutter::Rolling { readout, .. } => readout.name(),
+            Shutter::Rolling { readout, .. } | Shutter::Moving { readout, .. } => readout.name(),
         }
     }
 }
@@ -62,12 +106,15 @@ fn source_words(readout: Readout, from: ReadoutSource) -> String {
             "the camera file's shutter_type {} ([sensor] rolling_shutter overrides it)",
             readout.ncore_name()
         ),
+        ReadoutSource::Request => {
+            "the request (--rolling-shutter, else the camera file's shutter_type)".into()
+        }
     }
 }
 
 /// The shutter of `file`'s frames through a camera whose file states `camera_readout` (`None`
-/// for a lens prescription, which states none). Refuses a camera that moves during a frame: through a rolling shutter the
-/// renderer cannot draw it yet, and through a global one the end pose contradicts the shutter.
+/// for a lens prescription, which states none). Refuses a camera that moves during a frame
+/// through a global shutter: the end pose contradicts the shutter.
 pub(super) fn resolve(file: &SceneFile, camera_readout: Option<Readout>) -> Result<Shutter> {
     let src = file.source.display();
     let readout = match (file.sensor.rolling_shutter, camera_readout) {
@@ -87,10 +134,10 @@ pub(super) fn resolve(file: &SceneFile, camera_readout: Option<Readout>) -> Resu
             "{src}: [[poses]] #{}.end_rvec: the camera moves during the frame (end_rvec, end_tvec differ from rvec, tvec), but the shutter is global: every line is read at once, from rvec, tvec. Give [sensor] rolling_shutter (top_to_bottom, bottom_to_top, left_to_right or right_to_left), or drop end_rvec and end_tvec",
             i + 1
         ))),
-        (Some((readout, from)), Some(i)) => Err(Error::unsupported(format!(
-            "{src}: [sensor] rolling_shutter: the readout is {readout} (from {}), and [[poses]] #{} moves during its frame (end_rvec, end_tvec differ from rvec, tvec); the renderer draws every line of a frame from one pose, so it cannot render a moving rolling shutter yet, and will not pass a global shutter's image off as one. `vklens points project --rolling-shutter {readout}` projects points through it exactly; without end_rvec and end_tvec the frame renders still",
-            source_words(readout, from),
-            i + 1
-        ))),
+        (Some((readout, from)), Some(frame)) => Ok(Shutter::Moving {
+            readout,
+            from,
+            frame,
+        }),
     }
 }

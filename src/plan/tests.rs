@@ -714,7 +714,7 @@ fn two_frames(camera: &str, still: bool, extra: &str) -> SceneFile {
 }
 
 #[test]
-fn a_rolling_shutter_is_explained_with_its_source_and_refused_where_the_camera_moves() {
+fn a_rolling_shutter_is_explained_with_its_source_and_a_moving_one_takes_the_vertex_path() {
     let barrel = "../cameras/barrel_k1k2.json";
     let planned = |file: &SceneFile| plan(file, &load_geometry(file).unwrap());
     let rolling = "[sensor]\nrolling_shutter = \"top_to_bottom\"\n";
@@ -733,14 +733,20 @@ fn a_rolling_shutter_is_explained_with_its_source_and_refused_where_the_camera_m
             && text.contains("the global shutter's, exactly"),
         "{text}"
     );
-    // A moving camera: refused through a rolling shutter (naming the key), and through a
-    // global one (the end pose contradicts it), never rendered as a global shutter.
-    let e = planned(&two_frames(barrel, false, rolling)).unwrap_err();
-    assert_eq!(e.kind(), crate::ErrorKind::Unsupported);
-    let e = e.to_string();
+    // A moving camera through a rolling shutter: drawn per vertex (here without distortion,
+    // by the pinhole render's vertex shader), and said so; through a global shutter the end
+    // pose contradicts it, and it is refused, never rendered as a global shutter.
+    let p = planned(&two_frames(barrel, false, rolling)).unwrap();
+    assert_eq!(
+        p.shutter.moving_readout(),
+        Some(crate::model::rolling_shutter::Readout::TopToBottom)
+    );
+    assert_eq!(p.end_pose(0), Some(p.poses[0]));
+    assert_ne!(p.end_pose(1), Some(p.poses[1]));
+    let text = p.explain(None, &[]);
     assert!(
-        e.contains("[sensor] rolling_shutter") && e.contains("[[poses]] #2 moves"),
-        "{e}"
+        text.contains("the camera moves during frame 2") && text.contains("exactly per vertex"),
+        "{text}"
     );
     let e = planned(&two_frames(barrel, false, "")).unwrap_err();
     assert_eq!(e.kind(), crate::ErrorKind::Input);
@@ -754,8 +760,102 @@ fn a_rolling_shutter_is_explained_with_its_source_and_refused_where_the_camera_m
     let lens = scene_file(&format!(
         "{lens}\n{rolling}[[poses]]\nrvec = [0, 0, 0]\ntvec = [0, 0, 1]\nend_rvec = [0, 0, 0]\nend_tvec = [0.1, 0, 1]\n"
     ));
-    let e = planned(&lens).unwrap_err().to_string();
-    assert!(e.contains("[sensor] rolling_shutter"), "{e}");
+    let e = planned(&lens).unwrap_err();
+    assert_eq!(e.kind(), crate::ErrorKind::Unsupported);
+    let e = e.to_string();
+    assert!(
+        e.contains("[sensor] rolling_shutter")
+            && e.contains("[[poses]] #1 moves")
+            && e.contains("the image-based lens model draws a frame from one pose"),
+        "{e}"
+    );
+}
+
+/// A barrel lens over the grid, ID and depth outputs: frame 1 still, frame 2 panning during
+/// its readout (`end` its end pose; `None`: still too), with `extra` tables.
+fn moving_grid(end: Option<&str>, extra: &str) -> SceneFile {
+    let end = end
+        .map(|e| {
+            format!(
+                "{e}
+"
+            )
+        })
+        .unwrap_or_default();
+    scene_file(&format!(
+        "[geometry]
+scene = \"grid:16\"
+[optics]
+camera = \"../cameras/barrel_k1k2.json\"
+         [outputs]
+color = true
+ids = true
+depth = true
+         [[poses]]
+rvec = [0.0, 0.0, 0.0]
+tvec = [0.0, 0.0, 2.0]
+         [[poses]]
+rvec = [0.0, -0.05, 0.0]
+tvec = [0.05, 0.0, 2.0]
+{end}{extra}"
+    ))
+}
+
+#[test]
+fn a_moving_rolling_shutter_renders_per_vertex_and_its_still_frames_as_the_global_shutter() {
+    let ctx = validated_context();
+    let rolling = "[sensor]\nrolling_shutter = \"top_to_bottom\"\n";
+    let end = "end_rvec = [0.0, 0.05, 0.0]\nend_tvec = [-0.05, 0.0, 2.0]";
+    let moving = moving_grid(Some(end), rolling);
+    let global = moving_grid(None, "");
+    let scene = load_geometry(&moving).unwrap();
+    let p = plan(&moving, &scene).unwrap();
+    assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains("each vertex is drawn where its own line reads it"),
+        "{text}"
+    );
+    let frames = |p: &crate::plan::Plan| {
+        let mut out = Vec::new();
+        execute(&ctx, p, &scene, 0..2, &mut |f| {
+            out.push(f.rendered);
+            Ok(())
+        })
+        .unwrap();
+        out
+    };
+    let (got, twin) = (frames(&p), frames(&plan(&global, &scene).unwrap()));
+    let bits = |r: &crate::imaging::Rendered| {
+        let depth = r.depth.as_ref().unwrap().iter().map(|z| z.to_bits());
+        (r.ids.clone().unwrap(), depth.collect::<Vec<_>>())
+    };
+    // The still frame: the global shutter's, bit for bit (the pass solves nothing where the
+    // readout time cannot matter, so the arithmetic is the same).
+    assert_eq!(bits(&got[0]), bits(&twin[0]));
+    assert_eq!(got[0].color, twin[0].color);
+    // The moving one: another picture than any one pose gives.
+    let moved = got[1]
+        .ids
+        .as_ref()
+        .unwrap()
+        .iter()
+        .zip(twin[1].ids.as_ref().unwrap());
+    let changed = moved.filter(|(a, b)| a != b).count();
+    assert!(changed > 1000, "{changed} pixels change ID under the pan");
+    // Chromatic aberration needs the warp, which draws a frame from one pose: refused.
+    let chromatic = moving_grid(
+        Some(end),
+        &format!("{rolling}[effects]\nchromatic_aberration = true\nchromatic_scales = [1.002, 1.0, 0.998]\n"),
+    );
+    let e = plan(&chromatic, &scene).unwrap_err();
+    assert_eq!(e.kind(), crate::ErrorKind::Unsupported);
+    let e = e.to_string();
+    assert!(
+        e.contains("[sensor] rolling_shutter") && e.contains("chromatic_aberration"),
+        "{e}"
+    );
+    assert_no_validation_messages(&ctx);
 }
 
 #[test]
@@ -802,10 +902,86 @@ fn a_camera_files_readout_is_the_default_and_the_scene_key_overrides_it() {
         "{:?}",
         p.shutter
     );
-    let e = planned(&file(false, "")).unwrap_err().to_string();
+    // Moving: the camera file's readout is solved per vertex.
+    let p = planned(&file(false, "")).unwrap();
+    assert_eq!(
+        p.shutter,
+        crate::plan::Shutter::Moving {
+            readout: crate::model::rolling_shutter::Readout::LeftToRight,
+            from: crate::plan::ReadoutSource::CameraFile,
+            frame: 1,
+        }
+    );
+    let text = p.explain(None, &[]);
     assert!(
-        e.contains("[sensor] rolling_shutter") && e.contains("shutter_type ROLLING_LEFT_TO_RIGHT"),
-        "{e}"
+        text.contains("shutter_type ROLLING_LEFT_TO_RIGHT")
+            && text.contains("moves during frame 2"),
+        "{text}"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_rolling_shutter_example_and_its_global_twin_render_and_differ() {
+    let ctx = validated_context();
+    let render = |name: &str| {
+        let file = SceneFile::load(&examples().join(name)).unwrap();
+        let scene = load_geometry(&file).unwrap();
+        let p = plan(&file, &scene).unwrap();
+        let mut out = None;
+        execute(&ctx, &p, &scene, 0..1, &mut |f| {
+            out = Some(f.rendered);
+            Ok(())
+        })
+        .unwrap();
+        (p, out.unwrap())
+    };
+    let (moving, panned) = render("rolling_shutter.toml");
+    let (global, still) = render("rolling_shutter_global.toml");
+    assert!(moving.shutter.moving_readout().is_some());
+    assert!(matches!(moving.route, Route::Vertex { .. }));
+    assert_eq!(global.shutter, crate::plan::Shutter::Global);
+    let (a, b) = (panned.ids.unwrap(), still.ids.unwrap());
+    let board = b.iter().filter(|&&id| id != 0).count();
+    let changed = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+    assert!(board > 50_000, "the board fills the frame ({board} px)");
+    assert!(
+        changed > board / 10,
+        "{changed} of {board} px change square"
+    );
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn a_moving_rolling_shutter_without_distortion_renders_through_the_pinhole_pass() {
+    // Distortion dropped: the pinhole route's vertex shader solves each vertex's readout time.
+    let ctx = validated_context();
+    let barrel = "../cameras/barrel_k1k2.json";
+    let rolling = "[sensor]\nrolling_shutter = \"top_to_bottom\"\n[outputs]\nids = true\n";
+    let frames = |file: &SceneFile| {
+        let scene = load_geometry(file).unwrap();
+        let p = plan(file, &scene).unwrap();
+        assert_eq!(p.route, Route::Pinhole);
+        let mut out = Vec::new();
+        execute(&ctx, &p, &scene, 0..2, &mut |f| {
+            out.push(f.rendered.ids.unwrap());
+            Ok(())
+        })
+        .unwrap();
+        out
+    };
+    let moving = frames(&two_frames(barrel, false, rolling));
+    let still = frames(&two_frames(barrel, true, rolling));
+    assert_eq!(moving[0], still[0], "the still first frame is the same");
+    assert!(moving[0].iter().any(|&id| id != 0));
+    let changed = moving[1]
+        .iter()
+        .zip(&still[1])
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        changed > 500,
+        "{changed} pixels change object under the turn"
+    );
+    assert_no_validation_messages(&ctx);
 }

@@ -13,6 +13,7 @@ use std::collections::HashMap;
 use glam::{DVec2, DVec3};
 
 use super::{Mesh, Pose, Vertex, MAX_TRIANGLES};
+use crate::model::rolling_shutter::{FrameMotion, Readout};
 use crate::model::{Camera, Intrinsics};
 
 /// Depth below which a vertex is not measured (it is at or behind the camera, and the
@@ -146,7 +147,30 @@ pub fn longest_edge_px(mesh: &Mesh, pose: &Pose, intrinsics: &Intrinsics) -> f64
 /// segment the rasterizer draws between its moved end points, over the edges whose image is
 /// inside the frame (sampled at t = 1/4, 1/2, 3/4).
 pub fn straight_line_error(camera: &Camera, pose: &Pose, mesh: &Mesh) -> f64 {
-    let project = |i: u32| camera.project(pose.apply(mesh.vertices[i as usize].position()));
+    edge_error(camera, mesh, |x| camera.project(pose.apply(x)))
+}
+
+/// [`straight_line_error`] for a camera that moves during a rolling shutter's readout: every
+/// point of an edge (its ends and the samples between) is projected where its own line reads
+/// it ([`FrameMotion::project`]), which is what the vertex path draws at the ends. The lines
+/// read at different times see the edge from different poses, so its image bends more than
+/// the lens alone bends it (a straight edge across the readout leans and curves on a pan), and
+/// the tessellation must follow that too.
+pub fn straight_line_error_moving(
+    camera: &Camera,
+    motion: &FrameMotion,
+    readout: Readout,
+    mesh: &Mesh,
+) -> f64 {
+    edge_error(camera, mesh, |x| {
+        motion.project(camera, readout, x).map(|p| p.pixel)
+    })
+}
+
+/// The largest distance (px) between an edge's image by `project` and the straight segment
+/// between its ends' images, over the edges whose image is inside the frame.
+fn edge_error(camera: &Camera, mesh: &Mesh, project: impl Fn(DVec3) -> Option<DVec2>) -> f64 {
+    let project_vertex = |i: u32| project(mesh.vertices[i as usize].position());
     let inside = |p: DVec2| {
         p.x >= -0.5
             && p.y >= -0.5
@@ -160,7 +184,7 @@ pub fn straight_line_error(camera: &Camera, pose: &Pose, mesh: &Mesh) -> f64 {
             if !seen.insert((a.min(b), a.max(b))) {
                 continue;
             }
-            let (Some(pa), Some(pb)) = (project(a), project(b)) else {
+            let (Some(pa), Some(pb)) = (project_vertex(a), project_vertex(b)) else {
                 continue;
             };
             if !inside(pa) || !inside(pb) {
@@ -171,7 +195,7 @@ pub fn straight_line_error(camera: &Camera, pose: &Pose, mesh: &Mesh) -> f64 {
                 mesh.vertices[b as usize].position(),
             );
             for s in [0.25, 0.5, 0.75] {
-                if let Some(p) = camera.project(pose.apply(wa + (wb - wa) * s)) {
+                if let Some(p) = project(wa + (wb - wa) * s) {
                     let d = pb - pa;
                     let u = ((p - pa).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
                     worst = worst.max((pa + d * u).distance(p));
@@ -187,6 +211,55 @@ mod tests {
     use super::*;
     use crate::scene::builtin;
     use glam::DVec3;
+
+    #[test]
+    fn a_pan_during_the_readout_bends_edges_and_finer_edges_follow_it() {
+        // A grid of four big quads through a pinhole (no lens: every edge's image is straight
+        // for a still camera), panned 9° during a top-to-bottom readout.
+        let camera = Camera::from_coeffs(
+            800,
+            600,
+            Intrinsics {
+                fx: 400.0,
+                fy: 400.0,
+                cx: 399.5,
+                cy: 299.5,
+            },
+            &[0.0; 4],
+        )
+        .unwrap();
+        let mesh = builtin::grid(2).mesh;
+        let start = Pose::look_at(
+            DVec3::new(-0.1, 0.0, -1.5),
+            DVec3::new(-0.2, 0.0, 0.0),
+            DVec3::Y,
+        );
+        let end = Pose::look_at(
+            DVec3::new(0.1, 0.0, -1.5),
+            DVec3::new(0.2, 0.0, 0.0),
+            DVec3::Y,
+        );
+        let motion = FrameMotion::new(start.into(), end.into());
+        let still = straight_line_error(&camera, &start, &mesh);
+        let moving = straight_line_error_moving(&camera, &motion, Readout::TopToBottom, &mesh);
+        assert!(
+            still < 1e-6,
+            "a pinhole keeps still edges straight ({still} px)"
+        );
+        // Measured: 0.57 px.
+        assert!(moving > 0.3, "the pan bends them ({moving} px)");
+        // A still camera through the moving measure is the still one.
+        let none = FrameMotion::still(start.into());
+        let same = straight_line_error_moving(&camera, &none, Readout::TopToBottom, &mesh);
+        assert!((same - still).abs() < 1e-9);
+        // Shorter edges follow the bent image: the error falls about as the edge length squared.
+        let fine = tessellate(&mesh, &start, &camera, 16.0).unwrap();
+        let fine_error = straight_line_error_moving(&camera, &motion, Readout::TopToBottom, &fine);
+        assert!(
+            fine_error < moving / 20.0,
+            "{fine_error} px after splitting, {moving} before"
+        );
+    }
 
     #[test]
     fn splits_until_short_and_stays_watertight() {

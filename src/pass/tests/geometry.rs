@@ -228,6 +228,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             },
             background: [0.0, 0.0, 0.0, 1.0],
             chromatic: None,
+            rolling_shutter: None,
         };
         let color = render_scene(&ctx, &scene, &request, &mut |_| {})
             .unwrap()
@@ -383,6 +384,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         antialias: Antialias::default(),
         background: [0.0; 4],
         chromatic: None,
+        rolling_shutter: None,
     };
     let warped = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     assert!(warped.ids.unwrap().iter().all(|i| valid.contains(i)));
@@ -463,6 +465,7 @@ fn vertex_and_warp_paths_agree_on_a_finely_tessellated_scene() {
         },
         background: [0.0; 4],
         chromatic: None,
+        rolling_shutter: None,
     };
     let vertex = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     request.path = PathChoice::Warp {
@@ -522,6 +525,7 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
         antialias: Antialias::default(),
         background: [0.0; 4],
         chromatic: None,
+        rolling_shutter: None,
     };
     let got = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     // The host round trip: the overscanned pinhole render read back, then warped.

@@ -102,17 +102,27 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
         (
             "geometry.vert",
             shaders::GEOMETRY_VERT,
-            with(&[spec::DISTORT, spec::WRITE_FLOW]),
+            with(&[spec::DISTORT, spec::WRITE_FLOW, spec::READOUT]),
         ),
         (
             "geometry.vert (pinhole)",
             shaders::GEOMETRY_VERT_PINHOLE,
-            with(&[spec::DISTORT, spec::WRITE_FLOW]),
+            with(&[spec::DISTORT, spec::WRITE_FLOW, spec::READOUT]),
+        ),
+        (
+            "geometry.vert (pulled, flow)",
+            shaders::GEOMETRY_VERT_PULLED_FLOW,
+            with(&[spec::DISTORT, spec::WRITE_FLOW, spec::READOUT]),
         ),
         (
             "discard.comp",
             shaders::DISCARD_COMP,
-            with(&[spec::DISTORT, spec::DISCARD_STAGE, spec::WRITE_FLOW]),
+            with(&[
+                spec::DISTORT,
+                spec::DISCARD_STAGE,
+                spec::WRITE_FLOW,
+                spec::READOUT,
+            ]),
         ),
         (
             "geometry.frag",
@@ -162,6 +172,20 @@ fn geometry_frame_matches_the_glsl_block() {
         ),
         ("view", offset_of!(GeometryFrame, view)),
         ("viewport", offset_of!(GeometryFrame, viewport)),
+        ("projection", offset_of!(GeometryFrame, projection)),
+        ("previous_view", offset_of!(GeometryFrame, previous_view)),
+        ("turn", offset_of!(GeometryFrame, turn)),
+        ("start_centre", offset_of!(GeometryFrame, start_centre)),
+        ("end_centre", offset_of!(GeometryFrame, end_centre)),
+        ("previous_turn", offset_of!(GeometryFrame, previous_turn)),
+        (
+            "previous_start_centre",
+            offset_of!(GeometryFrame, previous_start_centre),
+        ),
+        (
+            "previous_end_centre",
+            offset_of!(GeometryFrame, previous_end_centre),
+        ),
     ];
     check(shaders::GEOMETRY_VERT, "GeometryFrame", host.clone());
     check(shaders::DISCARD_COMP, "GeometryFrame", host.clone());
@@ -299,6 +323,10 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
         Some(0),
         "no previous pose in the vertex shader"
     );
+    // A global shutter (no readout): the rolling shutter's per-vertex solve is compiled out
+    // of both the vertex shader and the discard.
+    assert_eq!(get(v, spec::READOUT), Some(0), "no rolling-shutter solve");
+    assert_eq!(per_vertex.get(spec::READOUT), Some(0));
     assert_eq!(
         [per_vertex, restore, drop].map(|c| c.get(spec::DISCARD_STAGE)),
         [Some(0), Some(1), Some(2)]

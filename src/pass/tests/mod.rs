@@ -13,6 +13,7 @@ mod lens_render;
 mod mesh_warp;
 mod models_gpu;
 mod reference_gpu;
+mod rolling_shutter;
 mod sphere_warp;
 mod warp_gpu;
 mod warp_hard_cases;

@@ -1,0 +1,237 @@
+// A moving rolling shutter per vertex: the readout time at which a vertex's own line reads it,
+// and the camera-frame point at that time. The port of `FrameMotion::project`
+// (src/model/rolling_shutter.rs): the camera turns by slerp and its centre moves linearly
+// between the pose of the first line (s = 0) and the pose of the last (s = 1), as Hedborg et
+// al. interpolate poses within a frame ("Rolling shutter bundle adjustment", 2012), and the
+// vertex appears where g(s) = s − line_time(π(X at pose(s))) is zero (Meingast, Geyer and
+// Sastry, "Geometric models of rolling-shutter cameras", 2005). The same scan for the first
+// sign change over 16 cells, the same Illinois false-position refinement, the same bounded
+// loops, so that the GPU finds the root the CPU finds; only the tolerances are f32's.
+//
+// π is Alg. 1's first half (alg1_ndc) on the Sec. 3.1 clip position of the camera-frame point,
+// so the lens is evaluated exactly as for a still camera. The includer declares `frame`
+// (geometry_frame.glsl), the camera model, `const bool DISTORT` and includes alg1.glsl first.
+//
+// VKL_READOUT = 0 (a global shutter, or a still camera) compiles none of it: every caller
+// branches on the constant, which the driver folds away.
+#ifndef VKL_ROLLING_SHUTTER_GLSL
+#define VKL_ROLLING_SHUTTER_GLSL
+
+// 0: global; 1 top_to_bottom, 2 bottom_to_top, 3 left_to_right, 4 right_to_left
+// (spec::READOUT, `Readout::gpu_id`).
+layout(constant_id = 24) const uint VKL_READOUT = 0u;
+
+// model::rolling_shutter::SCAN_CELLS and MAX_REFINE_STEPS.
+const uint VKL_RS_SCAN_CELLS = 16u;
+const uint VKL_RS_MAX_REFINE_STEPS = 64u;
+// The bracket is refined until its two pixels agree to this (px): f32 pixels of a 4k image
+// carry about 2e-4 px of rounding, so the refinement mostly ends where the bracket can shrink
+// no further, one unit in the last place of s wide.
+const float VKL_RS_PIXEL_TOLERANCE = 1e-4;
+// A bracket that can shrink no further is a root when its pixels are this close (px); further
+// apart it straddles a jump of the lens map, as on the CPU (MAX_ERROR_PX there, f64's).
+const float VKL_RS_MAX_ERROR_PX = 1e-2;
+
+// One frame's motion: the first line's world-to-camera rotation, the unit axis and angle of
+// the turn from the first line's camera frame to the last line's, and the two camera centres.
+struct VklMotion {
+    mat3 rotation;
+    vec3 axis;
+    float angle;
+    vec3 start_centre;
+    vec3 end_centre;
+};
+
+VklMotion vkl_motion_current() {
+    return VklMotion(mat3(frame.view), frame.turn.xyz, frame.turn.w, frame.start_centre.xyz,
+                     frame.end_centre.xyz);
+}
+
+// The motion of the frame flow starts from.
+VklMotion vkl_motion_previous() {
+    return VklMotion(mat3(frame.previous_view), frame.previous_turn.xyz, frame.previous_turn.w,
+                     frame.previous_start_centre.xyz, frame.previous_end_centre.xyz);
+}
+
+// The world point x in the camera frame at readout time s: R_cw(s) (x − C(s)) with
+// R_cw(s) = exp(s ω)ᵀ R_cw0 (Rodrigues' formula, turned back by s·angle about the axis).
+vec3 vkl_rs_camera_point(VklMotion m, vec3 x, float s) {
+    vec3 v = m.rotation * (x - mix(m.start_centre, m.end_centre, s));
+    float phi = -s * m.angle;
+    float c = cos(phi);
+    float sn = sin(phi);
+    return v * c + cross(m.axis, v) * sn + m.axis * (dot(m.axis, v) * (1.0 - c));
+}
+
+// When the pixel is read (model::rolling_shutter::line_time): 0 the first line, 1 the last.
+float vkl_line_time(vec2 pixel) {
+    bool rows = VKL_READOUT <= 2u;
+    float lines = rows ? frame.viewport.y : frame.viewport.x;
+    float last = max(lines - 1.0, 0.0);
+    if (last == 0.0) return 0.0;
+    float t = (rows ? pixel.y : pixel.x) / last;
+    return (VKL_READOUT == 1u || VKL_READOUT == 3u) ? t : 1.0 - t;
+}
+
+// One evaluation of g: the point seen from the pose at s, with what Alg. 1 made of it.
+struct VklRsSample {
+    float s;
+    float g;
+    vec2 pixel;
+    vec2 distorted_ndc;
+    vec2 ndc;           // alg1_ndc's undistorted NDC (Sec. 3.2's test)
+    vec3 camera;        // the camera-frame point at s
+    vec4 clip;          // its Sec. 3.1 clip position
+    bool ok;            // the lens sees it, and g is finite
+};
+
+VklRsSample vkl_rs_sample(VklMotion m, vec3 x, float s) {
+    VklRsSample r;
+    r.s = s;
+    r.camera = vkl_rs_camera_point(m, x, s);
+    r.clip = frame.projection * vec4(r.camera, 1.0);
+    r.ok = alg1_ndc(r.clip, r.distorted_ndc, r.pixel, r.ndc);
+    r.g = s - vkl_line_time(r.pixel);
+    r.ok = r.ok && !isnan(r.g) && !isinf(r.g) && !isnan(r.camera.z) && !isinf(r.camera.z);
+    return r;
+}
+
+VklRsSample vkl_rs_closest(VklRsSample a, VklRsSample b) {
+    return abs(a.g) <= abs(b.g) ? a : b;
+}
+
+// The root of g between a and b (g of opposite signs, a.s < b.s): Illinois false position with
+// Dekker's guard against steps too small to count, a bisection step where the bracket shrank
+// by less than half twice in a row (model::rolling_shutter::refine, step for step). False
+// where the lens does not see the point inside the bracket, or the bracket closes on a jump.
+bool vkl_rs_refine(VklMotion m, vec3 x, VklRsSample a, VklRsSample b, out VklRsSample root) {
+    float ga = a.g;
+    float gb = b.g;
+    int replaced = 0;  // -1: the last step replaced a; 1: b
+    int slow_steps = 0;
+    root = a;
+    for (uint i = 0u; i < VKL_RS_MAX_REFINE_STEPS; i++) {
+        float width = b.s - a.s;
+        vec2 d = abs(b.pixel - a.pixel);
+        float gap = max(d.x, d.y);
+        if (gap <= VKL_RS_PIXEL_TOLERANCE) {
+            root = vkl_rs_closest(a, b);
+            return true;
+        }
+        float s;
+        if (slow_steps >= 2) {
+            slow_steps = 0;
+            s = 0.5 * (a.s + b.s);
+        } else {
+            s = (a.s * gb - b.s * ga) / (gb - ga);
+        }
+        float step = 0.5 * VKL_RS_PIXEL_TOLERANCE * width / gap;
+        s = (!isnan(s) && !isinf(s) && step < 0.5 * width) ? clamp(s, a.s + step, b.s - step)
+                                                             : 0.5 * (a.s + b.s);
+        if (!(s > a.s && s < b.s)) break;  // as narrow as f32 makes it
+        VklRsSample c = vkl_rs_sample(m, x, s);
+        if (!c.ok) return false;
+        if (c.g == 0.0) {
+            root = c;
+            return true;
+        }
+        if ((c.g < 0.0) == (a.g < 0.0)) {
+            a = c;
+            ga = c.g;
+            if (replaced == -1) gb *= 0.5;
+            replaced = -1;
+        } else {
+            b = c;
+            gb = c.g;
+            if (replaced == 1) ga *= 0.5;
+            replaced = 1;
+        }
+        slow_steps = (b.s - a.s > 0.5 * width) ? slow_steps + 1 : 0;
+    }
+    vec2 d = abs(b.pixel - a.pixel);
+    root = vkl_rs_closest(a, b);
+    return max(d.x, d.y) <= VKL_RS_MAX_ERROR_PX;
+}
+
+// Where the world point x appears through motion m: the first self-consistent readout time in
+// readout order (`ok` false where the lens does not see it; then `clip` is a finite clip
+// position of the point at some readout time, for the rasterizer's clipping alone). Points no
+// line reads keep their position at the nearer end of the readout.
+//
+// The scan stops at the first sign change and the refinement runs outside it: the lanes of one
+// SIMD batch find their brackets in different cells, and a refinement inside the scan would run
+// once per cell that any lane brackets, the others idle; here they refine together. A bracket
+// that closes on a jump of the lens map rather than a root resumes the scan after it, as on the
+// CPU.
+VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
+    VklRsSample previous;
+    VklRsSample first;
+    VklRsSample last;
+    bool has_previous = false;
+    bool seen_everywhere = true;
+    bool crossed = false;
+    uint k = 0u;
+    for (uint attempt = 0u; attempt <= VKL_RS_SCAN_CELLS; attempt++) {
+        bool found = false;
+        VklRsSample a;
+        VklRsSample b;
+        for (; k <= VKL_RS_SCAN_CELLS && !found; k++) {
+            VklRsSample c = vkl_rs_sample(m, x, float(k) / float(VKL_RS_SCAN_CELLS));
+            if (c.ok) {
+                if (c.g == 0.0) return c;
+                if (has_previous && ((previous.g < 0.0) != (c.g < 0.0))) {
+                    crossed = true;
+                    found = true;
+                    a = previous;
+                    b = c;
+                }
+            } else {
+                seen_everywhere = false;
+            }
+            if (k == 0u) first = c;
+            last = c;
+            previous = c;
+            has_previous = c.ok;
+        }
+        if (!found) break;
+        VklRsSample root;
+        if (vkl_rs_refine(m, x, a, b, root)) return root;
+    }
+    VklRsSample end = first.g > 0.0 ? first : last;
+    end.ok = !crossed && seen_everywhere;
+    return end;
+}
+
+// A frame whose camera does not move during the readout: Alg. 1 from its one pose, with the
+// global shutter's very arithmetic, so that a still frame renders bit for bit as it does
+// without a readout.
+VklRsSample vkl_rs_still(vec3 x, mat4 view_projection, mat4 view) {
+    VklRsSample r;
+    vec4 world = vec4(x, 1.0);
+    r.s = 0.0;
+    r.g = 0.0;
+    r.clip = view_projection * world;
+    r.ok = alg1_ndc(r.clip, r.distorted_ndc, r.pixel, r.ndc);
+    r.camera = (view * world).xyz;
+    return r;
+}
+
+// Whether this frame's camera moves during the readout (start_centre.w: 1 or 0).
+bool vkl_rs_moving() {
+    return frame.start_centre.w != 0.0;
+}
+
+// Where this frame's lines see the world point x.
+VklRsSample vkl_rs_current(vec3 x) {
+    return vkl_rs_moving() ? vkl_rs_project(vkl_motion_current(), x)
+                           : vkl_rs_still(x, frame.view_projection, frame.view);
+}
+
+// Where the lines of the frame flow starts from saw it.
+VklRsSample vkl_rs_previous(vec3 x) {
+    return frame.previous_start_centre.w != 0.0
+               ? vkl_rs_project(vkl_motion_previous(), x)
+               : vkl_rs_still(x, frame.previous_view_projection, frame.previous_view);
+}
+
+#endif

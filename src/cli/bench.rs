@@ -316,8 +316,9 @@ pub struct AllArgs {
     /// devices are kept, and so are this device's tables of benches this run leaves out.
     #[arg(long, value_name = "FILE", default_value = "docs/benchmarks.md")]
     out: std::path::PathBuf,
-    /// Run only these, comma-separated: inverse, warp, vertex, lens, wide, models, plan, and
-    /// python (the Python package's frame loop beside cv2.remap). Default: all of them.
+    /// Run only these, comma-separated: inverse, warp, vertex, lens, wide, models, plan,
+    /// rolling-shutter, and python (the Python package's frame loop beside cv2.remap). Default:
+    /// all of them.
     #[arg(long, value_delimiter = ',', value_parser = parse_bench, value_name = "LIST")]
     benches: Vec<String>,
     /// Measure nothing: write the section of each device in FILE, the rows a `--json` run

@@ -11,12 +11,11 @@ use glam::DVec3;
 use serde_json::{json, Value};
 
 use super::fixed as f;
-use crate::host::plan::execute;
 use crate::host::Context;
 use crate::model::rolling_shutter::Readout;
 use crate::model::{Camera, Intrinsics};
 use crate::pass::geometry::DEFAULT_DELTA;
-use crate::plan::{PathChoice, Plan, RenderRequest};
+use crate::plan::{PathChoice, RenderRequest};
 use crate::scene::{builtin, Pose, Scene};
 use crate::Result;
 
@@ -67,17 +66,7 @@ fn frame_ms(
     request.pose = pan().0;
     request.previous_pose = request.pose;
     request.rolling_shutter = rolling_shutter;
-    let plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
-    let mut times = Vec::new();
-    execute(ctx, &plan, scene, [0, 0, 0], &mut |frame| {
-        times.push(frame.ms);
-        Ok(())
-    })?;
-    times.sort_by(f64::total_cmp);
-    times
-        .get(1)
-        .copied()
-        .ok_or_else(|| crate::Error::internal("three frames expected"))
+    super::wide::request_frame_ms(ctx, scene, &request)
 }
 
 /// Every row: per grid, the global path, then the exact path with its ratio to it.

@@ -65,8 +65,17 @@ pub fn cameras() -> Vec<(&'static str, Camera)> {
 /// Median wall-clock ms of three frames (GPU work and readback) after a warm-up, rendered by
 /// the plan of `path` on `camera` (the passes built once).
 fn frame_ms(ctx: &Context, scene: &Scene, camera: &Camera, path: PathChoice) -> Result<f64> {
-    let request = RenderRequest::color(camera, path);
-    let plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
+    request_frame_ms(ctx, scene, &RenderRequest::color(camera, path))
+}
+
+/// Median wall-clock ms of three frames (GPU work and readback) after a warm-up, rendered by
+/// the plan of `request` (the passes built once).
+pub(super) fn request_frame_ms(
+    ctx: &Context,
+    scene: &Scene,
+    request: &RenderRequest,
+) -> Result<f64> {
+    let plan = Plan::from_request(request, ctx.gpu().max_image_side())?;
     let mut times = Vec::new();
     execute(ctx, &plan, scene, [0, 0, 0], &mut |frame| {
         times.push(frame.ms);

@@ -41,21 +41,9 @@ fn camera() -> Camera {
     .unwrap()
 }
 
-/// A fast pan with a step sideways during the readout: the camera turns about 7° and moves
-/// 12 cm between the first line and the last, 1.6 m from the grid.
-fn pan() -> (Pose, Pose) {
-    let start = Pose::look_at(
-        DVec3::new(-0.06, 0.0, -1.6),
-        DVec3::new(-0.1, 0.0, 0.0),
-        DVec3::Y,
-    );
-    let end = Pose::look_at(
-        DVec3::new(0.06, 0.02, -1.6),
-        DVec3::new(0.12, 0.0, 0.0),
-        DVec3::Y,
-    );
-    (start, end)
-}
+// A fast pan with a step sideways during the readout: the camera turns about 7° and moves 12 cm
+// between the first line and the last, 1.6 m from the grid (the bench's scene).
+use crate::bench::rolling_shutter::pan;
 
 /// The frame before: the same pan, a readout earlier.
 fn previous_pan() -> (Pose, Pose) {

@@ -29,6 +29,14 @@
 // floats straight from the mesh's vertex buffer, and two floats back, not a clip position's
 // four (its image and texel-buffer stores measured slower still).
 #extension GL_GOOGLE_include_directive : require
+// A driver compiles the whole module before specialization folds STAGE and VKL_READOUT away,
+// and the lens model it would then drop, inlined at every call, is most of that time (on
+// lavapipe, seconds per pipeline). So each pipeline gets a module holding what it runs:
+// stages 1 and 2 never run Alg. 1 (the indices variant leaves stage 0 out), and a frame
+// every line sees from one pose never solves a readout time (the global variant leaves the
+// solve out; this module, with it, serves a moving rolling shutter).
+// vklens:variant indices VKL_DISCARD_INDICES
+// vklens:variant global VKL_GLOBAL_SHUTTER
 
 layout(local_size_x = 64) in;
 
@@ -82,20 +90,24 @@ vec4 vkl_world(uint v) {
 // shutter.
 vec3 vkl_camera(uint v) {
     vec4 world = vkl_world(v);
+#ifndef VKL_GLOBAL_SHUTTER
     if (VKL_READOUT != 0u && vkl_rs_moving()) {
         return vkl_rs_camera_point(vkl_motion_current(), world.xyz, motion[v].w);
     }
+#endif
     return (frame.view * world).xyz;
 }
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
+#ifndef VKL_DISCARD_INDICES
     if (STAGE == 0u) {
         if (i >= pc.count) return;
         vec4 world = vkl_world(i);
         vec4 clip;
         vec2 distorted_ndc, pixel, ndc;
         bool ok;
+#ifndef VKL_GLOBAL_SHUTTER
         if (VKL_READOUT != 0u) {
             VklRsSample r = vkl_rs_current(world.xyz);
             clip = r.clip;
@@ -109,7 +121,9 @@ void main() {
                 m.xyz = vec3(r.pixel - q.pixel, (r.ok && q.ok) ? 1.0 : 0.0);
             }
             motion[i] = m;
-        } else {
+        } else
+#endif
+        {
             clip = frame.view_projection * world;
             ok = alg1_ndc(clip, distorted_ndc, pixel, ndc);
         }
@@ -128,7 +142,10 @@ void main() {
             // The first of every 64 adds a workgroup to stage 2's dispatch.
             if (slot % 64u == 0u) atomicAdd(dropped.groups, 1u);
         }
-    } else {
+        return;
+    }
+#endif
+    {
         if (i >= dropped.count) return;
         uint entry = dropped.vertices[i];
         uint v = entry & ~VKL_CHECK_BIT;

@@ -19,8 +19,19 @@
 // vklens:variant pulled VKL_PULLED
 // The same, with the flow the discard pass computed.
 // vklens:variant pulled_flow VKL_PULLED_FLOW
+// The pinhole render of a frame every line sees from one pose (the warp's and the cube map's
+// sources, a camera without a lens): no lens model and no readout solve in the module at all.
+// A driver compiles the whole module before specialization folds DISTORT and VKL_READOUT away,
+// and the model it would drop is most of that time (on lavapipe, seconds per pipeline).
+// vklens:variant plain VKL_PLAIN
+// The geometry-shader path of a frame every line sees from one pose: no readout solve.
+// vklens:variant global VKL_GLOBAL_SHUTTER
 #ifdef VKL_PULLED_FLOW
 #define VKL_PULLED
+#endif
+#ifdef VKL_PLAIN
+#define VKL_PINHOLE
+#define VKL_GLOBAL_SHUTTER
 #endif
 
 #include "camera_model.glsl"
@@ -80,6 +91,7 @@ void main() {
     v_flow = vec3(0.0);
 #endif
 #else
+#ifndef VKL_GLOBAL_SHUTTER
     if (VKL_READOUT != 0u) {
         // A moving rolling shutter: the vertex where its own line reads it, and flow from
         // where the previous frame's lines read it.
@@ -100,6 +112,7 @@ void main() {
 #endif
         return;
     }
+#endif
     vec4 clip = frame.view_projection * world;
     vec4 distorted;
     vec2 pixel, ndc;

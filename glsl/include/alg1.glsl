@@ -1,7 +1,8 @@
 // Lambers et al. Alg. 1 on one clip-space position, shared by the vertex shader
 // (glsl/geometry.vert) and the discard pass (glsl/discard.comp) so that both decide with the
 // same arithmetic. The includer declares `frame` (geometry_frame.glsl), the camera model
-// (camera_model.glsl) and `const bool DISTORT`.
+// (camera_model.glsl) and `const bool DISTORT`. VKL_PLAIN (glsl/geometry.vert's plain variant)
+// leaves the lens out, for a module that only ever runs with DISTORT false.
 #ifndef VKL_ALG1_GLSL
 #define VKL_ALG1_GLSL
 
@@ -36,6 +37,7 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
     ndc = vec2(0.0);
     pixel = vec2(0.0);
     vec2 size = frame.viewport.xy;
+#ifndef VKL_PLAIN
     if (DISTORT && VKL_RAY_MODEL) {
         vec3 p = alg1_fisheye_point(clip);
         float r = length(p);
@@ -50,11 +52,15 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
         distorted_ndc = ok ? ndc : vec2(0.0);
         return ok;
     }
+#endif
     if (!(clip.w > 0.0)) return false;  // at or behind the camera: no image point
     ndc = clip.xy / clip.w;
     distorted_ndc = ndc;
     pixel = (ndc * 0.5 + 0.5) * size - 0.5;
     if (!DISTORT) return true;
+#ifdef VKL_PLAIN
+    return true;
+#else
     vec2 x = vkl_to_normalized(pixel);
     vec2 d;
     bool ok = vkl_contains_ideal(x) && vkl_distort(x, d);
@@ -62,6 +68,7 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
     ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
     distorted_ndc = ok ? (pixel + 0.5) / size * 2.0 - 1.0 : ndc;
     return ok;
+#endif
 }
 
 // The second half: the clip position of a vertex with undistorted clip position `clip` whose
@@ -70,10 +77,12 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
 // |(X, Y, Z)| (positive on every side of the camera, so nothing is clipped away and
 // attributes interpolate with the distance), its depth 1 − near / |(X, Y, Z)|.
 vec4 alg1_clip(vec4 clip, vec2 distorted_ndc) {
+#ifndef VKL_PLAIN
     if (DISTORT && VKL_RAY_MODEL) {
         float r = length(alg1_fisheye_point(clip));
         return vec4(distorted_ndc * r, (1.0 - frame.viewport.w / r) * r, r);
     }
+#endif
     return vec4(distorted_ndc * clip.w, clip.zw);
 }
 

@@ -33,9 +33,16 @@ pub const UPSAMPLE_MAP_COMP: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/upsample_map.comp.spv"));
 /// `glsl/geometry.vert`: Lambers et al. Alg. 1 (or a pinhole projection) per vertex.
 pub const GEOMETRY_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.spv"));
+/// `glsl/geometry.vert` for the geometry-shader path of a frame seen from one pose (no readout
+/// solve).
+pub const GEOMETRY_VERT_GLOBAL: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.global.spv"));
 /// `glsl/geometry.vert` without the discard data: the pinhole render (no geometry shader).
 pub const GEOMETRY_VERT_PINHOLE: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pinhole.spv"));
+/// `glsl/geometry.vert`'s pinhole render of a still frame: no lens model, no readout solve.
+pub const GEOMETRY_VERT_PLAIN: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.plain.spv"));
 /// `glsl/geometry.vert` reading the positions the compute discard computed.
 pub const GEOMETRY_VERT_PULLED: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/geometry.vert.pulled.spv"));
@@ -46,6 +53,12 @@ pub const GEOMETRY_VERT_PULLED_FLOW: &[u8] =
 pub const GEOMETRY_GEOM: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.geom.spv"));
 /// `glsl/discard.comp`: Lambers et al. Sec. 3.2's triangle discard without a geometry shader.
 pub const DISCARD_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/discard.comp.spv"));
+/// `glsl/discard.comp`'s stage 0 for a frame every line sees from one pose (no readout solve).
+pub const DISCARD_COMP_GLOBAL: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/discard.comp.global.spv"));
+/// `glsl/discard.comp`'s stages 1 and 2 alone (no Alg. 1 to compile).
+pub const DISCARD_COMP_INDICES: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/discard.comp.indices.spv"));
 /// `glsl/geometry.frag`: colour, object ID, flow and depth outputs.
 pub const GEOMETRY_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/geometry.frag.spv"));
 /// `glsl/mesh_warp.vert`: the Durham radial-correction paper's mesh-based warp (grid vertices with source coordinates).

@@ -658,9 +658,11 @@ impl GeometryPass {
         let mut stages = vec![Stage {
             stage: vk::ShaderStageFlags::VERTEX,
             spirv: match (geometry_stage, pulled, flow) {
-                (true, _, _) => shaders::GEOMETRY_VERT,
+                (true, _, _) if desc.readout.is_some() => shaders::GEOMETRY_VERT,
+                (true, _, _) => shaders::GEOMETRY_VERT_GLOBAL,
                 (_, true, true) => shaders::GEOMETRY_VERT_PULLED_FLOW,
                 (_, true, false) => shaders::GEOMETRY_VERT_PULLED,
+                _ if desc.readout.is_none() => shaders::GEOMETRY_VERT_PLAIN,
                 _ => shaders::GEOMETRY_VERT_PINHOLE,
             },
             constants: vertex_constants.clone(),
@@ -697,7 +699,12 @@ impl GeometryPass {
         let domain_table = discard_needs_domain_table(cam, discard_bound);
         let discard = if pulled {
             let constants = vertex_constants.bool(spec::DOMAIN_TABLE, domain_table);
-            Some(DiscardPass::new(gpu, constants, frames)?)
+            Some(DiscardPass::new(
+                gpu,
+                constants,
+                desc.readout.is_some(),
+                frames,
+            )?)
         } else {
             None
         };
@@ -1206,7 +1213,9 @@ impl DiscardPass {
     /// The three stages' pipelines, specialized like the vertex shader (camera terms,
     /// DISTORT, WRITE_FLOW), and a pool for one set per frame in flight (their uniforms are
     /// the frame's own; the mesh's buffers are written by [`GeometryPass::bind_mesh`]).
-    fn new(gpu: &Gpu, vertex: SpecConstants, frames: usize) -> Result<Self> {
+    /// `rolling`: frames may move during a rolling shutter's readout, so the per-vertex stage
+    /// carries the readout solve (glsl/discard.comp says why the modules differ).
+    fn new(gpu: &Gpu, vertex: SpecConstants, rolling: bool, frames: usize) -> Result<Self> {
         use vk::DescriptorType as T;
         let (uniform, storage) = (T::UNIFORM_BUFFER, T::STORAGE_BUFFER);
         let mut bindings = [storage; 10];
@@ -1215,7 +1224,11 @@ impl DiscardPass {
         let pipeline = |stage: u32| {
             ComputePipeline::new(
                 gpu,
-                shaders::DISCARD_COMP,
+                match (stage, rolling) {
+                    (0, true) => shaders::DISCARD_COMP,
+                    (0, false) => shaders::DISCARD_COMP_GLOBAL,
+                    _ => shaders::DISCARD_COMP_INDICES,
+                },
                 &bindings,
                 std::mem::size_of::<DiscardPush>() as u32,
                 vertex.clone().u32(spec::DISCARD_STAGE, stage),

@@ -110,6 +110,16 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
             with(&[spec::DISTORT, spec::WRITE_FLOW, spec::READOUT]),
         ),
         (
+            "geometry.vert (global)",
+            shaders::GEOMETRY_VERT_GLOBAL,
+            with(&[spec::DISTORT, spec::WRITE_FLOW, spec::READOUT]),
+        ),
+        (
+            "geometry.vert (plain)",
+            shaders::GEOMETRY_VERT_PLAIN,
+            vec![spec::DISTORT, spec::WRITE_FLOW],
+        ),
+        (
             "geometry.vert (pulled, flow)",
             shaders::GEOMETRY_VERT_PULLED_FLOW,
             with(&[spec::DISTORT, spec::WRITE_FLOW, spec::READOUT]),
@@ -117,6 +127,26 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
         (
             "discard.comp",
             shaders::DISCARD_COMP,
+            with(&[
+                spec::DISTORT,
+                spec::DISCARD_STAGE,
+                spec::WRITE_FLOW,
+                spec::READOUT,
+            ]),
+        ),
+        (
+            "discard.comp (global)",
+            shaders::DISCARD_COMP_GLOBAL,
+            with(&[
+                spec::DISTORT,
+                spec::DISCARD_STAGE,
+                spec::WRITE_FLOW,
+                spec::READOUT,
+            ]),
+        ),
+        (
+            "discard.comp (indices)",
+            shaders::DISCARD_COMP_INDICES,
             with(&[
                 spec::DISTORT,
                 spec::DISCARD_STAGE,

@@ -71,16 +71,22 @@ void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
     if (id.x >= int(pc.sizes.z) || id.y >= int(pc.sizes.w)) return;
     vec2 p = vec2(id);
-    vec3 rg;
-    bool ok = ray_of(p, pc.chromatic.y, rg);
-    vec4 value = ok ? sample_ray(rg) : pc.fill;
-    if (ok && CHROMATIC) {
-        vec3 rr;
-        vec3 rb;
-        ok = ray_of(p, pc.chromatic.x, rr) && ray_of(p, pc.chromatic.z, rb);
-        if (ok) {
-            value.r = sample_ray(rr).r;
-            value.b = sample_ray(rb).b;
+    // G first, then R and B, from one call site in a loop: a driver inlines the lens's inverse
+    // at every call before specialization folds CHROMATIC away (glsl/warp.comp says the same).
+    uint channels = CHROMATIC ? 3u : 1u;
+    vec3 rays[3];
+    bool ok = true;
+    for (uint k = 0u; k < channels && ok; k++) {
+        int c = k == 0u ? 1 : (k == 1u ? 0 : 2);
+        float scale = c == 1 ? pc.chromatic.y : (c == 0 ? pc.chromatic.x : pc.chromatic.z);
+        ok = ray_of(p, scale, rays[c]);
+    }
+    vec4 value = pc.fill;
+    if (ok) {
+        value = sample_ray(rays[1]);
+        if (CHROMATIC) {
+            value.r = sample_ray(rays[0]).r;
+            value.b = sample_ray(rays[2]).b;
         }
     }
     imageStore(target, id, ok ? value : pc.fill);

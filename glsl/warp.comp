@@ -61,22 +61,29 @@ void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
     if (id.x >= int(pc.sizes.z) || id.y >= int(pc.sizes.w)) return;
     vec2 p = vec2(id);
-    vec2 sg;
-    bool ok = coords(p, id, 1, pc.chromatic.y, sg);
+    // G first (the only channel without chromatic aberration), then R and B. One call site in
+    // a loop, not three: a driver inlines the inverse model at every call before
+    // specialization folds CHROMATIC and METHOD away, and on lavapipe that inlining was most of
+    // the pipeline's compile time.
+#if defined(VKL_R32UI)
+    const uint channels = 1u;
+#else
+    uint channels = CHROMATIC ? 3u : 1u;
+#endif
+    vec2 src[3];
+    bool ok = true;
+    for (uint k = 0u; k < channels && ok; k++) {
+        int c = k == 0u ? 1 : (k == 1u ? 0 : 2);
+        float scale = c == 1 ? pc.chromatic.y : (c == 0 ? pc.chromatic.x : pc.chromatic.z);
+        ok = coords(p, id, c, scale, src[c]);
+    }
     TEXEL value = TEXEL(0);
     if (ok) {
-        value = sample_at(sg);
+        value = sample_at(src[1]);
 #if !defined(VKL_R32UI)
         if (CHROMATIC) {
-            vec2 sr;
-            vec2 sb;
-            bool ok_r = coords(p, id, 0, pc.chromatic.x, sr);
-            bool ok_b = coords(p, id, 2, pc.chromatic.z, sb);
-            ok = ok_r && ok_b;
-            if (ok) {
-                value.r = sample_at(sr).r;
-                value.b = sample_at(sb).b;
-            }
+            value.r = sample_at(src[0]).r;
+            value.b = sample_at(src[2]).b;
         }
 #endif
     }

@@ -282,6 +282,25 @@ int main(int argc, char **argv) {
             vkl_scene_free(&scene);
         }
         free(text);
+
+        /* Float colour (`[outputs] format = "exr"`) comes back as RGBA32F. */
+        const char *hdr = "[geometry]\nscene = \"checkerboard:12x8:0.1\"\n"
+                          "[optics]\ncamera = \"../cameras/barrel_k1k2.json\"\n"
+                          "[outputs]\ncolor = true\nformat = \"exr\"\n"
+                          "[[poses]]\nrvec = [0.0, -0.08, 0.0]\ntvec = [-0.6521, -0.35, 1.2519]\n";
+        expect_ok("parse a float-colour scene", vkl_scene_parse(hdr, rolling_path, &scene));
+        vkl_frame hf = NULL;
+        if (scene && expect_ok("render float colour", vkl_scene_render(d, scene, 0, &hf))) {
+            vkl_pixel_format fmt = VKL_PIXELS_NONE;
+            size_t bytes = 0;
+            expect_ok("float colour output", vkl_frame_output(hf, VKL_OUTPUT_COLOR, &fmt, &bytes));
+            expect("float colour is RGBA32F, 16 bytes a pixel",
+                   fmt == VKL_PIXELS_RGBA32F && bytes == 16 * (size_t)r.width * r.height);
+            expect_ok("no ids asked for", vkl_frame_output(hf, VKL_OUTPUT_IDS, &fmt, &bytes));
+            expect("no ids", fmt == VKL_PIXELS_NONE && bytes == 0);
+        }
+        vkl_frame_free(&hf);
+        vkl_scene_free(&scene);
     }
     free_rendered(&r);
     free_rendered(&g);

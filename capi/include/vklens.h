@@ -16,7 +16,8 @@
  *     exception is vkl_device, vklens's own headless device, which scene rendering
  *     (vkl_scene_render) submits to and waits on; it never touches the caller's Vulkan.
  *   - Strings this library allocates for the caller (vkl_scene_explain's) are freed with
- *     vkl_string_free; every other returned string belongs to its handle.
+ *     vkl_string_free; every other string it returns is static or belongs to a handle, and
+ *     is never freed by the caller.
  *
  * Threads
  *   - vkl_camera: immutable; every camera function may be called from any thread, also on

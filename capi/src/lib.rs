@@ -1331,6 +1331,15 @@ pub unsafe extern "C" fn vkl_scene_free(s: *mut vkl_scene) {
     release(|| unsafe { free(s) })
 }
 
+// The header's thread rules for devices, scenes and frames rest on these being Send + Sync
+// (a device serializes its submissions): this fails to build if one stops being so.
+const _: fn() = || {
+    fn shared<T: Send + Sync>() {}
+    shared::<vkl_device_s>();
+    shared::<vkl_scene_s>();
+    shared::<vkl_frame_s>();
+};
+
 /// One rendered frame: the outputs its scene asks for, in host memory.
 pub struct vkl_frame_s {
     frame: Frame,

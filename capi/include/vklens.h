@@ -12,12 +12,19 @@
  *     variable, is harmless.
  *   - Structs that carry options start with `uint32_t version`: set it to VKL_API_VERSION.
  *   - The caller owns Vulkan: vklens creates no instance, device or queue through this API,
- *     records into the caller's command buffers and never submits or waits.
+ *     records into the caller's command buffers and never submits or waits. The one
+ *     exception is vkl_device, vklens's own headless device, which scene rendering
+ *     (vkl_scene_render) submits to and waits on; it never touches the caller's Vulkan.
+ *   - Strings this library allocates for the caller (vkl_scene_explain's) are freed with
+ *     vkl_string_free; every other string it returns is static or belongs to a handle, and
+ *     is never freed by the caller.
  *
  * Threads
  *   - vkl_camera: immutable; every camera function may be called from any thread, also on
  *     one camera at once.
  *   - vkl_gpu: vkl_warper_create may be called from several threads on one vkl_gpu.
+ *   - vkl_device: vkl_scene_render may be called from several threads on one device.
+ *   - vkl_scene, vkl_frame: immutable; every function may be called from any thread.
  *   - vkl_warper: one thread at a time per warper (record and record_prepare change its
  *     descriptor bindings); different warpers may record on different threads into different
  *     command buffers (the caller keeps each command pool externally synchronized, as Vulkan
@@ -87,9 +94,71 @@ typedef enum {
 } vkl_direction;
 
 /*
+ How an output's pixels are stored: row-major from the top row, rows tightly packed
+ (width × the pixel's bytes), the host's byte order.
+ */
+typedef enum {
+  /*
+   The frame does not have this output (the scene did not ask for it).
+   */
+  VKL_PIXELS_NONE = 0,
+  /*
+   4 bytes per pixel: R, G, B, A, 0 to 255 (colour; as VK_FORMAT_R8G8B8A8_UNORM).
+   */
+  VKL_PIXELS_RGBA8,
+  /*
+   4 floats per pixel: R, G, B, A, linear 0 to 1 and above for HDR (colour when the scene
+   asks for float output; as VK_FORMAT_R32G32B32A32_SFLOAT).
+   */
+  VKL_PIXELS_RGBA32F,
+  /*
+   1 uint32_t per pixel (IDs).
+   */
+  VKL_PIXELS_R32_UINT,
+  /*
+   1 float per pixel (depth).
+   */
+  VKL_PIXELS_R32F,
+  /*
+   2 floats per pixel, x then y (flow).
+   */
+  VKL_PIXELS_RG32F,
+} vkl_pixel_format;
+
+/*
+ An output of a rendered frame (the scene file's `[outputs]` table asks for them).
+ */
+typedef enum {
+  /*
+   The colour image (`[outputs] color`).
+   */
+  VKL_OUTPUT_COLOR = 0,
+  /*
+   Object IDs, 0 = background (`[outputs] ids`).
+   */
+  VKL_OUTPUT_IDS,
+  /*
+   Camera-frame z in metres, +infinity where nothing was drawn (`[outputs] depth`).
+   */
+  VKL_OUTPUT_DEPTH,
+  /*
+   Pixel motion (dx, dy) since the previous pose, NaN where unknown or background
+   (`[outputs] flow`).
+   */
+  VKL_OUTPUT_FLOW,
+} vkl_output;
+
+/*
  A calibrated camera (OpenCV's standard model, or a Brown lens held as its exact twin).
  */
 typedef struct vkl_camera_s vkl_camera_s;
+
+/*
+ vklens's own headless Vulkan device: the device scene rendering runs on. A scene render
+ submits work and waits for it, which vklens never does on the caller's queue (vkl_gpu), so
+ scenes get a device of their own, as the command line and the Python package do.
+ */
+typedef struct vkl_device_s vkl_device_s;
 
 /*
  An error: its kind, message, and the argument it is about (if one).
@@ -97,9 +166,20 @@ typedef struct vkl_camera_s vkl_camera_s;
 typedef struct vkl_error_s vkl_error_s;
 
 /*
+ One rendered frame: the outputs its scene asks for, in host memory.
+ */
+typedef struct vkl_frame_s vkl_frame_s;
+
+/*
  vklens's view of the caller's device: its function tables and its own memory allocator.
  */
 typedef struct vkl_gpu_s vkl_gpu_s;
+
+/*
+ A scene file planned for rendering: its geometry loaded, its camera read, the pipeline
+ chosen (vkl_scene_explain says which and why).
+ */
+typedef struct vkl_scene_s vkl_scene_s;
 
 /*
  A warp built once (pipelines, map images) and recorded every frame.
@@ -246,6 +326,23 @@ typedef struct {
   uint32_t width;
   uint32_t height;
 } vkl_image;
+
+/*
+ A device handle, made by vkl_device_create. vkl_scene_render may be called from several
+ threads on one device (its submissions are serialized).
+ */
+typedef vkl_device_s *vkl_device;
+
+/*
+ A scene handle. Immutable: safe to use from any thread, also to render on several threads
+ at once.
+ */
+typedef vkl_scene_s *vkl_scene;
+
+/*
+ A frame handle, made by vkl_scene_render. Immutable: safe to read from any thread.
+ */
+typedef vkl_frame_s *vkl_frame;
 
 #ifdef __cplusplus
 extern "C" {
@@ -501,6 +598,171 @@ vkl_error vkl_warper_record(vkl_warper w,
  `w` is NULL or points to NULL or to a warper this library returned.
  */
 void vkl_warper_free(vkl_warper *w);
+
+/*
+ Opens vklens's own headless device: its own instance, device and queue, none of the
+ caller's. The environment picks it as for the command line: `VKLENS_DEVICE` (`cpu` for
+ lavapipe, `gpu`, an index or a part of the device name; default: the fastest), and
+ `VKLENS_VALIDATION=1` turns the Khronos validation layer on (see
+ vkl_device_check_validation). No Vulkan library or device is VKL_ERROR_UNSUPPORTED or
+ VKL_ERROR_VULKAN.
+
+ # Safety
+ `out` is NULL or writable.
+ */
+vkl_error vkl_device_create(vkl_device *out);
+
+/*
+ The device's name as the driver reports it (UTF-8, NUL-terminated), valid until
+ vkl_device_free; NULL for a NULL device.
+
+ # Safety
+ `d` is NULL or a live device.
+ */
+const char *vkl_device_name(vkl_device d);
+
+/*
+ VKL_ERROR_VULKAN listing the validation layer's messages if it was on (VKLENS_VALIDATION=1)
+ and has reported anything on this device so far; NULL otherwise.
+
+ # Safety
+ `d` is NULL or a live device.
+ */
+vkl_error vkl_device_check_validation(vkl_device d);
+
+/*
+ Closes the device and sets `*d` to NULL. Frames already rendered on it stay valid (they
+ are host memory); no render on it may be running.
+
+ # Safety
+ `d` is NULL or points to NULL or to a device this library returned.
+ */
+void vkl_device_free(vkl_device *d);
+
+/*
+ Reads a scene file (TOML, as `vklens render --scene` reads it; see
+ examples/scenes/README.md) and plans it: relative paths in it (the camera, a mesh) are
+ resolved against the file's folder. A missing or unreadable file is VKL_ERROR_IO naming
+ the path; a malformed one (TOML, an unknown key or value) is VKL_ERROR_INPUT naming the
+ file and the key. No Vulkan needed.
+
+ # Safety
+ `path` is NULL or a NUL-terminated string; `out` is NULL or writable.
+ */
+vkl_error vkl_scene_load(const char *path, vkl_scene *out);
+
+/*
+ Parses a scene file's text (TOML) and plans it. `base_path` is the path of the file the
+ text stands for: relative paths in the text are resolved against its folder, and
+ messages name it. NULL = "scene.toml" in the working folder. Errors as vkl_scene_load's
+ for a malformed text. No Vulkan needed.
+
+ # Safety
+ `toml_text` and `base_path` are NULL or NUL-terminated strings; `out` is NULL or writable.
+ */
+vkl_error vkl_scene_parse(const char *toml_text, const char *base_path, vkl_scene *out);
+
+/*
+ How many frames (poses) the scene has: vkl_scene_render takes 0 to count - 1.
+
+ # Safety
+ `s` is NULL or a live scene; `count` is NULL or writable.
+ */
+vkl_error vkl_scene_frame_count(vkl_scene s, size_t *count);
+
+/*
+ The largest geometric error the plan's approximations leave, in output pixels, as
+ measured while planning (the scene's `[accuracy] max_error_px` bounds it).
+
+ # Safety
+ `s` is NULL or a live scene; `px` is NULL or writable.
+ */
+vkl_error vkl_scene_expected_error_px(vkl_scene s, double *px);
+
+/*
+ The plan as `vklens render --explain` prints it (the route, each step with the reason it
+ is there, the expected error against the budget): a new UTF-8, NUL-terminated string
+ written to `*out`, which the caller frees with vkl_string_free.
+
+ # Safety
+ `s` is NULL or a live scene; `out` is NULL or writable.
+ */
+vkl_error vkl_scene_explain(vkl_scene s, char **out);
+
+/*
+ Frees a string this library returned (vkl_scene_explain's) and sets `*s` to NULL.
+ `s == NULL` and `*s == NULL` are harmless. Never pass it memory of another allocator.
+
+ # Safety
+ `s` is NULL or points to NULL or to a string this library returned and did not free.
+ */
+void vkl_string_free(char **s);
+
+/*
+ Frees a scene and sets `*s` to NULL. Frames rendered from it stay valid.
+
+ # Safety
+ `s` is NULL or points to NULL or to a scene this library returned.
+ */
+void vkl_scene_free(vkl_scene *s);
+
+/*
+ Renders frame `frame_index` (the scene's pose of that index, 0-based) on `d` and waits for
+ it: the outputs come back in host memory, in a new frame written to `*out`. An index past
+ the scene's poses is VKL_ERROR_INPUT naming frame_index; work the device cannot do is
+ VKL_ERROR_UNSUPPORTED.
+
+ # Safety
+ `d` and `s` are NULL or live handles; `out` is NULL or writable.
+ */
+vkl_error vkl_scene_render(vkl_device d, vkl_scene s, size_t frame_index, vkl_frame *out);
+
+/*
+ `(width, height)` of every output of the frame.
+
+ # Safety
+ `f` is NULL or a live frame; `width` and `height` are NULL or writable.
+ */
+vkl_error vkl_frame_size(vkl_frame f, uint32_t *width, uint32_t *height);
+
+/*
+ The frame's pose index in its scene, and the wall time of its GPU work in milliseconds.
+ Either pointer may be NULL when that value is not wanted.
+
+ # Safety
+ `f` is NULL or a live frame; `index` and `ms` are NULL or writable.
+ */
+vkl_error vkl_frame_info(vkl_frame f, size_t *index, double *ms);
+
+/*
+ Whether the frame has output `which` (a vkl_output), its format and its size in bytes:
+ VKL_PIXELS_NONE and 0 when the scene did not ask for it (not an error). Either pointer may
+ be NULL when that value is not wanted.
+
+ # Safety
+ `f` is NULL or a live frame; `format` and `bytes` are NULL or writable.
+ */
+vkl_error vkl_frame_output(vkl_frame f, uint32_t which, vkl_pixel_format *format, size_t *bytes);
+
+/*
+ Copies output `which` (a vkl_output) into the caller's `dst` of `dst_bytes` bytes, laid out
+ as vkl_pixel_format says; vkl_frame_output gives the size. `dst` stays the caller's, the
+ frame keeps its own copy. A `dst_bytes` smaller than the output, or an output the scene did
+ not ask for, is VKL_ERROR_INPUT and copies nothing; bytes past the output's are untouched.
+
+ # Safety
+ `f` is NULL or a live frame; `dst` is NULL or points to `dst_bytes` writable bytes that do
+ not overlap the frame.
+ */
+vkl_error vkl_frame_copy(vkl_frame f, uint32_t which, void *dst, size_t dst_bytes);
+
+/*
+ Frees a frame and sets `*f` to NULL.
+
+ # Safety
+ `f` is NULL or points to NULL or to a frame this library returned.
+ */
+void vkl_frame_free(vkl_frame *f);
 
 #ifdef __cplusplus
 }  // extern "C"

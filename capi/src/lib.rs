@@ -21,8 +21,8 @@ use std::sync::{Arc, Mutex};
 
 use ash::vk;
 use vklens_core::{
-    Border, Camera, EnabledFeatures, Error, ErrorKind, Gpu, ImageRef, PixelFormat, Sampling,
-    WarpMethod, WarpOptions, Warper,
+    Border, Camera, Device, EnabledFeatures, Error, ErrorKind, Frame, Gpu, ImageRef, PixelFormat,
+    Pixels, Sampling, SceneRenderer, WarpMethod, WarpOptions, Warper,
 };
 
 /// The version of this header's structs: set every `version` field to it.
@@ -1098,4 +1098,486 @@ pub unsafe extern "C" fn vkl_warper_record(
 pub unsafe extern "C" fn vkl_warper_free(w: *mut vkl_warper) {
     // SAFETY: the caller's contract, as `free` needs it.
     release(|| unsafe { free(w) })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scenes
+
+/// vklens's own headless Vulkan device: the device scene rendering runs on. A scene render
+/// submits work and waits for it, which vklens never does on the caller's queue (vkl_gpu), so
+/// scenes get a device of their own, as the command line and the Python package do.
+pub struct vkl_device_s {
+    device: Device,
+    name: CString,
+}
+
+/// A device handle, made by vkl_device_create. vkl_scene_render may be called from several
+/// threads on one device (its submissions are serialized).
+pub type vkl_device = *mut vkl_device_s;
+
+/// Opens vklens's own headless device: its own instance, device and queue, none of the
+/// caller's. The environment picks it as for the command line: `VKLENS_DEVICE` (`cpu` for
+/// lavapipe, `gpu`, an index or a part of the device name; default: the fastest), and
+/// `VKLENS_VALIDATION=1` turns the Khronos validation layer on (see
+/// vkl_device_check_validation). No Vulkan library or device is VKL_ERROR_UNSUPPORTED or
+/// VKL_ERROR_VULKAN.
+///
+/// # Safety
+/// `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_device_create(out: *mut vkl_device) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        let device = Device::new()?;
+        let name = CString::new(device.name().replace('\0', " ")).unwrap_or_default();
+        let handle = Box::into_raw(Box::new(vkl_device_s { device, name }));
+        // SAFETY: non-null (checked) and writable (the caller's contract).
+        unsafe { out.write(handle) };
+        Ok(())
+    })
+}
+
+/// The device's name as the driver reports it (UTF-8, NUL-terminated), valid until
+/// vkl_device_free; NULL for a NULL device.
+///
+/// # Safety
+/// `d` is NULL or a live device.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_device_name(d: vkl_device) -> *const c_char {
+    // SAFETY: NULL or a live device (the caller's contract).
+    match unsafe { d.as_ref() } {
+        Some(d) => d.name.as_ptr(),
+        None => ptr::null(),
+    }
+}
+
+/// VKL_ERROR_VULKAN listing the validation layer's messages if it was on (VKLENS_VALIDATION=1)
+/// and has reported anything on this device so far; NULL otherwise.
+///
+/// # Safety
+/// `d` is NULL or a live device.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_device_check_validation(d: vkl_device) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live device (the caller's contract).
+        let d = unsafe { arg(d, "device")? };
+        d.device.check_validation()
+    })
+}
+
+/// Closes the device and sets `*d` to NULL. Frames already rendered on it stay valid (they
+/// are host memory); no render on it may be running.
+///
+/// # Safety
+/// `d` is NULL or points to NULL or to a device this library returned.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_device_free(d: *mut vkl_device) {
+    // SAFETY: the caller's contract, as `free` needs it.
+    release(|| unsafe { free(d) })
+}
+
+/// A scene file planned for rendering: its geometry loaded, its camera read, the pipeline
+/// chosen (vkl_scene_explain says which and why).
+pub struct vkl_scene_s {
+    scene: SceneRenderer,
+}
+
+/// A scene handle. Immutable: safe to use from any thread, also to render on several threads
+/// at once.
+pub type vkl_scene = *mut vkl_scene_s;
+
+/// `p` as a string, or an input error naming `what`.
+///
+/// # Safety
+/// `p` is NULL or NUL-terminated.
+unsafe fn arg_str<'a>(p: *const c_char, what: &str) -> Result<&'a str, Error> {
+    // SAFETY: NULL or NUL-terminated (the caller's contract).
+    unsafe { option_str(p, what)? }.ok_or_else(|| input(format!("{what}: NULL pointer")))
+}
+
+fn new_scene(out: *mut vkl_scene, scene: SceneRenderer) -> Result<(), Error> {
+    let handle = Box::into_raw(Box::new(vkl_scene_s { scene }));
+    // SAFETY: `out` was checked non-null by the caller of `new_scene`, and is writable (the C
+    // caller's contract).
+    unsafe { out.write(handle) };
+    Ok(())
+}
+
+/// Reads a scene file (TOML, as `vklens render --scene` reads it; see
+/// examples/scenes/README.md) and plans it: relative paths in it (the camera, a mesh) are
+/// resolved against the file's folder. A missing or unreadable file is VKL_ERROR_IO naming
+/// the path; a malformed one (TOML, an unknown key or value) is VKL_ERROR_INPUT naming the
+/// file and the key. No Vulkan needed.
+///
+/// # Safety
+/// `path` is NULL or a NUL-terminated string; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_scene_load(path: *const c_char, out: *mut vkl_scene) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        // SAFETY: NULL or NUL-terminated (the caller's contract).
+        let path = std::path::Path::new(unsafe { arg_str(path, "path")? });
+        // The planner reports an unreadable file as bad input; opening it first makes it an
+        // I/O error, as for vkl_camera_load, so that the caller can tell a wrong path from a
+        // wrong file.
+        std::fs::File::open(path).map_err(|e| Error::io(path, "cannot read scene file", &e))?;
+        new_scene(out, SceneRenderer::load(path)?)
+    })
+}
+
+/// Parses a scene file's text (TOML) and plans it. `base_path` is the path of the file the
+/// text stands for: relative paths in the text are resolved against its folder, and
+/// messages name it. NULL = "scene.toml" in the working folder. Errors as vkl_scene_load's
+/// for a malformed text. No Vulkan needed.
+///
+/// # Safety
+/// `toml_text` and `base_path` are NULL or NUL-terminated strings; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_scene_parse(
+    toml_text: *const c_char,
+    base_path: *const c_char,
+    out: *mut vkl_scene,
+) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        // SAFETY (both): NULL or NUL-terminated (the caller's contract).
+        let text = unsafe { arg_str(toml_text, "toml_text")? };
+        let base = unsafe { option_str(base_path, "base_path")? }.unwrap_or("scene.toml");
+        new_scene(out, SceneRenderer::parse(text, base)?)
+    })
+}
+
+/// How many frames (poses) the scene has: vkl_scene_render takes 0 to count - 1.
+///
+/// # Safety
+/// `s` is NULL or a live scene; `count` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_scene_frame_count(s: vkl_scene, count: *mut usize) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live scene; NULL (refused) or writable (the caller's contract).
+        unsafe { put(count, "count", arg(s, "scene")?.scene.frame_count()) }
+    })
+}
+
+/// The largest geometric error the plan's approximations leave, in output pixels, as
+/// measured while planning (the scene's `[accuracy] max_error_px` bounds it).
+///
+/// # Safety
+/// `s` is NULL or a live scene; `px` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_scene_expected_error_px(s: vkl_scene, px: *mut f64) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live scene; NULL (refused) or writable (the caller's contract).
+        unsafe { put(px, "px", arg(s, "scene")?.scene.expected_error_px()) }
+    })
+}
+
+/// The plan as `vklens render --explain` prints it (the route, each step with the reason it
+/// is there, the expected error against the budget): a new UTF-8, NUL-terminated string
+/// written to `*out`, which the caller frees with vkl_string_free.
+///
+/// # Safety
+/// `s` is NULL or a live scene; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_scene_explain(s: vkl_scene, out: *mut *mut c_char) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        // SAFETY: NULL or a live scene (the caller's contract).
+        let s = unsafe { arg(s, "scene")? };
+        let text = CString::new(s.scene.explain().replace('\0', " ")).unwrap_or_default();
+        // SAFETY: non-null (checked) and writable (the caller's contract).
+        unsafe { out.write(text.into_raw()) };
+        Ok(())
+    })
+}
+
+/// Frees a string this library returned (vkl_scene_explain's) and sets `*s` to NULL.
+/// `s == NULL` and `*s == NULL` are harmless. Never pass it memory of another allocator.
+///
+/// # Safety
+/// `s` is NULL or points to NULL or to a string this library returned and did not free.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_string_free(s: *mut *mut c_char) {
+    release(|| {
+        if s.is_null() {
+            return;
+        }
+        // SAFETY: the caller's contract: `*s` is NULL or came from `CString::into_raw`; it is
+        // nulled so that a second free through the same variable sees NULL.
+        unsafe {
+            let inner = s.replace(ptr::null_mut());
+            if !inner.is_null() {
+                drop(CString::from_raw(inner));
+            }
+        }
+    })
+}
+
+/// Frees a scene and sets `*s` to NULL. Frames rendered from it stay valid.
+///
+/// # Safety
+/// `s` is NULL or points to NULL or to a scene this library returned.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_scene_free(s: *mut vkl_scene) {
+    // SAFETY: the caller's contract, as `free` needs it.
+    release(|| unsafe { free(s) })
+}
+
+// The header's thread rules for devices, scenes and frames rest on these being Send + Sync
+// (a device serializes its submissions): this fails to build if one stops being so.
+const _: fn() = || {
+    fn shared<T: Send + Sync>() {}
+    shared::<vkl_device_s>();
+    shared::<vkl_scene_s>();
+    shared::<vkl_frame_s>();
+};
+
+/// One rendered frame: the outputs its scene asks for, in host memory.
+pub struct vkl_frame_s {
+    frame: Frame,
+}
+
+/// A frame handle, made by vkl_scene_render. Immutable: safe to read from any thread.
+pub type vkl_frame = *mut vkl_frame_s;
+
+/// Renders frame `frame_index` (the scene's pose of that index, 0-based) on `d` and waits for
+/// it: the outputs come back in host memory, in a new frame written to `*out`. An index past
+/// the scene's poses is VKL_ERROR_INPUT naming frame_index; work the device cannot do is
+/// VKL_ERROR_UNSUPPORTED.
+///
+/// # Safety
+/// `d` and `s` are NULL or live handles; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_scene_render(
+    d: vkl_device,
+    s: vkl_scene,
+    frame_index: usize,
+    out: *mut vkl_frame,
+) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        // SAFETY: NULL or live handles (the caller's contract).
+        let (d, s) = unsafe { (arg(d, "device")?, arg(s, "scene")?) };
+        let count = s.scene.frame_count();
+        if frame_index >= count {
+            return Err(input(format!(
+                "frame_index: {frame_index}, but the scene has {count} pose(s) (0 to {})",
+                count.saturating_sub(1)
+            )));
+        }
+        let mut rendered = None;
+        s.scene
+            .render(&d.device, frame_index..frame_index + 1, &mut |f| {
+                rendered = Some(f);
+                Ok(())
+            })?;
+        let frame = rendered.ok_or_else(|| {
+            Error::internal(format!("frame {frame_index}: the renderer returned none"))
+        })?;
+        let handle = Box::into_raw(Box::new(vkl_frame_s { frame }));
+        // SAFETY: non-null (checked) and writable (the caller's contract).
+        unsafe { out.write(handle) };
+        Ok(())
+    })
+}
+
+/// `(width, height)` of every output of the frame.
+///
+/// # Safety
+/// `f` is NULL or a live frame; `width` and `height` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_frame_size(
+    f: vkl_frame,
+    width: *mut u32,
+    height: *mut u32,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live frame (the caller's contract).
+        let r = &unsafe { arg(f, "frame")? }.frame.rendered;
+        // SAFETY: NULL (refused) or writable (the caller's contract).
+        unsafe { put_size(width, height, (r.width, r.height)) }
+    })
+}
+
+/// The frame's pose index in its scene, and the wall time of its GPU work in milliseconds.
+/// Either pointer may be NULL when that value is not wanted.
+///
+/// # Safety
+/// `f` is NULL or a live frame; `index` and `ms` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_frame_info(
+    f: vkl_frame,
+    index: *mut usize,
+    ms: *mut f64,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live frame (the caller's contract).
+        let f = &unsafe { arg(f, "frame")? }.frame;
+        // SAFETY (both): non-null and writable (the caller's contract).
+        if !index.is_null() {
+            unsafe { index.write(f.index) };
+        }
+        if !ms.is_null() {
+            unsafe { ms.write(f.ms) };
+        }
+        Ok(())
+    })
+}
+
+/// An output of a rendered frame (the scene file's `[outputs]` table asks for them).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum vkl_output {
+    /// The colour image (`[outputs] color`).
+    VKL_OUTPUT_COLOR = 0,
+    /// Object IDs, 0 = background (`[outputs] ids`).
+    VKL_OUTPUT_IDS,
+    /// Camera-frame z in metres, +infinity where nothing was drawn (`[outputs] depth`).
+    VKL_OUTPUT_DEPTH,
+    /// Pixel motion (dx, dy) since the previous pose, NaN where unknown or background
+    /// (`[outputs] flow`).
+    VKL_OUTPUT_FLOW,
+}
+
+/// How an output's pixels are stored: row-major from the top row, rows tightly packed
+/// (width × the pixel's bytes), the host's byte order.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum vkl_pixel_format {
+    /// The frame does not have this output (the scene did not ask for it).
+    VKL_PIXELS_NONE = 0,
+    /// 4 bytes per pixel: R, G, B, A, 0 to 255 (colour; as VK_FORMAT_R8G8B8A8_UNORM).
+    VKL_PIXELS_RGBA8,
+    /// 4 floats per pixel: R, G, B, A, linear 0 to 1 and above for HDR (colour when the scene
+    /// asks for float output; as VK_FORMAT_R32G32B32A32_SFLOAT).
+    VKL_PIXELS_RGBA32F,
+    /// 1 uint32_t per pixel (IDs).
+    VKL_PIXELS_R32_UINT,
+    /// 1 float per pixel (depth).
+    VKL_PIXELS_R32F,
+    /// 2 floats per pixel, x then y (flow).
+    VKL_PIXELS_RG32F,
+}
+
+/// The bytes of `which` in `frame`, and their format; `None` when the frame lacks it.
+fn output_bytes(frame: &Frame, which: u32) -> Result<Option<(vkl_pixel_format, &[u8])>, Error> {
+    use vkl_pixel_format::*;
+    /// The bytes of a slice of plain numbers (u8, u32 or f32, alone or in arrays: no padding,
+    /// every bit pattern valid as u8).
+    fn bytes<T: Copy>(v: &[T]) -> &[u8] {
+        // SAFETY: `v` is a live slice of `size_of_val(v)` initialized bytes (T is only ever a
+        // padding-free number type or array of one, see the callers), u8 has alignment 1, and
+        // the result borrows `v`.
+        unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u8>(), std::mem::size_of_val(v)) }
+    }
+    let r = &frame.rendered;
+    Ok(match which {
+        0 => r.color.as_ref().map(|c| match &c.pixels {
+            Pixels::Rgba8(p) => (VKL_PIXELS_RGBA8, bytes(p)),
+            Pixels::Rgba32F(p) => (VKL_PIXELS_RGBA32F, bytes(p)),
+            Pixels::R32Uint(p) => (VKL_PIXELS_R32_UINT, bytes(p)),
+        }),
+        1 => r.ids.as_deref().map(|p| (VKL_PIXELS_R32_UINT, bytes(p))),
+        2 => r.depth.as_deref().map(|p| (VKL_PIXELS_R32F, bytes(p))),
+        3 => r.flow.as_deref().map(|p| (VKL_PIXELS_RG32F, bytes(p))),
+        w => {
+            return Err(input(format!(
+                "which: {w} (expected VKL_OUTPUT_COLOR, VKL_OUTPUT_IDS, VKL_OUTPUT_DEPTH or VKL_OUTPUT_FLOW)"
+            )))
+        }
+    })
+}
+
+/// Whether the frame has output `which` (a vkl_output), its format and its size in bytes:
+/// VKL_PIXELS_NONE and 0 when the scene did not ask for it (not an error). Either pointer may
+/// be NULL when that value is not wanted.
+///
+/// # Safety
+/// `f` is NULL or a live frame; `format` and `bytes` are NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_frame_output(
+    f: vkl_frame,
+    which: u32,
+    format: *mut vkl_pixel_format,
+    bytes: *mut usize,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live frame (the caller's contract).
+        let f = &unsafe { arg(f, "frame")? }.frame;
+        let (fmt, len) = match output_bytes(f, which)? {
+            Some((fmt, b)) => (fmt, b.len()),
+            None => (vkl_pixel_format::VKL_PIXELS_NONE, 0),
+        };
+        // SAFETY (both): non-null and writable (the caller's contract).
+        if !format.is_null() {
+            unsafe { format.write(fmt) };
+        }
+        if !bytes.is_null() {
+            unsafe { bytes.write(len) };
+        }
+        Ok(())
+    })
+}
+
+/// Copies output `which` (a vkl_output) into the caller's `dst` of `dst_bytes` bytes, laid out
+/// as vkl_pixel_format says; vkl_frame_output gives the size. `dst` stays the caller's, the
+/// frame keeps its own copy. A `dst_bytes` smaller than the output, or an output the scene did
+/// not ask for, is VKL_ERROR_INPUT and copies nothing; bytes past the output's are untouched.
+///
+/// # Safety
+/// `f` is NULL or a live frame; `dst` is NULL or points to `dst_bytes` writable bytes that do
+/// not overlap the frame.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_frame_copy(
+    f: vkl_frame,
+    which: u32,
+    dst: *mut std::ffi::c_void,
+    dst_bytes: usize,
+) -> vkl_error {
+    guard(|| {
+        // SAFETY: NULL or a live frame (the caller's contract).
+        let f = &unsafe { arg(f, "frame")? }.frame;
+        let name = ["color", "ids", "depth", "flow"]
+            .get(which as usize)
+            .copied();
+        let Some((_, src)) = output_bytes(f, which)? else {
+            let name = name.unwrap_or("?");
+            return Err(input(format!(
+                "which: the frame has no {name} (the scene's [outputs] {name} is not true)"
+            )));
+        };
+        if dst.is_null() {
+            return Err(input("dst: NULL pointer"));
+        }
+        if dst_bytes < src.len() {
+            return Err(input(format!(
+                "dst_bytes: {dst_bytes}, but the output is {} bytes",
+                src.len()
+            )));
+        }
+        // SAFETY: `dst` is non-null (checked), has `dst_bytes` ≥ `src.len()` writable bytes
+        // and does not overlap the frame (the caller's contract).
+        unsafe { ptr::copy_nonoverlapping(src.as_ptr(), dst.cast::<u8>(), src.len()) };
+        Ok(())
+    })
+}
+
+/// Frees a frame and sets `*f` to NULL.
+///
+/// # Safety
+/// `f` is NULL or points to NULL or to a frame this library returned.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_frame_free(f: *mut vkl_frame) {
+    // SAFETY: the caller's contract, as `free` needs it.
+    release(|| unsafe { free(f) })
 }

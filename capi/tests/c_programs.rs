@@ -1,6 +1,7 @@
 //! The C API from C and C++: the example host engine (`examples/c/embed.c`), the bad-input
-//! suite (`tests/c/api_test.c`), the points functions bit for bit against the Rust library,
-//! the C++ program, and the bad-input suite under valgrind. Each program is built here with
+//! suite (`tests/c/api_test.c`), the points functions and scene rendering (`tests/c/scene.c`)
+//! bit for bit against the Rust library, the C++ program, and the bad-input suite under
+//! valgrind. Each program is built here with
 //! the system compiler against `include/vklens.h` and `libvklens.so`, using the flags
 //! `vklens.pc` gives (so the pkg-config file is tested too). GPU programs run with the
 //! Khronos validation layer on; any message fails them.
@@ -9,7 +10,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use vklens_core::{Camera, InverseMethod, Raster};
+use vklens_core::{Camera, Device, InverseMethod, Pixels, Raster, SceneRenderer};
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -353,4 +354,61 @@ fn a_cpp_program_includes_the_header_and_calls_the_camera_functions() {
     assert!(
         stdout.contains("800x600 camera; round trip within") && stdout.contains("missing file:")
     );
+}
+
+#[test]
+fn a_c_program_renders_scene_files_as_the_rust_library_does() {
+    let dir = temp("scene");
+    let exe = build("capi/tests/c/scene.c", &dir);
+    let run = Command::new(&exe)
+        .arg(repo())
+        .arg(&dir)
+        .env("VKLENS_VALIDATION", "1")
+        .output()
+        .expect("scene runs");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success() && stdout.contains(" passed, 0 failed"),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    // The same frame through SceneRenderer: the C frame's bytes are the Rust frame's.
+    let scene = SceneRenderer::load(repo().join("examples/scenes/rolling_shutter.toml"))
+        .expect("rolling_shutter.toml");
+    let device = Device::new().expect("a device");
+    let mut frames = Vec::new();
+    scene
+        .render(&device, 0..1, &mut |f| {
+            frames.push(f);
+            Ok(())
+        })
+        .expect("the Rust render");
+    let r = &frames[0].rendered;
+    let color: Vec<u8> = match &r.color.as_ref().expect("colour").pixels {
+        Pixels::Rgba8(p) => p.iter().flatten().copied().collect(),
+        other => panic!("colour as {other:?}: expected RGBA8"),
+    };
+    let ids: Vec<u8> = r
+        .ids
+        .as_ref()
+        .expect("ids")
+        .iter()
+        .flat_map(|v| v.to_ne_bytes())
+        .collect();
+    let depth: Vec<u8> = r
+        .depth
+        .as_ref()
+        .expect("depth")
+        .iter()
+        .flat_map(|v| v.to_ne_bytes())
+        .collect();
+    for (name, rust) in [("color", color), ("ids", ids), ("depth", depth)] {
+        let c = std::fs::read(dir.join(format!("{name}.bin"))).expect("the C program's output");
+        assert_eq!(c.len(), rust.len(), "{name}: sizes differ");
+        let differ = c.iter().zip(&rust).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            differ, 0,
+            "{name}: {differ} bytes differ between C and Rust"
+        );
+    }
 }

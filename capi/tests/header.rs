@@ -38,6 +38,8 @@ fn the_committed_header_is_what_cbindgen_generates() {
         "VKL_API_VERSION",
         "VKL_ERROR_INPUT",
         "vkl_vulkan",
+        "vkl_scene_render",
+        "VKL_OUTPUT_FLOW",
     ] {
         assert!(generated.contains(name), "{name} missing from the header");
     }

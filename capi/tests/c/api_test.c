@@ -191,6 +191,41 @@ static void cameras(void) {
     vkl_warper_free(NULL);
 }
 
+/* Scenes load, plan, explain and fail without a device: valgrind sees their frees too. The
+ * camera path is relative to this file, which `base_path` stands for. */
+static void scenes(void) {
+    const char *text = "[geometry]\nscene = \"checkerboard:12x8:0.1\"\n"
+                       "[optics]\ncamera = \"../../../examples/cameras/barrel_k1k2.json\"\n"
+                       "[outputs]\ncolor = true\n"
+                       "[sensor]\nrolling_shutter = \"top_to_bottom\"\n"
+                       "[[poses]]\nrvec = [0.0, -0.08, 0.0]\ntvec = [-0.6521, -0.35, 1.2519]\n"
+                       "end_rvec = [0.0, 0.08, 0.0]\nend_tvec = [-0.4444, -0.35, 1.3398]\n";
+    vkl_scene s = NULL;
+    expect_ok("scene_parse", vkl_scene_parse(text, __FILE__, &s));
+    size_t count = 0;
+    expect_ok("scene_frame_count", vkl_scene_frame_count(s, &count));
+    expect("one frame", count == 1);
+    char *plan = NULL;
+    expect_ok("scene_explain", vkl_scene_explain(s, &plan));
+    expect("the plan names the rolling shutter", plan && strstr(plan, "rolling") != NULL);
+    vkl_string_free(&plan);
+    expect("vkl_string_free nulls the string", plan == NULL);
+    vkl_string_free(&plan);
+    vkl_string_free(NULL);
+    vkl_scene_free(&s);
+    expect("vkl_scene_free nulls the handle", s == NULL);
+    vkl_scene_free(&s);
+    vkl_scene_free(NULL);
+    expect_error("scene_load(missing)", vkl_scene_load("/no/such/scene.toml", &s), VKL_ERROR_IO,
+                 "/no/such/scene.toml");
+    expect_error("scene_parse(NULL text)", vkl_scene_parse(NULL, __FILE__, &s), VKL_ERROR_INPUT, "toml_text");
+    expect_error("scene_parse(bad TOML)", vkl_scene_parse("[sensor", __FILE__, &s), VKL_ERROR_INPUT, "TOML");
+    expect_error("scene_render(NULL device)", vkl_scene_render(NULL, NULL, 0, NULL), VKL_ERROR_INPUT, "out");
+    expect("no scene made by the failures", s == NULL);
+    vkl_frame_free(NULL);
+    vkl_device_free(NULL);
+}
+
 static void gpu_and_warper(void) {
     host h;
     host_init(&h);
@@ -301,6 +336,7 @@ static void gpu_and_warper(void) {
 
 int main(int argc, char **argv) {
     cameras();
+    scenes();
     if (!(argc > 1 && strcmp(argv[1], "--no-gpu") == 0)) gpu_and_warper();
     printf("%d passed, %d failed\n", passed, failed);
     return failed != 0;

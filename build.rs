@@ -7,7 +7,8 @@
 //! The SPIR-V lands in `$OUT_DIR/<file name>.spv` (e.g. `points.comp.spv`) and is embedded
 //! with `include_bytes!` by `src/gpu/shaders.rs`. A shader with a line
 //! `// vklens:variant NAME DEFINE` is compiled once more with `#define DEFINE`, to
-//! `<file name>.NAME.spv` (e.g. `points.comp.f64.spv`, the f64 model).
+//! `<file name>.NAME.spv` (e.g. `points.comp.f64.spv`, the f64 model); `DEFINE` may be several,
+//! comma-separated (`// vklens:variant forward_f64 VKL_F64,VKL_POINTS_FORWARD`).
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -110,8 +111,12 @@ fn main() {
             let mut includes = Includes {
                 dir: glsl.join("include"),
             };
-            let defines: Vec<(&str, Option<&str>)> =
-                define.iter().map(|d| (d.as_str(), Some("1"))).collect();
+            // A variant may set several defines, comma-separated.
+            let defines: Vec<(&str, Option<&str>)> = define
+                .iter()
+                .flat_map(|d| d.split(','))
+                .map(|d| (d, Some("1")))
+                .collect();
             let input = match ShaderInput::new(
                 &source,
                 stage,

@@ -4,6 +4,16 @@
 pub const POINTS_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/points.comp.spv"));
 /// `glsl/points.comp` compiled with `VKL_F64`: the same model in f64 (needs `shaderFloat64`).
 pub const POINTS_COMP_F64: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/points.comp.f64.spv"));
+/// `glsl/points.comp`'s modes 0 and 2 alone (distort, project), f32 and f64.
+pub const POINTS_COMP_FORWARD: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/points.comp.forward.spv"));
+pub const POINTS_COMP_FORWARD_F64: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/points.comp.forward_f64.spv"));
+/// `glsl/points.comp`'s modes 1 and 3 alone (undistort, unproject), f32 and f64.
+pub const POINTS_COMP_INVERSE: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/points.comp.inverse.spv"));
+pub const POINTS_COMP_INVERSE_F64: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/points.comp.inverse_f64.spv"));
 /// `glsl/grid_demo.comp`: a procedural grid seen through a lens (analytic inverse per pixel).
 pub const GRID_DEMO_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/grid_demo.comp.spv"));
 /// `glsl/warp.comp`, rgba32f images (16-bit and float data).

@@ -113,9 +113,13 @@ impl PointsPass {
             .u32(spec::MODE, mode_id)
             .u32(spec::METHOD, method)
             .u32(spec::FIXED_POINT_ITERATIONS, iterations);
-        let spirv = match precision {
-            Precision::F32 => shaders::POINTS_COMP,
-            Precision::F64 => shaders::POINTS_COMP_F64,
+        // The module holding this mode's half of glsl/points.comp (which says why).
+        let forward = matches!(mode, PointsMode::Distort | PointsMode::Project);
+        let spirv = match (precision, forward) {
+            (Precision::F32, true) => shaders::POINTS_COMP_FORWARD,
+            (Precision::F64, true) => shaders::POINTS_COMP_FORWARD_F64,
+            (Precision::F32, false) => shaders::POINTS_COMP_INVERSE,
+            (Precision::F64, false) => shaders::POINTS_COMP_INVERSE_F64,
         };
         let pipeline = ComputePipeline::new(
             gpu,

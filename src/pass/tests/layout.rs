@@ -76,6 +76,26 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
     ]);
     let table: Vec<(&str, &[u8], Vec<SpecId>)> = vec![
         ("points.comp", shaders::POINTS_COMP, with(&coords)),
+        (
+            "points.comp (forward)",
+            shaders::POINTS_COMP_FORWARD,
+            with(&coords[..1]),
+        ),
+        (
+            "points.comp (forward, f64)",
+            shaders::POINTS_COMP_FORWARD_F64,
+            with(&coords[..1]),
+        ),
+        (
+            "points.comp (inverse)",
+            shaders::POINTS_COMP_INVERSE,
+            with(&coords),
+        ),
+        (
+            "points.comp (inverse, f64)",
+            shaders::POINTS_COMP_INVERSE_F64,
+            with(&coords),
+        ),
         ("warp.comp", shaders::WARP_COMP, warp.clone()),
         ("warp.comp (rgba8)", shaders::WARP_COMP_RGBA8, warp),
         (

@@ -407,9 +407,13 @@ pub const MAX_CONTRACTION: f64 = 0.5;
 /// Directions per side of the grid [`LineRate::measure`] samples the cone on (off-axis angle
 /// × azimuth).
 const RATE_GRID: usize = 192;
+/// Entries of [`LineRate::per_radian`]: the rate of cones of growing half angle, so that a
+/// point near the axis, where a lens moves its rays' pixels slowest, is bounded by the rate
+/// near the axis, not by the rate at the image's corners.
+pub const RATE_TABLE: usize = 32;
 /// How far past the image's widest ray the measured cone reaches (radians): a vertex at the
 /// image's edge keeps the bounded solve while its ray turns by up to twice this over a frame.
-const RATE_CONE_MARGIN: f64 = 0.15;
+const RATE_CONE_MARGIN: f64 = 0.25;
 /// The measured sup is multiplied by this. The rate is an analytic function of the direction
 /// inside the lens's domain, and the grid's cells are a few milliradians wide: between grid
 /// points it exceeds the sampled largest value by the change of the rate across half a cell,
@@ -420,16 +424,17 @@ const RATE_CONE_MARGIN: f64 = 0.15;
 const RATE_MARGIN: f64 = 1.25;
 
 /// How fast a lens moves a point across the readout's lines as the point's ray direction turns:
-/// the largest |∇ line_time| per radian of ray direction over a cone of directions about the
+/// the largest |∇ line_time| per radian of ray direction over cones of directions about the
 /// optical axis, measured once per camera. With a frame's motion it bounds how fast a point's
 /// own line time can change with the readout time ([`FrameMotion::line_rate_bound`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineRate {
-    /// Readout time per radian: the lens's largest pixels per radian of ray direction along
-    /// the readout's axis, over (lines − 1), with [`RATE_MARGIN`].
-    pub per_radian: f64,
-    /// The half angle of the cone (radians off the optical axis) over which it was measured;
-    /// every direction sampled in it is in the lens's valid domain.
+    /// Entry i: readout time per radian of ray direction (the lens's largest pixels per radian
+    /// along the readout's axis, over lines − 1, with [`RATE_MARGIN`]) over the rays at most
+    /// `cone · i / (RATE_TABLE − 1)` off the axis. Non-decreasing.
+    pub per_radian: [f64; RATE_TABLE],
+    /// The half angle of the largest cone (radians off the optical axis); every direction
+    /// sampled in it is in the lens's valid domain.
     pub cone: f64,
 }
 
@@ -449,7 +454,13 @@ impl LineRate {
         if last == 0.0 {
             return None;
         }
-        let max_angle = camera.lens().max_angle().min(std::f64::consts::PI);
+        // Alg. 1 drops a fisheye's vertices past its vertex limit, as if the lens did not see
+        // them: the cone stays inside it.
+        let max_angle = camera
+            .fisheye_vertex_limit()
+            .unwrap_or(f64::INFINITY)
+            .min(camera.lens().max_angle())
+            .min(std::f64::consts::PI);
         let cone = (image_cone(camera)? + RATE_CONE_MARGIN).min(max_angle);
         // The line coordinate (pixels) along the readout's axis.
         let line = |d: DVec3| {
@@ -458,10 +469,11 @@ impl LineRate {
                 .map(|p| if readout.is_vertical() { p.y } else { p.x })
         };
         const H: f64 = 1e-6;
-        let mut worst: f64 = 0.0;
-        let mut reach = cone;
+        let ring_angle = |i: usize| cone * i as f64 / RATE_GRID as f64;
+        // The largest rate on each ring of directions the lens sees whole.
+        let mut rings = Vec::with_capacity(RATE_GRID + 1);
         'rings: for i in 0..=RATE_GRID {
-            let theta = cone * i as f64 / RATE_GRID as f64;
+            let theta = ring_angle(i);
             let azimuths = if i == 0 { 1 } else { RATE_GRID };
             let mut ring: f64 = 0.0;
             for j in 0..azimuths {
@@ -479,22 +491,36 @@ impl LineRate {
                         line(H.cos() * d + H.sin() * t),
                         line(H.cos() * d - H.sin() * t),
                     ) else {
-                        // The lens does not see this ring everywhere: the cone ends inside the
+                        // The lens does not see this ring everywhere: the cone ends at the
                         // last ring it does.
-                        reach = cone * i.saturating_sub(1) as f64 / RATE_GRID as f64;
                         break 'rings;
                     };
                     g[k] = (a - b) / (2.0 * H);
                 }
                 ring = ring.max(g[0].hypot(g[1]));
             }
-            worst = worst.max(ring);
+            rings.push(ring);
         }
-        let per_radian = RATE_MARGIN * worst / last;
-        (per_radian.is_finite() && reach > 0.0).then_some(LineRate {
+        let reach = ring_angle(rings.len().checked_sub(1)?);
+        // Cone i holds the rings up to its half angle and the next one: between two rings the
+        // rate is within RATE_MARGIN of the larger of them.
+        let mut per_radian = [0.0; RATE_TABLE];
+        for (i, entry) in per_radian.iter_mut().enumerate() {
+            let theta = reach * i as f64 / (RATE_TABLE - 1) as f64;
+            let outer = ((theta / cone * RATE_GRID as f64).ceil() as usize + 1).min(rings.len());
+            let worst = rings[..outer].iter().copied().fold(0.0, f64::max);
+            *entry = RATE_MARGIN * worst / last;
+        }
+        (per_radian.iter().all(|r| r.is_finite()) && reach > 0.0).then_some(LineRate {
             per_radian,
             cone: reach,
         })
+    }
+
+    /// The rate over the rays at most `theta` off the axis; `None` past the cone.
+    pub fn within(&self, theta: f64) -> Option<f64> {
+        let i = (theta.max(0.0) / self.cone * (RATE_TABLE - 1) as f64).ceil();
+        (theta.is_finite() && i <= (RATE_TABLE - 1) as f64).then(|| self.per_radian[i as usize])
     }
 }
 
@@ -578,8 +604,8 @@ impl FrameMotion {
         let speed = self.angular_speed_bound(x);
         let p = self.to_camera(0.5, x);
         let theta = p.x.hypot(p.y).atan2(p.z);
-        let bound = speed * rate.per_radian;
-        (theta + 0.5 * speed <= rate.cone && bound.is_finite()).then_some(bound)
+        let bound = speed * rate.within(theta + 0.5 * speed)?;
+        bound.is_finite().then_some(bound)
     }
 }
 

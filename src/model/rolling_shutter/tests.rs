@@ -617,7 +617,17 @@ fn the_line_rate_bound_is_never_below_the_rate_the_motion_gives() {
     for camera in [standard(), fisheye(), double_sphere()] {
         for readout in Readout::ALL {
             let rate = LineRate::measure(&camera, readout).expect("a rate");
-            assert!(rate.per_radian > 0.0 && rate.cone > 0.0, "{rate:?}");
+            assert!(rate.per_radian[0] > 0.0 && rate.cone > 0.0, "{rate:?}");
+            assert!(
+                rate.per_radian.windows(2).all(|w| w[0] <= w[1]),
+                "a wider cone has no slower rate: {rate:?}"
+            );
+            assert_eq!(
+                rate.within(rate.cone),
+                Some(rate.per_radian[RATE_TABLE - 1])
+            );
+            assert_eq!(rate.within(rate.cone * 1.01), None);
+            assert_eq!(rate.within(f64::NAN), None);
             let (mut checked, mut tightest) = (0, f64::INFINITY);
             for x in world_points(&camera, &pan.0, 300, 5) {
                 let Some(bound) = m.line_rate_bound(&rate, x) else {
@@ -642,8 +652,11 @@ fn the_line_rate_bound_is_never_below_the_rate_the_motion_gives() {
                 camera.model_name()
             );
             println!(
-                "{} {readout}: {checked} points, bound/measured ≥ {tightest:.2}, {rate:?}",
-                camera.model_name()
+                "{} {readout}: {checked} points, bound/measured ≥ {tightest:.2}, cone {:.3}, rates {:.3} .. {:.3}",
+                camera.model_name(),
+                rate.cone,
+                rate.per_radian[0],
+                rate.per_radian[RATE_TABLE - 1]
             );
         }
     }

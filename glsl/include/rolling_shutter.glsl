@@ -35,8 +35,12 @@ const float VKL_RS_MAX_ERROR_PX = 1e-2;
 // model::rolling_shutter::MAX_CONTRACTION: the bound on |d line_time / ds| below which g is
 // strictly increasing with room to spare, and the scan is skipped.
 const float VKL_RS_MAX_CONTRACTION = 0.5;
-// Steps of the bounded solve before it gives up and scans (it converges in 3 to 5).
+// Steps of the bounded solve before it gives up and scans (it converges in 2 to 4).
 const uint VKL_RS_BOUNDED_STEPS = 8u;
+// The bounded solve stops where its next step would move the pixel by less than this (px):
+// a quarter of the refinement's tolerance, for the estimate of the step is the secant's, and
+// a solve that stops a step early is as far off as that step.
+const float VKL_RS_BOUNDED_STEP_TOLERANCE = 0.25 * VKL_RS_PIXEL_TOLERANCE;
 
 // One frame's motion: the first line's world-to-camera rotation, the unit axis and angle of
 // the turn from the first line's camera frame to the last line's, and the two camera centres.
@@ -228,7 +232,8 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
         // superlinearly, so what the next would move the pixel bounds c's error.
         vec2 pixel_speed = abs(c.pixel - a.pixel) / abs(c.s - a.s);
         if (next == c.s
-            || max(pixel_speed.x, pixel_speed.y) * abs(next - c.s) <= VKL_RS_PIXEL_TOLERANCE) {
+            || max(pixel_speed.x, pixel_speed.y) * abs(next - c.s)
+                   <= VKL_RS_BOUNDED_STEP_TOLERANCE) {
             return true;
         }
         a = c;

@@ -27,6 +27,12 @@
 //! pixels at the two ends of the bracket agree to [`PIXEL_TOLERANCE`]. Every loop is bounded
 //! and nothing is allocated, so the same iteration can run per vertex in a shader.
 //!
+//! Where the motion is slow enough, the scan finds nothing: [`FrameMotion::line_rate_bound`]
+//! bounds |d line_time / ds| of a point's own pixel by L (how fast its ray turns, times the
+//! lens's [`LineRate`]), and below 1 g′ ≥ 1 − L > 0, so g has one root at most. The renderer's
+//! per-vertex solve skips the scan there (`glsl/include/rolling_shutter.glsl`); this one, the
+//! reference, always scans.
+//!
 //! A single step of that iteration from mid-frame (the pose at s = ½ gives a row, the row a
 //! time, the time a pose) is what warps built on a gyroscope's rotations use; it is exact only
 //! when the point's line does not move during the readout, and `docs/rolling-shutter.md`

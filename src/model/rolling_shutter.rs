@@ -436,8 +436,9 @@ const RATE_MARGIN: f64 = 1.25;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineRate {
     /// Entry i: readout time per radian of ray direction (the lens's largest pixels per radian
-    /// along the readout's axis, over lines − 1, with [`RATE_MARGIN`]) over the rays at most
-    /// `cone · i / (RATE_TABLE − 1)` off the axis. Non-decreasing.
+    /// along the readout's axis, over lines − 1, with a quarter's margin for what the grid of
+    /// directions can miss) over the rays at most `cone · i / (RATE_TABLE − 1)` off the axis.
+    /// Non-decreasing.
     pub per_radian: [f64; RATE_TABLE],
     /// The half angle of the largest cone (radians off the optical axis); every direction
     /// sampled in it is in the lens's valid domain.

@@ -22,6 +22,10 @@ layout(set = 0, binding = 1, std140) uniform GeometryFrame {
     vec4 previous_turn;             // the same three for the frame flow starts from
     vec4 previous_start_centre;
     vec4 previous_end_centre;
+    vec4 readout_bound;             // x: the half angle of the cone the line rate holds on
+                                    // (radians off the axis; 0: no rate, scan)
+    vec4 readout_rates[8];          // the line rate (readout time per radian of ray direction)
+                                    // of cones of growing half angle, 32 entries
 } frame;
 
 #endif

@@ -32,6 +32,16 @@ const float VKL_RS_PIXEL_TOLERANCE = 1e-4;
 // apart it straddles a jump of the lens map, as on the CPU (MAX_ERROR_PX there, f64's).
 const float VKL_RS_MAX_ERROR_PX = 1e-2;
 
+// model::rolling_shutter::MAX_CONTRACTION: the bound on |d line_time / ds| below which g is
+// strictly increasing with room to spare, and the scan is skipped.
+const float VKL_RS_MAX_CONTRACTION = 0.5;
+// Steps of the bounded solve before it gives up and scans (it converges in 2 to 4).
+const uint VKL_RS_BOUNDED_STEPS = 8u;
+// The bounded solve stops where its next step would move the pixel by less than this (px):
+// a quarter of the refinement's tolerance, for the estimate of the step is the secant's, and
+// a solve that stops a step early is as far off as that step.
+const float VKL_RS_BOUNDED_STEP_TOLERANCE = 0.25 * VKL_RS_PIXEL_TOLERANCE;
+
 // One frame's motion: the first line's world-to-camera rotation, the unit axis and angle of
 // the turn from the first line's camera frame to the last line's, and the two camera centres.
 struct VklMotion {
@@ -153,6 +163,85 @@ bool vkl_rs_refine(VklMotion m, vec3 x, VklRsSample a, VklRsSample b, out VklRsS
     return max(d.x, d.y) <= VKL_RS_MAX_ERROR_PX;
 }
 
+// The distance from x to the segment the camera centre moves along.
+float vkl_rs_path_distance(VklMotion m, vec3 x) {
+    vec3 d = m.end_centre - m.start_centre;
+    float dd = dot(d, d);
+    float t = dd > 0.0 ? clamp(dot(x - m.start_centre, d) / dd, 0.0, 1.0) : 0.0;
+    return length(x - (m.start_centre + t * d));
+}
+
+// model::rolling_shutter::RATE_TABLE: entries of frame.readout_rates.
+const uint VKL_RS_RATE_TABLE = 32u;
+
+// The lens's line rate over the rays at most theta off the axis (LineRate::within); negative
+// past the cone. The table is read at constant indices: a per-lane index into a buffer is a
+// loop over the lanes on lavapipe.
+float vkl_rs_line_rate(float theta) {
+    float cone = frame.readout_bound.x;
+    float i = ceil(max(theta, 0.0) / cone * float(VKL_RS_RATE_TABLE - 1u));
+    float rate = -1.0;
+    for (uint k = 0u; k < VKL_RS_RATE_TABLE; k++) {
+        if (float(k) == i) rate = frame.readout_rates[k / 4u][k % 4u];
+    }
+    return rate;
+}
+
+// The solve where the frame's motion bounds how fast x's own line time moves
+// (model::rolling_shutter::FrameMotion::line_rate_bound): the ray to x turns at most
+// `speed` = angle + |C1 − C0| / d(x, C0C1) radians per unit of readout time, so during the frame
+// it stays within speed / 2 of its ray at mid-frame, θ off the axis; the lens moves a ray's
+// line by at most vkl_rs_line_rate(θ + speed / 2) readout time per radian there, and
+// T(s) = line_time(π(x at pose s)) has |T′| ≤ L = speed · that rate. With L ≤ ½,
+// g(s) = s − T(s) has g′ ∈ [1 − L, 1 + L]: strictly increasing, one root at most, and the
+// first root in readout order the scan looks for is the only one. Then a fixed-point step from
+// mid-frame and secant steps (their slope clamped to [1 − L, 1 + L], so that each step lands
+// where the derivative bounds say the root can be) find it in a few evaluations instead of the
+// scan's 17 and the refinement's.
+//
+// False, for the scan to decide as before, on anything the bound does not cover: no rate, a
+// sample the lens does not see, a ray that could leave the cone, a point nearer the centres'
+// path than the near plane, no convergence in VKL_RS_BOUNDED_STEPS. A point no line reads (g
+// of one sign over [0, 1], known from g at the end of the readout it lies beyond) keeps the
+// position of that end, as the scan gives it.
+bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
+    float distance = vkl_rs_path_distance(m, x);
+    float speed = m.angle + length(m.end_centre - m.start_centre) / distance;
+    VklRsSample a = vkl_rs_sample(m, x, 0.5);
+    root = a;
+    // NaN and infinity fail these comparisons too.
+    if (!(frame.readout_bound.x > 0.0 && distance >= frame.viewport.w && a.ok)) return false;
+    float theta = acos(clamp(a.camera.z / length(a.camera), -1.0, 1.0));
+    float bound = speed * vkl_rs_line_rate(theta + 0.5 * speed);
+    if (!(bound >= 0.0 && bound <= VKL_RS_MAX_CONTRACTION)) return false;
+    float low = 1.0 - bound;
+    float high = 1.0 + bound;
+    // The first step is the fixed-point step s1 = T(s0) (slope 1): |s1 − s*| ≤ L |s0 − s*|.
+    float s = clamp(a.s - a.g, 0.0, 1.0);
+    for (uint i = 0u; i < VKL_RS_BOUNDED_STEPS; i++) {
+        VklRsSample c = vkl_rs_sample(m, x, s);
+        if (!c.ok) return false;
+        root = c;
+        // g increases: g(0) > 0 or g(1) < 0 puts every root outside the readout.
+        if (c.g == 0.0 || (c.s == 0.0 && c.g > 0.0) || (c.s == 1.0 && c.g < 0.0)) return true;
+        float slope = (c.g - a.g) / (c.s - a.s);
+        slope = isnan(slope) ? 1.0 : clamp(slope, low, high);
+        float next = clamp(c.s - c.g / slope, 0.0, 1.0);
+        // Where the next step would move the pixel by less than the tolerance (at the pixel
+        // speed of the last step), c is the root to f32's precision: the steps converge
+        // superlinearly, so what the next would move the pixel bounds c's error.
+        vec2 pixel_speed = abs(c.pixel - a.pixel) / abs(c.s - a.s);
+        if (next == c.s
+            || max(pixel_speed.x, pixel_speed.y) * abs(next - c.s)
+                   <= VKL_RS_BOUNDED_STEP_TOLERANCE) {
+            return true;
+        }
+        a = c;
+        s = next;
+    }
+    return false;
+}
+
 // Where the world point x appears through motion m: the first self-consistent readout time in
 // readout order (`ok` false where the lens does not see it; then `clip` is a finite clip
 // position of the point at some readout time, for the rasterizer's clipping alone). Points no
@@ -164,6 +253,8 @@ bool vkl_rs_refine(VklMotion m, vec3 x, VklRsSample a, VklRsSample b, out VklRsS
 // that closes on a jump of the lens map rather than a root resumes the scan after it, as on the
 // CPU.
 VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
+    VklRsSample bounded;
+    if (vkl_rs_bounded(m, x, bounded)) return bounded;
     VklRsSample previous;
     VklRsSample first;
     VklRsSample last;

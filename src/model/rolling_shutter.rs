@@ -27,6 +27,12 @@
 //! pixels at the two ends of the bracket agree to [`PIXEL_TOLERANCE`]. Every loop is bounded
 //! and nothing is allocated, so the same iteration can run per vertex in a shader.
 //!
+//! Where the motion is slow enough, the scan finds nothing: [`FrameMotion::line_rate_bound`]
+//! bounds |d line_time / ds| of a point's own pixel by L (how fast its ray turns, times the
+//! lens's [`LineRate`]), and below 1 g′ ≥ 1 − L > 0, so g has one root at most. The renderer's
+//! per-vertex solve skips the scan there (`glsl/include/rolling_shutter.glsl`); this one, the
+//! reference, always scans.
+//!
 //! A single step of that iteration from mid-frame (the pose at s = ½ gives a row, the row a
 //! time, the time a pose) is what warps built on a gyroscope's rotations use; it is exact only
 //! when the point's line does not move during the readout, and `docs/rolling-shutter.md`
@@ -396,6 +402,217 @@ impl FrameMotion {
         // edge (what a triangle with a vertex outside the image needs).
         let (first, last) = (first?, last?);
         Some(if first.g > 0.0 { first } else { last }.projection())
+    }
+}
+
+/// The largest bound on |d line_time / ds| for which the shaders skip the scan: below 1 the
+/// function g(s) = s − line_time(s) has g′ ≥ 1 − L > 0, so it is strictly increasing and has at
+/// most one root; at ½ a lens rate measured a factor 2 too low would still leave g increasing.
+pub const MAX_CONTRACTION: f64 = 0.5;
+
+/// Directions per side of the grid [`LineRate::measure`] samples the cone on (off-axis angle
+/// × azimuth).
+const RATE_GRID: usize = 192;
+/// Entries of [`LineRate::per_radian`]: the rate of cones of growing half angle, so that a
+/// point near the axis, where a lens moves its rays' pixels slowest, is bounded by the rate
+/// near the axis, not by the rate at the image's corners.
+pub const RATE_TABLE: usize = 32;
+/// How far past the image's widest ray the measured cone reaches (radians): a vertex at the
+/// image's edge keeps the bounded solve while its ray turns by up to twice this over a frame.
+const RATE_CONE_MARGIN: f64 = 0.25;
+/// The measured sup is multiplied by this. The rate is an analytic function of the direction
+/// inside the lens's domain, and the grid's cells are a few milliradians wide: between grid
+/// points it exceeds the sampled largest value by the change of the rate across half a cell,
+/// a fraction of a percent for any calibrated lens (the finite differences themselves are
+/// accurate to O(h²), h = 1e-6 rad). A quarter on top covers what sampling can miss and the
+/// shaders' f32 arithmetic; with [`MAX_CONTRACTION`] at ½ the bound could be 2.5 times too low
+/// before a skipped scan could miss a root.
+const RATE_MARGIN: f64 = 1.25;
+
+/// How fast a lens moves a point across the readout's lines as the point's ray direction turns:
+/// the largest |∇ line_time| per radian of ray direction over cones of directions about the
+/// optical axis, measured once per camera. With a frame's motion it bounds how fast a point's
+/// own line time can change with the readout time ([`FrameMotion::line_rate_bound`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineRate {
+    /// Entry i: readout time per radian of ray direction (the lens's largest pixels per radian
+    /// along the readout's axis, over lines − 1, with a quarter's margin for what the grid of
+    /// directions can miss) over the rays at most `cone · i / (RATE_TABLE − 1)` off the axis.
+    /// Non-decreasing.
+    pub per_radian: [f64; RATE_TABLE],
+    /// The half angle of the largest cone (radians off the optical axis); every direction
+    /// sampled in it is in the lens's valid domain.
+    pub cone: f64,
+}
+
+impl LineRate {
+    /// Measures the rate of `camera` read out in `readout` order on a fine grid of directions
+    /// in the cone that holds the image's rays (plus a margin), through the camera's one
+    /// projection ([`Camera::project`]), so that every model of the table is measured alike.
+    /// The cone stops short of the first direction the lens does not see. `None` for a sensor
+    /// of one line, or a lens whose rate is not finite there.
+    pub fn measure(camera: &Camera, readout: Readout) -> Option<LineRate> {
+        let lines = if readout.is_vertical() {
+            camera.height
+        } else {
+            camera.width
+        };
+        let last = f64::from(lines.saturating_sub(1));
+        if last == 0.0 {
+            return None;
+        }
+        // Alg. 1 drops a fisheye's vertices past its vertex limit, as if the lens did not see
+        // them: the cone stays inside it.
+        let max_angle = camera
+            .fisheye_vertex_limit()
+            .unwrap_or(f64::INFINITY)
+            .min(camera.lens().max_angle())
+            .min(std::f64::consts::PI);
+        let cone = (image_cone(camera)? + RATE_CONE_MARGIN).min(max_angle);
+        // The line coordinate (pixels) along the readout's axis.
+        let line = |d: DVec3| {
+            camera
+                .project(d)
+                .map(|p| if readout.is_vertical() { p.y } else { p.x })
+        };
+        const H: f64 = 1e-6;
+        let ring_angle = |i: usize| cone * i as f64 / RATE_GRID as f64;
+        // The largest rate on each ring of directions the lens sees whole.
+        let mut rings = Vec::with_capacity(RATE_GRID + 1);
+        'rings: for i in 0..=RATE_GRID {
+            let theta = ring_angle(i);
+            let azimuths = if i == 0 { 1 } else { RATE_GRID };
+            let mut ring: f64 = 0.0;
+            for j in 0..azimuths {
+                let phi = std::f64::consts::TAU * j as f64 / azimuths as f64;
+                let d = DVec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                );
+                // Any orthonormal pair of tangents gives the gradient's norm on the sphere.
+                let (t1, t2) = d.any_orthonormal_pair();
+                let mut g = [0.0; 2];
+                for (k, t) in [t1, t2].into_iter().enumerate() {
+                    let (Some(a), Some(b)) = (
+                        line(H.cos() * d + H.sin() * t),
+                        line(H.cos() * d - H.sin() * t),
+                    ) else {
+                        // The lens does not see this ring everywhere: the cone ends at the
+                        // last ring it does.
+                        break 'rings;
+                    };
+                    g[k] = (a - b) / (2.0 * H);
+                }
+                ring = ring.max(g[0].hypot(g[1]));
+            }
+            rings.push(ring);
+        }
+        let reach = ring_angle(rings.len().checked_sub(1)?);
+        // Cone i holds the rings up to its half angle and the next one: between two rings the
+        // rate is within RATE_MARGIN of the larger of them.
+        let mut per_radian = [0.0; RATE_TABLE];
+        for (i, entry) in per_radian.iter_mut().enumerate() {
+            let theta = reach * i as f64 / (RATE_TABLE - 1) as f64;
+            let outer = ((theta / cone * RATE_GRID as f64).ceil() as usize + 1).min(rings.len());
+            let worst = rings[..outer].iter().copied().fold(0.0, f64::max);
+            *entry = RATE_MARGIN * worst / last;
+        }
+        (per_radian.iter().all(|r| r.is_finite()) && reach > 0.0).then_some(LineRate {
+            per_radian,
+            cone: reach,
+        })
+    }
+
+    /// The rate over the rays at most `theta` off the axis; `None` past the cone.
+    pub fn within(&self, theta: f64) -> Option<f64> {
+        let i = (theta.max(0.0) / self.cone * (RATE_TABLE - 1) as f64).ceil();
+        (theta.is_finite() && i <= (RATE_TABLE - 1) as f64).then(|| self.per_radian[i as usize])
+    }
+}
+
+/// The largest angle off the optical axis among the rays of the image's border pixels (where
+/// the lens sees them; its largest angle where it sees none).
+fn image_cone(camera: &Camera) -> Option<f64> {
+    let (w, h) = (f64::from(camera.width), f64::from(camera.height));
+    const STEPS: usize = 64;
+    let mut widest: Option<f64> = None;
+    for k in 0..=STEPS {
+        let t = k as f64 / STEPS as f64;
+        for p in [
+            DVec2::new(t * w - 0.5, -0.5),
+            DVec2::new(t * w - 0.5, h - 0.5),
+            DVec2::new(-0.5, t * h - 0.5),
+            DVec2::new(w - 0.5, t * h - 0.5),
+        ] {
+            if let Some(ray) = camera.unproject(p) {
+                let theta = ray.x.hypot(ray.y).atan2(ray.z);
+                widest = Some(widest.map_or(theta, |w| w.max(theta)));
+            }
+        }
+    }
+    widest
+        .or(Some(camera.lens().max_angle()))
+        .filter(|t| t.is_finite())
+}
+
+impl FrameMotion {
+    /// The distance from `x` to the segment C0C1 the camera centre moves along (metres).
+    pub fn distance_to_path(&self, x: DVec3) -> f64 {
+        let [c0, c1] = self.centres;
+        let d = c1 - c0;
+        let dd = d.length_squared();
+        let t = if dd > 0.0 {
+            ((x - c0).dot(d) / dd).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (x - (c0 + t * d)).length()
+    }
+
+    /// A bound on how fast the ray direction from the camera to `x` turns (radians per unit of
+    /// readout time) anywhere in the frame: the camera turns at a constant `angle`, and the
+    /// centre's step C1 − C0 turns the ray by at most |C1 − C0| / |X − C(s)| ≤ |C1 − C0| /
+    /// d(X, C0C1). Infinite for a point on the centres' path.
+    pub fn angular_speed_bound(&self, x: DVec3) -> f64 {
+        let step = (self.centres[1] - self.centres[0]).length();
+        if step == 0.0 {
+            return self.angle;
+        }
+        self.angle + step / self.distance_to_path(x)
+    }
+
+    /// The same for every point at least `distance` from the centres' path (the distance from
+    /// the segment C0C1 to a scene's bounding box): infinite where the distance is not
+    /// positive and the camera's centre moves.
+    pub fn angular_speed_bound_beyond(&self, distance: f64) -> f64 {
+        let step = (self.centres[1] - self.centres[0]).length();
+        if step == 0.0 {
+            return self.angle;
+        }
+        if !(distance > 0.0) {
+            return f64::INFINITY;
+        }
+        self.angle + step / distance
+    }
+
+    /// L, a bound on |d line_time / ds| of the line on which `x` appears, for every readout
+    /// time s: the ray's angular speed ([`Self::angular_speed_bound`]) times the lens's rate
+    /// (`rate`). `None` where the bound does not hold: `x` is not in front of the lens at
+    /// mid-frame, or its ray could leave the cone the rate was measured on (its ray at s = ½
+    /// is within the angular speed × ½ of every ray it has during the frame).
+    ///
+    /// Below 1, g(s) = s − line_time(s) is strictly increasing (g′ ≥ 1 − L): one root at
+    /// most, and the scan for the first root finds nothing a local solve would not.
+    pub fn line_rate_bound(&self, rate: &LineRate, x: DVec3) -> Option<f64> {
+        if self.still {
+            return Some(0.0);
+        }
+        let speed = self.angular_speed_bound(x);
+        let p = self.to_camera(0.5, x);
+        let theta = p.x.hypot(p.y).atan2(p.z);
+        let bound = speed * rate.within(theta + 0.5 * speed)?;
+        bound.is_finite().then_some(bound)
     }
 }
 

@@ -27,7 +27,7 @@ use crate::gpu::{
 pub use crate::imaging::Rendered;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::overscan::valid_region_boundary;
-use crate::model::rolling_shutter::{FrameMotion, Readout};
+use crate::model::rolling_shutter::{FrameMotion, LineRate, Readout, RATE_TABLE};
 use crate::model::{vulkan_projection, Camera, Frustum};
 use crate::scene::{Mesh, Pose, Vertex};
 
@@ -199,6 +199,13 @@ pub struct GeometryFrame {
     pub previous_turn: [f32; 4],
     pub previous_start_centre: [f32; 4],
     pub previous_end_centre: [f32; 4],
+    /// x: the half angle of the cone the lens's line rate was measured on ([`LineRate::cone`],
+    /// radians; 0 where it has none, and every vertex is solved by the scan), yzw: 0.
+    pub readout_bound: [f32; 4],
+    /// The line rate of cones of growing half angle ([`LineRate::per_radian`], entry i in
+    /// component i % 4 of row i / 4): with each motion's turn and centres it bounds how fast a
+    /// vertex's own line time moves during the readout.
+    pub readout_rates: [[f32; 4]; RATE_TABLE / 4],
 }
 
 /// One frame's poses: when the first line is read, and when the last is (the same for a
@@ -567,6 +574,10 @@ pub struct GeometryPass {
     domain_table: bool,
     /// The compute discard (a lens projection with [`Discard::Compute`]).
     discard: Option<DiscardPass>,
+    /// The line rate of the camera as the shaders project (lens or pinhole) in the desc's
+    /// readout order, where it has one: what lets the shaders skip the scan of a vertex whose
+    /// line time provably moves slower than the readout.
+    line_rate: Option<LineRate>,
 }
 
 /// One frame in flight of a [`GeometryPass`]: its uniforms and the sets that read them.
@@ -762,7 +773,9 @@ impl GeometryPass {
                 Motion::still(Pose::IDENTITY),
             )),
             domain_table,
+            line_rate: None,
         };
+        pass.line_rate = pass.measure_line_rate();
         for i in 0..frames {
             pass.select_frame(i);
             // SAFETY: the pass is new: no submission using it exists.
@@ -852,6 +865,7 @@ impl GeometryPass {
         }
         self.discard_bound = discard_bound(&self.desc.projection, camera)?;
         self.desc.camera = camera.clone();
+        self.line_rate = self.measure_line_rate();
         // The frame block holds the old camera's projection: a jittered pass (a moved
         // principal point) drew with the previous pass's projection, and the average of the
         // passes was shifted by the last pass's offset.
@@ -901,6 +915,21 @@ impl GeometryPass {
         unsafe { self.write_frame(motion, before) }
     }
 
+    /// The line rate of the desc's camera in its readout order, as the shaders project: through
+    /// the lens, or for a pinhole render through the pinhole of the same intrinsics. `None`
+    /// without a readout.
+    fn measure_line_rate(&self) -> Option<LineRate> {
+        let readout = self.desc.readout?;
+        let c = &self.desc.camera;
+        match self.desc.projection {
+            Projection::Lens { .. } => LineRate::measure(c, readout),
+            Projection::Pinhole => {
+                let pinhole = Camera::from_coeffs(c.width, c.height, c.intrinsics, &[0.0; 4]);
+                LineRate::measure(&pinhole.ok()?, readout)
+            }
+        }
+    }
+
     /// Writes the selected frame's uniforms.
     ///
     /// # Safety
@@ -910,7 +939,13 @@ impl GeometryPass {
         let slot = &self.frames[self.current];
         let camera = CameraParams::from_camera(&self.desc.camera);
         slot.camera.write(0, bytemuck::bytes_of(&camera))?;
-        let frame = self.frame_data(&self.desc.camera, self.discard_bound, motion, previous);
+        let mut frame = self.frame_data(&self.desc.camera, self.discard_bound, motion, previous);
+        if let Some(rate) = self.line_rate {
+            frame.readout_bound = [rate.cone as f32, 0.0, 0.0, 0.0];
+            for (i, r) in rate.per_radian.iter().enumerate() {
+                frame.readout_rates[i / 4][i % 4] = *r as f32;
+            }
+        }
         slot.frame.write(0, bytemuck::bytes_of(&frame))
     }
 
@@ -948,6 +983,8 @@ impl GeometryPass {
             previous_turn,
             previous_start_centre: previous_centres[0],
             previous_end_centre: previous_centres[1],
+            readout_bound: [0.0; 4],
+            readout_rates: [[0.0; 4]; RATE_TABLE / 4],
         }
     }
 

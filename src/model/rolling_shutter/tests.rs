@@ -573,3 +573,118 @@ fn an_ncore_camera_file_states_its_readout() {
     }
     assert_eq!(standard().readout(), None);
 }
+
+/// The largest |d line_time / ds| of `x`'s own pixel over the frame, by central differences on
+/// 400 cells of the readout (`None` where the lens loses the point somewhere).
+fn measured_line_rate(camera: &Camera, m: &FrameMotion, readout: Readout, x: DVec3) -> Option<f64> {
+    const CELLS: usize = 400;
+    const H: f64 = 1e-6;
+    let t = |s: f64| {
+        let p = camera.project(m.to_camera(s, x))?;
+        Some(line_time(readout, p.x, p.y, camera.width, camera.height))
+    };
+    let mut worst: f64 = 0.0;
+    for k in 0..=CELLS {
+        let s = (k as f64 / CELLS as f64).clamp(H, 1.0 - H);
+        worst = worst.max(((t(s + H)? - t(s - H)?) / (2.0 * H)).abs());
+    }
+    Some(worst)
+}
+
+#[test]
+fn a_still_camera_has_a_zero_line_rate_bound() {
+    let camera = standard();
+    let rate = LineRate::measure(&camera, Readout::TopToBottom).expect("a rate");
+    let pose = moving().0;
+    let m = FrameMotion::still(pose);
+    for x in world_points(&camera, &pose, 50, 3) {
+        assert_eq!(m.angular_speed_bound(x), 0.0);
+        assert_eq!(m.line_rate_bound(&rate, x), Some(0.0));
+    }
+    assert_eq!(m.angular_speed_bound_beyond(0.0), 0.0);
+}
+
+#[test]
+fn the_line_rate_bound_is_never_below_the_rate_the_motion_gives() {
+    // A pan with a step sideways for every model and readout: the bound L of each point against
+    // the largest rate of its own line time over the frame, measured by finite differences.
+    let pan = (
+        pose([0.0, 0.0, 0.0], [0.0, 0.0, 0.0]),
+        pose([0.01, 0.06, 0.0], [-0.08, 0.01, 0.0]),
+    );
+    let m = FrameMotion::new(pan.0, pan.1);
+    let mut contracting = 0;
+    for camera in [standard(), fisheye(), double_sphere()] {
+        for readout in Readout::ALL {
+            let rate = LineRate::measure(&camera, readout).expect("a rate");
+            assert!(rate.per_radian[0] > 0.0 && rate.cone > 0.0, "{rate:?}");
+            assert!(
+                rate.per_radian.windows(2).all(|w| w[0] <= w[1]),
+                "a wider cone has no slower rate: {rate:?}"
+            );
+            assert_eq!(
+                rate.within(rate.cone),
+                Some(rate.per_radian[RATE_TABLE - 1])
+            );
+            assert_eq!(rate.within(rate.cone * 1.01), None);
+            assert_eq!(rate.within(f64::NAN), None);
+            let (mut checked, mut tightest) = (0, f64::INFINITY);
+            for x in world_points(&camera, &pan.0, 300, 5) {
+                let Some(bound) = m.line_rate_bound(&rate, x) else {
+                    continue;
+                };
+                let measured = measured_line_rate(&camera, &m, readout, x)
+                    .expect("a bounded point stays in the lens's domain");
+                assert!(
+                    measured <= bound,
+                    "{} {readout}: {x}: the line time moves at {measured}, bound {bound}",
+                    camera.model_name()
+                );
+                if bound <= MAX_CONTRACTION {
+                    contracting += 1;
+                }
+                tightest = tightest.min(bound / measured.max(1e-12));
+                checked += 1;
+            }
+            assert!(
+                checked > 200,
+                "{} {readout}: {checked} points bounded",
+                camera.model_name()
+            );
+            println!(
+                "{} {readout}: {checked} points, bound/measured ≥ {tightest:.2}, cone {:.3}, rates {:.3} .. {:.3}",
+                camera.model_name(),
+                rate.cone,
+                rate.per_radian[0],
+                rate.per_radian[RATE_TABLE - 1]
+            );
+        }
+    }
+    assert!(
+        contracting > 1000,
+        "the scan is skipped for most points ({contracting})"
+    );
+}
+
+#[test]
+fn a_frame_bound_over_a_distance_covers_every_point_beyond_it() {
+    let (start, end) = moving();
+    let m = FrameMotion::new(start, end);
+    let camera = standard();
+    let points = world_points(&camera, &start, 200, 9);
+    let nearest = points
+        .iter()
+        .map(|&x| m.distance_to_path(x))
+        .fold(f64::INFINITY, f64::min);
+    assert!(nearest > 1.0);
+    let frame = m.angular_speed_bound_beyond(nearest);
+    for &x in &points {
+        assert!(m.angular_speed_bound(x) <= frame);
+    }
+    // A box that touches the centres' path: no bound.
+    assert_eq!(m.angular_speed_bound_beyond(0.0), f64::INFINITY);
+    // The distance to the segment, not to its line: past C1 the point is nearer C1.
+    let [_, c1] = m.centres();
+    let beyond = c1 + (c1 - m.centres()[0]).normalize() * 2.0;
+    assert!((m.distance_to_path(beyond) - 2.0).abs() < 1e-12);
+}

@@ -236,6 +236,8 @@ fn geometry_frame_matches_the_glsl_block() {
             "previous_end_centre",
             offset_of!(GeometryFrame, previous_end_centre),
         ),
+        ("readout_bound", offset_of!(GeometryFrame, readout_bound)),
+        ("readout_rates", offset_of!(GeometryFrame, readout_rates)),
     ];
     check(shaders::GEOMETRY_VERT, "GeometryFrame", host.clone());
     check(shaders::DISCARD_COMP, "GeometryFrame", host.clone());

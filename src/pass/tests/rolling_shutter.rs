@@ -10,7 +10,7 @@ use gpu_allocator::MemoryLocation;
 use crate::gpu::{global_barrier, Access, Buffer};
 use crate::host::geometry::{render, render_moving};
 use crate::imaging::Rendered;
-use crate::model::rolling_shutter::{line_time, FrameMotion, Readout};
+use crate::model::rolling_shutter::{line_time, FrameMotion, LineRate, Readout, MAX_CONTRACTION};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::geometry::{Discard, GeometryDesc, GeometryPass, GeometryTargets, Outputs};
 use crate::pass::geometry::{Projection, DEFAULT_DELTA};
@@ -72,86 +72,155 @@ fn desc(readout: Option<Readout>, discard: Discard) -> GeometryDesc {
     d
 }
 
+/// The worst errors of the GPU's per-vertex solve (its pixel, readout time and flow, f32)
+/// against `FrameMotion::project` in f64.
+#[derive(Debug, Default)]
+struct Agreement {
+    pixel: f64,
+    s: f64,
+    flow: f64,
+    /// Vertices compared: those the f64 solve sees in both frames.
+    checked: usize,
+}
+
+/// Draws `mesh` through the compute discard with `readout`, this frame's motion `now` and the
+/// previous frame's `before`, and compares each vertex's solve with the f64 one.
+fn gpu_against_f64(
+    ctx: &crate::host::Context,
+    mesh: &Mesh,
+    readout: Readout,
+    now: (Pose, Pose),
+    before: (Pose, Pose),
+) -> Agreement {
+    let gpu = ctx.gpu();
+    let cam = camera();
+    let n = mesh.vertices.len();
+    let mut pass = GeometryPass::new(gpu, desc(Some(readout), Discard::Compute)).unwrap();
+    let buffers = upload_mesh(ctx, mesh, None);
+    // SAFETY: nothing is pending: `submit` waits on every submission's fence.
+    unsafe {
+        pass.bind_mesh(&buffers);
+        pass.set_moving_frame((&now.0, &now.1), (&before.0, &before.1))
+            .unwrap();
+    }
+    let solve = pass.discard_constants().unwrap()[0].get(crate::pass::spec::READOUT);
+    assert_eq!(solve, Some(readout.gpu_id()), "the solve is compiled in");
+    let targets = GeometryTargets::new(gpu, &pass).unwrap();
+    let [positions, motions] = buffers.discard_results();
+    let download = |name, bytes: u64| {
+        Buffer::new(
+            gpu,
+            name,
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )
+        .unwrap()
+    };
+    let (ndc_out, motion_out) = (
+        download("test.ndc", 8 * n as u64),
+        download("test.motion", 16 * n as u64),
+    );
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` records outside a render pass; the discard's buffers were written
+        // by the pass's compute stage and are copied after it; all outlive the wait.
+        unsafe {
+            pass.record(cmd, &targets, &buffers);
+            global_barrier(gpu, cmd, Access::ComputeReadWrite, Access::TransferRead);
+            let d = gpu.device();
+            let whole = |bytes| [vk::BufferCopy::default().size(bytes)];
+            d.cmd_copy_buffer(cmd, positions.raw, ndc_out.raw, &whole(8 * n as u64));
+            d.cmd_copy_buffer(cmd, motions.raw, motion_out.raw, &whole(16 * n as u64));
+            global_barrier(gpu, cmd, Access::TransferWrite, Access::HostRead);
+        }
+        Ok(())
+    })
+    .unwrap();
+    let ndc = ndc_out.read_pod::<[f32; 2]>(n).unwrap();
+    let moved = motion_out.read_pod::<[f32; 4]>(n).unwrap();
+    let (m, m_before) = (motion(now), motion(before));
+    let size = DVec2::new(cam.width as f64, cam.height as f64);
+    let mut out = Agreement::default();
+    for (i, v) in mesh.vertices.iter().enumerate() {
+        let x = DVec3::from_array(v.position.map(f64::from));
+        let (Some(cpu), Some(cpu_before)) = (
+            m.project(&cam, readout, x),
+            m_before.project(&cam, readout, x),
+        ) else {
+            continue;
+        };
+        let gpu_px = (DVec2::new(ndc[i][0] as f64, ndc[i][1] as f64) + 1.0) * 0.5 * size - 0.5;
+        out.pixel = out.pixel.max((gpu_px - cpu.pixel).length());
+        out.s = out.s.max((moved[i][3] as f64 - cpu.s).abs());
+        let flow = DVec2::new(moved[i][0] as f64, moved[i][1] as f64);
+        assert_eq!(moved[i][2], 1.0, "vertex {i}: both frames see it");
+        out.flow = out
+            .flow
+            .max((flow - (cpu.pixel - cpu_before.pixel)).length());
+        out.checked += 1;
+    }
+    println!(
+        "{readout}: {} of {n} vertices, GPU (f32) against f64: pixel {:.2e} px, readout time {:.2e}, flow {:.2e} px",
+        out.checked, out.pixel, out.s, out.flow
+    );
+    out
+}
+
+/// How many of `mesh`'s vertices the line rate bound lets skip the scan in `now`'s frame (the
+/// shaders' test, in f64).
+fn bounded_vertices(mesh: &Mesh, readout: Readout, now: (Pose, Pose)) -> usize {
+    let rate = LineRate::measure(&camera(), readout).expect("the lens has a line rate");
+    let m = motion(now);
+    mesh.vertices
+        .iter()
+        .filter(|v| {
+            let x = DVec3::from_array(v.position.map(f64::from));
+            m.line_rate_bound(&rate, x)
+                .is_some_and(|l| l <= MAX_CONTRACTION)
+        })
+        .count()
+}
+
 #[test]
 fn each_vertex_lands_where_the_f64_solve_puts_it() {
     let ctx = validated_context();
-    let gpu = ctx.gpu();
-    let cam = camera();
     let mesh = builtin::grid(24).mesh;
-    let n = mesh.vertices.len();
     for readout in [Readout::TopToBottom, Readout::RightToLeft] {
-        let mut pass = GeometryPass::new(gpu, desc(Some(readout), Discard::Compute)).unwrap();
-        let buffers = upload_mesh(&ctx, &mesh, None);
-        let (now, before) = (pan(), previous_pan());
-        // SAFETY: nothing is pending: `submit` waits on every submission's fence.
-        unsafe {
-            pass.bind_mesh(&buffers);
-            pass.set_moving_frame((&now.0, &now.1), (&before.0, &before.1))
-                .unwrap();
-        }
-        let solve = pass.discard_constants().unwrap()[0].get(crate::pass::spec::READOUT);
-        assert_eq!(solve, Some(readout.gpu_id()), "the solve is compiled in");
-        let targets = GeometryTargets::new(gpu, &pass).unwrap();
-        let [positions, motions] = buffers.discard_results();
-        let download = |name, bytes: u64| {
-            Buffer::new(
-                gpu,
-                name,
-                bytes,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )
-            .unwrap()
-        };
-        let (ndc_out, motion_out) = (
-            download("test.ndc", 8 * n as u64),
-            download("test.motion", 16 * n as u64),
-        );
-        ctx.submit(|cmd| {
-            // SAFETY: `cmd` records outside a render pass; the discard's buffers were written
-            // by the pass's compute stage and are copied after it; all outlive the wait.
-            unsafe {
-                pass.record(cmd, &targets, &buffers);
-                global_barrier(gpu, cmd, Access::ComputeReadWrite, Access::TransferRead);
-                let d = gpu.device();
-                let whole = |bytes| [vk::BufferCopy::default().size(bytes)];
-                d.cmd_copy_buffer(cmd, positions.raw, ndc_out.raw, &whole(8 * n as u64));
-                d.cmd_copy_buffer(cmd, motions.raw, motion_out.raw, &whole(16 * n as u64));
-                global_barrier(gpu, cmd, Access::TransferWrite, Access::HostRead);
-            }
-            Ok(())
-        })
-        .unwrap();
-        let ndc = ndc_out.read_pod::<[f32; 2]>(n).unwrap();
-        let moved = motion_out.read_pod::<[f32; 4]>(n).unwrap();
-        let (m, m_before) = (motion(now), motion(before));
-        let size = DVec2::new(cam.width as f64, cam.height as f64);
-        let (mut worst_px, mut worst_s, mut worst_flow, mut checked) = (0f64, 0f64, 0f64, 0);
-        for (i, v) in mesh.vertices.iter().enumerate() {
-            let x = DVec3::from_array(v.position.map(f64::from));
-            let cpu = m.project(&cam, readout, x).expect("the grid is in view");
-            let gpu_px = (DVec2::new(ndc[i][0] as f64, ndc[i][1] as f64) + 1.0) * 0.5 * size - 0.5;
-            let error = (gpu_px - cpu.pixel).length();
-            worst_px = worst_px.max(error);
-            worst_s = worst_s.max((moved[i][3] as f64 - cpu.s).abs());
-            let cpu_before = m_before
-                .project(&cam, readout, x)
-                .expect("in view before too");
-            let flow = DVec2::new(moved[i][0] as f64, moved[i][1] as f64);
-            assert_eq!(moved[i][2], 1.0, "vertex {i}: both frames see it");
-            worst_flow = worst_flow.max((flow - (cpu.pixel - cpu_before.pixel)).length());
-            checked += 1;
-        }
-        println!(
-            "{readout}: {checked} vertices, GPU (f32) against f64: pixel {worst_px:.2e} px, readout time {worst_s:.2e}, flow {worst_flow:.2e} px"
-        );
-        assert_eq!(checked, n);
+        let a = gpu_against_f64(&ctx, &mesh, readout, pan(), previous_pan());
+        assert_eq!(a.checked, mesh.vertices.len(), "the grid is in view");
+        // The pan's bound lets every vertex skip the scan: this is the bounded solve.
+        assert_eq!(bounded_vertices(&mesh, readout, pan()), mesh.vertices.len());
         // Measured: 7e-5 px and 1.2e-4 px of flow (f32 pixels of a 512² image).
-        assert!(worst_px <= 1e-3, "{readout}: pixel off by {worst_px} px");
-        assert!(worst_flow <= 2e-3, "{readout}: flow off by {worst_flow} px");
+        assert!(a.pixel <= 1e-4, "{readout}: pixel off by {} px", a.pixel);
+        assert!(a.flow <= 2e-4, "{readout}: flow off by {} px", a.flow);
         // A pixel's worth of readout time is 1/511: the solve finds the same line.
-        assert!(worst_s <= 1e-4, "{readout}: readout time off by {worst_s}");
+        assert!(a.s <= 1e-5, "{readout}: readout time off by {}", a.s);
     }
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn a_motion_too_fast_for_the_bound_is_scanned_and_lands_where_the_f64_solve_puts_it() {
+    // A 35° pan during the readout: the ray to every vertex turns faster than the lens's line
+    // rate allows a bound for, so every vertex takes the scan.
+    let ctx = validated_context();
+    let mesh = builtin::grid(24).mesh;
+    let from = DVec3::new(-0.06, 0.0, -1.6);
+    let look = |x: f64| Pose::look_at(from, DVec3::new(x, 0.0, 0.0), DVec3::Y);
+    let now = (look(-0.5), look(0.5));
+    let before = (look(0.5), look(-0.5));
+    let readout = Readout::TopToBottom;
+    assert_eq!(
+        bounded_vertices(&mesh, readout, now),
+        0,
+        "no vertex is bounded"
+    );
+    assert_eq!(bounded_vertices(&mesh, readout, before), 0);
+    let a = gpu_against_f64(&ctx, &mesh, readout, now, before);
+    assert!(a.checked > mesh.vertices.len() / 2, "{a:?}");
+    assert!(a.pixel <= 1e-3, "pixel off by {} px", a.pixel);
+    assert!(a.flow <= 2e-3, "flow off by {} px", a.flow);
+    assert!(a.s <= 1e-4, "readout time off by {}", a.s);
     assert_no_validation_messages(&ctx);
 }
 

@@ -530,5 +530,7 @@ impl Camera {
     }
 }
 
+pub mod bands;
+
 #[cfg(test)]
 mod tests;

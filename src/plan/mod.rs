@@ -136,6 +136,9 @@ pub enum Stage {
     Vignetting { kept: bool },
     /// The perspective projections of one frame.
     CellRenders,
+    /// The warp's pinhole source, overscanned, rendered once per band of a moving rolling
+    /// shutter's lines, each band warped from its own render.
+    BandRenders,
 }
 
 impl Stage {
@@ -158,6 +161,7 @@ impl Stage {
             Stage::Vignetting { kept: true } => "vignetting kept",
             Stage::Vignetting { kept: false } => "vignetting divided out",
             Stage::CellRenders => "cell renders",
+            Stage::BandRenders => "pinhole render per band (overscanned)",
         }
     }
 }
@@ -211,6 +215,10 @@ pub struct Plan {
     pub antialias: scene_file::Antialias,
     /// The sensor's shutter, and where its readout came from.
     pub shutter: Shutter,
+    /// Where the camera moves during a rolling shutter's readout and the warp draws it: the
+    /// bands of lines it is drawn in, each from the pose of its middle line
+    /// ([`crate::model::rolling_shutter::bands`]); `None` otherwise.
+    pub bands: Option<u32>,
     /// Estimated frame time from the measured tables (ms, lavapipe), for comparison.
     pub estimated_ms: f64,
 }
@@ -314,6 +322,7 @@ fn file_plan(
         background: file.background,
         antialias: file.antialias,
         shutter,
+        bands: None,
         estimated_ms,
     }
 }

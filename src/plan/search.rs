@@ -5,10 +5,12 @@
 use glam::{DVec2, DVec3};
 
 use super::cost::{
-    estimate_ms, inverse_candidates_for, Cost, CUBE_RAY_ERROR_PX, MAP_BUILD_NS, MAP_F32_FLOOR_PX,
-    MAP_WARP_CHROMATIC_NS, MAP_WARP_NS, PLANNED_CUBE_MAX_SIDE,
+    estimate_ms, inverse_candidates_for, source_render_ms, Cost, CUBE_RAY_ERROR_PX, MAP_BUILD_NS,
+    MAP_F32_FLOOR_PX, MAP_WARP_CHROMATIC_NS, MAP_WARP_NS, PLANNED_CUBE_MAX_SIDE,
+    ROLLING_SHUTTER_NS_PER_VERTEX,
 };
 use super::{chromatic_scales, limits, SceneFile, MAP_COORDINATES};
+use crate::model::rolling_shutter::bands::{band_error_px, distance_range, BAND_COUNTS};
 use crate::model::rolling_shutter::{FrameMotion, Readout};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::warp::Coordinates;
@@ -224,15 +226,22 @@ pub(super) fn search_candidates(
         }
         _ => None,
     }
-    .map(|tessellation| VertexCandidate {
-        tessellation,
-        ms: estimate_ms(
-            pixels,
-            tessellation.triangles as f64,
-            Cost::Vertex {
-                vertices: tessellation.vertices as f64,
-            },
-        ),
+    .map(|tessellation| {
+        let vertices = tessellation.vertices as f64;
+        // A moving rolling shutter solves each vertex's readout time besides.
+        let solve = if motion.is_some() {
+            ROLLING_SHUTTER_NS_PER_VERTEX * vertices * 1e-6
+        } else {
+            0.0
+        };
+        VertexCandidate {
+            tessellation,
+            ms: estimate_ms(
+                pixels,
+                tessellation.triangles as f64,
+                Cost::Vertex { vertices },
+            ) + solve,
+        }
     });
     // Three fetches (and inverses, or maps) per pixel with chromatic aberration.
     let fetches = if chromatic.is_some() { 3.0 } else { 1.0 };
@@ -305,4 +314,85 @@ pub(super) fn search_candidates(
         no_pinhole_warp,
         frames,
     })
+}
+
+/// A moving rolling shutter drawn in bands by the warp route: `count` bands of the readout's
+/// lines, the pinhole source rendered once per band from the pose of its middle line, each
+/// band warped alone.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct BandsCandidate {
+    /// How many bands.
+    pub(super) count: u32,
+    /// The bands' own geometric error (px), measured against the exact projection.
+    pub(super) bands_error_px: f64,
+    /// The warp that carries each band.
+    pub(super) warp: WarpChoice,
+    /// Estimated frame time (ms): the warp's, and a source render more per further band.
+    pub(super) ms: f64,
+    /// The budget the count was chosen against (px).
+    pub(super) budget_px: f64,
+}
+
+impl BandsCandidate {
+    /// The route's error: the bands' and the warp's, which add along the chain.
+    pub(super) fn error_px(&self) -> f64 {
+        self.bands_error_px + self.warp.error_px
+    }
+}
+
+/// The bands weighed for a moving rolling shutter.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct BandsSearch {
+    /// The fewest bands of [`BAND_COUNTS`] whose error, with the warp's, meets the budget.
+    pub(super) chosen: Option<BandsCandidate>,
+    /// The most bands tried and the error they leave (px, the warp's included), where none
+    /// meets the budget; `None` where no warp was there to try.
+    pub(super) most: Option<(u32, f64)>,
+}
+
+/// The fewest bands that draw `motions` (each moving frame's readout and motion) through
+/// `camera` by the warp of `candidates` within `budget`: each count's error is the largest
+/// over the frames, at the distances of `scene`'s vertices from the camera.
+pub(super) fn search_bands(
+    scene: &Scene,
+    camera: &Camera,
+    candidates: &Candidates,
+    motions: &[(Readout, FrameMotion)],
+    budget: f64,
+) -> BandsSearch {
+    let Some(warp) = candidates.warp else {
+        return BandsSearch::default();
+    };
+    let pixels = camera.width as f64 * camera.height as f64;
+    let source_ms = source_render_ms(pixels, scene.mesh.triangle_count() as f64);
+    let points: Vec<DVec3> = scene.mesh.vertices.iter().map(|v| v.position()).collect();
+    let ranges: Vec<Option<(f64, f64)>> = motions
+        .iter()
+        .map(|(_, m)| distance_range(camera, m, points.iter().copied()))
+        .collect();
+    let mut most = None;
+    for count in BAND_COUNTS {
+        let bands_error_px = motions
+            .iter()
+            .zip(&ranges)
+            .filter_map(|((readout, m), range)| {
+                range.map(|r| band_error_px(camera, m, *readout, count, r))
+            })
+            .fold(0.0, f64::max);
+        let candidate = BandsCandidate {
+            count,
+            bands_error_px,
+            warp,
+            ms: warp.ms + (count - 1) as f64 * source_ms,
+            budget_px: budget,
+        };
+        if candidate.error_px() <= budget {
+            return BandsSearch {
+                chosen: Some(candidate),
+                most: None,
+            };
+        }
+        most = Some((count, candidate.error_px()));
+    }
+    BandsSearch { chosen: None, most }
 }

@@ -149,20 +149,26 @@ pub fn band_error_px(
     worst
 }
 
-/// The camera's distance range to `points` (metres) over the readout of `motion`: the nearest
-/// and the farthest of the points in front of the camera at its first and its last line,
-/// `None` where none is. The bands' error is measured over it.
+/// The distances (metres) from `camera` to those of `points` it sees over the readout of
+/// `motion`: the nearest and the farthest of the points that land on the image from the pose
+/// of its first or its last line, `None` where none does. The bands' error is measured over
+/// it.
 pub fn distance_range(
+    camera: &Camera,
     motion: &FrameMotion,
     points: impl IntoIterator<Item = DVec3>,
 ) -> Option<(f64, f64)> {
     let poses = [motion.start(), motion.end()];
+    let (w, h) = (f64::from(camera.width), f64::from(camera.height));
     let mut range: Option<(f64, f64)> = None;
     for x in points {
         for pose in &poses {
             let p = pose.apply(x);
             let d = p.length();
-            if !(d.is_finite() && d > 0.0) {
+            let seen = camera
+                .project(p)
+                .is_some_and(|q| (-0.5..w - 0.5).contains(&q.x) && (-0.5..h - 0.5).contains(&q.y));
+            if !(seen && d.is_finite() && d > 0.0) {
                 continue;
             }
             range = Some(match range {
@@ -307,11 +313,14 @@ mod tests {
 
     #[test]
     fn the_distance_range_spans_the_points_at_both_ends_of_the_readout() {
-        let motion = pan();
+        let (camera, motion) = (camera(), pan());
+        // Behind the camera, and far off to the side: not seen, not counted.
+        let unseen = [DVec3::new(0.0, 0.0, -3.0), DVec3::new(40.0, 0.0, 0.5)];
         let points = [DVec3::ZERO, DVec3::new(0.0, 0.0, 1.0)];
-        let (near, far) = distance_range(&motion, points).unwrap();
+        let (near, far) =
+            distance_range(&camera, &motion, points.into_iter().chain(unseen)).unwrap();
         assert!((near - 0.06f64.hypot(1.6)).abs() < 1e-12, "{near}");
         assert!((far - 0.06f64.hypot(2.6)).abs() < 1e-12, "{far}");
-        assert!(distance_range(&motion, []).is_none());
+        assert!(distance_range(&camera, &motion, unseen).is_none());
     }
 }

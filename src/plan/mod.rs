@@ -5,7 +5,11 @@
 //!   (tessellated as far as the budget needs) or a pinhole render + warp (overscanned), by
 //!   estimated cost; object IDs and flow force Alg. 1 (Lambers et al. Table 1); chromatic aberration
 //!   needs the warp's fused per-channel pass, so colour then goes by the warp and the data by
-//!   Alg. 1. A lens prescription goes by Heidrich et al.'s image-based model.
+//!   Alg. 1. A lens prescription goes by Heidrich et al.'s image-based model. A camera moving
+//!   during a rolling shutter's readout goes by Alg. 1 solving each vertex's readout time, or
+//!   by the warp in the fewest bands of lines (each from its middle line's pose) whose
+//!   measured error meets the budget, whichever is cheaper (chromatic aberration needs the
+//!   bands).
 //! - **Accuracy.** The inverse method is the cheapest whose error, *measured* on this camera
 //!   (the f64 model over a grid of the image), meets the budget; the tessellation is the
 //!   coarsest whose straight-line error, measured on this scene and pose, meets it; for a

@@ -291,3 +291,33 @@ pub fn table(rows: &[Value]) -> String {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_puts_the_bands_under_the_exact_and_global_rows() {
+        let rows = [
+            json!({"grid": "128²", "path": "global", "frame_ms": 11.5}),
+            json!({"grid": "128²", "path": "exact", "frame_ms": 29.2, "x_global": 2.53}),
+            json!({"grid": "128²", "path": "bands", "bands": 0, "colour_mad": 1.94}),
+            json!({"grid": "128²", "path": "bands", "bands": 16, "frame_ms": 218.6,
+                   "x_exact": 5.48, "error_px": 2.895, "colour_mad": 3.16}),
+        ];
+        let t = table(&rows);
+        assert!(
+            t.contains("| 128² | rolling, exact per vertex | 29.2 | 2.53 |"),
+            "{t}"
+        );
+        assert!(
+            t.contains("| 128² | camera still (floor) | — | — | — | 1.94 |"),
+            "{t}"
+        );
+        assert!(
+            t.contains("| 128² | 16 | 218.6 | 5.48 | 2.895 | 3.16 |"),
+            "{t}"
+        );
+        assert!(!t.contains('?'), "{t}");
+    }
+}

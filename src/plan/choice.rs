@@ -613,4 +613,104 @@ mod tests {
             }
         ));
     }
+
+    fn bands(count: u32, bands_error_px: f64, ms: f64) -> BandsSearch {
+        BandsSearch {
+            chosen: Some(BandsCandidate {
+                count,
+                bands_error_px,
+                warp: warp(10.0, 1e-3),
+                ms,
+                budget_px: 0.5,
+            }),
+            most: None,
+        }
+    }
+
+    const MOVING: (crate::model::rolling_shutter::Readout, usize) =
+        (crate::model::rolling_shutter::Readout::TopToBottom, 1);
+
+    #[test]
+    fn a_moving_rolling_shutter_weighs_the_bands_against_the_exact_vertex_path() {
+        let choose = |f: &SceneFile, c: &Candidates, b: &BandsSearch| {
+            choose_moving_rolling_shutter(f, c, b, MOVING)
+        };
+        let c = candidates(Some(vertex(30.0, 9e-3)), Some(warp(10.0, 1e-3)), None);
+        // Colour alone: the cheaper. Dearer bands lose, and --explain hears what they cost.
+        let f = file("[accuracy]\nmax_error_px = 0.5\n");
+        let choice = choose(&f, &c, &bands(8, 0.3, 80.0)).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Vertex {
+                why: VertexReason::MovingRollingShutter {
+                    bands: BandsLoss::Dearer { count: 8, ms, .. }
+                },
+                ..
+            } if ms == 80.0
+        ));
+        let choice = choose(&f, &c, &bands(4, 0.3, 20.0)).unwrap();
+        assert_eq!(choice.bands(), Some(4));
+        assert!(matches!(
+            choice.route(),
+            Route::Warp {
+                chromatic: None,
+                ..
+            }
+        ));
+        assert_eq!(
+            (choice.expected_error_px(), choice.estimated_ms()),
+            (0.3 + 1e-3, 20.0)
+        );
+        // IDs: the vertex path, however cheap the bands.
+        let ids = file("[accuracy]\nmax_error_px = 0.5\n[outputs]\nids = true\n");
+        let choice = choose(&ids, &c, &bands(4, 0.3, 1.0)).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Vertex {
+                why: VertexReason::MovingRollingShutter {
+                    bands: BandsLoss::DataOutputs
+                },
+                ..
+            }
+        ));
+        // Chromatic with IDs: the bands for colour, the vertex path for the IDs.
+        let both = file(&format!(
+            "{CHROMATIC}[accuracy]\nmax_error_px = 0.5\n[outputs]\nids = true\n"
+        ));
+        let choice = choose(&both, &c, &bands(16, 0.2, 150.0)).unwrap();
+        assert!(matches!(
+            choice.route(),
+            Route::WarpAndVertex {
+                chromatic: Some(_),
+                ..
+            }
+        ));
+        assert_eq!((choice.bands(), choice.estimated_ms()), (Some(16), 180.0));
+        // No route within the budget: refused, naming both keys and what 64 bands leave.
+        let missed = BandsSearch {
+            chosen: None,
+            most: Some((64, 0.8)),
+        };
+        let chromatic = file(&format!("{CHROMATIC}[accuracy]\nmax_error_px = 0.5\n"));
+        let e = choose(&chromatic, &c, &missed).unwrap_err().to_string();
+        assert!(
+            e.starts_with("/scenes/s.toml: [sensor] rolling_shutter, [accuracy] max_error_px = 0.5: [[poses]] #2 moves during its top_to_bottom readout")
+                && e.contains("leaves 0.800 px even with 64 bands"),
+            "{e}"
+        );
+        let none = candidates(None, Some(warp(10.0, 1e-3)), None);
+        let e = choose(&f, &none, &missed).unwrap_err().to_string();
+        assert!(
+            e.contains("even 1 px edges") && e.contains("64 bands"),
+            "{e}"
+        );
+        // A lens no pinhole source holds: no bands, and the cube map draws from one pose.
+        let e = choose(&chromatic, &wide(None, None), &BandsSearch::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("[sensor] rolling_shutter") && e.contains("the lens sees past 90°"),
+            "{e}"
+        );
+    }
 }

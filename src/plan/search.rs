@@ -365,20 +365,35 @@ pub(super) fn search_bands(
     };
     let pixels = camera.width as f64 * camera.height as f64;
     let source_ms = source_render_ms(pixels, scene.mesh.triangle_count() as f64);
-    let points: Vec<DVec3> = scene.mesh.vertices.iter().map(|v| v.position()).collect();
+    // The distances come from at most this many vertices, evenly through the mesh: a range,
+    // not a bound, and a dense mesh's neighbours add nothing to it.
+    const MAX_POINTS: usize = 1 << 14;
+    let step = scene.mesh.vertices.len().div_ceil(MAX_POINTS).max(1);
+    let points: Vec<DVec3> = scene
+        .mesh
+        .vertices
+        .iter()
+        .step_by(step)
+        .map(|v| v.position())
+        .collect();
     let ranges: Vec<Option<(f64, f64)>> = motions
         .iter()
         .map(|(_, m)| distance_range(camera, m, points.iter().copied()))
         .collect();
     let mut most = None;
     for count in BAND_COUNTS {
-        let bands_error_px = motions
-            .iter()
-            .zip(&ranges)
-            .filter_map(|((readout, m), range)| {
-                range.map(|r| band_error_px(camera, m, *readout, count, r))
-            })
-            .fold(0.0, f64::max);
+        // The largest over the frames; a frame past the budget settles the count.
+        let mut bands_error_px = 0f64;
+        for ((readout, m), range) in motions.iter().zip(&ranges) {
+            if let Some(r) = range {
+                bands_error_px = bands_error_px.max(band_error_px(camera, m, *readout, count, *r));
+            }
+            if bands_error_px + warp.error_px > budget
+                && count != BAND_COUNTS[BAND_COUNTS.len() - 1]
+            {
+                break;
+            }
+        }
         let candidate = BandsCandidate {
             count,
             bands_error_px,

@@ -83,8 +83,9 @@ fn frame_ms(
     super::wide::request_frame_ms(ctx, scene, &request)
 }
 
-/// The exact vertex path's colour request for `camera` through the pan, top to bottom.
-pub fn exact_request(camera: &Camera) -> RenderRequest {
+/// The exact vertex path's colour request for `camera` through the pan, read in `readout`
+/// order.
+pub fn exact_request(camera: &Camera, readout: Readout) -> RenderRequest {
     let (start, end) = pan();
     let mut request = RenderRequest::color(
         camera,
@@ -95,13 +96,14 @@ pub fn exact_request(camera: &Camera) -> RenderRequest {
     );
     request.pose = start;
     request.previous_pose = start;
-    request.rolling_shutter = Some((Readout::TopToBottom, end));
+    request.rolling_shutter = Some((readout, end));
     request
 }
 
-/// The warp route's plan for `camera` through the pan, top to bottom, in `count` bands of
-/// lines (Newton per pixel, density 1); `count` 1 is one render from the mid-frame pose.
-pub fn bands_plan(ctx: &Context, camera: &Camera, count: u32) -> Result<Plan> {
+/// The warp route's plan for `camera` through the pan, read in `readout` order, in `count`
+/// bands of lines (Newton per pixel, density 1); `count` 1 is one render from the mid-frame
+/// pose.
+pub fn bands_plan(ctx: &Context, camera: &Camera, readout: Readout, count: u32) -> Result<Plan> {
     let (start, end) = pan();
     let mut request = RenderRequest::color(
         camera,
@@ -114,7 +116,7 @@ pub fn bands_plan(ctx: &Context, camera: &Camera, count: u32) -> Result<Plan> {
     request.previous_pose = start;
     let mut plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
     plan.shutter = Shutter::Moving {
-        readout: Readout::TopToBottom,
+        readout,
         from: ReadoutSource::Request,
         frame: 0,
     };
@@ -123,14 +125,14 @@ pub fn bands_plan(ctx: &Context, camera: &Camera, count: u32) -> Result<Plan> {
     Ok(plan)
 }
 
-/// The bands' geometric error (px) for `camera` through the pan over `scene`'s distances, as
-/// the planner measures it.
-pub fn bands_error_px(camera: &Camera, scene: &Scene, count: u32) -> f64 {
+/// The bands' geometric error (px) for `camera` through the pan, read in `readout` order, over
+/// `scene`'s distances, as the planner measures it.
+pub fn bands_error_px(camera: &Camera, scene: &Scene, readout: Readout, count: u32) -> f64 {
     let (start, end) = pan();
     let motion = FrameMotion::new(start.into(), end.into());
     let points = scene.mesh.vertices.iter().map(|v| v.position());
     distance_range(camera, &motion, points).map_or(0.0, |range| {
-        band_error_px(camera, &motion, Readout::TopToBottom, count, range)
+        band_error_px(camera, &motion, readout, count, range)
     })
 }
 
@@ -157,9 +159,9 @@ pub fn colour_mad(a: &Rendered, b: &Rendered) -> Result<f64> {
 /// exact path, from the warp's resampling of its pinhole source against the vertex path's
 /// raster (8-bit levels, as [`colour_mad`]).
 pub fn still_colour_mad(ctx: &Context, camera: &Camera, scene: &Scene) -> Result<f64> {
-    let mut vertex = exact_request(camera);
+    let mut vertex = exact_request(camera, Readout::TopToBottom);
     vertex.rolling_shutter = None;
-    let mut warp = bands_plan(ctx, camera, 1)?;
+    let mut warp = bands_plan(ctx, camera, Readout::TopToBottom, 1)?;
     (warp.shutter, warp.end_poses, warp.bands) = (Shutter::Global, Vec::new(), None);
     let max = ctx.gpu().max_image_side();
     let (_, a) = plan_frames(ctx, &Plan::from_request(&vertex, max)?, scene)?;
@@ -198,7 +200,8 @@ fn bands_rows(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value
     progress(&format!(
         "rolling shutter: grid {BANDS_GRID}², exact per vertex (the bands' reference)"
     ));
-    let exact_plan = Plan::from_request(&exact_request(&camera), ctx.gpu().max_image_side())?;
+    let top = Readout::TopToBottom;
+    let exact_plan = Plan::from_request(&exact_request(&camera, top), ctx.gpu().max_image_side())?;
     let (exact_ms, exact) = plan_frames(ctx, &exact_plan, &scene)?;
     progress(&format!(
         "rolling shutter: grid {BANDS_GRID}², the warp and the vertex path, camera still"
@@ -213,14 +216,14 @@ fn bands_rows(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value
         progress(&format!(
             "rolling shutter: grid {BANDS_GRID}², {count} bands"
         ));
-        let (ms, rendered) = plan_frames(ctx, &bands_plan(ctx, &camera, count)?, &scene)?;
+        let (ms, rendered) = plan_frames(ctx, &bands_plan(ctx, &camera, top, count)?, &scene)?;
         rows.push(json!({
             "grid": format!("{BANDS_GRID}²"),
             "path": "bands",
             "bands": count,
             "frame_ms": ms,
             "x_exact": ms / exact_ms,
-            "error_px": bands_error_px(&camera, &scene, count),
+            "error_px": bands_error_px(&camera, &scene, top, count),
             "colour_mad": colour_mad(&rendered, &exact)?,
         }));
     }

@@ -3,7 +3,7 @@
 
 use super::cost::CUBE_RAY_ERROR_PX;
 use super::search::{
-    BandsCandidate, BandsSearch, Candidates, CubeCandidate, VertexCandidate, WarpChoice,
+    BandsCandidate, BandsSearch, BandsVia, Candidates, CubeCandidate, VertexCandidate, WarpChoice,
 };
 use super::{chromatic_scales, Route, SceneFile};
 use crate::{Error, Result};
@@ -131,24 +131,26 @@ impl Choice {
             },
             Choice::Bands {
                 bands,
-                vertex: Some(vertex),
+                vertex,
                 chromatic,
                 ..
-            } => Route::WarpAndVertex {
-                method: bands.warp.method,
-                chromatic: *chromatic,
-                tessellate: vertex.tessellation.edge_px,
-                map: bands.warp.map,
-            },
-            Choice::Bands {
-                bands,
-                vertex: None,
-                chromatic,
-                ..
-            } => Route::Warp {
-                method: bands.warp.method,
-                chromatic: *chromatic,
-                map: bands.warp.map,
+            } => match (bands.via, vertex) {
+                (BandsVia::Warp(w), Some(vertex)) => Route::WarpAndVertex {
+                    method: w.method,
+                    chromatic: *chromatic,
+                    tessellate: vertex.tessellation.edge_px,
+                    map: w.map,
+                },
+                (BandsVia::Warp(w), None) => Route::Warp {
+                    method: w.method,
+                    chromatic: *chromatic,
+                    map: w.map,
+                },
+                // The cube map carries colour alone: the choice puts no vertex path beside it.
+                (BandsVia::Cube(c), _) => Route::Cube {
+                    side: c.side,
+                    chromatic: *chromatic,
+                },
             },
         }
     }
@@ -285,10 +287,10 @@ pub(super) fn choose_moving_rolling_shutter(
     // What the bands leave at most, where none meets the budget.
     let missed = |why: &str| {
         match (bands.most, &candidates.no_pinhole_warp) {
-        (_, Some(no_source)) => Error::input(format!(
-            "{moving}; {why}, and the warp draws it only in bands of lines, each from a pinhole source, which cannot hold this lens ({no_source}): not planned (drop what needs the warp, or end_rvec and end_tvec)"
+        (None, Some(no_source)) => Error::input(format!(
+            "{moving}; {why}, and the warp draws it only in bands of lines, each from a pinhole source, which cannot hold this lens ({no_source}), or from a cube map's faces, which carry colour alone: not planned (drop what needs the warp, or end_rvec and end_tvec)"
         )),
-        (Some((count, error)), None) => Error::input(format!(
+        (Some((count, error)), _) => Error::input(format!(
             "{moving}; {why}, and drawn in bands of lines (each from the pose of its middle line) the warp leaves {error:.3} px even with {count} bands, beyond the budget: raise max_error_px to {error:.3} or more, or slow the motion (end_rvec, end_tvec nearer rvec, tvec)"
         )),
         (None, None) => Error::input(format!(
@@ -309,7 +311,10 @@ pub(super) fn choose_moving_rolling_shutter(
                 "[effects] chromatic_aberration needs the warp (Alg. 1 cannot give each channel its own lens)",
             ));
         };
-        let vertex = if data { Some(vertex_for_data()?) } else { None };
+        let vertex = match b.via {
+            BandsVia::Warp(_) if data => Some(vertex_for_data()?),
+            _ => None,
+        };
         return Ok(Choice::Bands {
             bands: b,
             vertex,
@@ -619,7 +624,7 @@ mod tests {
             chosen: Some(BandsCandidate {
                 count,
                 bands_error_px,
-                warp: warp(10.0, 1e-3),
+                via: BandsVia::Warp(warp(10.0, 1e-3)),
                 ms,
                 budget_px: 0.5,
             }),

@@ -115,6 +115,12 @@ pub(super) fn source_render_ms(pixels: f64, triangles: f64) -> f64 {
     (RENDER_NS_PER_PIXEL * OVERSCAN_AREA * pixels + RENDER_NS_PER_TRIANGLE * triangles) * 1e-6
 }
 
+/// One pinhole render of `pixels` pixels (ms): a cube face, which each further band of a
+/// moving rolling shutter renders six times.
+pub(super) fn face_render_ms(pixels: f64, triangles: f64) -> f64 {
+    (RENDER_NS_PER_PIXEL * pixels + RENDER_NS_PER_TRIANGLE * triangles) * 1e-6
+}
+
 /// What a frame costs, by route.
 #[derive(Debug, Clone, Copy)]
 pub(super) enum Cost {

@@ -6,7 +6,7 @@ use super::choice::{BandsLoss, BandsReason, Choice, CubeLoss, CubeReason, Vertex
 use super::cost::CUBE_RAY_ERROR_PX;
 use super::lens::Cells;
 use super::scene_file::{Antialias, Effects};
-use super::search::{BandsCandidate, Candidates, TessellationChoice, WarpChoice};
+use super::search::{BandsCandidate, BandsVia, Candidates, TessellationChoice, WarpChoice};
 use super::{Plan, Route, Stage, Step};
 use crate::model::Terms;
 
@@ -240,7 +240,15 @@ pub(super) fn camera_steps(choice: &Choice, candidates: &Candidates, terms: Term
             chromatic,
             why,
         } => {
-            let mut steps = warp_steps(&bands.warp, chromatic.is_some(), candidates, &terms);
+            let mut steps = match &bands.via {
+                BandsVia::Warp(w) => warp_steps(w, chromatic.is_some(), candidates, &terms),
+                BandsVia::Cube(c) => {
+                    let why = CubeReason::NoPinholeWarp(
+                        candidates.no_pinhole_warp.clone().unwrap_or_default(),
+                    );
+                    cube_steps(c.side, c.ms, chromatic.is_some(), &why, candidates, &terms)
+                }
+            };
             steps[0] = bands_step(bands, why);
             if let Some(vertex) = vertex {
                 steps.push(Step {
@@ -358,10 +366,17 @@ fn bands_step(bands: &BandsCandidate, why: &BandsReason) -> Step {
             "no tessellation meets the budget on the exact vertex path".into()
         }
     };
+    let (stage, sources) = match bands.via {
+        BandsVia::Warp(_) => (Stage::BandRenders, "the pinhole source is"),
+        BandsVia::Cube(_) => (
+            Stage::BandCubeFaces,
+            "no pinhole source holds the lens, so the cube map's six faces are",
+        ),
+    };
     Step {
-        stage: Stage::BandRenders,
+        stage,
         why: format!(
-            "the camera moves during the readout and the warp draws a frame from one pose: {why}; {k} bands leave {:.2} px ≤ {:.2} px budget ({:.2} px from the bands, measured against the exact per-line projection over the scene's depths, the fewest of 4, 8, 16, 32, 64 that meet it; the rest the warp's); the pinhole source is rendered once per band, from the pose of the band's middle line, and each band of the output warped from its own render (est. {:.1} ms per frame)",
+            "the camera moves during the readout and the warp draws a frame from one pose: {why}; {k} bands leave {:.2} px ≤ {:.2} px budget ({:.2} px from the bands, measured against the exact per-line projection over the scene's depths, the fewest of 4, 8, 16, 32, 64 that meet it; the rest the warp's); {sources} rendered once per band, from the pose of the band's middle line, and each band of the output warped from its own render (est. {:.1} ms per frame)",
             bands.error_px(),
             bands.budget_px,
             bands.bands_error_px,

@@ -143,6 +143,9 @@ pub enum Stage {
     /// The warp's pinhole source, overscanned, rendered once per band of a moving rolling
     /// shutter's lines, each band warped from its own render.
     BandRenders,
+    /// The six pinhole faces of a cube map, rendered once per band of a moving rolling
+    /// shutter's lines, each band warped from its own cube.
+    BandCubeFaces,
 }
 
 impl Stage {
@@ -166,6 +169,7 @@ impl Stage {
             Stage::Vignetting { kept: false } => "vignetting divided out",
             Stage::CellRenders => "cell renders",
             Stage::BandRenders => "pinhole render per band (overscanned)",
+            Stage::BandCubeFaces => "cube faces per band (6 pinhole renders each)",
         }
     }
 }

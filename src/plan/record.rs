@@ -166,6 +166,9 @@ pub struct PlanRecorder {
     cube: Option<CubeStage>,
     /// The warp's bands, where it draws a moving rolling shutter.
     bands: Option<BandedSource>,
+    /// The cube map's bands, where it draws a moving rolling shutter: one set of faces each,
+    /// in the stage's slots.
+    cube_bands: Option<Vec<Band>>,
     lens: Option<LensRenderer>,
     mesh: MeshBuffers,
     poses: Vec<Pose>,
@@ -288,6 +291,7 @@ impl PlanRecorder {
             warp: None,
             cube: None,
             bands: None,
+            cube_bands: None,
             lens: None,
             mesh: MeshBuffers::new(gpu, mesh, texture)?,
             poses: plan.poses.clone(),
@@ -309,8 +313,10 @@ impl PlanRecorder {
             pipelines: Vec::new(),
         };
         let lens_delta = Projection::Lens { delta: plan.delta };
-        let banded = matches!(plan.route, Route::Warp { .. } | Route::WarpAndVertex { .. })
-            && plan.bands.is_some();
+        let banded = matches!(
+            plan.route,
+            Route::Warp { .. } | Route::WarpAndVertex { .. } | Route::Cube { .. }
+        ) && plan.bands.is_some();
         if plan.shutter.moving_readout().is_some()
             && !matches!(plan.route, Route::Pinhole | Route::Vertex { .. })
             && !banded
@@ -402,14 +408,30 @@ impl PlanRecorder {
                             fill: plan.background,
                             write_mask: false,
                         };
-                        let stage = CubeStage::with_frames(gpu, camera, side, f, &options, frames)?;
+                        let mut stage =
+                            CubeStage::with_frames(gpu, camera, side, f, &options, frames)?;
                         r.pipelines.extend([
                             RecordedPipeline::geometry(&stage.pass),
                             RecordedPipeline::compute(PassKind::SphereWarp, stage.warp.pipeline()),
                         ]);
+                        match (plan.bands, plan.shutter.moving_readout()) {
+                            (Some(count), Some(readout)) => {
+                                let bands = crate::model::rolling_shutter::bands::bands(
+                                    readout,
+                                    camera.width,
+                                    camera.height,
+                                    count,
+                                );
+                                // SAFETY: the stage is new: nothing recorded with it exists.
+                                unsafe { stage.set_bands(bands.len()) }?;
+                                r.cube_bands = Some(bands);
+                                r.names.push("cube faces + sphere warp per band");
+                            }
+                            _ => r
+                                .names
+                                .extend(["cube faces (6 pinhole renders)", "sphere warp"]),
+                        }
                         r.cube = Some(stage);
-                        r.names
-                            .extend(["cube faces (6 pinhole renders)", "sphere warp"]);
                     }
                     Route::LensModel { .. } => {
                         return Err(internal("the lens route is handled above"))
@@ -620,6 +642,21 @@ impl PlanRecorder {
                 (p, self.end_poses.get(i - 1).copied().unwrap_or(p))
             }
         };
+        let motion = FrameMotion::new(pose.into(), end.into());
+        // Each band from the pose of its middle line (slerp and a linear centre between the
+        // frame's two poses).
+        let band_poses = |bands: &[Band]| -> Vec<Pose> {
+            bands
+                .iter()
+                .map(|band| {
+                    let p = motion.at(band.s);
+                    Pose {
+                        rotation: p.rotation,
+                        translation: p.translation,
+                    }
+                })
+                .collect()
+        };
         // SAFETY (every block below): this function's contract: no recorded work of the
         // selected frame, whose uniforms and sets these are, is pending.
         if let Some((pass, _)) = &self.geometry {
@@ -629,24 +666,13 @@ impl PlanRecorder {
             unsafe { st.pass.set_frame(&pose, &pose) }?;
         }
         if let (Some(st), Some(b)) = (&self.warp, &mut self.bands) {
-            // Each band from the pose of its middle line (slerp and a linear centre between
-            // the frame's two poses).
-            let motion = FrameMotion::new(pose.into(), end.into());
-            b.poses[b.frame] = b
-                .bands
-                .iter()
-                .map(|band| {
-                    let p = motion.at(band.s);
-                    Pose {
-                        rotation: p.rotation,
-                        translation: p.translation,
-                    }
-                })
-                .collect();
+            b.poses[b.frame] = band_poses(&b.bands);
             unsafe { b.write_slots(&st.pass) }?;
         }
-        if let Some(c) = &self.cube {
-            unsafe { c.prepare(&self.mesh, &pose) }?;
+        match (&self.cube, &self.cube_bands) {
+            (Some(c), Some(bands)) => unsafe { c.prepare_bands(&self.mesh, &band_poses(bands)) }?,
+            (Some(c), None) => unsafe { c.prepare(&self.mesh, &pose) }?,
+            _ => {}
         }
         if let Some(l) = &mut self.lens {
             unsafe { l.prepare(&self.mesh, &pose) }?;
@@ -739,7 +765,15 @@ impl PlanRecorder {
                 st.record_warps(cmd);
                 stamp();
             }
-            if let Some(c) = &self.cube {
+            if let (Some(c), Some(bands)) = (&self.cube, &self.cube_bands) {
+                // Each band's faces, then its rows or columns of the output; the next band's
+                // faces discard the cube only after this warp has sampled it.
+                for (k, band) in bands.iter().enumerate() {
+                    c.record_band_faces(cmd, &self.mesh, k);
+                    c.record_warp_band(cmd, band.rect);
+                }
+                stamp();
+            } else if let Some(c) = &self.cube {
                 c.record_faces(cmd, &self.mesh);
                 stamp();
                 c.record_warp(cmd);

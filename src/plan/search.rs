@@ -5,8 +5,8 @@
 use glam::{DVec2, DVec3};
 
 use super::cost::{
-    estimate_ms, inverse_candidates_for, source_render_ms, Cost, CUBE_RAY_ERROR_PX, MAP_BUILD_NS,
-    MAP_F32_FLOOR_PX, MAP_WARP_CHROMATIC_NS, MAP_WARP_NS, PLANNED_CUBE_MAX_SIDE,
+    estimate_ms, face_render_ms, inverse_candidates_for, source_render_ms, Cost, CUBE_RAY_ERROR_PX,
+    MAP_BUILD_NS, MAP_F32_FLOOR_PX, MAP_WARP_CHROMATIC_NS, MAP_WARP_NS, PLANNED_CUBE_MAX_SIDE,
     ROLLING_SHUTTER_NS_PER_VERTEX,
 };
 use super::{chromatic_scales, limits, SceneFile, MAP_COORDINATES};
@@ -316,27 +316,47 @@ pub(super) fn search_candidates(
     })
 }
 
-/// A moving rolling shutter drawn in bands by the warp route: `count` bands of the readout's
-/// lines, the pinhole source rendered once per band from the pose of its middle line, each
-/// band warped alone.
+/// A moving rolling shutter drawn in bands: `count` bands of the readout's lines, the warp's
+/// pinhole source (or the cube map's six faces) rendered once per band from the pose of its
+/// middle line, each band warped alone.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct BandsCandidate {
     /// How many bands.
     pub(super) count: u32,
     /// The bands' own geometric error (px), measured against the exact projection.
     pub(super) bands_error_px: f64,
-    /// The warp that carries each band.
-    pub(super) warp: WarpChoice,
-    /// Estimated frame time (ms): the warp's, and a source render more per further band.
+    /// The route that carries each band.
+    pub(super) via: BandsVia,
+    /// Estimated frame time (ms): the route's, and its sources rendered again per further
+    /// band.
     pub(super) ms: f64,
     /// The budget the count was chosen against (px).
     pub(super) budget_px: f64,
 }
 
+/// The route that draws each band.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum BandsVia {
+    /// A pinhole source and the warp.
+    Warp(WarpChoice),
+    /// Six pinhole faces of a cube map and the sphere warp: a lens no pinhole source holds.
+    Cube(CubeCandidate),
+}
+
+impl BandsVia {
+    /// The route's own geometric error (px).
+    pub(super) fn error_px(&self) -> f64 {
+        match self {
+            BandsVia::Warp(w) => w.error_px,
+            BandsVia::Cube(_) => CUBE_RAY_ERROR_PX,
+        }
+    }
+}
+
 impl BandsCandidate {
     /// The route's error: the bands' and the warp's, which add along the chain.
     pub(super) fn error_px(&self) -> f64 {
-        self.bands_error_px + self.warp.error_px
+        self.bands_error_px + self.via.error_px()
     }
 }
 
@@ -351,8 +371,9 @@ pub(super) struct BandsSearch {
 }
 
 /// The fewest bands that draw `motions` (each moving frame's readout and motion) through
-/// `camera` by the warp of `candidates` within `budget`: each count's error is the largest
-/// over the frames, at the distances of `scene`'s vertices from the camera.
+/// `camera` by the warp of `candidates` (or, where no pinhole source holds the lens, its cube
+/// map) within `budget`: each count's error is the largest over the frames, at the distances
+/// of `scene`'s vertices from the camera.
 pub(super) fn search_bands(
     scene: &Scene,
     camera: &Camera,
@@ -360,11 +381,18 @@ pub(super) fn search_bands(
     motions: &[(Readout, FrameMotion)],
     budget: f64,
 ) -> BandsSearch {
-    let Some(warp) = candidates.warp else {
-        return BandsSearch::default();
+    let triangles = scene.mesh.triangle_count() as f64;
+    let (via, source_ms) = match (candidates.warp, candidates.cube) {
+        (Some(w), _) => (
+            BandsVia::Warp(w),
+            source_render_ms(camera.width as f64 * camera.height as f64, triangles),
+        ),
+        (None, Some(c)) => (
+            BandsVia::Cube(c),
+            6.0 * face_render_ms(f64::from(c.side) * f64::from(c.side), triangles),
+        ),
+        (None, None) => return BandsSearch::default(),
     };
-    let pixels = camera.width as f64 * camera.height as f64;
-    let source_ms = source_render_ms(pixels, scene.mesh.triangle_count() as f64);
     // The distances come from at most this many vertices, evenly through the mesh: a range,
     // not a bound, and a dense mesh's neighbours add nothing to it.
     const MAX_POINTS: usize = 1 << 14;
@@ -388,7 +416,7 @@ pub(super) fn search_bands(
             if let Some(r) = range {
                 bands_error_px = bands_error_px.max(band_error_px(camera, m, *readout, count, *r));
             }
-            if bands_error_px + warp.error_px > budget
+            if bands_error_px + via.error_px() > budget
                 && count != BAND_COUNTS[BAND_COUNTS.len() - 1]
             {
                 break;
@@ -397,8 +425,11 @@ pub(super) fn search_bands(
         let candidate = BandsCandidate {
             count,
             bands_error_px,
-            warp,
-            ms: warp.ms + (count - 1) as f64 * source_ms,
+            via,
+            ms: match via {
+                BandsVia::Warp(w) => w.ms,
+                BandsVia::Cube(c) => c.ms,
+            } + (count - 1) as f64 * source_ms,
             budget_px: budget,
         };
         if candidate.error_px() <= budget {

@@ -6,12 +6,11 @@
 //! shutter's image is the global shutter's, exactly: every route draws it. Where it moves
 //! (`end_rvec`, `end_tvec` differ from `rvec`, `tvec`), each line sees another pose. The vertex
 //! path draws that exactly, solving per vertex the readout time at which its own line reads it
-//! (`glsl/include/rolling_shutter.glsl`). The warp draws a frame from one pose; it approximates
-//! the motion in bands of lines, each rendered from the pose of its middle line
-//! (`model::rolling_shutter::bands`), where the error that leaves meets the budget (the choice
-//! is `choice::choose_moving_rolling_shutter`). The cube map and the image-based lens model
-//! draw from one pose only, so where only they could draw, the plan is refused, naming the
-//! key.
+//! (`glsl/include/rolling_shutter.glsl`). The warp and the cube map draw a frame from one
+//! pose; they approximate the motion in bands of lines, each rendered from the pose of its
+//! middle line (`model::rolling_shutter::bands`), where the error that leaves meets the budget
+//! (the choice is `choice::choose_moving_rolling_shutter`). The image-based lens model draws
+//! from one pose only, so a lens prescription is refused, naming the key.
 
 use super::SceneFile;
 use crate::model::rolling_shutter::Readout;

@@ -1246,3 +1246,86 @@ fn bands_approach_the_exact_vertex_path_as_they_multiply() {
     }
     assert_no_validation_messages(&ctx);
 }
+
+/// The 200° fisheye in the room, lateral colour, turning about 1° during its second frame's
+/// top-to-bottom readout, with `extra` tables.
+fn banded_fisheye(extra: &str) -> SceneFile {
+    scene_file(&format!(
+        "[geometry]\nscene = \"room\"\n[optics]\ncamera = \"../cameras/fisheye_200.json\"\n\
+         [sensor]\nrolling_shutter = \"top_to_bottom\"\n{BANDS_CHROMATIC}\
+         [[poses]]\nrvec = [0.0, 0.0, 0.0]\ntvec = [0.0, 0.0, 0.0]\n\
+         [[poses]]\nrvec = [0.0, -0.009, 0.0]\ntvec = [0.0, 0.0, 0.0]\n\
+         end_rvec = [0.0, 0.009, 0.0]\nend_tvec = [0.0, 0.0, 0.0]\n{extra}"
+    ))
+}
+
+#[test]
+fn a_lens_no_pinhole_holds_takes_its_bands_through_the_cube_map() {
+    let ctx = validated_context();
+    let file = banded_fisheye(&budget(0.5));
+    let scene = load_geometry(&file).unwrap();
+    let mut p = plan(&file, &scene).unwrap();
+    assert!(
+        matches!(
+            p.route,
+            Route::Cube {
+                chromatic: Some(_),
+                ..
+            }
+        ),
+        "{:?}",
+        p.route
+    );
+    let k = p.bands.unwrap();
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains("cube faces per band (6 pinhole renders each)")
+            && text.contains(&format!("{k} bands leave"))
+            && text.contains("the cube map's six faces are rendered once per band"),
+        "{text}"
+    );
+    // Too tight a budget: refused, naming both keys.
+    let tight = banded_fisheye(&budget(0.001));
+    let e = plan(&tight, &scene).unwrap_err().to_string();
+    assert!(
+        e.contains("[sensor] rolling_shutter, [accuracy] max_error_px = 0.001")
+            && e.contains("with 64 bands"),
+        "{e}"
+    );
+    // Rendered small (lavapipe renders six faces per band): every pixel written once, by
+    // its band's warp, the frame in bands unlike the still one.
+    let camera = crate::model::Camera::fisheye(
+        160,
+        160,
+        crate::model::Intrinsics {
+            fx: 46.0,
+            fy: 46.0,
+            cx: 79.5,
+            cy: 79.5,
+        },
+        crate::model::Fisheye::new([0.02, -0.004, 0.0005, 0.0], 0.0, Some(200.0)).unwrap(),
+    )
+    .unwrap();
+    p.optics = crate::plan::Optics::Camera(camera);
+    p.route = Route::Cube {
+        side: 64,
+        chromatic: Some([1.002, 1.0, 0.998]),
+    };
+    p.bands = Some(8);
+    p.background = [0.0, 0.0, 0.0, 1.0];
+    let mut out = Vec::new();
+    let recorded = execute(&ctx, &p, &scene, 0..2, &mut |f| {
+        out.push(f.rendered.color.unwrap());
+        Ok(())
+    })
+    .unwrap();
+    assert!(recorded.has(PassKind::SphereWarp));
+    for c in &out {
+        let crate::imaging::Pixels::Rgba8(c) = &c.pixels else {
+            panic!("8-bit colour expected");
+        };
+        assert!(c.iter().all(|p| p[3] == 255));
+    }
+    assert_ne!(out[0].pixels, out[1].pixels);
+    assert_no_validation_messages(&ctx);
+}

@@ -39,6 +39,7 @@ layout(push_constant) uniform SpherePush {
     vec4 chromatic;  // per-channel magnification R G B, -
     vec4 fill;       // value for pixels without a source
     uvec4 sizes;     // -, -, output w h
+    uvec4 band;      // the output pixels a dispatch covers: x0 y0 x1 y1 (x1, y1 excluded)
 } pc;
 
 // The unit camera-frame ray output pixel p sees, for channel magnification `scale`.
@@ -68,8 +69,10 @@ vec4 sample_ray(vec3 r) {
 }
 
 void main() {
-    ivec2 id = ivec2(gl_GlobalInvocationID.xy);
-    if (id.x >= int(pc.sizes.z) || id.y >= int(pc.sizes.w)) return;
+    // A dispatch covers the band of output pixels pc.band names (the whole output, or one
+    // band of a rolling shutter's lines, each warped from its own cube).
+    ivec2 id = ivec2(gl_GlobalInvocationID.xy + pc.band.xy);
+    if (id.x >= int(min(pc.band.z, pc.sizes.z)) || id.y >= int(min(pc.band.w, pc.sizes.w))) return;
     vec2 p = vec2(id);
     // G first, then R and B, from one call site in a loop: a driver inlines the lens's inverse
     // at every call before specialization folds CHROMATIC away (glsl/warp.comp says the same).

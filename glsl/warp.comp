@@ -58,8 +58,10 @@ bool coords(vec2 p, ivec2 id, int channel, float scale, out vec2 s) {
 }
 
 void main() {
-    ivec2 id = ivec2(gl_GlobalInvocationID.xy);
-    if (id.x >= int(pc.sizes.z) || id.y >= int(pc.sizes.w)) return;
+    // A dispatch covers the band of output pixels pc.band names (the whole output, or one
+    // band of a rolling shutter's lines, each warped from its own source render).
+    ivec2 id = ivec2(gl_GlobalInvocationID.xy + pc.band.xy);
+    if (id.x >= int(min(pc.band.z, pc.sizes.z)) || id.y >= int(min(pc.band.w, pc.sizes.w))) return;
     vec2 p = vec2(id);
     // G first (the only channel without chromatic aberration), then R and B. One call site in
     // a loop, not three: a driver inlines the inverse model at every call before

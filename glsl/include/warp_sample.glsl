@@ -32,6 +32,7 @@ layout(push_constant) uniform WarpPush {
     vec4 fill;       // value for pixels without a source
     uvec4 sizes;     // source w h, output w h
     vec4 rectify[3]; // columns of Rᵀ·K_out⁻¹ (undistort with RECTIFY only)
+    uvec4 band;      // the output pixels a dispatch covers: x0 y0 x1 y1 (x1, y1 excluded)
 } pc;
 
 mat3 vkl_rectify() {

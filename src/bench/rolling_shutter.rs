@@ -6,21 +6,35 @@
 //!
 //! Each row has the frame time (wall clock of one whole render, readback included: median of
 //! 3 after a warm-up), and the exact path's rows its ratio to the global path's.
+//!
+//! Then the approximation the warp route can draw (chromatic aberration needs it): the same
+//! frame in K = 4 … 64 bands of lines, the warp's pinhole source rendered once per band from
+//! the pose of its middle line (`model::rolling_shutter::bands`), on the 128² grid. Each bands
+//! row has its frame time and ratio to the exact path's, the geometric error the planner
+//! measures for it (f64, against the exact projection over the grid's distances) and the mean
+//! absolute difference of its colour from the exact path's (8-bit levels, over every channel
+//! of every pixel). A first row gives that difference for a camera that does not move, the
+//! floor the warp's resampling leaves against the vertex path's raster whatever the bands.
 
 use glam::DVec3;
 use serde_json::{json, Value};
 
 use super::fixed as f;
+use crate::host::plan::execute;
 use crate::host::Context;
-use crate::model::rolling_shutter::Readout;
-use crate::model::{Camera, Intrinsics};
+use crate::imaging::{Pixels, Rendered};
+use crate::model::rolling_shutter::bands::{band_error_px, distance_range, BAND_COUNTS};
+use crate::model::rolling_shutter::{FrameMotion, Readout};
+use crate::model::{Camera, Intrinsics, InverseMethod};
 use crate::pass::geometry::DEFAULT_DELTA;
-use crate::plan::{PathChoice, RenderRequest};
+use crate::plan::{PathChoice, Plan, ReadoutSource, RenderRequest, Shutter};
 use crate::scene::{builtin, Pose, Scene};
-use crate::Result;
+use crate::{Error, Result};
 
 /// Grid meshes (quads per side).
 pub const GRIDS: [u32; 2] = [128, 512];
+/// The grid the bands are measured on (quads per side).
+pub const BANDS_GRID: u32 = 128;
 
 /// The camera of every row.
 pub fn camera() -> Result<Camera> {
@@ -69,8 +83,155 @@ fn frame_ms(
     super::wide::request_frame_ms(ctx, scene, &request)
 }
 
-/// Every row: per grid, the global path, then the exact path with its ratio to it.
+/// The exact vertex path's colour request for `camera` through the pan, read in `readout`
+/// order.
+pub fn exact_request(camera: &Camera, readout: Readout) -> RenderRequest {
+    let (start, end) = pan();
+    let mut request = RenderRequest::color(
+        camera,
+        PathChoice::Vertex {
+            delta: DEFAULT_DELTA,
+            tessellate: None,
+        },
+    );
+    request.pose = start;
+    request.previous_pose = start;
+    request.rolling_shutter = Some((readout, end));
+    request
+}
+
+/// The warp route's plan for `camera` through the pan, read in `readout` order, in `count`
+/// bands of lines (Newton per pixel, density 1); `count` 1 is one render from the mid-frame
+/// pose.
+pub fn bands_plan(ctx: &Context, camera: &Camera, readout: Readout, count: u32) -> Result<Plan> {
+    let (start, end) = pan();
+    let mut request = RenderRequest::color(
+        camera,
+        PathChoice::Warp {
+            method: InverseMethod::Newton,
+            density: 1.0,
+        },
+    );
+    request.pose = start;
+    request.previous_pose = start;
+    let mut plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
+    plan.shutter = Shutter::Moving {
+        readout,
+        from: ReadoutSource::Request,
+        frame: 0,
+    };
+    plan.end_poses = vec![end];
+    plan.bands = Some(count);
+    Ok(plan)
+}
+
+/// The bands' geometric error (px) for `camera` through the pan, read in `readout` order, over
+/// `scene`'s distances, as the planner measures it.
+pub fn bands_error_px(camera: &Camera, scene: &Scene, readout: Readout, count: u32) -> f64 {
+    let (start, end) = pan();
+    let motion = FrameMotion::new(start.into(), end.into());
+    let points = scene.mesh.vertices.iter().map(|v| v.position());
+    distance_range(camera, &motion, points).map_or(0.0, |range| {
+        band_error_px(camera, &motion, readout, count, range)
+    })
+}
+
+/// Mean absolute difference of two 8-bit colour images (levels, over R, G, B of every pixel).
+pub fn colour_mad(a: &Rendered, b: &Rendered) -> Result<f64> {
+    let pixels = |r: &Rendered| match r.color.as_ref().map(|c| &c.pixels) {
+        Some(Pixels::Rgba8(p)) => Ok(p.clone()),
+        _ => Err(Error::internal("an 8-bit colour image expected")),
+    };
+    let (a, b) = (pixels(a)?, pixels(b)?);
+    if a.len() != b.len() || a.is_empty() {
+        return Err(Error::internal("colour images of different sizes"));
+    }
+    let sum: f64 = a
+        .iter()
+        .zip(&b)
+        .flat_map(|(p, q)| (0..3).map(move |c| (f64::from(p[c]) - f64::from(q[c])).abs()))
+        .sum();
+    Ok(sum / (3 * a.len()) as f64)
+}
+
+/// The colour the warp and the vertex path leave apart for a camera that does not move (the
+/// first pose of the pan, the global shutter): the floor under the bands' difference from the
+/// exact path, from the warp's resampling of its pinhole source against the vertex path's
+/// raster (8-bit levels, as [`colour_mad`]).
+pub fn still_colour_mad(ctx: &Context, camera: &Camera, scene: &Scene) -> Result<f64> {
+    let mut vertex = exact_request(camera, Readout::TopToBottom);
+    vertex.rolling_shutter = None;
+    let mut warp = bands_plan(ctx, camera, Readout::TopToBottom, 1)?;
+    (warp.shutter, warp.end_poses, warp.bands) = (Shutter::Global, Vec::new(), None);
+    let max = ctx.gpu().max_image_side();
+    let (_, a) = plan_frames(ctx, &Plan::from_request(&vertex, max)?, scene)?;
+    let (_, b) = plan_frames(ctx, &warp, scene)?;
+    colour_mad(&a, &b)
+}
+
+/// Median wall-clock ms of three frames of `plan` after a warm-up, and the last frame.
+fn plan_frames(ctx: &Context, plan: &Plan, scene: &Scene) -> Result<(f64, Rendered)> {
+    let mut times = Vec::new();
+    let mut last = None;
+    execute(ctx, plan, scene, [0, 0, 0], &mut |frame| {
+        times.push(frame.ms);
+        last = Some(frame.rendered);
+        Ok(())
+    })?;
+    times.sort_by(f64::total_cmp);
+    match (times.get(1), last) {
+        (Some(&ms), Some(rendered)) => Ok((ms, rendered)),
+        _ => Err(Error::internal("three frames expected")),
+    }
+}
+
+/// Every row: per grid, the global path, then the exact path with its ratio to it; then the
+/// bands on [`BANDS_GRID`], each against the exact path.
 pub fn run(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
+    let mut rows = global_and_exact(ctx, progress)?;
+    rows.extend(bands_rows(ctx, progress)?);
+    Ok(rows)
+}
+
+/// The bands rows: K = 4 … 64 on the 128² grid, each against the exact path.
+fn bands_rows(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
+    let camera = camera()?;
+    let scene = builtin::grid(BANDS_GRID);
+    progress(&format!(
+        "rolling shutter: grid {BANDS_GRID}², exact per vertex (the bands' reference)"
+    ));
+    let top = Readout::TopToBottom;
+    let exact_plan = Plan::from_request(&exact_request(&camera, top), ctx.gpu().max_image_side())?;
+    let (exact_ms, exact) = plan_frames(ctx, &exact_plan, &scene)?;
+    progress(&format!(
+        "rolling shutter: grid {BANDS_GRID}², the warp and the vertex path, camera still"
+    ));
+    let mut rows = vec![json!({
+        "grid": format!("{BANDS_GRID}²"),
+        "path": "bands",
+        "bands": 0,
+        "colour_mad": still_colour_mad(ctx, &camera, &scene)?,
+    })];
+    for count in BAND_COUNTS {
+        progress(&format!(
+            "rolling shutter: grid {BANDS_GRID}², {count} bands"
+        ));
+        let (ms, rendered) = plan_frames(ctx, &bands_plan(ctx, &camera, top, count)?, &scene)?;
+        rows.push(json!({
+            "grid": format!("{BANDS_GRID}²"),
+            "path": "bands",
+            "bands": count,
+            "frame_ms": ms,
+            "x_exact": ms / exact_ms,
+            "error_px": bands_error_px(&camera, &scene, top, count),
+            "colour_mad": colour_mad(&rendered, &exact)?,
+        }));
+    }
+    Ok(rows)
+}
+
+/// Per grid, the global path, then the exact path with its ratio to it.
+fn global_and_exact(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
     let camera = camera()?;
     let (_, end) = pan();
     let mut rows = Vec::new();
@@ -92,11 +253,12 @@ pub fn run(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> 
     Ok(rows)
 }
 
-/// The rows as a Markdown table.
+/// The rows as Markdown tables: the global and exact paths, then the bands.
 pub fn table(rows: &[Value]) -> String {
     let mut out = String::from(
         "| grid (quads, 800×600) | shutter | frame ms | × global |\n|---|---|---:|---:|\n",
     );
+    let (bands, rows): (Vec<&Value>, Vec<&Value>) = rows.iter().partition(|r| r["path"] == "bands");
     for r in rows {
         let path = match r["path"].as_str() {
             Some("exact") => "rolling, exact per vertex",
@@ -110,5 +272,55 @@ pub fn table(rows: &[Value]) -> String {
             f(r, "x_global", 2),
         ));
     }
+    if !bands.is_empty() {
+        out.push_str(
+            "\n| grid (quads, 800×600) | bands | frame ms | × exact | geometric error px | colour MAD (levels) |\n|---|---:|---:|---:|---:|---:|\n",
+        );
+        for r in bands {
+            out.push_str(&format!(
+                "| {} | {} | {} | {} | {} | {} |\n",
+                r["grid"].as_str().unwrap_or("?"),
+                match r["bands"].as_u64() {
+                    Some(0) => "camera still (floor)".to_string(),
+                    Some(k) => k.to_string(),
+                    None => "?".into(),
+                },
+                f(r, "frame_ms", 1),
+                f(r, "x_exact", 2),
+                f(r, "error_px", 3),
+                f(r, "colour_mad", 2),
+            ));
+        }
+    }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_puts_the_bands_under_the_exact_and_global_rows() {
+        let rows = [
+            json!({"grid": "128²", "path": "global", "frame_ms": 11.5}),
+            json!({"grid": "128²", "path": "exact", "frame_ms": 29.2, "x_global": 2.53}),
+            json!({"grid": "128²", "path": "bands", "bands": 0, "colour_mad": 1.94}),
+            json!({"grid": "128²", "path": "bands", "bands": 16, "frame_ms": 218.6,
+                   "x_exact": 5.48, "error_px": 2.895, "colour_mad": 3.16}),
+        ];
+        let t = table(&rows);
+        assert!(
+            t.contains("| 128² | rolling, exact per vertex | 29.2 | 2.53 |"),
+            "{t}"
+        );
+        assert!(
+            t.contains("| 128² | camera still (floor) | — | — | — | 1.94 |"),
+            "{t}"
+        );
+        assert!(
+            t.contains("| 128² | 16 | 218.6 | 5.48 | 2.895 | 3.16 |"),
+            "{t}"
+        );
+        assert!(!t.contains('?'), "{t}");
+    }
 }

@@ -45,6 +45,7 @@ fn plan_json(p: &Plan, frames: &[(usize, f64)]) -> serde_json::Value {
         "expected_error_px": p.expected_error_px,
         "budget_px": p.budget_px,
         "shutter": p.shutter.name(),
+        "bands": p.bands,
         "antialias": {"supersample": p.antialias.supersample, "jitter": p.antialias.jitter},
         "estimated_ms": if p.estimated_ms.is_finite() { json!(p.estimated_ms) } else { json!(null) },
         "frames": frames.iter().map(|(i, ms)| json!({"frame": i, "ms": ms})).collect::<Vec<_>>(),

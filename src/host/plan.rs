@@ -580,12 +580,16 @@ mod tests {
     #[test]
     fn every_route_keeps_a_frame_in_flight_of_its_own() {
         let ctx = context();
-        // Alg. 1 with IDs, flow and depth; the chromatic map warp; the cube map; the lens model.
+        // Alg. 1 with IDs, flow and depth; the chromatic map warp; the cube map; the lens model;
+        // the chromatic warp in bands.
         for name in [
             "ids_and_flow.toml",
             "chromatic.toml",
             "fisheye_chromatic.toml",
             "lens_chromatic.toml",
+            // The chromatic warp in bands of a moving rolling shutter's lines: a slot per band
+            // and frame in flight.
+            "rolling_shutter_chromatic.toml",
         ] {
             let (plan, scene) = two_pose_plan(name);
             let expected = one_after_the_other(&ctx, &plan, &scene);

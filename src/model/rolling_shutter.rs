@@ -747,5 +747,7 @@ impl Camera {
     }
 }
 
+pub mod bands;
+
 #[cfg(test)]
 mod tests;

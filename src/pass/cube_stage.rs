@@ -184,23 +184,55 @@ impl CubeStage {
     /// Host writes to the selected frame's face uniforms and descriptor sets
     /// ([`Self::select_frame`]): no recorded work of that frame may be pending on the GPU.
     pub unsafe fn prepare(&self, mesh: &MeshBuffers, pose: &Pose) -> Result<()> {
+        // SAFETY: the caller upholds this function's contract, which is prepare_bands's.
+        unsafe { self.prepare_bands(mesh, std::slice::from_ref(pose)) }
+    }
+
+    /// Makes room for `count` sets of faces per frame in flight, one per band of a rolling
+    /// shutter's lines ([`Self::prepare_bands`], [`Self::record_band`]).
+    ///
+    /// # Safety
+    /// Drops the faces' slots: no recorded work of this stage may be pending.
+    pub unsafe fn set_bands(&mut self, count: usize) -> Result<()> {
+        let frames = self.slots.len();
+        self.slots = (0..frames)
+            .map(|_| self.pass.slots((6 * count.max(1)) as u32))
+            .collect::<crate::gpu::Result<Vec<_>>>()?;
+        Ok(())
+    }
+
+    /// As [`Self::prepare`], one set of faces per pose in `poses` (band k's at `poses[k]`; at
+    /// most the bands [`Self::set_bands`] made room for).
+    ///
+    /// # Safety
+    /// As [`Self::prepare`].
+    pub unsafe fn prepare_bands(&self, mesh: &MeshBuffers, poses: &[Pose]) -> Result<()> {
         // SAFETY: the caller upholds this function's contract (nothing pending uses the slots).
         unsafe {
             let slots = &self.slots[self.current];
+            if 6 * poses.len() > slots.len() {
+                return Err(Error::input(format!(
+                    "{} poses of cube faces: the stage has room for {}",
+                    poses.len(),
+                    slots.len() / 6
+                )));
+            }
             self.pass.bind_slots_mesh(slots, mesh);
-            for face in CubeFace::ALL {
-                let r = face.rotation();
-                let face_pose = Pose {
-                    rotation: r * pose.rotation,
-                    translation: r * pose.translation,
-                };
-                self.pass.set_slot(
-                    slots,
-                    face.layer() as usize,
-                    &self.face_camera,
-                    &face_pose,
-                    &face_pose,
-                )?;
+            for (k, pose) in poses.iter().enumerate() {
+                for face in CubeFace::ALL {
+                    let r = face.rotation();
+                    let face_pose = Pose {
+                        rotation: r * pose.rotation,
+                        translation: r * pose.translation,
+                    };
+                    self.pass.set_slot(
+                        slots,
+                        6 * k + face.layer() as usize,
+                        &self.face_camera,
+                        &face_pose,
+                        &face_pose,
+                    )?;
+                }
             }
         }
         Ok(())
@@ -248,6 +280,21 @@ impl CubeStage {
     /// pass on a queue with graphics and compute; `mesh` uploaded and alive until the work
     /// completes.
     pub unsafe fn record_faces(&self, cmd: vk::CommandBuffer, mesh: &MeshBuffers) {
+        // SAFETY: the caller upholds this function's contract, which is record_band_faces's.
+        unsafe { self.record_band_faces(cmd, mesh, 0) }
+    }
+
+    /// As [`Self::record_faces`], from band `band`'s poses ([`Self::prepare_bands`]). The
+    /// cube is discarded first, after the last warp's reads of it: bands take turns.
+    ///
+    /// # Safety
+    /// As [`Self::record_faces`], the band prepared.
+    pub unsafe fn record_band_faces(
+        &self,
+        cmd: vk::CommandBuffer,
+        mesh: &MeshBuffers,
+        band: usize,
+    ) {
         use vk::ImageLayout as L;
         let d = self.gpu.device();
         let Some(face_image) = self.targets.color() else {
@@ -285,7 +332,7 @@ impl CubeStage {
                     &self.targets,
                     mesh,
                     &self.slots[self.current],
-                    layer as usize,
+                    6 * band + layer as usize,
                 );
                 d.cmd_copy_image(
                     cmd,
@@ -323,6 +370,23 @@ impl CubeStage {
         // the output and mask, which the warp was bound to with the cube in `new`, in GENERAL.
         unsafe {
             self.warp.record(cmd);
+            global_barrier(
+                &self.gpu,
+                cmd,
+                Access::ComputeWrite,
+                [Access::TransferRead, Access::ComputeRead],
+            );
+        }
+    }
+
+    /// As [`Self::record_warp`], for the output pixels in `band` alone (`[x0, y0, x1, y1]`).
+    ///
+    /// # Safety
+    /// As [`Self::record_warp`].
+    pub unsafe fn record_warp_band(&self, cmd: vk::CommandBuffer, band: [u32; 4]) {
+        // SAFETY: as in `record_warp`.
+        unsafe {
+            self.warp.record_band(cmd, band);
             global_barrier(
                 &self.gpu,
                 cmd,

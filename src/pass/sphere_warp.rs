@@ -172,6 +172,9 @@ pub struct SpherePush {
     pub fill: [f32; 4],
     /// -, -, output width, output height.
     pub sizes: [u32; 4],
+    /// The output pixels a dispatch covers: `[x0, y0, x1, y1]`, x1 and y1 excluded (the whole
+    /// output, or a band of a rolling shutter's lines).
+    pub band: [u32; 4],
 }
 
 /// Options of one sphere warp.
@@ -272,6 +275,7 @@ impl SphereWarpPass {
                 chromatic: [r, g, b, 0.0],
                 fill: options.fill,
                 sizes: [0, 0, camera.width, camera.height],
+                band: [0, 0, camera.width, camera.height],
             },
             output_size: (camera.width, camera.height),
             terms: camera.terms(),
@@ -355,6 +359,33 @@ impl SphereWarpPass {
                 self.set,
                 bytemuck::bytes_of(&self.push),
                 (w.div_ceil(8), h.div_ceil(8)),
+            )
+        };
+    }
+
+    /// As [`Self::record`], for the output pixels in `band` alone (`[x0, y0, x1, y1]`, x1
+    /// and y1 excluded, clamped to the output). An empty band records nothing.
+    ///
+    /// # Safety
+    /// As [`Self::record`].
+    pub unsafe fn record_band(&self, cmd: vk::CommandBuffer, band: [u32; 4]) {
+        let (w, h) = self.output_size;
+        let [x0, y0, x1, y1] = band;
+        let (x1, y1) = (x1.min(w), y1.min(h));
+        if x0 >= x1 || y0 >= y1 {
+            return;
+        }
+        let push = SpherePush {
+            band: [x0, y0, x1, y1],
+            ..self.push
+        };
+        // SAFETY: as in `record`: the caller upholds its contract; the push is the block.
+        unsafe {
+            self.pipeline.record_dispatch(
+                cmd,
+                self.set,
+                bytemuck::bytes_of(&push),
+                ((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8)),
             )
         };
     }

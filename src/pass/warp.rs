@@ -116,10 +116,14 @@ pub struct WarpPush {
     /// Columns of the homography Rᵀ·K_out⁻¹ from an output pixel to the lens camera's ray
     /// (undistort with a rectification rotation; `w` unused).
     pub rectify: [[f32; 4]; 3],
+    /// The output pixels a dispatch of the warp covers: columns x0..x1, rows y0..y1 as
+    /// `[x0, y0, x1, y1]` (the whole output, or a band of a rolling shutter's lines; the map
+    /// builds ignore it).
+    pub band: [u32; 4],
 }
 
 // Within the 128 bytes of push constants every device offers.
-const _: () = assert!(std::mem::size_of::<WarpPush>() == 112);
+const _: () = assert!(std::mem::size_of::<WarpPush>() == 128);
 
 const MAP_FORMAT: vk::Format = vk::Format::R32G32_SFLOAT;
 /// Largest forward residual (px) a coarse-map pixel may have before it is marked invalid.
@@ -284,6 +288,7 @@ impl WarpPass {
             rectify: rectify.map_or([[0.0; 4]; 3], |h| {
                 [h.x_axis, h.y_axis, h.z_axis].map(|c| f4([c.x, c.y, c.z, 0.0]))
             }),
+            band: [0, 0, g.output_size.0, g.output_size.1],
         };
 
         // Maps: real ones in map mode (one per channel that differs), 1×1 placeholders
@@ -618,6 +623,34 @@ impl WarpPass {
                 self.sets[self.slot],
                 bytemuck::bytes_of(&self.push),
                 (w.div_ceil(8), h.div_ceil(8)),
+            )
+        };
+    }
+
+    /// As [`Self::record`], for the output pixels in `band` alone (`[x0, y0, x1, y1]`, x1
+    /// and y1 excluded, clamped to the output): the others keep what they hold. An empty band
+    /// records nothing.
+    ///
+    /// # Safety
+    /// As [`Self::record`].
+    pub unsafe fn record_band(&self, cmd: vk::CommandBuffer, band: [u32; 4]) {
+        let (w, h) = self.desc.geometry.output_size;
+        let [x0, y0, x1, y1] = band;
+        let (x1, y1) = (x1.min(w), y1.min(h));
+        if x0 >= x1 || y0 >= y1 {
+            return;
+        }
+        let push = WarpPush {
+            band: [x0, y0, x1, y1],
+            ..self.push
+        };
+        // SAFETY: as in `record`: the caller upholds its contract; `push` is a `WarpPush`.
+        unsafe {
+            self.pipeline.record_dispatch(
+                cmd,
+                self.sets[self.slot],
+                bytemuck::bytes_of(&push),
+                ((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8)),
             )
         };
     }

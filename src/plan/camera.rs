@@ -6,9 +6,9 @@ use std::path::Path;
 
 use super::choice::choose;
 use super::cost::{estimate_ms, Cost};
-use super::search::search_candidates;
+use super::search::{search_bands, search_candidates};
 use super::{chromatic_scales, explain, file_plan, Optics, Plan, Route, SceneFile, Shutter};
-use crate::model::rolling_shutter::Readout;
+use crate::model::rolling_shutter::{FrameMotion, Readout};
 use crate::model::{Camera, OpenCvDistortion};
 use crate::scene::{Pose, Scene};
 use crate::{Error, Result};
@@ -56,13 +56,6 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
         file.poses.clone()
     };
     let terms = camera.terms();
-    if chromatic_scales(file).is_some() {
-        shutter.refuse_one_pose_route(
-            &file.source.display().to_string(),
-            "the warp",
-            "[effects] chromatic_aberration needs the warp (Alg. 1 cannot give each channel its own lens)",
-        )?;
-    }
     if terms == Default::default() && chromatic_scales(file).is_none() {
         return Ok(pinhole_plan(file, scene, camera, (poses, shutter)));
     }
@@ -76,21 +69,37 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
         _ => None,
     };
     let candidates = search_candidates(file, scene, &camera, &poses, moving)?;
-    let choice = if shutter.moving_readout().is_some() {
-        super::choice::choose_moving_rolling_shutter(file, &candidates)?
-    } else {
-        choose(file, &candidates)?
+    let choice = match shutter {
+        Shutter::Moving { readout, frame, .. } => {
+            // Every frame that moves: the bands must meet the budget on each.
+            let motions: Vec<_> = poses
+                .iter()
+                .zip(&file.end_poses)
+                .filter_map(|(p, e)| e.filter(|e| e != p).map(|e| (*p, e)))
+                .map(|(p, e)| (readout, FrameMotion::new(p.into(), e.into())))
+                .collect();
+            let bands = search_bands(scene, &camera, &candidates, &motions, file.max_error_px);
+            super::choice::choose_moving_rolling_shutter(
+                file,
+                &candidates,
+                &bands,
+                (readout, frame),
+            )?
+        }
+        _ => choose(file, &candidates)?,
     };
     let mut steps = explain::camera_steps(&choice, &candidates, terms);
     steps.extend(explain::antialias_step(file.antialias, file.outputs.color));
-    Ok(file_plan(
+    let mut plan = file_plan(
         file,
         choice.route(),
         steps,
         Optics::Camera(camera),
         (poses, shutter),
         (choice.expected_error_px(), choice.estimated_ms()),
-    ))
+    );
+    plan.bands = choice.bands();
+    Ok(plan)
 }
 
 /// The plan of a camera with no lens work: its pinhole projection alone.

@@ -2,7 +2,9 @@
 //! for, the cheapest route that delivers it, with the reason as data, or the refusal.
 
 use super::cost::CUBE_RAY_ERROR_PX;
-use super::search::{Candidates, CubeCandidate, VertexCandidate, WarpChoice};
+use super::search::{
+    BandsCandidate, BandsSearch, BandsVia, Candidates, CubeCandidate, VertexCandidate, WarpChoice,
+};
 use super::{chromatic_scales, Route, SceneFile};
 use crate::{Error, Result};
 
@@ -32,6 +34,37 @@ pub(super) enum Choice {
         chromatic: Option<[f64; 3]>,
         why: CubeReason,
     },
+    /// A camera moving during a rolling shutter's readout, drawn by the warp in bands of
+    /// lines (each from its middle line's pose); Alg. 1 beside it for IDs and flow.
+    Bands {
+        bands: BandsCandidate,
+        vertex: Option<VertexCandidate>,
+        chromatic: Option<[f64; 3]>,
+        why: BandsReason,
+    },
+}
+
+/// Why the bands carry a moving rolling shutter's colour.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum BandsReason {
+    /// Chromatic aberration needs the warp (Alg. 1 cannot give each channel its own lens).
+    Chromatic,
+    /// Cheaper than the exact vertex path (`vertex_ms`), or that path cannot meet the budget
+    /// (`None`).
+    Cheaper { vertex_ms: Option<f64> },
+}
+
+/// Why the bands did not carry a moving rolling shutter, where the vertex path does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum BandsLoss {
+    /// IDs or flow are asked for, which no warp carries.
+    DataOutputs,
+    /// No warp meets the budget on this camera, or no pinhole source holds the lens.
+    NoWarp,
+    /// Even `count` bands leave `error_px` (the warp's included), beyond the budget.
+    MissBudget { count: u32, error_px: f64 },
+    /// `count` bands meet the budget with `error_px`, but cost `ms`, no less than Alg. 1.
+    Dearer { count: u32, error_px: f64, ms: f64 },
 }
 
 /// Why Alg. 1 carries every output.
@@ -43,9 +76,9 @@ pub(super) enum VertexReason {
     NoPinholeWarp { why: String, cube: CubeLoss },
     /// No dearer than the warp (`warp_ms`), or no warp meets the budget (`None`).
     Cheaper { warp_ms: Option<f64> },
-    /// The camera moves during a frame read out by a rolling shutter: only the vertex path
-    /// draws each line from its own pose.
-    MovingRollingShutter,
+    /// The camera moves during a frame read out by a rolling shutter: the vertex path draws
+    /// each line from its own pose, exactly, and the bands lost (`bands`).
+    MovingRollingShutter { bands: BandsLoss },
 }
 
 /// Why the cube map did not carry a lens no pinhole source holds.
@@ -96,6 +129,38 @@ impl Choice {
                 side: cube.side,
                 chromatic: *chromatic,
             },
+            Choice::Bands {
+                bands,
+                vertex,
+                chromatic,
+                ..
+            } => match (bands.via, vertex) {
+                (BandsVia::Warp(w), Some(vertex)) => Route::WarpAndVertex {
+                    method: w.method,
+                    chromatic: *chromatic,
+                    tessellate: vertex.tessellation.edge_px,
+                    map: w.map,
+                },
+                (BandsVia::Warp(w), None) => Route::Warp {
+                    method: w.method,
+                    chromatic: *chromatic,
+                    map: w.map,
+                },
+                // The cube map carries colour alone: the choice puts no vertex path beside it.
+                (BandsVia::Cube(c), _) => Route::Cube {
+                    side: c.side,
+                    chromatic: *chromatic,
+                },
+            },
+        }
+    }
+
+    /// How many bands of lines the warp draws a moving rolling shutter in (`None`: one pose
+    /// per frame, or the vertex path).
+    pub(super) fn bands(&self) -> Option<u32> {
+        match self {
+            Choice::Bands { bands, .. } => Some(bands.count),
+            _ => None,
         }
     }
 
@@ -108,6 +173,9 @@ impl Choice {
                 warp.error_px.max(vertex.tessellation.error_px)
             }
             Choice::Cube { .. } => CUBE_RAY_ERROR_PX,
+            Choice::Bands { bands, vertex, .. } => vertex
+                .map_or(0.0, |v| v.tessellation.error_px)
+                .max(bands.error_px()),
         }
     }
 
@@ -118,6 +186,7 @@ impl Choice {
             Choice::Warp { warp, .. } => warp.ms,
             Choice::WarpAndVertex { warp, vertex, .. } => warp.ms + vertex.ms,
             Choice::Cube { cube, .. } => cube.ms,
+            Choice::Bands { bands, vertex, .. } => bands.ms + vertex.map_or(0.0, |v| v.ms),
         }
     }
 }
@@ -196,24 +265,105 @@ fn choose_warp(
     })
 }
 
-/// The route of a camera that moves during a rolling shutter's readout: Alg. 1 solving each
-/// vertex's readout time, whatever the warp would cost, for the warp and the cube map draw a
-/// frame from one pose (an approximation by bands of lines is not planned).
+/// The route of a camera that moves during a rolling shutter's readout (`readout`, first in
+/// frame `frame`, counted from 0): Alg. 1 solving each vertex's readout time (exact), or the
+/// warp in the fewest bands of lines that meet the budget (`bands`), whichever is cheaper;
+/// chromatic aberration needs the warp, IDs and flow Alg. 1. Refuses, naming `[sensor]
+/// rolling_shutter` and `[accuracy] max_error_px`, what no route delivers within the budget.
 pub(super) fn choose_moving_rolling_shutter(
     file: &SceneFile,
     candidates: &Candidates,
+    bands: &BandsSearch,
+    (readout, frame): (crate::model::rolling_shutter::Readout, usize),
 ) -> Result<Choice> {
-    let Some(vertex) = candidates.vertex else {
-        return Err(Error::input(format!(
-            "{}: [accuracy] max_error_px = {}: even 1 px edges do not meet it, and a moving rolling shutter ([sensor] rolling_shutter with end_rvec, end_tvec) needs the vertex path",
-            file.source.display(),
-            file.max_error_px
-        )));
+    let src = file.source.display();
+    let budget = file.max_error_px;
+    let chromatic = chromatic_scales(file);
+    let data = file.outputs.ids || file.outputs.flow;
+    let moving = format!(
+        "{src}: [sensor] rolling_shutter, [accuracy] max_error_px = {budget}: [[poses]] #{} moves during its {readout} readout",
+        frame + 1
+    );
+    // What the bands leave at most, where none meets the budget.
+    let missed = |why: &str| {
+        match (bands.most, &candidates.no_pinhole_warp) {
+        (None, Some(no_source)) => Error::input(format!(
+            "{moving}; {why}, and the warp draws it only in bands of lines, each from a pinhole source, which cannot hold this lens ({no_source}), or from a cube map's faces, which carry colour alone: not planned (drop what needs the warp, or end_rvec and end_tvec)"
+        )),
+        (Some((count, error)), _) => Error::input(format!(
+            "{moving}; {why}, and drawn in bands of lines (each from the pose of its middle line) the warp leaves {error:.3} px even with {count} bands, beyond the budget: raise max_error_px to {error:.3} or more, or slow the motion (end_rvec, end_tvec nearer rvec, tvec)"
+        )),
+        (None, None) => Error::input(format!(
+            "{moving}; {why}, and no inverse method meets the budget for the warp that would draw it in bands of lines"
+        )),
+    }
     };
-    Ok(Choice::Vertex {
-        vertex,
-        why: VertexReason::MovingRollingShutter,
-    })
+    let vertex_for_data = || {
+        candidates.vertex.ok_or_else(|| {
+            Error::input(format!(
+                "{moving}; the IDs/flow outputs need the vertex path, and even 1 px edges do not meet the budget"
+            ))
+        })
+    };
+    if chromatic.is_some() {
+        let Some(b) = bands.chosen else {
+            return Err(missed(
+                "[effects] chromatic_aberration needs the warp (Alg. 1 cannot give each channel its own lens)",
+            ));
+        };
+        let vertex = match b.via {
+            BandsVia::Warp(_) if data => Some(vertex_for_data()?),
+            _ => None,
+        };
+        return Ok(Choice::Bands {
+            bands: b,
+            vertex,
+            chromatic,
+            why: BandsReason::Chromatic,
+        });
+    }
+    if data {
+        return Ok(Choice::Vertex {
+            vertex: vertex_for_data()?,
+            why: VertexReason::MovingRollingShutter {
+                bands: BandsLoss::DataOutputs,
+            },
+        });
+    }
+    match (candidates.vertex, bands.chosen) {
+        (Some(v), Some(b)) if b.ms < v.ms => Ok(Choice::Bands {
+            bands: b,
+            vertex: None,
+            chromatic,
+            why: BandsReason::Cheaper {
+                vertex_ms: Some(v.ms),
+            },
+        }),
+        (None, Some(b)) => Ok(Choice::Bands {
+            bands: b,
+            vertex: None,
+            chromatic,
+            why: BandsReason::Cheaper { vertex_ms: None },
+        }),
+        (Some(vertex), b) => {
+            let loss = match (b, bands.most) {
+                (Some(b), _) => BandsLoss::Dearer {
+                    count: b.count,
+                    error_px: b.error_px(),
+                    ms: b.ms,
+                },
+                (None, Some((count, error_px))) => BandsLoss::MissBudget { count, error_px },
+                (None, None) => BandsLoss::NoWarp,
+            };
+            Ok(Choice::Vertex {
+                vertex,
+                why: VertexReason::MovingRollingShutter { bands: loss },
+            })
+        }
+        (None, None) => Err(missed(
+            "even 1 px edges do not meet the budget on the vertex path, which draws it exactly",
+        )),
+    }
 }
 
 /// Alg. 1 for every output, and why.
@@ -467,5 +617,105 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    fn bands(count: u32, bands_error_px: f64, ms: f64) -> BandsSearch {
+        BandsSearch {
+            chosen: Some(BandsCandidate {
+                count,
+                bands_error_px,
+                via: BandsVia::Warp(warp(10.0, 1e-3)),
+                ms,
+                budget_px: 0.5,
+            }),
+            most: None,
+        }
+    }
+
+    const MOVING: (crate::model::rolling_shutter::Readout, usize) =
+        (crate::model::rolling_shutter::Readout::TopToBottom, 1);
+
+    #[test]
+    fn a_moving_rolling_shutter_weighs_the_bands_against_the_exact_vertex_path() {
+        let choose = |f: &SceneFile, c: &Candidates, b: &BandsSearch| {
+            choose_moving_rolling_shutter(f, c, b, MOVING)
+        };
+        let c = candidates(Some(vertex(30.0, 9e-3)), Some(warp(10.0, 1e-3)), None);
+        // Colour alone: the cheaper. Dearer bands lose, and --explain hears what they cost.
+        let f = file("[accuracy]\nmax_error_px = 0.5\n");
+        let choice = choose(&f, &c, &bands(8, 0.3, 80.0)).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Vertex {
+                why: VertexReason::MovingRollingShutter {
+                    bands: BandsLoss::Dearer { count: 8, ms, .. }
+                },
+                ..
+            } if ms == 80.0
+        ));
+        let choice = choose(&f, &c, &bands(4, 0.3, 20.0)).unwrap();
+        assert_eq!(choice.bands(), Some(4));
+        assert!(matches!(
+            choice.route(),
+            Route::Warp {
+                chromatic: None,
+                ..
+            }
+        ));
+        assert_eq!(
+            (choice.expected_error_px(), choice.estimated_ms()),
+            (0.3 + 1e-3, 20.0)
+        );
+        // IDs: the vertex path, however cheap the bands.
+        let ids = file("[accuracy]\nmax_error_px = 0.5\n[outputs]\nids = true\n");
+        let choice = choose(&ids, &c, &bands(4, 0.3, 1.0)).unwrap();
+        assert!(matches!(
+            choice,
+            Choice::Vertex {
+                why: VertexReason::MovingRollingShutter {
+                    bands: BandsLoss::DataOutputs
+                },
+                ..
+            }
+        ));
+        // Chromatic with IDs: the bands for colour, the vertex path for the IDs.
+        let both = file(&format!(
+            "{CHROMATIC}[accuracy]\nmax_error_px = 0.5\n[outputs]\nids = true\n"
+        ));
+        let choice = choose(&both, &c, &bands(16, 0.2, 150.0)).unwrap();
+        assert!(matches!(
+            choice.route(),
+            Route::WarpAndVertex {
+                chromatic: Some(_),
+                ..
+            }
+        ));
+        assert_eq!((choice.bands(), choice.estimated_ms()), (Some(16), 180.0));
+        // No route within the budget: refused, naming both keys and what 64 bands leave.
+        let missed = BandsSearch {
+            chosen: None,
+            most: Some((64, 0.8)),
+        };
+        let chromatic = file(&format!("{CHROMATIC}[accuracy]\nmax_error_px = 0.5\n"));
+        let e = choose(&chromatic, &c, &missed).unwrap_err().to_string();
+        assert!(
+            e.starts_with("/scenes/s.toml: [sensor] rolling_shutter, [accuracy] max_error_px = 0.5: [[poses]] #2 moves during its top_to_bottom readout")
+                && e.contains("leaves 0.800 px even with 64 bands"),
+            "{e}"
+        );
+        let none = candidates(None, Some(warp(10.0, 1e-3)), None);
+        let e = choose(&f, &none, &missed).unwrap_err().to_string();
+        assert!(
+            e.contains("even 1 px edges") && e.contains("64 bands"),
+            "{e}"
+        );
+        // A lens no pinhole source holds: no bands, and the cube map draws from one pose.
+        let e = choose(&chromatic, &wide(None, None), &BandsSearch::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("[sensor] rolling_shutter") && e.contains("the lens sees past 90°"),
+            "{e}"
+        );
     }
 }

@@ -103,6 +103,24 @@ pub(super) const PLANNED_CUBE_MAX_SIDE: u32 = 4096;
 /// `prism_tilt` ("map max error px" in `bench warp`), where the f64 estimate is 3e-6 px.
 pub(super) const MAP_F32_FLOOR_PX: f64 = 5.3e-4;
 
+/// The rolling-shutter solve per vertex (ns), beyond Alg. 1's for a still camera: each
+/// vertex scans 17 readout times through the lens before it refines. `bench rolling-shutter`,
+/// 2026-12-03, 800×600: 29.3 against 17.3 ms at 128² quads (16,641 vertices, 721 ns a vertex),
+/// 295.1 against 115.5 ms at 512² (263,169 vertices, 682 ns).
+pub(super) const ROLLING_SHUTTER_NS_PER_VERTEX: f64 = 700.0;
+
+/// The warp's pinhole source alone, one render (ms): what each further band of a moving
+/// rolling shutter adds to the warp route's frame.
+pub(super) fn source_render_ms(pixels: f64, triangles: f64) -> f64 {
+    (RENDER_NS_PER_PIXEL * OVERSCAN_AREA * pixels + RENDER_NS_PER_TRIANGLE * triangles) * 1e-6
+}
+
+/// One pinhole render of `pixels` pixels (ms): a cube face, which each further band of a
+/// moving rolling shutter renders six times.
+pub(super) fn face_render_ms(pixels: f64, triangles: f64) -> f64 {
+    (RENDER_NS_PER_PIXEL * pixels + RENDER_NS_PER_TRIANGLE * triangles) * 1e-6
+}
+
 /// What a frame costs, by route.
 #[derive(Debug, Clone, Copy)]
 pub(super) enum Cost {

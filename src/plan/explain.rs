@@ -2,11 +2,11 @@
 //! was weighed against, and what `vklens render --explain` prints and
 //! `SceneRenderer::explain` returns.
 
-use super::choice::{Choice, CubeLoss, CubeReason, VertexReason};
+use super::choice::{BandsLoss, BandsReason, Choice, CubeLoss, CubeReason, VertexReason};
 use super::cost::CUBE_RAY_ERROR_PX;
 use super::lens::Cells;
 use super::scene_file::{Antialias, Effects};
-use super::search::{Candidates, TessellationChoice, WarpChoice};
+use super::search::{BandsCandidate, BandsVia, Candidates, TessellationChoice, WarpChoice};
 use super::{Plan, Route, Stage, Step};
 use crate::model::Terms;
 
@@ -15,8 +15,12 @@ impl Plan {
     /// GPU time (timestamps) where measured.
     pub fn explain(&self, measured_ms: Option<f64>, passes: &[(&str, f64)]) -> String {
         let p = self;
+        let bands = p
+            .bands
+            .map(|k| format!(", in {k} bands of lines (a moving rolling shutter)"))
+            .unwrap_or_default();
         let mut out = format!(
-            "plan: {}\n",
+            "plan: {}{bands}\n",
             match &p.route {
                 Route::Pinhole => "pinhole render".to_string(),
                 Route::Vertex { tessellate } => format!(
@@ -230,6 +234,33 @@ pub(super) fn camera_steps(choice: &Choice, candidates: &Candidates, terms: Term
             });
             steps
         }
+        Choice::Bands {
+            bands,
+            vertex,
+            chromatic,
+            why,
+        } => {
+            let mut steps = match &bands.via {
+                BandsVia::Warp(w) => warp_steps(w, chromatic.is_some(), candidates, &terms),
+                BandsVia::Cube(c) => {
+                    let why = CubeReason::NoPinholeWarp(
+                        candidates.no_pinhole_warp.clone().unwrap_or_default(),
+                    );
+                    cube_steps(c.side, c.ms, chromatic.is_some(), &why, candidates, &terms)
+                }
+            };
+            steps[0] = bands_step(bands, why);
+            if let Some(vertex) = vertex {
+                steps.push(Step {
+                    stage: Stage::VertexRenderData,
+                    why: format!(
+                        "IDs and flow cannot be warped (Lambers et al. Table 1): drawn exactly, each vertex where its own line reads it; {}; {terms}",
+                        describe_tessellation(&vertex.tessellation)
+                    ),
+                });
+            }
+            steps
+        }
         Choice::Vertex { vertex, why } => {
             let why = vertex_reason(why, vertex.ms);
             let t = &vertex.tessellation;
@@ -318,6 +349,42 @@ fn warp_steps(
     ]
 }
 
+/// The bands' source renders, and why the bands: how many, the error they leave against the
+/// budget, and what they were weighed against.
+fn bands_step(bands: &BandsCandidate, why: &BandsReason) -> Step {
+    let k = bands.count;
+    let why = match why {
+        BandsReason::Chromatic => {
+            "chromatic aberration needs the warp (Alg. 1 cannot give each channel its own lens)"
+                .to_string()
+        }
+        BandsReason::Cheaper { vertex_ms: Some(v) } => format!(
+            "est. {:.1} ms against {v:.1} ms for the exact vertex path",
+            bands.ms
+        ),
+        BandsReason::Cheaper { vertex_ms: None } => {
+            "no tessellation meets the budget on the exact vertex path".into()
+        }
+    };
+    let (stage, sources) = match bands.via {
+        BandsVia::Warp(_) => (Stage::BandRenders, "the pinhole source is"),
+        BandsVia::Cube(_) => (
+            Stage::BandCubeFaces,
+            "no pinhole source holds the lens, so the cube map's six faces are",
+        ),
+    };
+    Step {
+        stage,
+        why: format!(
+            "the camera moves during the readout and the warp draws a frame from one pose: {why}; {k} bands leave {:.2} px ≤ {:.2} px budget ({:.2} px from the bands, measured against the exact per-line projection over the scene's depths, the fewest of 4, 8, 16, 32, 64 that meet it; the rest the warp's); {sources} rendered once per band, from the pose of the band's middle line, and each band of the output warped from its own render (est. {:.1} ms per frame)",
+            bands.error_px(),
+            bands.budget_px,
+            bands.bands_error_px,
+            bands.ms
+        ),
+    }
+}
+
 /// Why Alg. 1 (estimated `vertex_ms`) carries every output.
 fn vertex_reason(why: &VertexReason, vertex_ms: f64) -> String {
     match why {
@@ -339,8 +406,20 @@ fn vertex_reason(why: &VertexReason, vertex_ms: f64) -> String {
                 CubeLoss::ColourAlone => "a cube map carries colour alone".into(),
             }
         ),
-        VertexReason::MovingRollingShutter => format!(
-            "the camera moves during a rolling shutter's readout: each vertex is drawn where its own line reads it (its readout time solved per vertex, estimated {vertex_ms:.1} ms); the warp and the cube map draw a frame from one pose, which would be a global shutter's image"
+        VertexReason::MovingRollingShutter { bands } => format!(
+            "the camera moves during a rolling shutter's readout: each vertex is drawn where its own line reads it (its readout time solved per vertex, estimated {vertex_ms:.1} ms); the warp and the cube map draw a frame from one pose, {}",
+            match bands {
+                BandsLoss::DataOutputs =>
+                    "and IDs and flow cannot be warped (Lambers et al. Table 1)".to_string(),
+                BandsLoss::NoWarp =>
+                    "and no warp meets the budget on this camera to draw it in bands of lines".into(),
+                BandsLoss::MissBudget { count, error_px } => format!(
+                    "and even {count} bands of lines, each from its middle line's pose, leave {error_px:.2} px, beyond the budget"
+                ),
+                BandsLoss::Dearer { count, error_px, ms } => format!(
+                    "and {count} bands of lines, each from its middle line's pose, would leave {error_px:.2} px but cost est. {ms:.1} ms"
+                ),
+            }
         ),
         VertexReason::Cheaper { warp_ms } => format!(
             "estimated {vertex_ms:.1} ms against {} for pinhole + warp",

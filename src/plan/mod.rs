@@ -5,7 +5,11 @@
 //!   (tessellated as far as the budget needs) or a pinhole render + warp (overscanned), by
 //!   estimated cost; object IDs and flow force Alg. 1 (Lambers et al. Table 1); chromatic aberration
 //!   needs the warp's fused per-channel pass, so colour then goes by the warp and the data by
-//!   Alg. 1. A lens prescription goes by Heidrich et al.'s image-based model.
+//!   Alg. 1. A lens prescription goes by Heidrich et al.'s image-based model. A camera moving
+//!   during a rolling shutter's readout goes by Alg. 1 solving each vertex's readout time, or
+//!   by the warp in the fewest bands of lines (each from its middle line's pose) whose
+//!   measured error meets the budget, whichever is cheaper (chromatic aberration needs the
+//!   bands).
 //! - **Accuracy.** The inverse method is the cheapest whose error, *measured* on this camera
 //!   (the f64 model over a grid of the image), meets the budget; the tessellation is the
 //!   coarsest whose straight-line error, measured on this scene and pose, meets it; for a
@@ -136,6 +140,12 @@ pub enum Stage {
     Vignetting { kept: bool },
     /// The perspective projections of one frame.
     CellRenders,
+    /// The warp's pinhole source, overscanned, rendered once per band of a moving rolling
+    /// shutter's lines, each band warped from its own render.
+    BandRenders,
+    /// The six pinhole faces of a cube map, rendered once per band of a moving rolling
+    /// shutter's lines, each band warped from its own cube.
+    BandCubeFaces,
 }
 
 impl Stage {
@@ -158,6 +168,8 @@ impl Stage {
             Stage::Vignetting { kept: true } => "vignetting kept",
             Stage::Vignetting { kept: false } => "vignetting divided out",
             Stage::CellRenders => "cell renders",
+            Stage::BandRenders => "pinhole render per band (overscanned)",
+            Stage::BandCubeFaces => "cube faces per band (6 pinhole renders each)",
         }
     }
 }
@@ -211,6 +223,10 @@ pub struct Plan {
     pub antialias: scene_file::Antialias,
     /// The sensor's shutter, and where its readout came from.
     pub shutter: Shutter,
+    /// Where the camera moves during a rolling shutter's readout and the warp draws it: the
+    /// bands of lines it is drawn in, each from the pose of its middle line
+    /// ([`crate::model::rolling_shutter::bands`]); `None` otherwise.
+    pub bands: Option<u32>,
     /// Estimated frame time from the measured tables (ms, lavapipe), for comparison.
     pub estimated_ms: f64,
 }
@@ -314,6 +330,7 @@ fn file_plan(
         background: file.background,
         antialias: file.antialias,
         shutter,
+        bands: None,
         estimated_ms,
     }
 }

@@ -12,11 +12,14 @@ use glam::DVec2;
 use super::{Plan, Route};
 use crate::gpu::{Error, Gpu, QueryPool, Result};
 use crate::imaging::Raster;
+use crate::model::rolling_shutter::bands::Band;
+use crate::model::rolling_shutter::FrameMotion;
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, OpenCvDistortion};
 use crate::pass::cube_stage::CubeStage;
 use crate::pass::geometry::{
-    ColorFormat, GeometryDesc, GeometryPass, GeometryTargets, MeshBuffers, Outputs, Projection,
+    ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
+    Projection,
 };
 use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
 use crate::pass::sphere_warp::SphereWarpOptions;
@@ -118,6 +121,40 @@ pub(crate) fn geometry_kind(pass: &GeometryPass) -> PassKind {
     }
 }
 
+/// A moving rolling shutter drawn by the warp in bands of lines: the warp's pinhole source
+/// rendered once per band, from the pose of the band's middle line, and each band of the
+/// output warped from its own render.
+struct BandedSource {
+    gpu: Gpu,
+    /// The bands, in readout order.
+    bands: Vec<Band>,
+    /// One camera-and-pose slot of the warp's pinhole render per band and frame in flight
+    /// (band k of frame f at f · bands + k).
+    slots: GeometrySlots,
+    /// The source camera the slots render with (a jittered pass moves it).
+    camera: Camera,
+    /// The frame in flight [`PlanRecorder::select_frame`] selected.
+    frame: usize,
+    /// Each frame in flight's band poses, as last prepared.
+    poses: Vec<Vec<Pose>>,
+}
+
+impl BandedSource {
+    /// Writes the selected frame's slots: each band's pose with `self.camera`.
+    ///
+    /// # Safety
+    /// No recorded work of the selected frame may be pending.
+    unsafe fn write_slots(&self, pass: &GeometryPass) -> Result<()> {
+        let n = self.bands.len();
+        for (k, pose) in self.poses[self.frame].iter().enumerate() {
+            // SAFETY: the caller upholds this function's contract: nothing that reads the
+            // selected frame's slots is pending.
+            unsafe { pass.set_slot(&self.slots, self.frame * n + k, &self.camera, pose, pose) }?;
+        }
+        Ok(())
+    }
+}
+
 /// The passes of one plan, built once; any number of frames recorded.
 pub struct PlanRecorder {
     /// Alg. 1 or the pinhole render with its targets (every output it renders).
@@ -127,6 +164,11 @@ pub struct PlanRecorder {
     warp: Option<WarpStage>,
     /// The cube path's colour.
     cube: Option<CubeStage>,
+    /// The warp's bands, where it draws a moving rolling shutter.
+    bands: Option<BandedSource>,
+    /// The cube map's bands, where it draws a moving rolling shutter: one set of faces each,
+    /// in the stage's slots.
+    cube_bands: Option<Vec<Band>>,
     lens: Option<LensRenderer>,
     mesh: MeshBuffers,
     poses: Vec<Pose>,
@@ -248,6 +290,8 @@ impl PlanRecorder {
             geometry: None,
             warp: None,
             cube: None,
+            bands: None,
+            cube_bands: None,
             lens: None,
             mesh: MeshBuffers::new(gpu, mesh, texture)?,
             poses: plan.poses.clone(),
@@ -269,11 +313,16 @@ impl PlanRecorder {
             pipelines: Vec::new(),
         };
         let lens_delta = Projection::Lens { delta: plan.delta };
+        let banded = matches!(
+            plan.route,
+            Route::Warp { .. } | Route::WarpAndVertex { .. } | Route::Cube { .. }
+        ) && plan.bands.is_some();
         if plan.shutter.moving_readout().is_some()
             && !matches!(plan.route, Route::Pinhole | Route::Vertex { .. })
+            && !banded
         {
             return Err(internal(
-                "a camera moving during a rolling shutter's readout is drawn by the vertex path alone: the planner routes it there",
+                "a camera moving during a rolling shutter's readout is drawn by the vertex path, or by the warp in bands: the planner routes it there",
             ));
         }
         match &plan.route {
@@ -323,7 +372,7 @@ impl PlanRecorder {
                             depth: o.depth,
                         };
                         r.set_warp(warp_stage(camera, *method, *chromatic, *map, data)?);
-                        r.names.extend(["pinhole render (overscanned)", "warp"]);
+                        r.set_bands(gpu, plan)?;
                     }
                     Route::WarpAndVertex {
                         method,
@@ -334,7 +383,7 @@ impl PlanRecorder {
                         if o.color {
                             let none = DataOutputs::default();
                             r.set_warp(warp_stage(camera, *method, *chromatic, *map, none)?);
-                            r.names.extend(["pinhole render (overscanned)", "warp"]);
+                            r.set_bands(gpu, plan)?;
                         }
                         r.geometry = Some(geometry(
                             camera,
@@ -359,14 +408,30 @@ impl PlanRecorder {
                             fill: plan.background,
                             write_mask: false,
                         };
-                        let stage = CubeStage::with_frames(gpu, camera, side, f, &options, frames)?;
+                        let mut stage =
+                            CubeStage::with_frames(gpu, camera, side, f, &options, frames)?;
                         r.pipelines.extend([
                             RecordedPipeline::geometry(&stage.pass),
                             RecordedPipeline::compute(PassKind::SphereWarp, stage.warp.pipeline()),
                         ]);
+                        match (plan.bands, plan.shutter.moving_readout()) {
+                            (Some(count), Some(readout)) => {
+                                let bands = crate::model::rolling_shutter::bands::bands(
+                                    readout,
+                                    camera.width,
+                                    camera.height,
+                                    count,
+                                );
+                                // SAFETY: the stage is new: nothing recorded with it exists.
+                                unsafe { stage.set_bands(bands.len()) }?;
+                                r.cube_bands = Some(bands);
+                                r.names.push("cube faces + sphere warp per band");
+                            }
+                            _ => r
+                                .names
+                                .extend(["cube faces (6 pinhole renders)", "sphere warp"]),
+                        }
                         r.cube = Some(stage);
-                        r.names
-                            .extend(["cube faces (6 pinhole renders)", "sphere warp"]);
                     }
                     Route::LensModel { .. } => {
                         return Err(internal("the lens route is handled above"))
@@ -395,6 +460,9 @@ impl PlanRecorder {
             }
             if let Some(st) = &mut self.warp {
                 st.pass.bind_mesh(&self.mesh);
+                if let Some(b) = &self.bands {
+                    st.pass.bind_slots_mesh(&b.slots, &self.mesh);
+                }
             }
         }
     }
@@ -413,12 +481,43 @@ impl PlanRecorder {
         if let Some(st) = &mut self.warp {
             st.select_frame(frame);
         }
+        if let Some(b) = &mut self.bands {
+            b.frame = frame % self.frames_in_flight;
+        }
         if let Some(c) = &mut self.cube {
             c.select_frame(frame);
         }
         if let Some(l) = &mut self.lens {
             l.select_frame(frame);
         }
+    }
+
+    /// The warp's passes' names, and its bands where `plan` draws a moving rolling shutter in
+    /// them: one slot of the source render per band and frame in flight. After
+    /// [`Self::set_warp`].
+    fn set_bands(&mut self, gpu: &Gpu, plan: &Plan) -> Result<()> {
+        let (Some(count), Some(readout)) = (plan.bands, plan.shutter.moving_readout()) else {
+            self.names.extend(["pinhole render (overscanned)", "warp"]);
+            return Ok(());
+        };
+        let (Some(st), Some((source, g))) = (&self.warp, &self.warp_source) else {
+            return Err(internal("bands without a warp"));
+        };
+        let (w, h) = g.output_size;
+        let bands = crate::model::rolling_shutter::bands::bands(readout, w, h, count);
+        let frames = self.frames_in_flight;
+        let slots = st.pass.slots((bands.len() * frames) as u32)?;
+        self.bands = Some(BandedSource {
+            gpu: gpu.clone(),
+            poses: vec![Vec::new(); frames],
+            bands,
+            slots,
+            camera: source.clone(),
+            frame: 0,
+        });
+        self.names
+            .push("pinhole render + warp per band (overscanned)");
+        Ok(())
     }
 
     fn set_warp(&mut self, (stage, source, geometry): (WarpStage, Camera, WarpGeometry)) {
@@ -501,6 +600,11 @@ impl PlanRecorder {
             unsafe { st.pass.set_camera(&moved) }?;
             // SAFETY: no submission using it is pending (`submit` waits on its fence).
             unsafe { st.warp.retarget(g) }?;
+            if let Some(b) = &mut self.bands {
+                b.camera = moved;
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { b.write_slots(&st.pass) }?;
+            }
         }
         Ok(())
     }
@@ -538,6 +642,21 @@ impl PlanRecorder {
                 (p, self.end_poses.get(i - 1).copied().unwrap_or(p))
             }
         };
+        let motion = FrameMotion::new(pose.into(), end.into());
+        // Each band from the pose of its middle line (slerp and a linear centre between the
+        // frame's two poses).
+        let band_poses = |bands: &[Band]| -> Vec<Pose> {
+            bands
+                .iter()
+                .map(|band| {
+                    let p = motion.at(band.s);
+                    Pose {
+                        rotation: p.rotation,
+                        translation: p.translation,
+                    }
+                })
+                .collect()
+        };
         // SAFETY (every block below): this function's contract: no recorded work of the
         // selected frame, whose uniforms and sets these are, is pending.
         if let Some((pass, _)) = &self.geometry {
@@ -546,8 +665,14 @@ impl PlanRecorder {
         if let Some(st) = &self.warp {
             unsafe { st.pass.set_frame(&pose, &pose) }?;
         }
-        if let Some(c) = &self.cube {
-            unsafe { c.prepare(&self.mesh, &pose) }?;
+        if let (Some(st), Some(b)) = (&self.warp, &mut self.bands) {
+            b.poses[b.frame] = band_poses(&b.bands);
+            unsafe { b.write_slots(&st.pass) }?;
+        }
+        match (&self.cube, &self.cube_bands) {
+            (Some(c), Some(bands)) => unsafe { c.prepare_bands(&self.mesh, &band_poses(bands)) }?,
+            (Some(c), None) => unsafe { c.prepare(&self.mesh, &pose) }?,
+            _ => {}
         }
         if let Some(l) = &mut self.lens {
             unsafe { l.prepare(&self.mesh, &pose) }?;
@@ -611,13 +736,44 @@ impl PlanRecorder {
                 l.record(cmd, &self.mesh);
                 stamp();
             }
-            if let Some(st) = &self.warp {
+            if let (Some(st), Some(b)) = (&self.warp, &self.bands) {
+                let n = b.bands.len();
+                for (k, band) in b.bands.iter().enumerate() {
+                    if k > 0 {
+                        // The bands write disjoint pixels of one output image; ordering the
+                        // dispatches keeps every hazard tracker's view of that image simple.
+                        // The render pass's own dependency already waits for the last
+                        // band's warps to finish reading the source before clearing it.
+                        crate::gpu::global_barrier(
+                            &b.gpu,
+                            cmd,
+                            [crate::gpu::Access::ComputeReadWrite],
+                            [crate::gpu::Access::ComputeReadWrite],
+                        );
+                    }
+                    st.pass
+                        .record_slot(cmd, &st.targets, &self.mesh, &b.slots, b.frame * n + k);
+                    st.warp.record_band(cmd, band.rect);
+                    for d in st.data_warps() {
+                        d.warp.record_band(cmd, band.rect);
+                    }
+                }
+                stamp();
+            } else if let Some(st) = &self.warp {
                 st.pass.record(cmd, &st.targets, &self.mesh);
                 stamp();
                 st.record_warps(cmd);
                 stamp();
             }
-            if let Some(c) = &self.cube {
+            if let (Some(c), Some(bands)) = (&self.cube, &self.cube_bands) {
+                // Each band's faces, then its rows or columns of the output; the next band's
+                // faces discard the cube only after this warp has sampled it.
+                for (k, band) in bands.iter().enumerate() {
+                    c.record_band_faces(cmd, &self.mesh, k);
+                    c.record_warp_band(cmd, band.rect);
+                }
+                stamp();
+            } else if let Some(c) = &self.cube {
                 c.record_faces(cmd, &self.mesh);
                 stamp();
                 c.record_warp(cmd);

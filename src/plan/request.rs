@@ -312,6 +312,7 @@ impl Plan {
             background: request.background,
             antialias: aa,
             shutter,
+            bands: None,
             estimated_ms: f64::NAN,
         })
     }

@@ -5,10 +5,12 @@
 use glam::{DVec2, DVec3};
 
 use super::cost::{
-    estimate_ms, inverse_candidates_for, Cost, CUBE_RAY_ERROR_PX, MAP_BUILD_NS, MAP_F32_FLOOR_PX,
-    MAP_WARP_CHROMATIC_NS, MAP_WARP_NS, PLANNED_CUBE_MAX_SIDE,
+    estimate_ms, face_render_ms, inverse_candidates_for, source_render_ms, Cost, CUBE_RAY_ERROR_PX,
+    MAP_BUILD_NS, MAP_F32_FLOOR_PX, MAP_WARP_CHROMATIC_NS, MAP_WARP_NS, PLANNED_CUBE_MAX_SIDE,
+    ROLLING_SHUTTER_NS_PER_VERTEX,
 };
 use super::{chromatic_scales, limits, SceneFile, MAP_COORDINATES};
+use crate::model::rolling_shutter::bands::{band_error_px, distance_range, BAND_COUNTS};
 use crate::model::rolling_shutter::{FrameMotion, Readout};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::warp::Coordinates;
@@ -224,15 +226,22 @@ pub(super) fn search_candidates(
         }
         _ => None,
     }
-    .map(|tessellation| VertexCandidate {
-        tessellation,
-        ms: estimate_ms(
-            pixels,
-            tessellation.triangles as f64,
-            Cost::Vertex {
-                vertices: tessellation.vertices as f64,
-            },
-        ),
+    .map(|tessellation| {
+        let vertices = tessellation.vertices as f64;
+        // A moving rolling shutter solves each vertex's readout time besides.
+        let solve = if motion.is_some() {
+            ROLLING_SHUTTER_NS_PER_VERTEX * vertices * 1e-6
+        } else {
+            0.0
+        };
+        VertexCandidate {
+            tessellation,
+            ms: estimate_ms(
+                pixels,
+                tessellation.triangles as f64,
+                Cost::Vertex { vertices },
+            ) + solve,
+        }
     });
     // Three fetches (and inverses, or maps) per pixel with chromatic aberration.
     let fetches = if chromatic.is_some() { 3.0 } else { 1.0 };
@@ -305,4 +314,131 @@ pub(super) fn search_candidates(
         no_pinhole_warp,
         frames,
     })
+}
+
+/// A moving rolling shutter drawn in bands: `count` bands of the readout's lines, the warp's
+/// pinhole source (or the cube map's six faces) rendered once per band from the pose of its
+/// middle line, each band warped alone.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct BandsCandidate {
+    /// How many bands.
+    pub(super) count: u32,
+    /// The bands' own geometric error (px), measured against the exact projection.
+    pub(super) bands_error_px: f64,
+    /// The route that carries each band.
+    pub(super) via: BandsVia,
+    /// Estimated frame time (ms): the route's, and its sources rendered again per further
+    /// band.
+    pub(super) ms: f64,
+    /// The budget the count was chosen against (px).
+    pub(super) budget_px: f64,
+}
+
+/// The route that draws each band.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum BandsVia {
+    /// A pinhole source and the warp.
+    Warp(WarpChoice),
+    /// Six pinhole faces of a cube map and the sphere warp: a lens no pinhole source holds.
+    Cube(CubeCandidate),
+}
+
+impl BandsVia {
+    /// The route's own geometric error (px).
+    pub(super) fn error_px(&self) -> f64 {
+        match self {
+            BandsVia::Warp(w) => w.error_px,
+            BandsVia::Cube(_) => CUBE_RAY_ERROR_PX,
+        }
+    }
+}
+
+impl BandsCandidate {
+    /// The route's error: the bands' and the warp's, which add along the chain.
+    pub(super) fn error_px(&self) -> f64 {
+        self.bands_error_px + self.via.error_px()
+    }
+}
+
+/// The bands weighed for a moving rolling shutter.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct BandsSearch {
+    /// The fewest bands of [`BAND_COUNTS`] whose error, with the warp's, meets the budget.
+    pub(super) chosen: Option<BandsCandidate>,
+    /// The most bands tried and the error they leave (px, the warp's included), where none
+    /// meets the budget; `None` where no warp was there to try.
+    pub(super) most: Option<(u32, f64)>,
+}
+
+/// The fewest bands that draw `motions` (each moving frame's readout and motion) through
+/// `camera` by the warp of `candidates` (or, where no pinhole source holds the lens, its cube
+/// map) within `budget`: each count's error is the largest over the frames, at the distances
+/// of `scene`'s vertices from the camera.
+pub(super) fn search_bands(
+    scene: &Scene,
+    camera: &Camera,
+    candidates: &Candidates,
+    motions: &[(Readout, FrameMotion)],
+    budget: f64,
+) -> BandsSearch {
+    let triangles = scene.mesh.triangle_count() as f64;
+    let (via, source_ms) = match (candidates.warp, candidates.cube) {
+        (Some(w), _) => (
+            BandsVia::Warp(w),
+            source_render_ms(camera.width as f64 * camera.height as f64, triangles),
+        ),
+        (None, Some(c)) => (
+            BandsVia::Cube(c),
+            6.0 * face_render_ms(f64::from(c.side) * f64::from(c.side), triangles),
+        ),
+        (None, None) => return BandsSearch::default(),
+    };
+    // The distances come from at most this many vertices, evenly through the mesh: a range,
+    // not a bound, and a dense mesh's neighbours add nothing to it.
+    const MAX_POINTS: usize = 1 << 14;
+    let step = scene.mesh.vertices.len().div_ceil(MAX_POINTS).max(1);
+    let points: Vec<DVec3> = scene
+        .mesh
+        .vertices
+        .iter()
+        .step_by(step)
+        .map(|v| v.position())
+        .collect();
+    let ranges: Vec<Option<(f64, f64)>> = motions
+        .iter()
+        .map(|(_, m)| distance_range(camera, m, points.iter().copied()))
+        .collect();
+    let mut most = None;
+    for count in BAND_COUNTS {
+        // The largest over the frames; a frame past the budget settles the count.
+        let mut bands_error_px = 0f64;
+        for ((readout, m), range) in motions.iter().zip(&ranges) {
+            if let Some(r) = range {
+                bands_error_px = bands_error_px.max(band_error_px(camera, m, *readout, count, *r));
+            }
+            if bands_error_px + via.error_px() > budget
+                && count != BAND_COUNTS[BAND_COUNTS.len() - 1]
+            {
+                break;
+            }
+        }
+        let candidate = BandsCandidate {
+            count,
+            bands_error_px,
+            via,
+            ms: match via {
+                BandsVia::Warp(w) => w.ms,
+                BandsVia::Cube(c) => c.ms,
+            } + (count - 1) as f64 * source_ms,
+            budget_px: budget,
+        };
+        if candidate.error_px() <= budget {
+            return BandsSearch {
+                chosen: Some(candidate),
+                most: None,
+            };
+        }
+        most = Some((count, candidate.error_px()));
+    }
+    BandsSearch { chosen: None, most }
 }

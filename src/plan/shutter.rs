@@ -6,9 +6,11 @@
 //! shutter's image is the global shutter's, exactly: every route draws it. Where it moves
 //! (`end_rvec`, `end_tvec` differ from `rvec`, `tvec`), each line sees another pose. The vertex
 //! path draws that exactly, solving per vertex the readout time at which its own line reads it
-//! (`glsl/include/rolling_shutter.glsl`); the warp and cube routes draw a frame from one pose,
-//! which would be a global shutter's image under another name, so a moving rolling shutter is
-//! routed to the vertex path, and refused (naming the key) where only those routes could draw.
+//! (`glsl/include/rolling_shutter.glsl`). The warp and the cube map draw a frame from one
+//! pose; they approximate the motion in bands of lines, each rendered from the pose of its
+//! middle line (`model::rolling_shutter::bands`), where the error that leaves meets the budget
+//! (the choice is `choice::choose_moving_rolling_shutter`). The image-based lens model draws
+//! from one pose only, so a lens prescription is refused, naming the key.
 
 use super::SceneFile;
 use crate::model::rolling_shutter::Readout;
@@ -56,7 +58,7 @@ impl Shutter {
                 source_words(readout, from)
             ),
             Shutter::Moving { readout, from, frame } => format!(
-                "rolling, {readout}, from {}; the camera moves during frame {} (end_rvec, end_tvec apart from rvec, tvec), so each line sees the pose of its own readout time (slerp and a linear centre between the two poses), drawn exactly per vertex",
+                "rolling, {readout}, from {}; the camera moves during frame {} (end_rvec, end_tvec apart from rvec, tvec), so each line sees the pose of its own readout time (slerp and a linear centre between the two poses), drawn exactly per vertex, or by the warp in bands of lines (the plan below says which)",
                 source_words(readout, from),
                 frame + 1
             ),

@@ -843,16 +843,20 @@ fn a_moving_rolling_shutter_renders_per_vertex_and_its_still_frames_as_the_globa
         .zip(twin[1].ids.as_ref().unwrap());
     let changed = moved.filter(|(a, b)| a != b).count();
     assert!(changed > 1000, "{changed} pixels change ID under the pan");
-    // Chromatic aberration needs the warp, which draws a frame from one pose: refused.
+    // Chromatic aberration needs the warp, which draws a frame from one pose: in bands of
+    // lines, none of which meets the default 0.01 px budget under this pan: refused.
     let chromatic = moving_grid(
         Some(end),
         &format!("{rolling}[effects]\nchromatic_aberration = true\nchromatic_scales = [1.002, 1.0, 0.998]\n"),
     );
     let e = plan(&chromatic, &scene).unwrap_err();
-    assert_eq!(e.kind(), crate::ErrorKind::Unsupported);
+    assert_eq!(e.kind(), crate::ErrorKind::Input);
     let e = e.to_string();
     assert!(
-        e.contains("[sensor] rolling_shutter") && e.contains("chromatic_aberration"),
+        e.contains("[sensor] rolling_shutter")
+            && e.contains("[accuracy] max_error_px = 0.01")
+            && e.contains("chromatic_aberration")
+            && e.contains("with 64 bands"),
         "{e}"
     );
     assert_no_validation_messages(&ctx);
@@ -983,5 +987,345 @@ fn a_moving_rolling_shutter_without_distortion_renders_through_the_pinhole_pass(
         changed > 500,
         "{changed} pixels change object under the turn"
     );
+    assert_no_validation_messages(&ctx);
+}
+
+/// The barrel lens over the grid, colour alone, panning during the second frame's top-to-bottom
+/// readout (about 3° and 5 cm), with `extra` tables.
+fn banded_grid(extra: &str) -> SceneFile {
+    scene_file(&format!(
+        "[geometry]\nscene = \"grid:16\"\n[optics]\ncamera = \"../cameras/barrel_k1k2.json\"\n\
+         [sensor]\nrolling_shutter = \"top_to_bottom\"\n\
+         [[poses]]\nrvec = [0.0, 0.0, 0.0]\ntvec = [0.0, 0.0, 2.0]\n\
+         [[poses]]\nrvec = [0.0, -0.025, 0.0]\ntvec = [0.025, 0.0, 2.0]\n\
+         end_rvec = [0.0, 0.025, 0.0]\nend_tvec = [-0.025, 0.0, 2.0]\n{extra}"
+    ))
+}
+
+const BANDS_CHROMATIC: &str =
+    "[effects]\nchromatic_aberration = true\nchromatic_scales = [1.002, 1.0, 0.998]\n";
+
+fn budget(px: f64) -> String {
+    format!("[accuracy]\nmax_error_px = {px}\n")
+}
+
+#[test]
+fn chromatic_aberration_through_a_moving_rolling_shutter_takes_the_fewest_bands_that_meet_the_budget(
+) {
+    let planned = |px: f64| {
+        let file = banded_grid(&format!("{BANDS_CHROMATIC}{}", budget(px)));
+        plan(&file, &load_geometry(&file).unwrap())
+    };
+    let p = planned(0.5).unwrap();
+    assert!(
+        matches!(
+            p.route,
+            Route::Warp {
+                chromatic: Some(_),
+                ..
+            }
+        ),
+        "{:?}",
+        p.route
+    );
+    let k = p.bands.unwrap();
+    assert!(
+        crate::model::rolling_shutter::bands::BAND_COUNTS.contains(&k),
+        "{k}"
+    );
+    assert!(p.expected_error_px <= 0.5, "{}", p.expected_error_px);
+    // The fewest: a budget just under what k bands leave takes more of them, and one twice
+    // what they leave takes no more.
+    let tighter = planned(p.expected_error_px * 0.99).unwrap();
+    assert!(tighter.bands.unwrap() > k, "{:?}", tighter.bands);
+    assert!(tighter.expected_error_px < p.expected_error_px);
+    let looser = planned(p.expected_error_px * 2.0).unwrap();
+    assert!(looser.bands.unwrap() <= k, "{:?}", looser.bands);
+    // The cost grows with the bands: a source render each.
+    assert!(tighter.estimated_ms > p.estimated_ms);
+    // A still camera never takes bands.
+    let still = banded_grid(&format!("{BANDS_CHROMATIC}{}", budget(0.5)))
+        .poses
+        .len();
+    assert_eq!(still, 2);
+    let file = scene_file(&format!(
+        "[geometry]\nscene = \"grid:16\"\n[optics]\ncamera = \"../cameras/barrel_k1k2.json\"\n[sensor]\nrolling_shutter = \"top_to_bottom\"\n{BANDS_CHROMATIC}{}",
+        budget(0.5)
+    ));
+    let p = plan(&file, &load_geometry(&file).unwrap()).unwrap();
+    assert_eq!(p.bands, None);
+    assert!(matches!(p.route, Route::Warp { .. }));
+}
+
+#[test]
+fn bands_no_count_can_meet_are_refused_naming_the_shutter_and_the_budget() {
+    let file = banded_grid(&format!("{BANDS_CHROMATIC}{}", budget(0.001)));
+    let e = plan(&file, &load_geometry(&file).unwrap()).unwrap_err();
+    assert_eq!(e.kind(), crate::ErrorKind::Input);
+    let e = e.to_string();
+    assert!(
+        e.contains("test.toml: [sensor] rolling_shutter, [accuracy] max_error_px = 0.001")
+            && e.contains("[[poses]] #2 moves during its top_to_bottom readout")
+            && e.contains("with 64 bands")
+            && e.contains("chromatic_aberration"),
+        "{e}"
+    );
+    // The error 64 bands would leave, which a budget at it accepts.
+    let left: f64 = e
+        .split(" px even with 64 bands")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap();
+    assert!(left > 0.001 && left < 0.5, "{left}");
+    let file = banded_grid(&format!("{BANDS_CHROMATIC}{}", budget(left * 1.01)));
+    let p = plan(&file, &load_geometry(&file).unwrap()).unwrap();
+    assert_eq!(p.bands, Some(64));
+}
+
+#[test]
+fn without_chromatic_aberration_a_moving_rolling_shutter_keeps_the_vertex_path() {
+    // The exact path costs a render and the per-vertex solve; the fewest bands that meet the
+    // budget cost four renders and the warp: the vertex path, and --explain says why.
+    let file = banded_grid(&budget(0.5));
+    let p = plan(&file, &load_geometry(&file).unwrap()).unwrap();
+    assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
+    assert_eq!(p.bands, None);
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains("each vertex is drawn where its own line reads it")
+            && text.contains("bands of lines, each from its middle line's pose, would leave")
+            && text.contains("but cost est."),
+        "{text}"
+    );
+    // At the default budget no count of bands meets it.
+    let file = banded_grid("");
+    let p = plan(&file, &load_geometry(&file).unwrap()).unwrap();
+    assert!(matches!(p.route, Route::Vertex { .. }));
+    assert!(
+        p.explain(None, &[]).contains("even 64 bands of lines"),
+        "{}",
+        p.explain(None, &[])
+    );
+}
+
+#[test]
+fn the_bands_are_explained_with_their_count_error_and_budget() {
+    let file = banded_grid(&format!("{BANDS_CHROMATIC}{}", budget(0.5)));
+    let p = plan(&file, &load_geometry(&file).unwrap()).unwrap();
+    let k = p.bands.unwrap();
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains(&format!("in {k} bands of lines (a moving rolling shutter)")),
+        "{text}"
+    );
+    assert!(
+        text.contains("pinhole render per band (overscanned): the camera moves during the readout and the warp draws a frame from one pose: chromatic aberration needs the warp (Alg. 1 cannot give each channel its own lens)")
+            && text.contains(&format!("; {k} bands leave {:.2} px ≤ 0.50 px budget", p.expected_error_px))
+            && text.contains("from the pose of the band's middle line"),
+        "{text}"
+    );
+    // IDs beside: the warp in bands for colour, the exact vertex path for the IDs.
+    let file = banded_grid(&format!(
+        "{BANDS_CHROMATIC}{}[outputs]\ncolor = true\nids = true\n",
+        budget(0.5)
+    ));
+    let p = plan(&file, &load_geometry(&file).unwrap()).unwrap();
+    assert!(
+        matches!(p.route, Route::WarpAndVertex { .. }),
+        "{:?}",
+        p.route
+    );
+    assert_eq!(p.bands, Some(k));
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains("drawn exactly, each vertex where its own line reads it"),
+        "{text}"
+    );
+}
+
+#[test]
+fn bands_render_chromatic_colour_and_exact_ids_in_one_frame() {
+    let ctx = validated_context();
+    let file = banded_grid(&format!(
+        "{BANDS_CHROMATIC}{}[outputs]\ncolor = true\nids = true\n",
+        budget(0.5)
+    ));
+    let scene = load_geometry(&file).unwrap();
+    let mut p = plan(&file, &scene).unwrap();
+    // A small frame: lavapipe renders the source once per band.
+    let camera = crate::model::Camera::from_coeffs(
+        160,
+        120,
+        crate::model::Intrinsics {
+            fx: 80.0,
+            fy: 80.0,
+            cx: 79.5,
+            cy: 59.5,
+        },
+        &[-0.11, 0.02, 0.0, 0.0],
+    )
+    .unwrap();
+    p.optics = crate::plan::Optics::Camera(camera);
+    p.background = [0.0, 0.0, 0.0, 1.0];
+    let mut out = Vec::new();
+    let recorded = execute(&ctx, &p, &scene, 0..2, &mut |f| {
+        out.push(f.rendered);
+        Ok(())
+    })
+    .unwrap();
+    assert!(recorded.has(PassKind::Warp) && recorded.has(PassKind::VertexRender));
+    for f in &out {
+        // Every pixel written by one band's warp: opaque, drawn or the background.
+        let Some(crate::imaging::Pixels::Rgba8(c)) = f.color.as_ref().map(|c| &c.pixels) else {
+            panic!("8-bit colour expected");
+        };
+        assert!(c.iter().all(|p| p[3] == 255));
+        assert!(f.ids.as_ref().unwrap().iter().any(|&id| id != 0));
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn bands_approach_the_exact_vertex_path_as_they_multiply() {
+    use crate::bench::rolling_shutter::{
+        bands_error_px, bands_plan, colour_mad, exact_request, still_colour_mad,
+    };
+    use crate::model::rolling_shutter::Readout;
+    let ctx = validated_context();
+    let camera = crate::model::Camera::from_coeffs(
+        160,
+        120,
+        crate::model::Intrinsics {
+            fx: 80.0,
+            fy: 80.0,
+            cx: 79.5,
+            cy: 59.5,
+        },
+        &[-0.11, 0.02, 0.0, 0.0],
+    )
+    .unwrap();
+    let scene = crate::scene::builtin::grid(16);
+    let frame = |p: &crate::plan::Plan| {
+        let mut out = None;
+        crate::host::plan::execute_untimed(&ctx, p, &scene, [0], &mut |f| {
+            out = Some(f.rendered);
+            Ok(())
+        })
+        .unwrap();
+        out.unwrap()
+    };
+    let max = ctx.gpu().max_image_side();
+    // What the warp's resampling leaves against the vertex path's raster, camera still.
+    let floor = still_colour_mad(&ctx, &camera, &scene).unwrap();
+    // Rows, and columns read against the pan's sweep: band rects of either kind.
+    for (readout, counts) in [
+        (Readout::TopToBottom, &[1, 4, 16][..]),
+        (Readout::RightToLeft, &[1, 16][..]),
+    ] {
+        let exact = crate::plan::Plan::from_request(&exact_request(&camera, readout), max);
+        let exact = frame(&exact.unwrap());
+        // One band is one render from the mid-frame pose: a global shutter's image. Above
+        // the floor, the difference falls as the bands multiply.
+        let excess: Vec<f64> = counts
+            .iter()
+            .map(|&k| {
+                let p = bands_plan(&ctx, &camera, readout, k).unwrap();
+                colour_mad(&frame(&p), &exact).unwrap() - floor
+            })
+            .collect();
+        assert!(
+            excess.windows(2).all(|w| w[1] < 0.6 * w[0]),
+            "{readout}: {excess:?} above {floor}"
+        );
+        let error: Vec<f64> = [4, 16]
+            .iter()
+            .map(|&k| bands_error_px(&camera, &scene, readout, k))
+            .collect();
+        assert!(error[1] < 0.3 * error[0], "{readout}: {error:?}");
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// The 200° fisheye in the room, lateral colour, turning about 1° during its second frame's
+/// top-to-bottom readout, with `extra` tables.
+fn banded_fisheye(extra: &str) -> SceneFile {
+    scene_file(&format!(
+        "[geometry]\nscene = \"room\"\n[optics]\ncamera = \"../cameras/fisheye_200.json\"\n\
+         [sensor]\nrolling_shutter = \"top_to_bottom\"\n{BANDS_CHROMATIC}\
+         [[poses]]\nrvec = [0.0, 0.0, 0.0]\ntvec = [0.0, 0.0, 0.0]\n\
+         [[poses]]\nrvec = [0.0, -0.009, 0.0]\ntvec = [0.0, 0.0, 0.0]\n\
+         end_rvec = [0.0, 0.009, 0.0]\nend_tvec = [0.0, 0.0, 0.0]\n{extra}"
+    ))
+}
+
+#[test]
+fn a_lens_no_pinhole_holds_takes_its_bands_through_the_cube_map() {
+    let ctx = validated_context();
+    let file = banded_fisheye(&budget(0.5));
+    let scene = load_geometry(&file).unwrap();
+    let mut p = plan(&file, &scene).unwrap();
+    assert!(
+        matches!(
+            p.route,
+            Route::Cube {
+                chromatic: Some(_),
+                ..
+            }
+        ),
+        "{:?}",
+        p.route
+    );
+    let k = p.bands.unwrap();
+    let text = p.explain(None, &[]);
+    assert!(
+        text.contains("cube faces per band (6 pinhole renders each)")
+            && text.contains(&format!("{k} bands leave"))
+            && text.contains("the cube map's six faces are rendered once per band"),
+        "{text}"
+    );
+    // Too tight a budget: refused, naming both keys.
+    let tight = banded_fisheye(&budget(0.001));
+    let e = plan(&tight, &scene).unwrap_err().to_string();
+    assert!(
+        e.contains("[sensor] rolling_shutter, [accuracy] max_error_px = 0.001")
+            && e.contains("with 64 bands"),
+        "{e}"
+    );
+    // Rendered small (lavapipe renders six faces per band): every pixel written once, by
+    // its band's warp, the frame in bands unlike the still one.
+    let camera = crate::model::Camera::fisheye(
+        160,
+        160,
+        crate::model::Intrinsics {
+            fx: 46.0,
+            fy: 46.0,
+            cx: 79.5,
+            cy: 79.5,
+        },
+        crate::model::Fisheye::new([0.02, -0.004, 0.0005, 0.0], 0.0, Some(200.0)).unwrap(),
+    )
+    .unwrap();
+    p.optics = crate::plan::Optics::Camera(camera);
+    p.route = Route::Cube {
+        side: 64,
+        chromatic: Some([1.002, 1.0, 0.998]),
+    };
+    p.bands = Some(8);
+    p.background = [0.0, 0.0, 0.0, 1.0];
+    let mut out = Vec::new();
+    let recorded = execute(&ctx, &p, &scene, 0..2, &mut |f| {
+        out.push(f.rendered.color.unwrap());
+        Ok(())
+    })
+    .unwrap();
+    assert!(recorded.has(PassKind::SphereWarp));
+    for c in &out {
+        let crate::imaging::Pixels::Rgba8(c) = &c.pixels else {
+            panic!("8-bit colour expected");
+        };
+        assert!(c.iter().all(|p| p[3] == 255));
+    }
+    assert_ne!(out[0].pixels, out[1].pixels);
     assert_no_validation_messages(&ctx);
 }

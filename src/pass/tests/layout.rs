@@ -273,11 +273,14 @@ fn warp_push_matches_the_warp_and_map_blocks() {
         ("sizes", offset_of!(WarpPush, sizes)),
         ("rectify", offset_of!(WarpPush, rectify)),
     ];
+    // The map builds' block ends before the warp's band.
+    let mut map = warp.clone();
+    map[2].0 = "unused";
+    let mut warp = warp;
+    warp.push(("band", offset_of!(WarpPush, band)));
     check(shaders::WARP_COMP, "WarpPush", warp.clone());
     check(shaders::WARP_COMP_RGBA8, "WarpPush", warp.clone());
     check(shaders::WARP_RASTER_FRAG, "WarpPush", warp.clone());
-    let mut map = warp;
-    map[2].0 = "unused";
     check(shaders::INVERSE_MAP_COMP, "MapPush", map.clone());
     check(shaders::UPSAMPLE_MAP_COMP, "MapPush", map);
     assert!(

@@ -361,7 +361,8 @@ enum BenchCommand {
     Wide(bench::WideArgs),
     /// A camera panning during a rolling shutter's readout, drawn exactly (each vertex's
     /// readout time solved on the GPU) beside the global shutter's vertex path: frame time and
-    /// ratio, on grids of 128² and 512² quads.
+    /// ratio, on grids of 128² and 512² quads; then the warp in 4 to 64 bands of lines, each
+    /// band's time, geometric error and colour difference against the exact path.
     #[command(name = "rolling-shutter")]
     RollingShutter(bench::WideArgs),
     /// Every camera model of the table (one realistic camera each) beside OpenCV's standard

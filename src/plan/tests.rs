@@ -1005,6 +1005,23 @@ fn banded_grid(extra: &str) -> SceneFile {
 const BANDS_CHROMATIC: &str =
     "[effects]\nchromatic_aberration = true\nchromatic_scales = [1.002, 1.0, 0.998]\n";
 
+/// A 160×120 k1 k2 camera: lavapipe renders a banded frame's source once per band, so the
+/// GPU checks of the bands keep their frames small.
+fn small_barrel() -> crate::model::Camera {
+    crate::model::Camera::from_coeffs(
+        160,
+        120,
+        crate::model::Intrinsics {
+            fx: 80.0,
+            fy: 80.0,
+            cx: 79.5,
+            cy: 59.5,
+        },
+        &[-0.11, 0.02, 0.0, 0.0],
+    )
+    .unwrap()
+}
+
 fn budget(px: f64) -> String {
     format!("[accuracy]\nmax_error_px = {px}\n")
 }
@@ -1154,18 +1171,7 @@ fn bands_render_chromatic_colour_and_exact_ids_in_one_frame() {
     let scene = load_geometry(&file).unwrap();
     let mut p = plan(&file, &scene).unwrap();
     // A small frame: lavapipe renders the source once per band.
-    let camera = crate::model::Camera::from_coeffs(
-        160,
-        120,
-        crate::model::Intrinsics {
-            fx: 80.0,
-            fy: 80.0,
-            cx: 79.5,
-            cy: 59.5,
-        },
-        &[-0.11, 0.02, 0.0, 0.0],
-    )
-    .unwrap();
+    let camera = small_barrel();
     p.optics = crate::plan::Optics::Camera(camera);
     p.background = [0.0, 0.0, 0.0, 1.0];
     let mut out = Vec::new();
@@ -1193,18 +1199,7 @@ fn bands_approach_the_exact_vertex_path_as_they_multiply() {
     };
     use crate::model::rolling_shutter::Readout;
     let ctx = validated_context();
-    let camera = crate::model::Camera::from_coeffs(
-        160,
-        120,
-        crate::model::Intrinsics {
-            fx: 80.0,
-            fy: 80.0,
-            cx: 79.5,
-            cy: 59.5,
-        },
-        &[-0.11, 0.02, 0.0, 0.0],
-    )
-    .unwrap();
+    let camera = small_barrel();
     let scene = crate::scene::builtin::grid(16);
     let frame = |p: &crate::plan::Plan| {
         let mut out = None;

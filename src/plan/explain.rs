@@ -67,7 +67,7 @@ impl Plan {
                 }
             }
         );
-        out.push_str(&format!("  shutter: {}\n", p.shutter.explain()));
+        out.push_str(&format!("  shutter: {}\n", p.shutter.explain(p.bands)));
         for (i, s) in p.steps.iter().enumerate() {
             out.push_str(&format!("  {}. {}: {}\n", i + 1, s.stage.name(), s.why));
         }

@@ -49,8 +49,13 @@ pub enum Shutter {
 }
 
 impl Shutter {
-    /// The line `--explain` prints.
-    pub fn explain(self) -> String {
+    /// The line `--explain` prints; `bands`: the plan draws a moving frame by the warp in that
+    /// many bands of lines (`None`: exactly, per vertex).
+    pub fn explain(self, bands: Option<u32>) -> String {
+        let drawn = match bands {
+            Some(k) => format!("approximated by the warp in {k} bands of lines, each from the pose of its middle line"),
+            None => "drawn exactly per vertex".into(),
+        };
         match self {
             Shutter::Global => "global: every line is read at once (no [sensor] rolling_shutter, and no rolling shutter_type in a camera file)".into(),
             Shutter::Rolling { readout, from } => format!(
@@ -58,7 +63,7 @@ impl Shutter {
                 source_words(readout, from)
             ),
             Shutter::Moving { readout, from, frame } => format!(
-                "rolling, {readout}, from {}; the camera moves during frame {} (end_rvec, end_tvec apart from rvec, tvec), so each line sees the pose of its own readout time (slerp and a linear centre between the two poses), drawn exactly per vertex, or by the warp in bands of lines (the plan below says which)",
+                "rolling, {readout}, from {}; the camera moves during frame {} (end_rvec, end_tvec apart from rvec, tvec), so each line sees the pose of its own readout time (slerp and a linear centre between the two poses), {drawn}",
                 source_words(readout, from),
                 frame + 1
             ),

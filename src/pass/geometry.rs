@@ -864,8 +864,18 @@ impl GeometryPass {
             ));
         }
         self.discard_bound = discard_bound(&self.desc.projection, camera)?;
+        // The line rate is the lens's, per radian of ray direction: a moved principal point
+        // (a jittered pass of anti-aliasing, once per sample and frame) leaves it as it is,
+        // and its cone's margin covers the sub-pixel turn of the image's widest ray. Only
+        // another focal length or lens is measured again (tens of milliseconds).
+        let old = &self.desc.camera;
+        let same_lens = (old.intrinsics.fx, old.intrinsics.fy)
+            == (camera.intrinsics.fx, camera.intrinsics.fy)
+            && old.lens() == camera.lens();
         self.desc.camera = camera.clone();
-        self.line_rate = self.measure_line_rate();
+        if !same_lens {
+            self.line_rate = self.measure_line_rate();
+        }
         // The frame block holds the old camera's projection: a jittered pass (a moved
         // principal point) drew with the previous pass's projection, and the average of the
         // passes was shifted by the last pass's offset.

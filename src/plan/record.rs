@@ -646,16 +646,7 @@ impl PlanRecorder {
         // Each band from the pose of its middle line (slerp and a linear centre between the
         // frame's two poses).
         let band_poses = |bands: &[Band]| -> Vec<Pose> {
-            bands
-                .iter()
-                .map(|band| {
-                    let p = motion.at(band.s);
-                    Pose {
-                        rotation: p.rotation,
-                        translation: p.translation,
-                    }
-                })
-                .collect()
+            bands.iter().map(|band| motion.at(band.s).into()).collect()
         };
         // SAFETY (every block below): this function's contract: no recorded work of the
         // selected frame, whose uniforms and sets these are, is pending.

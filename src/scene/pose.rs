@@ -121,6 +121,16 @@ impl From<Pose> for crate::model::rolling_shutter::WorldToCamera {
     }
 }
 
+/// A pose of the model layer's motion (the pose of a line's readout time) as the renderer's.
+impl From<crate::model::rolling_shutter::WorldToCamera> for Pose {
+    fn from(p: crate::model::rolling_shutter::WorldToCamera) -> Self {
+        Pose {
+            rotation: p.rotation,
+            translation: p.translation,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

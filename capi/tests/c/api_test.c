@@ -10,45 +10,9 @@
 
 #include <vklens.h>
 
+#include "expect.h"
+
 #include "../../../examples/c/vk_host.h"
-
-static int passed, failed;
-
-/* Expects `e` to be an error of `kind` whose message contains `name`; frees it. */
-static void expect_error(const char *what, vkl_error e, vkl_error_kind kind, const char *name) {
-    const char *msg = vkl_error_message(e);
-    if (e && vkl_error_kind_of(e) == kind && strstr(msg, name)) {
-        passed++;
-    } else {
-        failed++;
-        fprintf(stderr, "FAIL %s: kind %d (want %d), message \"%s\" (want it to name \"%s\")\n", what,
-                (int)vkl_error_kind_of(e), (int)kind, msg, name);
-    }
-    vkl_error_free(&e);
-    if (e != NULL) {
-        failed++;
-        fprintf(stderr, "FAIL %s: vkl_error_free did not null the handle\n", what);
-    }
-}
-
-static void expect_ok(const char *what, vkl_error e) {
-    if (e == NULL) {
-        passed++;
-    } else {
-        failed++;
-        fprintf(stderr, "FAIL %s: %s\n", what, vkl_error_message(e));
-        vkl_error_free(&e);
-    }
-}
-
-static void expect(const char *what, int ok) {
-    if (ok) {
-        passed++;
-    } else {
-        failed++;
-        fprintf(stderr, "FAIL %s\n", what);
-    }
-}
 
 static const double K[9] = {400, 0, 399.5, 0, 400, 299.5, 0, 0, 1};
 

@@ -16,46 +16,7 @@
 
 #include <vklens.h>
 
-static int passed, failed;
-
-static void expect(const char *what, int ok) {
-    if (ok) {
-        passed++;
-    } else {
-        failed++;
-        fprintf(stderr, "FAIL %s\n", what);
-    }
-}
-
-static int expect_ok(const char *what, vkl_error e) {
-    if (e == NULL) {
-        passed++;
-        return 1;
-    }
-    failed++;
-    fprintf(stderr, "FAIL %s: %s\n", what, vkl_error_message(e));
-    vkl_error_free(&e);
-    return 0;
-}
-
-/* Expects `e` to be an error of `kind` whose message contains `name` (and `also`, when not
- * NULL); frees it. */
-static void expect_error2(const char *what, vkl_error e, vkl_error_kind kind, const char *name,
-                          const char *also) {
-    const char *msg = vkl_error_message(e);
-    if (e && vkl_error_kind_of(e) == kind && strstr(msg, name) && (!also || strstr(msg, also))) {
-        passed++;
-    } else {
-        failed++;
-        fprintf(stderr, "FAIL %s: kind %d (want %d), message \"%s\" (want it to name \"%s\"%s%s)\n", what,
-                (int)vkl_error_kind_of(e), (int)kind, msg, name, also ? " and " : "", also ? also : "");
-    }
-    vkl_error_free(&e);
-}
-
-static void expect_error(const char *what, vkl_error e, vkl_error_kind kind, const char *name) {
-    expect_error2(what, e, kind, name, NULL);
-}
+#include "expect.h"
 
 /* An output of a frame, copied out: NULL when the frame lacks it. */
 static void *copy_output(vkl_frame f, vkl_output which, vkl_pixel_format *format, size_t *bytes) {

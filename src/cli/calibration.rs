@@ -119,6 +119,8 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
         background: [0.5, 0.5, 0.5, 1.0],
         chromatic: None,
         rolling_shutter: None,
+        // No moving rolling shutter: no bands to size.
+        max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
     };
     let mut plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
     plan.poses = poses.clone();

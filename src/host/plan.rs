@@ -310,7 +310,8 @@ fn run_frames(
     Ok(recorded)
 }
 
-/// Renders `request` once on the headless context (the plan, then [`execute_untimed`]);
+/// Renders `request` once on the headless context (the plan for `scene`, which sizes the
+/// bands of a moving rolling shutter on the warp and cube paths, then [`execute_untimed`]);
 /// `progress` hears each step of the plan.
 pub fn render_request(
     ctx: &crate::host::Context,
@@ -318,7 +319,7 @@ pub fn render_request(
     request: &RenderRequest,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Rendered> {
-    let plan = Plan::from_request(request, ctx.gpu().max_image_side())?;
+    let plan = Plan::from_request_with_scene(request, scene, ctx.gpu().max_image_side())?;
     for s in &plan.steps {
         progress(&format!("{}: {}", s.stage.name(), s.why));
     }

@@ -5,15 +5,16 @@
 //! nearest-sampled, for instance), within what the route can deliver honestly.
 
 use crate::model::overscan::{beyond_a_pinhole, cube_face_side};
-use crate::model::rolling_shutter::Readout;
+use crate::model::rolling_shutter::{FrameMotion, Readout};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::geometry::DEFAULT_DELTA;
-use crate::scene::Pose;
+use crate::scene::{Pose, Scene};
 use crate::{Error, Result};
 
 use super::antialias::{scaled_camera, MAX_JITTER, MAX_SUPERSAMPLE};
 use super::limits::pinhole_source_refusal;
-use super::scene_file::{Antialias, OutputSpec};
+use super::scene_file::{Antialias, OutputSpec, DEFAULT_MAX_ERROR_PX};
+use super::search::{search_bands, BandsVia, Candidates, CubeCandidate, WarpChoice};
 use super::{inverse_error_px, Plan, Route, Stage, Step, CUBE_RAY_ERROR_PX};
 
 /// Which path renders the lens, as a caller names it.
@@ -56,9 +57,16 @@ pub struct RenderRequest {
     /// Lateral chromatic aberration (warp and cube paths): per-channel radial scales R, G, B.
     pub chromatic: Option<[f64; 3]>,
     /// A rolling shutter: its readout, and the pose when the frame's last line is read
-    /// (`pose` is the first line's). With the two poses apart only the vertex and pinhole
-    /// paths draw it, each vertex where its own line reads it. `None`: a global shutter.
+    /// (`pose` is the first line's). With the two poses apart the vertex and pinhole paths
+    /// draw each vertex where its own line reads it; the warp and cube paths draw the frame in
+    /// bands of lines, as many as `max_error_px` needs ([`Plan::from_request_with_scene`]).
+    /// `None`: a global shutter.
     pub rolling_shutter: Option<(Readout, Pose)>,
+    /// The largest geometric error (output pixels) the bands of a moving rolling shutter may
+    /// leave on the warp and cube paths, the route's own error included, against the exact
+    /// per-line projection: the fewest bands that meet it are drawn, as a scene file's
+    /// `[accuracy] max_error_px` sizes them. The other paths are taken as named, not held to it.
+    pub max_error_px: f64,
 }
 
 impl RenderRequest {
@@ -78,6 +86,7 @@ impl RenderRequest {
             background: [0.0; 4],
             chromatic: None,
             rolling_shutter: None,
+            max_error_px: DEFAULT_MAX_ERROR_PX,
         }
     }
 }
@@ -87,6 +96,29 @@ impl Plan {
     /// most `max_image_side` px on a side. Refuses what the path cannot deliver (flow through
     /// a warp, data through a cube map), naming the request's field.
     pub fn from_request(request: &RenderRequest, max_image_side: u32) -> Result<Plan> {
+        Self::from_request_in(request, None, max_image_side)
+    }
+
+    /// [`Plan::from_request`] for `scene`: a camera that moves during a rolling shutter's
+    /// readout is drawn by the warp and cube paths too, in the fewest bands of lines whose
+    /// error, measured over the scene's depths as the planner measures a scene file's, meets
+    /// the request's `max_error_px`; refused, naming `max_error_px`, where even the most
+    /// bands miss it.
+    pub fn from_request_with_scene(
+        request: &RenderRequest,
+        scene: &Scene,
+        max_image_side: u32,
+    ) -> Result<Plan> {
+        Self::from_request_in(request, Some(scene), max_image_side)
+    }
+
+    /// The plan of `request`; `scene`, where given, sizes the bands of a moving rolling
+    /// shutter on the warp and cube paths (without it they are refused).
+    fn from_request_in(
+        request: &RenderRequest,
+        scene: Option<&Scene>,
+        max_image_side: u32,
+    ) -> Result<Plan> {
         let aa = request.antialias;
         if !(1..=MAX_SUPERSAMPLE).contains(&aa.supersample) {
             return Err(Error::argument(
@@ -126,10 +158,12 @@ impl Plan {
                 from: super::ReadoutSource::Request,
             },
             Some((readout, _)) => {
-                if !matches!(
-                    request.path,
-                    PathChoice::Vertex { .. } | PathChoice::Pinhole
-                ) {
+                if scene.is_none()
+                    && !matches!(
+                        request.path,
+                        PathChoice::Vertex { .. } | PathChoice::Pinhole
+                    )
+                {
                     return Err(Error::argument(
                         "rolling_shutter",
                         format!("the camera moves during the {readout} readout: only the vertex path draws each line from its own pose (the warp and cube paths draw a frame from one pose, a global shutter's image); use the vertex path"),
@@ -285,6 +319,24 @@ impl Plan {
                 (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX)
             }
         };
+        // A moving rolling shutter on the warp or cube path: in bands of lines.
+        let banded = match (request.rolling_shutter, scene, &route) {
+            (Some((readout, end)), Some(scene), Route::Warp { .. } | Route::Cube { .. })
+                if end != request.pose =>
+            {
+                let motion = FrameMotion::new(request.pose.into(), end.into());
+                let b = request_bands(
+                    request,
+                    scene,
+                    &route,
+                    expected,
+                    (readout, motion),
+                    &mut steps,
+                )?;
+                Some(b)
+            }
+            _ => None,
+        };
         if aa.is_on() && o.color {
             steps.push(Step {
                 stage: Stage::Antialias,
@@ -294,12 +346,16 @@ impl Plan {
                 ),
             });
         }
+        let (expected, budget_px, bands) = match banded {
+            Some(b) => (b.error_px(), b.budget_px, Some(b.count)),
+            None => (expected, f64::INFINITY, None),
+        };
         Ok(Plan {
             route,
             steps,
             optics: super::Optics::Camera(camera.clone()),
             expected_error_px: expected,
-            budget_px: f64::INFINITY,
+            budget_px,
             poses: vec![request.pose],
             end_poses: request
                 .rolling_shutter
@@ -312,10 +368,105 @@ impl Plan {
             background: request.background,
             antialias: aa,
             shutter,
-            bands: None,
+            bands,
             estimated_ms: f64::NAN,
         })
     }
+}
+
+/// The fewest bands of lines that draw `request`'s moving rolling shutter (`readout`,
+/// `motion`) by `route` (the warp, whose own error is `route_error_px`, or the cube map)
+/// within `request.max_error_px`: the planner's own search ([`search_bands`]) with the route
+/// the request names as its one candidate. The first of `steps`, the source render, becomes
+/// the per-band render, saying the count, the error and the budget; refused, naming
+/// `max_error_px`, where even the most bands miss it.
+fn request_bands(
+    request: &RenderRequest,
+    scene: &Scene,
+    route: &Route,
+    route_error_px: f64,
+    (readout, motion): (Readout, FrameMotion),
+    steps: &mut [Step],
+) -> Result<super::search::BandsCandidate> {
+    let budget = request.max_error_px;
+    if !(budget.is_finite() && budget > 0.0) {
+        return Err(Error::argument(
+            "max_error_px",
+            format!("{budget}: expected pixels > 0"),
+        ));
+    }
+    // The frame times are not estimated for a named route (the plan's is NaN): the count
+    // is chosen by the error alone, as the planner's is.
+    let (warp, cube, what) = match *route {
+        Route::Warp { method, map, .. } => {
+            if !route_error_px.is_finite() {
+                return Err(Error::argument(
+                    "method",
+                    format!("{method} leaves pixels of this camera unsolved that Newton solves, so the error of a moving rolling shutter's bands cannot be held to the budget; use newton"),
+                ));
+            }
+            let w = WarpChoice {
+                method,
+                map,
+                error_px: route_error_px,
+                ms: f64::NAN,
+            };
+            (Some(w), None, "the warp")
+        }
+        Route::Cube { side, .. } => (
+            None,
+            Some(CubeCandidate { side, ms: f64::NAN }),
+            "the cube map",
+        ),
+        _ => {
+            return Err(Error::internal(
+                "bands are drawn by the warp or the cube map",
+            ))
+        }
+    };
+    let candidates = Candidates {
+        vertex: None,
+        per_pixel: warp,
+        from_map: None,
+        warp,
+        cube,
+        no_pinhole_warp: None,
+        frames: 1,
+    };
+    let found = search_bands(
+        scene,
+        &request.camera,
+        &candidates,
+        &[(readout, motion)],
+        budget,
+    );
+    let Some(b) = found.chosen else {
+        let (count, error) = found
+            .most
+            .ok_or_else(|| Error::internal("no bands searched for the warp or the cube map"))?;
+        return Err(Error::argument(
+            "max_error_px",
+            format!(
+                "{budget} px: the camera moves during the {readout} readout, and {what} draws each band of lines from one pose: even {count} bands leave {error:.3} px, beyond the budget; raise max_error_px to {error:.3} or more, or take the vertex path, which draws each line from its own pose, exactly"
+            ),
+        ));
+    };
+    let (stage, sources) = match b.via {
+        BandsVia::Warp(_) => (Stage::BandRenders, "the warp's pinhole source"),
+        BandsVia::Cube(_) => (Stage::BandCubeFaces, "the cube map's six faces"),
+    };
+    if let Some(first) = steps.first_mut() {
+        *first = Step {
+            stage,
+            why: format!(
+                "the camera moves during the {readout} readout: {} bands of lines leave {:.3} px ≤ {budget} px budget ({:.3} px from the bands, measured against the exact per-line projection over the scene's depths, the fewest of 4, 8, 16, 32, 64 that meet it; the rest {what}'s); {sources} rendered once per band, from the pose of its middle line, and each band warped from its own render",
+                b.count,
+                b.error_px(),
+                b.bands_error_px,
+            ),
+        };
+    }
+    Ok(b)
 }
 
 fn push_cube_steps(steps: &mut Vec<Step>, why: String, chromatic: bool) {

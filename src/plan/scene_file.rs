@@ -11,6 +11,10 @@ use toml::{Table, Value};
 use crate::model::rolling_shutter::Readout;
 use crate::scene::Pose;
 
+/// The accuracy budget (largest geometric error in output pixels) where none is given: a
+/// scene file's `[accuracy] max_error_px`, and `vklens render --max-error-px`.
+pub const DEFAULT_MAX_ERROR_PX: f64 = 0.01;
+
 /// What is wrong with a scene file: one line, `file: [table] key: problem`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneFileError {
@@ -529,7 +533,9 @@ impl SceneFile {
         }
 
         let a = r.table(&root, "accuracy", &["max_error_px"])?;
-        let max_error_px = r.opt_number(a, "accuracy", "max_error_px")?.unwrap_or(0.01);
+        let max_error_px = r
+            .opt_number(a, "accuracy", "max_error_px")?
+            .unwrap_or(DEFAULT_MAX_ERROR_PX);
         if !(max_error_px > 0.0) {
             return Err(r.err(
                 "[accuracy] max_error_px",

@@ -229,6 +229,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             background: [0.0, 0.0, 0.0, 1.0],
             chromatic: None,
             rolling_shutter: None,
+            max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
         };
         let color = render_scene(&ctx, &scene, &request, &mut |_| {})
             .unwrap()
@@ -385,6 +386,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         background: [0.0; 4],
         chromatic: None,
         rolling_shutter: None,
+        max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
     };
     let warped = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     assert!(warped.ids.unwrap().iter().all(|i| valid.contains(i)));
@@ -466,6 +468,7 @@ fn vertex_and_warp_paths_agree_on_a_finely_tessellated_scene() {
         background: [0.0; 4],
         chromatic: None,
         rolling_shutter: None,
+        max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
     };
     let vertex = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     request.path = PathChoice::Warp {
@@ -526,6 +529,7 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
         background: [0.0; 4],
         chromatic: None,
         rolling_shutter: None,
+        max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
     };
     let got = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
     // The host round trip: the overscanned pinhole render read back, then warped.

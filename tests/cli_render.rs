@@ -371,8 +371,9 @@ fn render_pans_through_a_rolling_shutter_with_end_pose() {
     let w = 800;
     let top = a[..w].iter().zip(&b[..w]).filter(|(x, y)| x != y).count();
     assert!(top < 10, "{top} pixels of the first line differ");
-    // Without a rolling shutter an end pose contradicts the global one; through the warp a
-    // moving camera would be drawn from one pose. Both refused, naming what to change.
+    // Without a rolling shutter an end pose contradicts the global one; through the warp no
+    // count of bands of lines meets the default budget on this pan. Both refused, naming what
+    // to change.
     for (extra, expect) in [
         (&pan[..], "--end-pose"),
         (
@@ -383,5 +384,143 @@ fn render_pans_through_a_rolling_shutter_with_end_pose() {
         let (o, _) = render("rs_refused", extra);
         assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
         assert!(stderr(&o).contains(expect), "{}", stderr(&o));
+    }
+}
+
+/// Mean absolute difference of two 8-bit colour images, in levels over R, G, B.
+fn colour_mad(a: &Path, b: &Path) -> f64 {
+    let (a, b) = (
+        image::open(a).unwrap().to_rgba8(),
+        image::open(b).unwrap().to_rgba8(),
+    );
+    assert_eq!(a.dimensions(), b.dimensions());
+    let sum: f64 = a
+        .pixels()
+        .zip(b.pixels())
+        .flat_map(|(p, q)| (0..3).map(move |c| (f64::from(p[c]) - f64::from(q[c])).abs()))
+        .sum();
+    sum / (3 * a.width() * a.height()) as f64
+}
+
+#[test]
+fn the_warp_flags_draw_a_moving_rolling_shutter_in_as_many_bands_as_the_budget_needs() {
+    // barrel_k1k2.json at 0.4× (small: lavapipe renders the source once per band).
+    let cam = tmp("rs_bands_cam.json");
+    std::fs::write(
+        &cam,
+        r#"{"width": 320, "height": 240, "fx": 160, "fy": 160, "cx": 159.5, "cy": 119.5,
+            "dist_coeffs": [-0.11, 0.02, 0, 0]}"#,
+    )
+    .unwrap();
+    let cam = cam.to_str().unwrap().to_string();
+    // The grid filling most of the frame, the camera turning 0.1 rad during the readout
+    // (16 px at the centre). Supersampled, so that the warp's resampling of the chart's fine
+    // texture leaves a low floor against the vertex path's raster.
+    let start = ["--pose", "0,0,0,0,0,1.2", "--supersample", "2"];
+    let moving = [
+        &start[..],
+        &[
+            "--end-pose",
+            "0,0.1,0,0,0,1.2",
+            "--rolling-shutter",
+            "top_to_bottom",
+        ],
+    ]
+    .concat();
+    let render = |name: &str, extra: &[&str]| {
+        let out = tmp(&format!("{name}.png"));
+        let mut a = vec!["render", "--camera", &cam, "--scene", "grid", "--output"];
+        a.push(out.to_str().unwrap());
+        a.extend(extra.iter().copied());
+        (vklens(&a), out)
+    };
+    let ok = |(o, out): (std::process::Output, PathBuf)| {
+        assert!(o.status.success(), "{}", stderr(&o));
+        (stderr(&o), out)
+    };
+    let vertex = ["--path", "vertex", "--tessellate", "4"];
+    let (_, exact) = ok(render("rs_exact", &[&moving[..], &vertex[..]].concat()));
+    let (_, still_vertex) = ok(render(
+        "rs_still_vertex",
+        &[&start[..], &vertex[..]].concat(),
+    ));
+    let (_, still) = ok(render(
+        "rs_still_warp",
+        &[&start[..], &["--path", "warp"]].concat(),
+    ));
+    // A loose budget takes the fewest bands; a tight one more, and says so.
+    let (e4, four) = ok(render(
+        "rs_bands_loose",
+        &[&moving[..], &["--path", "warp", "--max-error-px", "100"]].concat(),
+    ));
+    assert!(e4.contains("4 bands of lines leave"), "{e4}");
+    let (e, banded) = ok(render(
+        "rs_bands_tight",
+        &[&moving[..], &["--path", "warp", "--max-error-px", "0.25"]].concat(),
+    ));
+    let k = e
+        .split(" bands of lines leave")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|k| k.parse::<u32>().ok())
+        .unwrap_or_else(|| panic!("no band count in: {e}"));
+    assert!(k > 4 && e.contains("≤ 0.25 px budget"), "{e}");
+    // What the warp's resampling leaves against the vertex path's raster, camera still.
+    let floor = colour_mad(&still, &still_vertex);
+    let (to_exact, four_to_exact, still_to_exact) = (
+        colour_mad(&banded, &exact),
+        colour_mad(&four, &exact),
+        colour_mad(&still, &exact),
+    );
+    let from_still = colour_mad(&banded, &still);
+    eprintln!(
+        "{k} bands: {to_exact:.3} levels from the exact path; 4 bands {four_to_exact:.3}; \
+         still {still_to_exact:.3}; floor {floor:.3}; {k} bands from the still warp {from_still:.3}"
+    );
+    // Moved from the still frame, and near the exact path: within the floor, and nearer
+    // than 4 bands or the still frame.
+    assert!(from_still > 2.0 * to_exact, "{from_still}");
+    assert!(
+        to_exact < 0.85 * four_to_exact && to_exact < 0.5 * still_to_exact,
+        "{to_exact}"
+    );
+    assert!(to_exact < 1.25 * floor, "{to_exact} above {floor}");
+
+    // The cube path takes its bands too.
+    let (e, _) = ok(render(
+        "rs_bands_cube",
+        &[&moving[..], &["--path", "cube", "--max-error-px", "1"]].concat(),
+    ));
+    assert!(
+        e.contains("cube faces per band") && e.contains("bands of lines leave"),
+        "{e}"
+    );
+
+    // No count meets the budget: refused, naming the flag, what 64 bands leave and the exact
+    // path, and nothing written.
+    let (o, out) = render(
+        "rs_bands_refused",
+        &[&moving[..], &["--path", "warp", "--max-error-px", "0.001"]].concat(),
+    );
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("--max-error-px 0.001")
+            && e.contains("64 bands leave")
+            && e.contains("--path vertex"),
+        "{e}"
+    );
+    assert!(!out.exists());
+    for bad in [
+        "--max-error-px=0",
+        "--max-error-px=-1",
+        "--max-error-px=nan",
+    ] {
+        let (o, _) = render(
+            "rs_bands_bad",
+            &[&moving[..], &["--path", "warp", bad]].concat(),
+        );
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("--max-error-px"), "{}", stderr(&o));
     }
 }

@@ -1075,6 +1075,53 @@ fn chromatic_aberration_through_a_moving_rolling_shutter_takes_the_fewest_bands_
 }
 
 #[test]
+fn a_request_through_the_warp_takes_the_bands_the_planner_takes_for_its_scene_file() {
+    use crate::plan::{PathChoice, RenderRequest};
+    let camera = crate::io::load_camera(&examples().join("../cameras/barrel_k1k2.json")).unwrap();
+    for px in [0.5, 2.0, 8.0] {
+        let file = banded_grid(&format!("{BANDS_CHROMATIC}{}", budget(px)));
+        let scene = load_geometry(&file).unwrap();
+        let planned = plan(&file, &scene).unwrap();
+        // The frame that moves, as flags give it: the warp named, the same budget.
+        let mut request = RenderRequest::color(
+            &camera,
+            PathChoice::Warp {
+                method: crate::model::InverseMethod::Newton,
+                density: 1.0,
+            },
+        );
+        request.pose = file.poses[1];
+        request.previous_pose = file.poses[1];
+        request.rolling_shutter = Some((
+            crate::model::rolling_shutter::Readout::TopToBottom,
+            file.end_poses[1].unwrap(),
+        ));
+        request.max_error_px = px;
+        let p = crate::plan::Plan::from_request_with_scene(&request, &scene, 16384).unwrap();
+        assert!(planned.bands.is_some());
+        assert_eq!(p.bands, planned.bands, "{px} px");
+        assert!(p.expected_error_px <= px && p.budget_px == px);
+        assert_eq!(p.steps[0].stage, Stage::BandRenders);
+        let k = p.bands.unwrap();
+        assert!(
+            p.steps[0]
+                .why
+                .contains(&format!("{k} bands of lines leave")),
+            "{}",
+            p.steps[0].why
+        );
+        // Without the scene the bands cannot be sized: refused as before.
+        let e = crate::plan::Plan::from_request(&request, 16384).unwrap_err();
+        assert_eq!(e.argument_name(), Some("rolling_shutter"));
+        // A budget no count meets: refused, naming it and what 64 bands leave.
+        request.max_error_px = 1e-4;
+        let e = crate::plan::Plan::from_request_with_scene(&request, &scene, 16384).unwrap_err();
+        assert_eq!(e.argument_name(), Some("max_error_px"), "{e}");
+        assert!(e.to_string().contains("even 64 bands leave"), "{e}");
+    }
+}
+
+#[test]
 fn bands_no_count_can_meet_are_refused_naming_the_shutter_and_the_budget() {
     let file = banded_grid(&format!("{BANDS_CHROMATIC}{}", budget(0.001)));
     let e = plan(&file, &load_geometry(&file).unwrap()).unwrap_err();
@@ -1238,6 +1285,90 @@ fn bands_approach_the_exact_vertex_path_as_they_multiply() {
             .map(|&k| bands_error_px(&camera, &scene, readout, k))
             .collect();
         assert!(error[1] < 0.3 * error[0], "{readout}: {error:?}");
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// The cube map's plan for `camera` through the bench's pan, read in `readout` order, in
+/// `count` bands of lines (`count` 1: one set of faces from the mid-frame pose); `None`: the
+/// camera still at the pan's first pose, the global shutter.
+fn cube_bands_plan(
+    camera: &crate::model::Camera,
+    readout: crate::model::rolling_shutter::Readout,
+    count: Option<u32>,
+    max_image_side: u32,
+) -> crate::plan::Plan {
+    use crate::plan::{PathChoice, ReadoutSource, RenderRequest, Shutter};
+    let (start, end) = crate::bench::rolling_shutter::pan();
+    let mut request = RenderRequest::color(camera, PathChoice::cube(camera, 2.0));
+    request.pose = start;
+    request.previous_pose = start;
+    let mut p = crate::plan::Plan::from_request(&request, max_image_side).unwrap();
+    if count.is_some() {
+        p.shutter = Shutter::Moving {
+            readout,
+            from: ReadoutSource::Request,
+            frame: 0,
+        };
+        p.end_poses = vec![end];
+        p.bands = count;
+    }
+    p
+}
+
+#[test]
+fn cube_bands_approach_the_exact_vertex_path_as_they_multiply() {
+    use crate::bench::rolling_shutter::{colour_mad, exact_request};
+    use crate::model::rolling_shutter::Readout;
+    let ctx = validated_context();
+    // A lens both routes draw: the vertex path exactly per vertex, the cube map by its rays.
+    let camera = small_barrel();
+    let scene = crate::scene::builtin::grid(16);
+    let frame = |p: &crate::plan::Plan| {
+        let mut out = None;
+        crate::host::plan::execute_untimed(&ctx, p, &scene, [0], &mut |f| {
+            out = Some(f.rendered);
+            Ok(())
+        })
+        .unwrap();
+        out.unwrap()
+    };
+    let max = ctx.gpu().max_image_side();
+    // What the cube map's resampling (faces, then the sphere warp) leaves against the vertex
+    // path's raster, camera still at the pan's first pose.
+    let floor = {
+        let mut still = exact_request(&camera, Readout::TopToBottom);
+        still.rolling_shutter = None;
+        let vertex = frame(&crate::plan::Plan::from_request(&still, max).unwrap());
+        let cube = frame(&cube_bands_plan(&camera, Readout::TopToBottom, None, max));
+        colour_mad(&cube, &vertex).unwrap()
+    };
+    for (readout, counts) in [
+        (Readout::TopToBottom, &[1, 4, 16][..]),
+        (Readout::RightToLeft, &[1, 16][..]),
+    ] {
+        let exact = crate::plan::Plan::from_request(&exact_request(&camera, readout), max);
+        let exact = frame(&exact.unwrap());
+        // One band is one cube from the mid-frame pose: a global shutter's image. Above the
+        // floor, the difference falls as the bands multiply.
+        let excess: Vec<f64> = counts
+            .iter()
+            .map(|&k| {
+                let p = cube_bands_plan(&camera, readout, Some(k), max);
+                colour_mad(&frame(&p), &exact).unwrap() - floor
+            })
+            .collect();
+        eprintln!("cube bands {readout} {counts:?}: {excess:?} above the floor {floor}");
+        assert!(
+            excess.windows(2).all(|w| w[1] < 0.6 * w[0]),
+            "{readout}: {excess:?} above {floor}"
+        );
+        // The most bands: within a quarter of one band's excess, and a level of the floor.
+        let (one, most) = (excess[0], excess[excess.len() - 1]);
+        assert!(
+            most < 0.25 * one && most < 1.0,
+            "{readout}: {excess:?} above {floor}"
+        );
     }
     assert_no_validation_messages(&ctx);
 }

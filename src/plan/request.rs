@@ -94,7 +94,9 @@ impl RenderRequest {
 impl Plan {
     /// The plan that renders `request` by the path it names, on a device whose images are at
     /// most `max_image_side` px on a side. Refuses what the path cannot deliver (flow through
-    /// a warp, data through a cube map), naming the request's field.
+    /// a warp, data through a cube map), naming the request's field. A camera moving during
+    /// a rolling shutter's readout goes by the vertex or pinhole path here: the warp and cube
+    /// paths need the scene to size their bands ([`Plan::from_request_with_scene`]).
     pub fn from_request(request: &RenderRequest, max_image_side: u32) -> Result<Plan> {
         Self::from_request_in(request, None, max_image_side)
     }

@@ -12,6 +12,13 @@
 //            test is appended to the dropped list.
 //   STAGE 1, one invocation per vertex on the dropped list of the *previous* draw of this
 //            mesh (run before stage 0 empties it): its triangles get their indices back.
+//   STAGE 3, with a moving rolling shutter, one invocation per vertex stage 0 deferred: stage 0
+//            solves each vertex's readout time where the frame's motion bounds it
+//            (rolling_shutter.glsl's vkl_rs_bounded: a few evaluations of the lens) and hands
+//            the rest to this stage, which scans and refines as the CPU does and then does
+//            stage 0's work for them. A driver that masks SIMD lanes rather than branching
+//            (lavapipe) would otherwise run the scan's and the refinement's first evaluations
+//            for every vertex, needed or not.
 //   STAGE 2, one invocation per vertex on the new dropped list: each triangle it belongs to
 //            becomes degenerate (its first index three times), which rasterizes to nothing.
 //            A kept vertex at or behind the image plane (a fisheye seeing past 90°) is on the
@@ -37,6 +44,7 @@
 // solve out; this module, with it, serves a moving rolling shutter).
 // vklens:variant indices VKL_DISCARD_INDICES
 // vklens:variant global VKL_GLOBAL_SHUTTER
+// vklens:variant bounded VKL_RS_BOUNDED_ONLY
 
 layout(local_size_x = 64) in;
 
@@ -53,8 +61,9 @@ layout(set = 0, binding = 2, std430) readonly buffer Vertices { float vertex_dat
 // Per vertex, read by the draw as vertex attributes: the distorted NDC, and the flow (xy) with
 // whether both poses see the vertex (z).
 layout(set = 0, binding = 3, std430) writeonly buffer Positions { vec2 positions[]; };
-// With a moving rolling shutter, w holds the vertex's solved readout time: the draw and stage 2
-// rebuild its camera-frame point from it without solving again.
+// With a moving rolling shutter, w holds the vertex's solved readout time: stage 2 (and the
+// draw, where xyz hold the flow) rebuild its camera-frame point from it without solving
+// again; without flow, x and y hold the point's depth and distance for the draw.
 layout(set = 0, binding = 4, std430) buffer Motion { vec4 motion[]; };
 // The dropped vertices (and, marked with VKL_CHECK_BIT, kept vertices whose triangles are
 // tested for wrapping behind the lens), and the indirect dispatch that visits them: `groups` is
@@ -72,6 +81,16 @@ layout(set = 0, binding = 6, std430) readonly buffer IncidenceStart { uint incid
 layout(set = 0, binding = 7, std430) readonly buffer Incidence { uint incidence[]; };
 layout(set = 0, binding = 8, std430) readonly buffer Indices { uint indices[]; };
 layout(set = 0, binding = 9, std430) writeonly buffer Kept { uint kept[]; };
+// The vertices stage 0 left to stage 3 (a moving rolling shutter the bound does not cover),
+// behind the indirect dispatch that visits them, as `Dropped`. The host resets the header
+// with the dropped list's.
+layout(set = 0, binding = 10, std430) buffer Deferred {
+    uint groups;
+    uint one_y;
+    uint one_z;
+    uint count;
+    uint vertices[];
+} deferred;
 
 layout(push_constant) uniform DiscardPush { uint count; } pc;
 
@@ -98,50 +117,69 @@ vec3 vkl_camera(uint v) {
     return (frame.view * world).xyz;
 }
 
+#ifndef VKL_DISCARD_INDICES
+// Stage 0's work on vertex i (stage 3's on a deferred one).
+void vkl_per_vertex(uint i) {
+    vec4 world = vkl_world(i);
+    vec4 clip;
+    vec2 distorted_ndc, pixel, ndc;
+    bool ok;
+#ifndef VKL_GLOBAL_SHUTTER
+    if (VKL_READOUT != 0u) {
+        VklRsSample r;
+        VklRsSample q;
+        bool solved = vkl_rs_current(world.xyz, r);
+        if (WRITE_FLOW) solved = vkl_rs_previous(world.xyz, q) && solved;
+        if (!solved) {
+            uint slot = atomicAdd(deferred.count, 1u);
+            deferred.vertices[slot] = i;
+            if (slot % 64u == 0u) atomicAdd(deferred.groups, 1u);
+            return;
+        }
+        clip = r.clip;
+        distorted_ndc = r.distorted_ndc;
+        pixel = r.pixel;
+        ndc = r.ndc;
+        ok = r.ok;
+        // Without flow, xy carry what the draw needs of the camera-frame point (its depth and
+        // its distance), which it would otherwise rebuild from s at a rotation's cost, per
+        // vertex invocation.
+        vec4 m = vec4(r.camera.z, length(r.camera), 0.0, r.s);
+        if (WRITE_FLOW) m.xyz = vec3(r.pixel - q.pixel, (r.ok && q.ok) ? 1.0 : 0.0);
+        motion[i] = m;
+    } else
+#endif
+    {
+        clip = frame.view_projection * world;
+        ok = alg1_ndc(clip, distorted_ndc, pixel, ndc);
+    }
+    positions[i] = distorted_ndc;
+    if (WRITE_FLOW && VKL_READOUT == 0u) {
+        vec2 previous_ndc, previous_pixel, previous_undistorted;
+        bool previous_ok = alg1_ndc(frame.previous_view_projection * world, previous_ndc,
+                                    previous_pixel, previous_undistorted);
+        motion[i] = vec4(pixel - previous_pixel, (ok && previous_ok) ? 1.0 : 0.0, 0.0);
+    }
+    bool kept = vkl_vertex_kept(ok, ndc);
+    // clip.w is the camera-frame z (Sec. 3.1's projection).
+    if (!kept || !(clip.w > 0.0)) {
+        uint slot = atomicAdd(dropped.count, 1u);
+        dropped.vertices[slot] = kept ? (i | VKL_CHECK_BIT) : i;
+        // The first of every 64 adds a workgroup to stage 2's dispatch.
+        if (slot % 64u == 0u) atomicAdd(dropped.groups, 1u);
+    }
+}
+#endif
+
 void main() {
     uint i = gl_GlobalInvocationID.x;
 #ifndef VKL_DISCARD_INDICES
     if (STAGE == 0u) {
-        if (i >= pc.count) return;
-        vec4 world = vkl_world(i);
-        vec4 clip;
-        vec2 distorted_ndc, pixel, ndc;
-        bool ok;
-#ifndef VKL_GLOBAL_SHUTTER
-        if (VKL_READOUT != 0u) {
-            VklRsSample r = vkl_rs_current(world.xyz);
-            clip = r.clip;
-            distorted_ndc = r.distorted_ndc;
-            pixel = r.pixel;
-            ndc = r.ndc;
-            ok = r.ok;
-            vec4 m = vec4(0.0, 0.0, 0.0, r.s);
-            if (WRITE_FLOW) {
-                VklRsSample q = vkl_rs_previous(world.xyz);
-                m.xyz = vec3(r.pixel - q.pixel, (r.ok && q.ok) ? 1.0 : 0.0);
-            }
-            motion[i] = m;
-        } else
-#endif
-        {
-            clip = frame.view_projection * world;
-            ok = alg1_ndc(clip, distorted_ndc, pixel, ndc);
-        }
-        positions[i] = distorted_ndc;
-        if (WRITE_FLOW && VKL_READOUT == 0u) {
-            vec2 previous_ndc, previous_pixel, previous_undistorted;
-            bool previous_ok = alg1_ndc(frame.previous_view_projection * world, previous_ndc,
-                                        previous_pixel, previous_undistorted);
-            motion[i] = vec4(pixel - previous_pixel, (ok && previous_ok) ? 1.0 : 0.0, 0.0);
-        }
-        bool kept = vkl_vertex_kept(ok, ndc);
-        // clip.w is the camera-frame z (Sec. 3.1's projection).
-        if (!kept || !(clip.w > 0.0)) {
-            uint slot = atomicAdd(dropped.count, 1u);
-            dropped.vertices[slot] = kept ? (i | VKL_CHECK_BIT) : i;
-            // The first of every 64 adds a workgroup to stage 2's dispatch.
-            if (slot % 64u == 0u) atomicAdd(dropped.groups, 1u);
-        }
+        if (i < pc.count) vkl_per_vertex(i);
+        return;
+    }
+    if (STAGE == 3u) {
+        if (i < deferred.count) vkl_per_vertex(deferred.vertices[i]);
         return;
     }
 #endif

@@ -77,11 +77,17 @@ void main() {
 #ifdef VKL_PULLED
 #ifdef VKL_PULLED_FLOW
     if (VKL_READOUT != 0u && vkl_rs_moving()) {
-        // The discard pass solved the vertex's readout time (in_motion.w): its camera-frame
-        // point then is one rotation away, the lens is not evaluated again.
-        vec3 p = vkl_rs_camera_point(vkl_motion_current(), in_position, in_motion.w);
-        v_depth = p.z;
-        gl_Position = alg1_clip(frame.projection * vec4(p, 1.0), in_distorted_ndc);
+        if (WRITE_FLOW) {
+            // The discard pass solved the vertex's readout time (in_motion.w): its
+            // camera-frame point then is one rotation away, the lens is not evaluated again.
+            vec3 p = vkl_rs_camera_point(vkl_motion_current(), in_position, in_motion.w);
+            v_depth = p.z;
+            gl_Position = alg1_clip(frame.projection * vec4(p, 1.0), in_distorted_ndc);
+        } else {
+            // Without flow, the discard pass left the point's depth and distance.
+            v_depth = in_motion.x;
+            gl_Position = alg1_clip_at(in_motion.x, in_motion.y, in_distorted_ndc);
+        }
     } else {
         gl_Position = alg1_clip(frame.view_projection * world, in_distorted_ndc);
     }
@@ -95,13 +101,16 @@ void main() {
     if (VKL_READOUT != 0u) {
         // A moving rolling shutter: the vertex where its own line reads it, and flow from
         // where the previous frame's lines read it.
-        VklRsSample r = vkl_rs_current(in_position);
+        // This module solves every vertex in full: it never leaves one to a later pass.
+        VklRsSample r;
+        vkl_rs_current(in_position, r);
         gl_Position = r.ok ? alg1_clip(r.clip, r.distorted_ndc) : r.clip;
         v_depth = r.camera.z;
         bool previous_ok = r.ok;
         vec2 previous_pixel = r.pixel;
         if (WRITE_FLOW) {
-            VklRsSample q = vkl_rs_previous(in_position);
+            VklRsSample q;
+            vkl_rs_previous(in_position, q);
             previous_ok = q.ok;
             previous_pixel = q.pixel;
         }

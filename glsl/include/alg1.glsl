@@ -86,6 +86,18 @@ vec4 alg1_clip(vec4 clip, vec2 distorted_ndc) {
     return vec4(distorted_ndc * clip.w, clip.zw);
 }
 
+// alg1_clip for a camera-frame point known by its depth z and its distance r alone: the
+// Sec. 3.1 projection's z and w depend on the depth alone (model::vulkan_projection).
+vec4 alg1_clip_at(float z, float r, vec2 distorted_ndc) {
+#ifndef VKL_PLAIN
+    if (DISTORT && VKL_RAY_MODEL) {
+        return vec4(distorted_ndc * r, (1.0 - frame.viewport.w / r) * r, r);
+    }
+#endif
+    vec2 zw = frame.projection[2].zw * z + frame.projection[3].zw;
+    return vec4(distorted_ndc * zw.y, zw);
+}
+
 // Alg. 1 on one clip-space position: the distorted clip position, its OpenCV pixel, and
 // whether the model is defined there.
 bool alg1(vec4 clip, out vec4 distorted, out vec2 pixel, out vec2 ndc) {

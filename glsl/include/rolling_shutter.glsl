@@ -175,16 +175,14 @@ float vkl_rs_path_distance(VklMotion m, vec3 x) {
 const uint VKL_RS_RATE_TABLE = 32u;
 
 // The lens's line rate over the rays at most theta off the axis (LineRate::within); negative
-// past the cone. The table is read at constant indices: a per-lane index into a buffer is a
-// loop over the lanes on lavapipe.
+// past the cone.
 float vkl_rs_line_rate(float theta) {
     float cone = frame.readout_bound.x;
     float i = ceil(max(theta, 0.0) / cone * float(VKL_RS_RATE_TABLE - 1u));
-    float rate = -1.0;
-    for (uint k = 0u; k < VKL_RS_RATE_TABLE; k++) {
-        if (float(k) == i) rate = frame.readout_rates[k / 4u][k % 4u];
-    }
-    return rate;
+    // NaN fails the comparison too.
+    if (!(i < float(VKL_RS_RATE_TABLE))) return -1.0;
+    uint k = min(uint(i), VKL_RS_RATE_TABLE - 1u);
+    return frame.readout_rates[k / 4u][k % 4u];
 }
 
 // The solve where the frame's motion bounds how fast x's own line time moves
@@ -252,6 +250,13 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
 // once per cell that any lane brackets, the others idle; here they refine together. A bracket
 // that closes on a jump of the lens map rather than a root resumes the scan after it, as on the
 // CPU.
+#ifdef VKL_RS_BOUNDED_ONLY
+// A module for a pass that hands what the bound does not cover to a later dispatch
+// (glsl/discard.comp's stage 3): the bounded solve alone, false where it does not decide.
+bool vkl_rs_solve(VklMotion m, vec3 x, out VklRsSample r) {
+    return vkl_rs_bounded(m, x, r);
+}
+#else
 VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
     VklRsSample bounded;
     if (vkl_rs_bounded(m, x, bounded)) return bounded;
@@ -293,6 +298,12 @@ VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
     return end;
 }
 
+bool vkl_rs_solve(VklMotion m, vec3 x, out VklRsSample r) {
+    r = vkl_rs_project(m, x);
+    return true;
+}
+#endif
+
 // A frame whose camera does not move during the readout: Alg. 1 from its one pose, with the
 // global shutter's very arithmetic, so that a still frame renders bit for bit as it does
 // without a readout.
@@ -312,17 +323,19 @@ bool vkl_rs_moving() {
     return frame.start_centre.w != 0.0;
 }
 
-// Where this frame's lines see the world point x.
-VklRsSample vkl_rs_current(vec3 x) {
-    return vkl_rs_moving() ? vkl_rs_project(vkl_motion_current(), x)
-                           : vkl_rs_still(x, frame.view_projection, frame.view);
+// Where this frame's lines see the world point x; false where a VKL_RS_BOUNDED_ONLY module
+// leaves it to a later pass.
+bool vkl_rs_current(vec3 x, out VklRsSample r) {
+    if (vkl_rs_moving()) return vkl_rs_solve(vkl_motion_current(), x, r);
+    r = vkl_rs_still(x, frame.view_projection, frame.view);
+    return true;
 }
 
-// Where the lines of the frame flow starts from saw it.
-VklRsSample vkl_rs_previous(vec3 x) {
-    return frame.previous_start_centre.w != 0.0
-               ? vkl_rs_project(vkl_motion_previous(), x)
-               : vkl_rs_still(x, frame.previous_view_projection, frame.previous_view);
+// Where the lines of the frame flow starts from saw it; false as vkl_rs_current.
+bool vkl_rs_previous(vec3 x, out VklRsSample r) {
+    if (frame.previous_start_centre.w != 0.0) return vkl_rs_solve(vkl_motion_previous(), x, r);
+    r = vkl_rs_still(x, frame.previous_view_projection, frame.previous_view);
+    return true;
 }
 
 #endif

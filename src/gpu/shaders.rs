@@ -66,6 +66,10 @@ pub const DISCARD_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/discar
 /// `glsl/discard.comp`'s stage 0 for a frame every line sees from one pose (no readout solve).
 pub const DISCARD_COMP_GLOBAL: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/discard.comp.global.spv"));
+/// `glsl/discard.comp`'s stage 0 for a moving rolling shutter: the bounded readout solve alone,
+/// what it does not cover left to stage 3 (`DISCARD_COMP`).
+pub const DISCARD_COMP_BOUNDED: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/discard.comp.bounded.spv"));
 /// `glsl/discard.comp`'s stages 1 and 2 alone (no Alg. 1 to compile).
 pub const DISCARD_COMP_INDICES: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/discard.comp.indices.spv"));

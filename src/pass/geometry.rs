@@ -428,6 +428,9 @@ struct DiscardBuffers {
     /// The vertices the last discard dropped, behind the indirect dispatch that visits them
     /// (`Dropped` in the shader: groups, 1, 1, count, then the list).
     dropped: Buffer,
+    /// The vertices a moving rolling shutter's per-vertex stage left to stage 3, as `dropped`
+    /// (`Deferred` in the shader).
+    deferred: Buffer,
     /// Which triangles each vertex belongs to (compressed rows: vertex v's triangles are
     /// `incidence[incidence_start[v] .. incidence_start[v + 1]]`).
     incidence_start: Buffer,
@@ -493,6 +496,12 @@ impl MeshBuffers {
             dropped: Buffer::from_pod(
                 gpu,
                 "mesh.discard.dropped",
+                &dropped,
+                storage | U::INDIRECT_BUFFER | U::TRANSFER_DST,
+            )?,
+            deferred: Buffer::from_pod(
+                gpu,
+                "mesh.discard.deferred",
                 &dropped,
                 storage | U::INDIRECT_BUFFER | U::TRANSFER_DST,
             )?,
@@ -592,10 +601,12 @@ struct FrameSlot {
 /// Most frames in flight a geometry pass keeps uniforms and sets for (the warp's limit).
 pub const MAX_FRAMES_IN_FLIGHT: usize = crate::pass::warp::MAX_FRAMES_IN_FLIGHT;
 
-/// The compute discard's three pipelines (`glsl/discard.comp`, STAGE 0 per vertex, 1 restore,
-/// 2 drop) and the pool of their sets (one per frame in flight, in [`FrameSlot`]).
+/// The compute discard's pipelines (`glsl/discard.comp`, STAGE 0 per vertex, 1 restore,
+/// 2 drop, and for a moving rolling shutter 3, the vertices stage 0 deferred) and the pool of
+/// their sets (one per frame in flight, in [`FrameSlot`]).
 struct DiscardPass {
     stages: [ComputePipeline; 3],
+    deferred: Option<ComputePipeline>,
     pool: DescriptorPool,
 }
 
@@ -1265,15 +1276,16 @@ impl DiscardPass {
     fn new(gpu: &Gpu, vertex: SpecConstants, rolling: bool, frames: usize) -> Result<Self> {
         use vk::DescriptorType as T;
         let (uniform, storage) = (T::UNIFORM_BUFFER, T::STORAGE_BUFFER);
-        let mut bindings = [storage; 10];
+        let mut bindings = [storage; 11];
         bindings[0] = uniform;
         bindings[1] = uniform;
         let pipeline = |stage: u32| {
             ComputePipeline::new(
                 gpu,
                 match (stage, rolling) {
-                    (0, true) => shaders::DISCARD_COMP,
+                    (0, true) => shaders::DISCARD_COMP_BOUNDED,
                     (0, false) => shaders::DISCARD_COMP_GLOBAL,
+                    (3, _) => shaders::DISCARD_COMP,
                     _ => shaders::DISCARD_COMP_INDICES,
                 },
                 &bindings,
@@ -1282,10 +1294,15 @@ impl DiscardPass {
             )
         };
         let stages = [pipeline(0)?, pipeline(1)?, pipeline(2)?];
-        // One set per frame for all three: their set layouts are identically defined, hence
+        let deferred = if rolling { Some(pipeline(3)?) } else { None };
+        // One set per frame for all: their set layouts are identically defined, hence
         // compatible.
         let pool = DescriptorPool::for_pipeline(gpu, &stages[0], frames as u32)?;
-        Ok(DiscardPass { stages, pool })
+        Ok(DiscardPass {
+            stages,
+            deferred,
+            pool,
+        })
     }
 
     /// Points `set` (a frame's discard set) at `mesh`'s buffers.
@@ -1311,6 +1328,7 @@ impl DiscardPass {
                     (7, storage, &m.incidence),
                     (8, storage, &mesh.indices),
                     (9, storage, &m.kept),
+                    (10, storage, &m.deferred),
                 ],
             )
         };
@@ -1358,6 +1376,10 @@ impl DiscardPass {
             let header = bytemuck::cast_slice(&DROPPED_HEADER);
             gpu.device()
                 .cmd_update_buffer(cmd, m.dropped.raw, 0, header);
+            if self.deferred.is_some() {
+                gpu.device()
+                    .cmd_update_buffer(cmd, m.deferred.raw, 0, header);
+            }
             global_barrier(gpu, cmd, TransferWrite, ComputeReadWrite);
             let push = DiscardPush {
                 count: mesh.vertex_count,
@@ -1369,6 +1391,10 @@ impl DiscardPass {
                 (push.count.div_ceil(64).max(1), 1),
             );
             global_barrier(gpu, cmd, ComputeReadWrite, discard);
+            if let Some(deferred) = &self.deferred {
+                deferred.record_dispatch_indirect(cmd, set, none, &m.deferred, 0);
+                global_barrier(gpu, cmd, ComputeReadWrite, discard);
+            }
             drop.record_dispatch_indirect(cmd, set, none, &m.dropped, 0);
             global_barrier(gpu, cmd, ComputeReadWrite, draw);
         }

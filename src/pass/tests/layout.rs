@@ -155,6 +155,16 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
             ]),
         ),
         (
+            "discard.comp (bounded)",
+            shaders::DISCARD_COMP_BOUNDED,
+            with(&[
+                spec::DISTORT,
+                spec::DISCARD_STAGE,
+                spec::WRITE_FLOW,
+                spec::READOUT,
+            ]),
+        ),
+        (
             "discard.comp (global)",
             shaders::DISCARD_COMP_GLOBAL,
             with(&[
@@ -241,6 +251,7 @@ fn geometry_frame_matches_the_glsl_block() {
     ];
     check(shaders::GEOMETRY_VERT, "GeometryFrame", host.clone());
     check(shaders::DISCARD_COMP, "GeometryFrame", host.clone());
+    check(shaders::DISCARD_COMP_BOUNDED, "GeometryFrame", host.clone());
     check(shaders::GEOMETRY_GEOM, "GeometryFrame", host);
     // The vertex shader also reads the camera, with the same layout as everywhere.
     check(

@@ -308,14 +308,18 @@ fn a_moving_frame_matches_a_ray_cast_from_each_lines_own_pose() {
         moved > 10_000,
         "the pan moves the picture ({moved} px change ID)"
     );
-    let mut discards = vec![Discard::Compute];
+    // With flow the draw rebuilds each vertex's camera-frame point from its solved time;
+    // without, it reads the depth and distance the discard left (glsl/discard.comp).
+    let mut runs = vec![(Discard::Compute, true), (Discard::Compute, false)];
     if ctx.gpu().supports_geometry_shader() {
-        discards.push(Discard::GeometryShader);
+        runs.push((Discard::GeometryShader, true));
     }
-    for discard in discards {
+    for (discard, flow) in runs {
+        let mut d = desc(Some(readout), discard);
+        d.outputs.flow = flow;
         let got = render_moving(
             &ctx,
-            desc(Some(readout), discard),
+            d,
             &mesh,
             None,
             (&now.0, &now.1),
@@ -324,7 +328,7 @@ fn a_moving_frame_matches_a_ray_cast_from_each_lines_own_pose() {
         .unwrap();
         let (wrong, worst, compared) = compare(&got, &reference, cam.width, cam.height);
         println!(
-            "{}: {compared} px compared, {wrong} IDs differ, depth within {worst:.2e} relative",
+            "{} (flow {flow}): {compared} px compared, {wrong} IDs differ, depth within {worst:.2e} relative",
             discard.name()
         );
         assert!(compared > 200_000);

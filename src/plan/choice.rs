@@ -437,28 +437,11 @@ mod tests {
         }
     }
 
-    /// Candidates with a pinhole source: `vertex`, `warp` (per pixel) and `cube`.
-    fn candidates(
-        vertex: Option<VertexCandidate>,
-        warp: Option<WarpChoice>,
-        cube: Option<CubeCandidate>,
-    ) -> Candidates {
-        Candidates {
-            vertex,
-            per_pixel: warp,
-            from_map: None,
-            warp,
-            cube,
-            no_pinhole_warp: None,
-            frames: 1,
-        }
-    }
-
     /// A lens no pinhole source holds: no warp, `vertex` and `cube` only.
     fn wide(vertex: Option<VertexCandidate>, cube: Option<CubeCandidate>) -> Candidates {
         Candidates {
             no_pinhole_warp: Some("the lens sees past 90°".into()),
-            ..candidates(vertex, None, cube)
+            ..Candidates::with_pinhole(vertex, None, cube)
         }
     }
 
@@ -474,7 +457,7 @@ mod tests {
     #[test]
     fn the_cheaper_of_alg1_and_the_warp_carries_colour() {
         let f = file("");
-        let c = candidates(Some(vertex(7.5, 9e-3)), Some(warp(16.7, 6e-3)), None);
+        let c = Candidates::with_pinhole(Some(vertex(7.5, 9e-3)), Some(warp(16.7, 6e-3)), None);
         let choice = choose(&f, &c).unwrap();
         assert_eq!(
             choice.route(),
@@ -494,7 +477,7 @@ mod tests {
             (9e-3, 7.5)
         );
 
-        let c = candidates(Some(vertex(20.0, 9e-3)), Some(warp(16.7, 6e-3)), None);
+        let c = Candidates::with_pinhole(Some(vertex(20.0, 9e-3)), Some(warp(16.7, 6e-3)), None);
         let choice = choose(&f, &c).unwrap();
         assert!(matches!(
             choice,
@@ -512,7 +495,7 @@ mod tests {
     #[test]
     fn ids_and_flow_take_alg1_however_cheap_the_warp() {
         let f = file("[outputs]\nids = true\nflow = true\n");
-        let c = candidates(Some(vertex(50.0, 9e-3)), Some(warp(1.0, 6e-3)), None);
+        let c = Candidates::with_pinhole(Some(vertex(50.0, 9e-3)), Some(warp(1.0, 6e-3)), None);
         let choice = choose(&f, &c).unwrap();
         assert!(matches!(
             choice,
@@ -524,14 +507,14 @@ mod tests {
                 ..
             }
         ));
-        let none = candidates(None, Some(warp(1.0, 6e-3)), None);
+        let none = Candidates::with_pinhole(None, Some(warp(1.0, 6e-3)), None);
         assert!(refusal(&f, &none).contains("[accuracy] max_error_px = 0.01"));
     }
 
     #[test]
     fn chromatic_colour_goes_by_a_warp_and_the_data_by_alg1() {
         let f = file(&format!("{CHROMATIC}[outputs]\nids = true\n"));
-        let c = candidates(Some(vertex(5.0, 9e-3)), Some(warp(40.0, 6e-3)), None);
+        let c = Candidates::with_pinhole(Some(vertex(5.0, 9e-3)), Some(warp(40.0, 6e-3)), None);
         let choice = choose(&f, &c).unwrap();
         assert!(matches!(
             choice.route(),
@@ -546,8 +529,8 @@ mod tests {
             (choice.expected_error_px(), choice.estimated_ms()),
             (9e-3, 45.0)
         );
-        let no_vertex = candidates(None, Some(warp(40.0, 6e-3)), None);
-        let no_warp = candidates(Some(vertex(5.0, 9e-3)), None, None);
+        let no_vertex = Candidates::with_pinhole(None, Some(warp(40.0, 6e-3)), None);
+        let no_warp = Candidates::with_pinhole(Some(vertex(5.0, 9e-3)), None, None);
         assert!(refusal(&f, &no_vertex).contains("tessellation"));
         assert!(refusal(&f, &no_warp).contains("inverse"));
     }
@@ -560,7 +543,8 @@ mod tests {
         };
         let f = file(CHROMATIC);
         // With chromatic aberration Alg. 1 does not compete, however cheap.
-        let c = candidates(Some(vertex(1.0, 9e-3)), Some(warp(125.0, 6e-3)), Some(cube));
+        let c =
+            Candidates::with_pinhole(Some(vertex(1.0, 9e-3)), Some(warp(125.0, 6e-3)), Some(cube));
         let choice = choose(&f, &c).unwrap();
         assert!(matches!(
             &choice,
@@ -640,7 +624,7 @@ mod tests {
         let choose = |f: &SceneFile, c: &Candidates, b: &BandsSearch| {
             choose_moving_rolling_shutter(f, c, b, MOVING)
         };
-        let c = candidates(Some(vertex(30.0, 9e-3)), Some(warp(10.0, 1e-3)), None);
+        let c = Candidates::with_pinhole(Some(vertex(30.0, 9e-3)), Some(warp(10.0, 1e-3)), None);
         // Colour alone: the cheaper. Dearer bands lose, and --explain hears what they cost.
         let f = file("[accuracy]\nmax_error_px = 0.5\n");
         let choice = choose(&f, &c, &bands(8, 0.3, 80.0)).unwrap();
@@ -703,7 +687,7 @@ mod tests {
                 && e.contains("leaves 0.800 px even with 64 bands"),
             "{e}"
         );
-        let none = candidates(None, Some(warp(10.0, 1e-3)), None);
+        let none = Candidates::with_pinhole(None, Some(warp(10.0, 1e-3)), None);
         let e = choose(&f, &none, &missed).unwrap_err().to_string();
         assert!(
             e.contains("even 1 px edges") && e.contains("64 bands"),

@@ -426,15 +426,7 @@ fn request_bands(
             ))
         }
     };
-    let candidates = Candidates {
-        vertex: None,
-        per_pixel: warp,
-        from_map: None,
-        warp,
-        cube,
-        no_pinhole_warp: None,
-        frames: 1,
-    };
+    let candidates = Candidates::with_pinhole(None, warp, cube);
     let found = search_bands(
         scene,
         &request.camera,

@@ -200,6 +200,26 @@ pub(super) struct Candidates {
     pub(super) frames: usize,
 }
 
+impl Candidates {
+    /// Routes with a pinhole source for one frame: `vertex`, the warp solved per pixel
+    /// (`warp`, no map) and `cube`.
+    pub(super) fn with_pinhole(
+        vertex: Option<VertexCandidate>,
+        warp: Option<WarpChoice>,
+        cube: Option<CubeCandidate>,
+    ) -> Candidates {
+        Candidates {
+            vertex,
+            per_pixel: warp,
+            from_map: None,
+            warp,
+            cube,
+            no_pinhole_warp: None,
+            frames: 1,
+        }
+    }
+}
+
 /// Searches every candidate route of `file` for `scene` through `camera` at `poses` (the
 /// tessellation is measured at the first).
 pub(super) fn search_candidates(

@@ -1239,6 +1239,21 @@ fn bands_render_chromatic_colour_and_exact_ids_in_one_frame() {
     assert_no_validation_messages(&ctx);
 }
 
+/// Frame 0 of `plan` rendered once.
+fn first_frame(
+    ctx: &crate::host::Context,
+    plan: &crate::plan::Plan,
+    scene: &crate::scene::Scene,
+) -> crate::imaging::Rendered {
+    let mut out = None;
+    crate::host::plan::execute_untimed(ctx, plan, scene, [0], &mut |f| {
+        out = Some(f.rendered);
+        Ok(())
+    })
+    .unwrap();
+    out.expect("one frame")
+}
+
 #[test]
 fn bands_approach_the_exact_vertex_path_as_they_multiply() {
     use crate::bench::rolling_shutter::{
@@ -1248,15 +1263,7 @@ fn bands_approach_the_exact_vertex_path_as_they_multiply() {
     let ctx = validated_context();
     let camera = small_barrel();
     let scene = crate::scene::builtin::grid(16);
-    let frame = |p: &crate::plan::Plan| {
-        let mut out = None;
-        crate::host::plan::execute_untimed(&ctx, p, &scene, [0], &mut |f| {
-            out = Some(f.rendered);
-            Ok(())
-        })
-        .unwrap();
-        out.unwrap()
-    };
+    let frame = |p: &crate::plan::Plan| first_frame(&ctx, p, &scene);
     let max = ctx.gpu().max_image_side();
     // What the warp's resampling leaves against the vertex path's raster, camera still.
     let floor = still_colour_mad(&ctx, &camera, &scene).unwrap();
@@ -1324,15 +1331,7 @@ fn cube_bands_approach_the_exact_vertex_path_as_they_multiply() {
     // A lens both routes draw: the vertex path exactly per vertex, the cube map by its rays.
     let camera = small_barrel();
     let scene = crate::scene::builtin::grid(16);
-    let frame = |p: &crate::plan::Plan| {
-        let mut out = None;
-        crate::host::plan::execute_untimed(&ctx, p, &scene, [0], &mut |f| {
-            out = Some(f.rendered);
-            Ok(())
-        })
-        .unwrap();
-        out.unwrap()
-    };
+    let frame = |p: &crate::plan::Plan| first_frame(&ctx, p, &scene);
     let max = ctx.gpu().max_image_side();
     // What the cube map's resampling (faces, then the sphere warp) leaves against the vertex
     // path's raster, camera still at the pan's first pose.

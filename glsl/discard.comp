@@ -102,6 +102,8 @@ vec4 vkl_world(uint v) {
     return vec4(vertex_data[k], vertex_data[k + 1u], vertex_data[k + 2u], 1.0);
 }
 
+// rolling_shutter.glsl's VKL_RUNTIME needs a per-invocation value.
+#define VKL_INVOCATION gl_GlobalInvocationID.x
 #include "alg1.glsl"
 #include "rolling_shutter.glsl"
 

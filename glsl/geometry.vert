@@ -65,6 +65,8 @@ layout(location = 4) in vec2 in_distorted_ndc;
 layout(location = 5) in vec4 in_motion;
 #endif
 
+// rolling_shutter.glsl's VKL_RUNTIME needs a per-invocation value.
+#define VKL_INVOCATION uint(gl_VertexIndex)
 #include "alg1.glsl"
 #include "rolling_shutter.glsl"
 

@@ -17,6 +17,14 @@
 #ifndef VKL_ROLLING_SHUTTER_GLSL
 #define VKL_ROLLING_SHUTTER_GLSL
 
+// A condition on uniform values alone, kept a branch decided when the shader runs. lavapipe
+// (Mesa 22 and 23) replaces the uniforms that an `if` reads and nothing else by their values
+// at each draw or dispatch and, where that folds away half the shader, compiles the shader
+// again, at every draw or dispatch: milliseconds per frame for this file's solve, which a
+// still frame skips. An invocation index no invocation has keeps the condition per invocation
+// (the includer defines VKL_INVOCATION); elsewhere it costs one comparison.
+#define VKL_RUNTIME(condition) ((condition) || VKL_INVOCATION == 0xFFFFFFFFu)
+
 // 0: global; 1 top_to_bottom, 2 bottom_to_top, 3 left_to_right, 4 right_to_left
 // (spec::READOUT, `Readout::gpu_id`).
 layout(constant_id = 24) const uint VKL_READOUT = 0u;
@@ -208,7 +216,9 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
     VklRsSample a = vkl_rs_sample(m, x, 0.5);
     root = a;
     // NaN and infinity fail these comparisons too.
-    if (!(frame.readout_bound.x > 0.0 && distance >= frame.viewport.w && a.ok)) return false;
+    if (!(VKL_RUNTIME(frame.readout_bound.x > 0.0) && distance >= frame.viewport.w && a.ok)) {
+        return false;
+    }
     float theta = acos(clamp(a.camera.z / length(a.camera), -1.0, 1.0));
     float bound = speed * vkl_rs_line_rate(theta + 0.5 * speed);
     if (!(bound >= 0.0 && bound <= VKL_RS_MAX_CONTRACTION)) return false;
@@ -320,7 +330,7 @@ VklRsSample vkl_rs_still(vec3 x, mat4 view_projection, mat4 view) {
 
 // Whether this frame's camera moves during the readout (start_centre.w: 1 or 0).
 bool vkl_rs_moving() {
-    return frame.start_centre.w != 0.0;
+    return VKL_RUNTIME(frame.start_centre.w != 0.0);
 }
 
 // Where this frame's lines see the world point x; false where a VKL_RS_BOUNDED_ONLY module
@@ -333,7 +343,9 @@ bool vkl_rs_current(vec3 x, out VklRsSample r) {
 
 // Where the lines of the frame flow starts from saw it; false as vkl_rs_current.
 bool vkl_rs_previous(vec3 x, out VklRsSample r) {
-    if (frame.previous_start_centre.w != 0.0) return vkl_rs_solve(vkl_motion_previous(), x, r);
+    if (VKL_RUNTIME(frame.previous_start_centre.w != 0.0)) {
+        return vkl_rs_solve(vkl_motion_previous(), x, r);
+    }
     r = vkl_rs_still(x, frame.previous_view_projection, frame.previous_view);
     return true;
 }

@@ -32,10 +32,16 @@ vec3 alg1_fisheye_point(vec4 clip) {
 // for Sec. 3.2's test; for a fisheye the distorted NDC, see above), and whether the model is
 // defined there. Where it is not, `distorted_ndc` is the undistorted NDC or 0 (finite: the
 // vertex is dropped with its triangles, never drawn).
-bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
+//
+// `J`: the lens's Jacobian at the point (distorted normalized coordinates in ideal ones), which
+// the standard model computes with the point at no extra cost; the identity without
+// distortion, 0 for a ray model (not differentiated here).
+bool alg1_ndc_jacobian(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc,
+                       out mat2 J) {
     distorted_ndc = vec2(0.0);
     ndc = vec2(0.0);
     pixel = vec2(0.0);
+    J = mat2(1.0);
     vec2 size = frame.viewport.xy;
 #ifndef VKL_PLAIN
     if (DISTORT && VKL_RAY_MODEL) {
@@ -44,6 +50,7 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
         vec2 d;
         // domain_info.z: the cosine of the angle past which a vertex is dropped where the domain
         // reaches straight behind the lens (model::Camera::fisheye_vertex_limit), else -2.
+        J = mat2(0.0);
         bool ok = r >= frame.viewport.w && p.z >= r * vkl_cam.domain_info.z
                   && vkl_ray_project(p, d);
         pixel = vkl_to_pixel(d);
@@ -63,12 +70,17 @@ bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
 #else
     vec2 x = vkl_to_normalized(pixel);
     vec2 d;
-    bool ok = vkl_contains_ideal(x) && vkl_distort(x, d);
+    bool ok = vkl_contains_ideal(x) && vkl_distort_jacobian(x, d, J);
     pixel = vkl_to_pixel(d);
     ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
     distorted_ndc = ok ? (pixel + 0.5) / size * 2.0 - 1.0 : ndc;
     return ok;
 #endif
+}
+
+bool alg1_ndc(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out vec2 ndc) {
+    mat2 J;
+    return alg1_ndc_jacobian(clip, distorted_ndc, pixel, ndc, J);
 }
 
 // The second half: the clip position of a vertex with undistorted clip position `clip` whose

@@ -71,14 +71,24 @@ VklMotion vkl_motion_previous() {
                      frame.previous_start_centre.xyz, frame.previous_end_centre.xyz);
 }
 
-// The world point x in the camera frame at readout time s: R_cw(s) (x − C(s)) with
-// R_cw(s) = exp(s ω)ᵀ R_cw0 (Rodrigues' formula, turned back by s·angle about the axis).
-vec3 vkl_rs_camera_point(VklMotion m, vec3 x, float s) {
-    vec3 v = m.rotation * (x - mix(m.start_centre, m.end_centre, s));
-    float phi = -s * m.angle;
-    float c = cos(phi);
-    float sn = sin(phi);
+// v turned by phi about the motion's axis (Rodrigues' formula), given cos and sin of phi.
+vec3 vkl_rs_turn(VklMotion m, float c, float sn, vec3 v) {
     return v * c + cross(m.axis, v) * sn + m.axis * (dot(m.axis, v) * (1.0 - c));
+}
+
+// The world point x in the camera frame at readout time s: R_cw(s) (x − C(s)) with
+// R_cw(s) = exp(s ω)ᵀ R_cw0 (turned back by s·angle about the axis).
+vec3 vkl_rs_camera_point(VklMotion m, vec3 x, float s) {
+    float phi = -s * m.angle;
+    return vkl_rs_turn(m, cos(phi), sin(phi), m.rotation * (x - mix(m.start_centre, m.end_centre, s)));
+}
+
+// d/ds of vkl_rs_camera_point at s, where it is `camera`: the turn moves it by
+// −angle · axis × camera, the centre's travel by −R_cw(s) (C1 − C0).
+vec3 vkl_rs_camera_velocity(VklMotion m, float s, vec3 camera) {
+    float phi = -s * m.angle;
+    vec3 travel = vkl_rs_turn(m, cos(phi), sin(phi), m.rotation * (m.end_centre - m.start_centre));
+    return -m.angle * cross(m.axis, camera) - travel;
 }
 
 // When the pixel is read (model::rolling_shutter::line_time): 0 the first line, 1 the last.
@@ -89,6 +99,14 @@ float vkl_line_time(vec2 pixel) {
     if (last == 0.0) return 0.0;
     float t = (rows ? pixel.y : pixel.x) / last;
     return (VKL_READOUT == 1u || VKL_READOUT == 3u) ? t : 1.0 - t;
+}
+
+// d line_time / d pixel: line_time is affine in the pixel.
+vec2 vkl_line_gradient() {
+    bool rows = VKL_READOUT <= 2u;
+    float last = max((rows ? frame.viewport.y : frame.viewport.x) - 1.0, 0.0);
+    float rate = last == 0.0 ? 0.0 : ((VKL_READOUT == 1u || VKL_READOUT == 3u) ? 1.0 : -1.0) / last;
+    return rows ? vec2(0.0, rate) : vec2(rate, 0.0);
 }
 
 // One evaluation of g: the point seen from the pose at s, with what Alg. 1 made of it.
@@ -103,6 +121,38 @@ struct VklRsSample {
     bool ok;            // the lens sees it, and g is finite
 };
 
+// Where the point moves at a sample, for Newton's steps: the camera-frame point's velocity
+// (d/ds), the pixel's through the lens's Jacobian, and g′ = 1 − d line_time / ds. A ray model
+// is not differentiated here: `known` false and g′ 1.
+struct VklRsVelocity {
+    vec3 camera;
+    vec2 pixel;
+    float slope;
+    bool known;
+};
+
+// A sample with its velocity.
+VklRsSample vkl_rs_sample_velocity(VklMotion m, vec3 x, float s, out VklRsVelocity v) {
+    VklRsSample r;
+    r.s = s;
+    r.camera = vkl_rs_camera_point(m, x, s);
+    r.clip = frame.projection * vec4(r.camera, 1.0);
+    mat2 J;
+    r.ok = alg1_ndc_jacobian(r.clip, r.distorted_ndc, r.pixel, r.ndc, J);
+    r.g = s - vkl_line_time(r.pixel);
+    r.ok = r.ok && !isnan(r.g) && !isinf(r.g) && !isnan(r.camera.z) && !isinf(r.camera.z);
+    // The clip position's velocity through the projection, the ideal normalized point's
+    // through the viewport (x = (pinhole pixel − c) / f), the distorted one's through J.
+    v.camera = vkl_rs_camera_velocity(m, s, r.camera);
+    vec4 clip_velocity = frame.projection * vec4(v.camera, 0.0);
+    vec2 ndc_velocity = (clip_velocity.xy - r.clip.xy / r.clip.w * clip_velocity.w) / r.clip.w;
+    vec2 f = vkl_cam.intrinsics.xy;
+    v.pixel = f * (J * (ndc_velocity * 0.5 * frame.viewport.xy / f));
+    v.known = !(VKL_RAY_MODEL && DISTORT);
+    v.slope = v.known ? 1.0 - dot(vkl_line_gradient(), v.pixel) : 1.0;
+    return r;
+}
+
 VklRsSample vkl_rs_sample(VklMotion m, vec3 x, float s) {
     VklRsSample r;
     r.s = s;
@@ -111,6 +161,21 @@ VklRsSample vkl_rs_sample(VklMotion m, vec3 x, float s) {
     r.ok = alg1_ndc(r.clip, r.distorted_ndc, r.pixel, r.ndc);
     r.g = s - vkl_line_time(r.pixel);
     r.ok = r.ok && !isnan(r.g) && !isinf(r.g) && !isnan(r.camera.z) && !isinf(r.camera.z);
+    return r;
+}
+
+// The sample at s on the tangent at c (velocity v; the standard model's Alg. 1).
+VklRsSample vkl_rs_tangent(VklRsSample c, VklRsVelocity v, float s) {
+    float ds = s - c.s;
+    VklRsSample r;
+    r.s = s;
+    r.g = c.g + ds * v.slope;
+    r.pixel = c.pixel + ds * v.pixel;
+    r.distorted_ndc = (r.pixel + 0.5) / frame.viewport.xy * 2.0 - 1.0;
+    r.camera = c.camera + ds * v.camera;
+    r.clip = frame.projection * vec4(r.camera, 1.0);
+    r.ndc = r.clip.xy / r.clip.w;
+    r.ok = c.ok;
     return r;
 }
 
@@ -200,10 +265,12 @@ float vkl_rs_line_rate(float theta) {
 // line by at most vkl_rs_line_rate(θ + speed / 2) readout time per radian there, and
 // T(s) = line_time(π(x at pose s)) has |T′| ≤ L = speed · that rate. With L ≤ ½,
 // g(s) = s − T(s) has g′ ∈ [1 − L, 1 + L]: strictly increasing, one root at most, and the
-// first root in readout order the scan looks for is the only one. Then a fixed-point step from
-// mid-frame and secant steps (their slope clamped to [1 − L, 1 + L], so that each step lands
-// where the derivative bounds say the root can be) find it in a few evaluations instead of the
-// scan's 17 and the refinement's.
+// first root in readout order the scan looks for is the only one. Then Newton's steps from
+// mid-frame (g′ from the lens's Jacobian, which the standard model computes with the point;
+// a ray model takes a fixed-point step and secant steps), their slopes clamped to
+// [1 − L, 1 + L] so that each step lands where the derivative bounds say the root can be, find
+// it in two evaluations on the bench's pan, the root read off the second one's tangent, instead
+// of the scan's 17 and the refinement's. A fixed-point first step and secant steps took three.
 //
 // False, for the scan to decide as before, on anything the bound does not cover: no rate, a
 // sample the lens does not see, a ray that could leave the cone, a point nearer the centres'
@@ -213,7 +280,8 @@ float vkl_rs_line_rate(float theta) {
 bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
     float distance = vkl_rs_path_distance(m, x);
     float speed = m.angle + length(m.end_centre - m.start_centre) / distance;
-    VklRsSample a = vkl_rs_sample(m, x, 0.5);
+    VklRsVelocity va;
+    VklRsSample a = vkl_rs_sample_velocity(m, x, 0.5, va);
     root = a;
     // NaN and infinity fail these comparisons too.
     if (!(VKL_RUNTIME(frame.readout_bound.x > 0.0) && distance >= frame.viewport.w && a.ok)) {
@@ -224,27 +292,45 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
     if (!(bound >= 0.0 && bound <= VKL_RS_MAX_CONTRACTION)) return false;
     float low = 1.0 - bound;
     float high = 1.0 + bound;
-    // The first step is the fixed-point step s1 = T(s0) (slope 1): |s1 − s*| ≤ L |s0 − s*|.
-    float s = clamp(a.s - a.g, 0.0, 1.0);
+    // Newton's steps where the lens's Jacobian gives g′, else a fixed-point step
+    // (|s1 − s*| ≤ L |s0 − s*|) and secant steps; every slope clamped to what the bound allows.
+    float slope = isnan(va.slope) ? 1.0 : clamp(va.slope, low, high);
+    float s = clamp(a.s - a.g / slope, 0.0, 1.0);
     for (uint i = 0u; i < VKL_RS_BOUNDED_STEPS; i++) {
-        VklRsSample c = vkl_rs_sample(m, x, s);
+        VklRsVelocity vc;
+        VklRsSample c = vkl_rs_sample_velocity(m, x, s, vc);
         if (!c.ok) return false;
         root = c;
         // g increases: g(0) > 0 or g(1) < 0 puts every root outside the readout.
         if (c.g == 0.0 || (c.s == 0.0 && c.g > 0.0) || (c.s == 1.0 && c.g < 0.0)) return true;
-        float slope = (c.g - a.g) / (c.s - a.s);
+        float span = abs(c.s - a.s);
+        slope = vc.known ? vc.slope : (c.g - a.g) / (c.s - a.s);
         slope = isnan(slope) ? 1.0 : clamp(slope, low, high);
         float next = clamp(c.s - c.g / slope, 0.0, 1.0);
         // Where the next step would move the pixel by less than the tolerance (at the pixel
         // speed of the last step), c is the root to f32's precision: the steps converge
         // superlinearly, so what the next would move the pixel bounds c's error.
-        vec2 pixel_speed = abs(c.pixel - a.pixel) / abs(c.s - a.s);
-        if (next == c.s
-            || max(pixel_speed.x, pixel_speed.y) * abs(next - c.s)
-                   <= VKL_RS_BOUNDED_STEP_TOLERANCE) {
+        vec2 pixel_speed = abs(c.pixel - a.pixel) / span;
+        float step = abs(next - c.s);
+        if (next == c.s || max(pixel_speed.x, pixel_speed.y) * step
+                               <= VKL_RS_BOUNDED_STEP_TOLERANCE) {
             return true;
         }
+        // With velocities, the sample at `next` is read off c's tangent where Taylor's
+        // remainders leave it within the tolerance: the tangent strays from the pixel's path by
+        // ½ |p″| step², and Newton's step misses the root by |g″| / (2 g′) step², each second
+        // derivative taken from how the first changed between a and c.
+        if (vc.known) {
+            vec2 curvature = abs(vc.pixel - va.pixel) / span;
+            float miss = abs(vc.slope - va.slope) / span / (2.0 * slope);
+            vec2 off = (0.5 * curvature + abs(vc.pixel) * miss) * step * step;
+            if (max(off.x, off.y) <= VKL_RS_BOUNDED_STEP_TOLERANCE) {
+                root = vkl_rs_tangent(c, vc, next);
+                return true;
+            }
+        }
         a = c;
+        va = vc;
         s = next;
     }
     return false;
@@ -336,6 +422,9 @@ bool vkl_rs_moving() {
 // Where this frame's lines see the world point x; false where a VKL_RS_BOUNDED_ONLY module
 // leaves it to a later pass.
 bool vkl_rs_current(vec3 x, out VklRsSample r) {
+#ifdef VKL_RS_BOUNDED_ONLY
+    return vkl_rs_solve(vkl_motion_current(), x, r);
+#endif
     if (vkl_rs_moving()) return vkl_rs_solve(vkl_motion_current(), x, r);
     r = vkl_rs_still(x, frame.view_projection, frame.view);
     return true;

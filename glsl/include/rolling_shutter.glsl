@@ -121,14 +121,17 @@ struct VklRsSample {
     bool ok;            // the lens sees it, and g is finite
 };
 
+// Whether samples carry g′: the standard model's Jacobian gives it; a ray model is not
+// differentiated here (its solve takes a fixed-point step and secant steps).
+#define VKL_RS_NEWTON (!(DISTORT && VKL_RAY_MODEL))
+
 // Where the point moves at a sample, for Newton's steps: the camera-frame point's velocity
-// (d/ds), the pixel's through the lens's Jacobian, and g′ = 1 − d line_time / ds. A ray model
-// is not differentiated here: `known` false and g′ 1.
+// (d/ds), the pixel's through the lens's Jacobian, and g′ = 1 − d line_time / ds (1 without
+// VKL_RS_NEWTON).
 struct VklRsVelocity {
     vec3 camera;
     vec2 pixel;
     float slope;
-    bool known;
 };
 
 // A sample with its velocity.
@@ -148,20 +151,14 @@ VklRsSample vkl_rs_sample_velocity(VklMotion m, vec3 x, float s, out VklRsVeloci
     vec2 ndc_velocity = (clip_velocity.xy - r.clip.xy / r.clip.w * clip_velocity.w) / r.clip.w;
     vec2 f = vkl_cam.intrinsics.xy;
     v.pixel = f * (J * (ndc_velocity * 0.5 * frame.viewport.xy / f));
-    v.known = !(VKL_RAY_MODEL && DISTORT);
-    v.slope = v.known ? 1.0 - dot(vkl_line_gradient(), v.pixel) : 1.0;
+    v.slope = VKL_RS_NEWTON ? 1.0 - dot(vkl_line_gradient(), v.pixel) : 1.0;
     return r;
 }
 
+// A sample alone (the velocity is dead code the driver drops).
 VklRsSample vkl_rs_sample(VklMotion m, vec3 x, float s) {
-    VklRsSample r;
-    r.s = s;
-    r.camera = vkl_rs_camera_point(m, x, s);
-    r.clip = frame.projection * vec4(r.camera, 1.0);
-    r.ok = alg1_ndc(r.clip, r.distorted_ndc, r.pixel, r.ndc);
-    r.g = s - vkl_line_time(r.pixel);
-    r.ok = r.ok && !isnan(r.g) && !isinf(r.g) && !isnan(r.camera.z) && !isinf(r.camera.z);
-    return r;
+    VklRsVelocity unused;
+    return vkl_rs_sample_velocity(m, x, s, unused);
 }
 
 // The sample at s on the tangent at c (velocity v; the standard model's Alg. 1).
@@ -304,7 +301,7 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
         // g increases: g(0) > 0 or g(1) < 0 puts every root outside the readout.
         if (c.g == 0.0 || (c.s == 0.0 && c.g > 0.0) || (c.s == 1.0 && c.g < 0.0)) return true;
         float span = abs(c.s - a.s);
-        slope = vc.known ? vc.slope : (c.g - a.g) / (c.s - a.s);
+        slope = VKL_RS_NEWTON ? vc.slope : (c.g - a.g) / (c.s - a.s);
         slope = isnan(slope) ? 1.0 : clamp(slope, low, high);
         float next = clamp(c.s - c.g / slope, 0.0, 1.0);
         // Where the next step would move the pixel by less than the tolerance (at the pixel
@@ -320,7 +317,7 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
         // remainders leave it within the tolerance: the tangent strays from the pixel's path by
         // ½ |p″| step², and Newton's step misses the root by |g″| / (2 g′) step², each second
         // derivative taken from how the first changed between a and c.
-        if (vc.known) {
+        if (VKL_RS_NEWTON) {
             vec2 curvature = abs(vc.pixel - va.pixel) / span;
             float miss = abs(vc.slope - va.slope) / span / (2.0 * slope);
             vec2 off = (0.5 * curvature + abs(vc.pixel) * miss) * step * step;
@@ -422,9 +419,6 @@ bool vkl_rs_moving() {
 // Where this frame's lines see the world point x; false where a VKL_RS_BOUNDED_ONLY module
 // leaves it to a later pass.
 bool vkl_rs_current(vec3 x, out VklRsSample r) {
-#ifdef VKL_RS_BOUNDED_ONLY
-    return vkl_rs_solve(vkl_motion_current(), x, r);
-#endif
     if (vkl_rs_moving()) return vkl_rs_solve(vkl_motion_current(), x, r);
     r = vkl_rs_still(x, frame.view_projection, frame.view);
     return true;

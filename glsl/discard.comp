@@ -145,10 +145,17 @@ void vkl_per_vertex(uint i) {
         ok = r.ok;
         // Without flow, xy carry what the draw needs of the camera-frame point (its depth and
         // its distance), which it would otherwise rebuild from s at a rotation's cost, per
-        // vertex invocation.
-        vec4 m = vec4(r.camera.z, length(r.camera), 0.0, r.s);
-        if (WRITE_FLOW) m.xyz = vec3(r.pixel - q.pixel, (r.ok && q.ok) ? 1.0 : 0.0);
-        motion[i] = m;
+        // vertex invocation. The standard model's draw needs the depth alone, and never
+        // rebuilds the point (it keeps no vertex behind the lens for stage 2 to test): lavapipe
+        // stores a per-vertex vector lane by lane and component by component, so that vertex
+        // stores one float, not four.
+        if (WRITE_FLOW) {
+            motion[i] = vec4(r.pixel - q.pixel, (r.ok && q.ok) ? 1.0 : 0.0, r.s);
+        } else if (DISTORT && VKL_RAY_MODEL) {
+            motion[i] = vec4(r.camera.z, length(r.camera), 0.0, r.s);
+        } else {
+            motion[i].x = r.camera.z;
+        }
     } else
 #endif
     {
@@ -174,6 +181,8 @@ void vkl_per_vertex(uint i) {
 #endif
 
 void main() {
+    vkl_load_camera();
+    vkl_load_frame();
     uint i = gl_GlobalInvocationID.x;
 #ifndef VKL_DISCARD_INDICES
     if (STAGE == 0u) {

@@ -26,6 +26,7 @@ layout(location = 3) out vec3 g_flow;
 layout(location = 4) out float g_depth;
 
 void main() {
+    vkl_load_frame();
     float bound = frame.viewport.z;
     for (int i = 0; i < 3; i++) {
         vec3 u = v_undistorted[i];

@@ -71,6 +71,8 @@ layout(location = 5) in vec4 in_motion;
 #include "rolling_shutter.glsl"
 
 void main() {
+    vkl_load_camera();
+    vkl_load_frame();
     vec4 world = vec4(in_position, 1.0);
     v_color = in_color;
     v_uv = in_uv;

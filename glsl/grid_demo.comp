@@ -21,6 +21,7 @@ layout(push_constant) uniform Push { uvec2 size; } pc;
 uint pack(vec4 c) { return packUnorm4x8(clamp(c, 0.0, 1.0)); }
 
 void main() {
+    vkl_load_camera();
     uvec2 id = gl_GlobalInvocationID.xy;
     if (id.x >= pc.size.x || id.y >= pc.size.y) return;
     uint index = id.y * pc.size.x + id.x;

@@ -26,6 +26,7 @@ layout(push_constant) uniform MapPush {
 } pc;
 
 void main() {
+    vkl_load_camera();
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
     if (id.x >= int(pc.sizes.z) || id.y >= int(pc.sizes.w)) return;
     vec2 s;

@@ -32,6 +32,7 @@ layout(set = 0, binding = 2, std430) writeonly buffer Outputs { VKL_VEC4 outputs
 layout(push_constant) uniform Push { uint count; } pc;
 
 void main() {
+    vkl_load_camera();
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.count) return;
     VKL_VEC2 result = VKL_VEC2(0.0);

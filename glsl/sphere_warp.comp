@@ -69,6 +69,7 @@ vec4 sample_ray(vec3 r) {
 }
 
 void main() {
+    vkl_load_camera();
     // A dispatch covers the band of output pixels pc.band names (the whole output, or one
     // band of a rolling shutter's lines, each warped from its own cube).
     ivec2 id = ivec2(gl_GlobalInvocationID.xy + pc.band.xy);

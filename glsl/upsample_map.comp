@@ -60,6 +60,7 @@ vec2 sample_rel(ivec2 k, vec2 base, inout bool valid) {
 }
 
 void main() {
+    vkl_load_camera();
     // One invocation per coarse cell: its samples are read once for the STRIDE² pixels it
     // writes. On lavapipe the fixed cost of an invocation is about half a copy pass per frame
     // (shared/notes/lavapipe-performance.md): one invocation per pixel made the upsampling

@@ -58,6 +58,7 @@ bool coords(vec2 p, ivec2 id, int channel, float scale, out vec2 s) {
 }
 
 void main() {
+    vkl_load_camera();
     // A dispatch covers the band of output pixels pc.band names (the whole output, or one
     // band of a rolling shutter's lines, each warped from its own source render).
     ivec2 id = ivec2(gl_GlobalInvocationID.xy + pc.band.xy);

@@ -105,7 +105,12 @@ layout(constant_id = 7) const bool VKL_DOMAIN_TABLE = true;
 // would lose digits, and the error of the series, O(r⁴), is far below rounding there.
 #define VKL_FISHEYE_SMALL 1e-4
 
-layout(set = VKL_CAMERA_SET, binding = VKL_CAMERA_BINDING, std140) uniform VKL_PARAMS_BLOCK {
+// The camera's scalar members, read once at the top of main() into `vkl_cam` (a private copy)
+// by vkl_load_camera(), as geometry_frame.glsl's frame: lavapipe (Mesa 22 and 23) reads a
+// block member with one scalar load only outside control flow and gathers it lane by lane,
+// with a bounds check per lane, inside any branch or loop. The model's parameters and the
+// domain table, which some models index per invocation, stay in the block.
+struct VklCamera {
     VKL_VEC4 intrinsics;        // fx fy cx cy
     VKL_VEC4 radial;            // k1 k2 k3 -          fisheye: k1 k2 k3 k4
     VKL_VEC4 rational;          // k4 k5 k6 -          fisheye: α, θ_max, θ_d(θ_max), -
@@ -115,9 +120,18 @@ layout(set = VKL_CAMERA_SET, binding = VKL_CAMERA_BINDING, std140) uniform VKL_P
     VKL_VEC4 untilt[3];         // rows of its inverse
     VKL_VEC4 domain_info;       // x: smallest ideal boundary radius, y: smallest distorted one,
                                 // z: cos of Alg. 1's vertex limit for a ray model (-2: none)
+};
+
+layout(set = VKL_CAMERA_SET, binding = VKL_CAMERA_BINDING, std140) uniform VKL_PARAMS_BLOCK {
+    VklCamera values;
     VKL_VEC4 model[16];         // the ray model's own parameters (model::table::RayModel::gpu_params)
     VKL_VEC4 domain[VKL_DOMAIN_SAMPLES]; // x: ideal boundary radius, y: distorted, at angle TAU*i/N
-} vkl_cam;
+} vkl_cam_block;
+
+VklCamera vkl_cam;
+
+// Every includer's main() calls this first, outside any branch.
+void vkl_load_camera() { vkl_cam = vkl_cam_block.values; }
 
 VKL_VEC2 vkl_to_pixel(VKL_VEC2 x) { return x * vkl_cam.intrinsics.xy + vkl_cam.intrinsics.zw; }
 VKL_VEC2 vkl_to_normalized(VKL_VEC2 p) { return (p - vkl_cam.intrinsics.zw) / vkl_cam.intrinsics.xy; }
@@ -389,8 +403,8 @@ VKL_FLOAT vkl_domain_radius(float angle, int which) {
     float t = fract(angle / VKL_TAU) * float(VKL_DOMAIN_SAMPLES);
     int i = min(int(floor(t)), VKL_DOMAIN_SAMPLES - 1);
     VKL_FLOAT f = VKL_FLOAT(t - float(i));
-    VKL_FLOAT a = vkl_cam.domain[i][which];
-    VKL_FLOAT b = vkl_cam.domain[(i + 1) % VKL_DOMAIN_SAMPLES][which];
+    VKL_FLOAT a = vkl_cam_block.domain[i][which];
+    VKL_FLOAT b = vkl_cam_block.domain[(i + 1) % VKL_DOMAIN_SAMPLES][which];
     return mix(a, b, f);
 }
 

@@ -3,7 +3,13 @@
 #ifndef VKL_GEOMETRY_FRAME_GLSL
 #define VKL_GEOMETRY_FRAME_GLSL
 
-layout(set = 0, binding = 1, std140) uniform GeometryFrame {
+// Every member but the rate table, read once at the top of main() into `frame` (a private
+// copy) by vkl_load_frame(). lavapipe (Mesa 22 and 23) reads a uniform block member at a
+// uniform offset with one scalar load only outside control flow; inside any branch or loop it
+// gathers it lane by lane with a bounds check per lane (about twenty instructions for each
+// float), and a moving rolling shutter's solve reads some eighty floats of this block inside
+// its branches and loops.
+struct VklFrame {
     mat4 view_projection;           // Sec. 3.1 projection × world-to-camera pose
     mat4 previous_view_projection;  // the same for the pose the flow starts from
     mat4 view;                      // world-to-camera pose (depth output: camera z)
@@ -24,8 +30,18 @@ layout(set = 0, binding = 1, std140) uniform GeometryFrame {
     vec4 previous_end_centre;
     vec4 readout_bound;             // x: the half angle of the cone the line rate holds on
                                     // (radians off the axis; 0: no rate, scan)
+};
+
+layout(set = 0, binding = 1, std140) uniform GeometryFrame {
+    VklFrame values;
     vec4 readout_rates[8];          // the line rate (readout time per radian of ray direction)
-                                    // of cones of growing half angle, 32 entries
-} frame;
+                                    // of cones of growing half angle, 32 entries; indexed per
+                                    // vertex, so read from the block
+} frame_block;
+
+VklFrame frame;
+
+// Every includer's main() calls this first, outside any branch.
+void vkl_load_frame() { frame = frame_block.values; }
 
 #endif

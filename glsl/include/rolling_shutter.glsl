@@ -241,7 +241,7 @@ float vkl_rs_path_distance(VklMotion m, vec3 x) {
     return length(x - (m.start_centre + t * d));
 }
 
-// model::rolling_shutter::RATE_TABLE: entries of frame.readout_rates.
+// model::rolling_shutter::RATE_TABLE: entries of frame_block.readout_rates.
 const uint VKL_RS_RATE_TABLE = 32u;
 
 // The lens's line rate over the rays at most theta off the axis (LineRate::within); negative
@@ -252,7 +252,7 @@ float vkl_rs_line_rate(float theta) {
     // NaN fails the comparison too.
     if (!(i < float(VKL_RS_RATE_TABLE))) return -1.0;
     uint k = min(uint(i), VKL_RS_RATE_TABLE - 1u);
-    return frame.readout_rates[k / 4u][k % 4u];
+    return frame_block.readout_rates[k / 4u][k % 4u];
 }
 
 // The solve where the frame's motion bounds how fast x's own line time moves

@@ -44,12 +44,25 @@ fn instructions(spirv: &[u8]) -> Vec<(u32, Vec<u32>)> {
 }
 
 /// `(member name, byte offset)` of the struct (block) type named `type_name`, in member order.
+/// A struct that a block holds and a shader also copies into a private variable is two types
+/// of one name, one of them without offsets: the one with offsets is the block's.
 pub fn member_offsets(spirv: &[u8], type_name: &str) -> Option<Vec<(String, u32)>> {
     let ins = instructions(spirv);
-    let id = ins
+    let named: Vec<u32> = ins
         .iter()
-        .find(|(op, a)| *op == OP_NAME && a.len() > 1 && string(&a[1..]) == type_name)
-        .map(|(_, a)| a[0])?;
+        .filter(|(op, a)| *op == OP_NAME && a.len() > 1 && string(&a[1..]) == type_name)
+        .map(|(_, a)| a[0])
+        .collect();
+    let laid_out = |id: u32| {
+        ins.iter().any(|(op, a)| {
+            *op == OP_MEMBER_DECORATE && a[0] == id && a.get(2) == Some(&DECORATION_OFFSET)
+        })
+    };
+    let id = named
+        .iter()
+        .copied()
+        .find(|&id| laid_out(id))
+        .or_else(|| named.first().copied())?;
     let mut names: HashMap<u32, String> = HashMap::new();
     let mut offsets: HashMap<u32, u32> = HashMap::new();
     for (op, a) in &ins {

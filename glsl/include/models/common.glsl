@@ -16,7 +16,7 @@ void vkl_sin_cos_signed(VKL_FLOAT t, out VKL_FLOAT sn, out VKL_FLOAT cs) {
     if (t < 0.0) sn = -sn;
 }
 
-VKL_FLOAT vkl_coef(int i) { return vkl_cam.model[i / 4][i % 4]; }
+VKL_FLOAT vkl_coef(int i) { return vkl_cam_block.model[i / 4][i % 4]; }
 
 // Σ cᵢ tⁱ over the 8 coefficients from model index `first`, and its slope.
 void vkl_poly8(int first, VKL_FLOAT t, out VKL_FLOAT v, out VKL_FLOAT s) {

@@ -2,7 +2,7 @@
 // model[0].x = k.
 
 bool vkl_division_project(VKL_VEC3 p, out VKL_VEC2 m) {
-    VKL_FLOAT k = vkl_cam.model[0].x;
+    VKL_FLOAT k = vkl_cam_block.model[0].x;
     m = VKL_VEC2(0.0);
     VKL_FLOAT disc = p.z * p.z - 4.0 * k * dot(p.xy, p.xy);
     if (!(p.z > 0.0 && disc >= 0.0)) return false;
@@ -11,7 +11,7 @@ bool vkl_division_project(VKL_VEC3 p, out VKL_VEC2 m) {
 }
 
 bool vkl_division_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
-    VKL_FLOAT k = vkl_cam.model[0].x;
+    VKL_FLOAT k = vkl_cam_block.model[0].x;
     ray = VKL_VEC3(0.0, 0.0, 1.0);
     VKL_FLOAT r2 = dot(m, m);
     if (k > 0.0 && r2 * k > 1.0) return false;

@@ -2,13 +2,13 @@
 // code. model[0] = (ξ, α).
 
 VKL_FLOAT vkl_ds_w2() {
-    VKL_FLOAT xi = vkl_cam.model[0].x;
-    VKL_FLOAT w1 = vkl_unified_w(vkl_cam.model[0].y);
+    VKL_FLOAT xi = vkl_cam_block.model[0].x;
+    VKL_FLOAT w1 = vkl_unified_w(vkl_cam_block.model[0].y);
     return (w1 + xi) / sqrt(2.0 * w1 * xi + xi * xi + 1.0);
 }
 
 bool vkl_ds_project(VKL_VEC3 p, out VKL_VEC2 m) {
-    VKL_FLOAT xi = vkl_cam.model[0].x, a = vkl_cam.model[0].y;
+    VKL_FLOAT xi = vkl_cam_block.model[0].x, a = vkl_cam_block.model[0].y;
     VKL_FLOAT d1 = length(p);
     m = VKL_VEC2(0.0);
     if (!(p.z > -vkl_ds_w2() * d1)) return false;
@@ -20,7 +20,7 @@ bool vkl_ds_project(VKL_VEC3 p, out VKL_VEC2 m) {
 }
 
 bool vkl_ds_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
-    VKL_FLOAT xi = vkl_cam.model[0].x, a = vkl_cam.model[0].y;
+    VKL_FLOAT xi = vkl_cam_block.model[0].x, a = vkl_cam_block.model[0].y;
     ray = VKL_VEC3(0.0, 0.0, 1.0);
     VKL_FLOAT r2 = dot(m, m);
     if (a > 0.5 && r2 >= 1.0 / (2.0 * a - 1.0)) return false;

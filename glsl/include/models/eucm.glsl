@@ -2,7 +2,7 @@
 // model[0] = (α, β).
 
 bool vkl_eucm_project(VKL_VEC3 p, out VKL_VEC2 m) {
-    VKL_FLOAT a = vkl_cam.model[0].x, b = vkl_cam.model[0].y;
+    VKL_FLOAT a = vkl_cam_block.model[0].x, b = vkl_cam_block.model[0].y;
     VKL_FLOAT rho = sqrt(b * dot(p.xy, p.xy) + p.z * p.z);
     m = VKL_VEC2(0.0);
     if (!(p.z > -vkl_unified_w(a) * rho)) return false;
@@ -12,7 +12,7 @@ bool vkl_eucm_project(VKL_VEC3 p, out VKL_VEC2 m) {
 }
 
 bool vkl_eucm_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
-    VKL_FLOAT a = vkl_cam.model[0].x, b = vkl_cam.model[0].y;
+    VKL_FLOAT a = vkl_cam_block.model[0].x, b = vkl_cam_block.model[0].y;
     ray = VKL_VEC3(0.0, 0.0, 1.0);
     VKL_FLOAT r2 = dot(m, m);
     if (a > 0.5 && r2 >= 1.0 / ((2.0 * a - 1.0) * b)) return false;

@@ -5,7 +5,7 @@ bool vkl_fov_project(VKL_VEC3 p, out VKL_VEC2 m) {
     m = VKL_VEC2(0.0);
     if (!(p.z > 0.0)) return false;
     VKL_VEC2 x = p.xy / p.z;
-    VKL_FLOAT w = vkl_cam.model[0].x, a = vkl_cam.model[0].y;
+    VKL_FLOAT w = vkl_cam_block.model[0].x, a = vkl_cam_block.model[0].y;
     if (w == 0.0) { m = x; return true; }
     VKL_FLOAT r2 = dot(x, x);
     VKL_FLOAT factor;
@@ -22,7 +22,7 @@ bool vkl_fov_project(VKL_VEC3 p, out VKL_VEC2 m) {
 }
 
 bool vkl_fov_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
-    VKL_FLOAT w = vkl_cam.model[0].x, a = vkl_cam.model[0].y;
+    VKL_FLOAT w = vkl_cam_block.model[0].x, a = vkl_cam_block.model[0].y;
     ray = VKL_VEC3(0.0, 0.0, 1.0);
     if (w == 0.0) { ray = normalize(VKL_VEC3(m, 1.0)); return true; }
     VKL_FLOAT rd = length(m);

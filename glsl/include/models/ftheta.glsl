@@ -9,33 +9,33 @@ bool vkl_ftheta_project(VKL_VEC3 p, out VKL_VEC2 m) {
     VKL_FLOAT rho = length(p.xy);
     if (rho == 0.0) return p.z > 0.0;
     VKL_FLOAT theta = vkl_atan2(rho, p.z);
-    if (!(theta < vkl_cam.model[0].y)) return false;
+    if (!(theta < vkl_cam_block.model[0].y)) return false;
     VKL_FLOAT delta, slope;
-    if (vkl_cam.model[0].x == 1.0 || vkl_cam.model[0].w == 1.0) {
+    if (vkl_cam_block.model[0].x == 1.0 || vkl_cam_block.model[0].w == 1.0) {
         vkl_poly8(8, theta, delta, slope);
-    } else if (!vkl_poly8_solve(16, theta, vkl_cam.model[0].z, delta)) {
+    } else if (!vkl_poly8_solve(16, theta, vkl_cam_block.model[0].z, delta)) {
         return false;
     }
     VKL_VEC2 q = p.xy * (delta / rho);
-    VKL_VEC3 cde = vkl_cam.model[1].xyz;
+    VKL_VEC3 cde = vkl_cam_block.model[1].xyz;
     m = VKL_VEC2(cde.x * q.x + cde.y * q.y, cde.z * q.x + q.y);
     return true;
 }
 
 bool vkl_ftheta_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
     ray = VKL_VEC3(0.0, 0.0, 1.0);
-    VKL_VEC3 cde = vkl_cam.model[1].xyz;
+    VKL_VEC3 cde = vkl_cam_block.model[1].xyz;
     VKL_VEC2 q = VKL_VEC2(m.x - cde.y * m.y, -cde.z * m.x + cde.x * m.y) / (cde.x - cde.y * cde.z);
     VKL_FLOAT r = length(q);
     if (r == 0.0) return true;
     VKL_FLOAT theta, slope;
-    if (vkl_cam.model[0].x == 0.0 || vkl_cam.model[0].w == 1.0) {
-        if (vkl_cam.model[0].x == 0.0 && !(r <= vkl_cam.model[0].z)) return false;
+    if (vkl_cam_block.model[0].x == 0.0 || vkl_cam_block.model[0].w == 1.0) {
+        if (vkl_cam_block.model[0].x == 0.0 && !(r <= vkl_cam_block.model[0].z)) return false;
         vkl_poly8(16, r, theta, slope);
-    } else if (!vkl_poly8_solve(8, r, vkl_cam.model[0].z, theta)) {
+    } else if (!vkl_poly8_solve(8, r, vkl_cam_block.model[0].z, theta)) {
         return false;
     }
-    if (!(theta >= 0.0 && theta < vkl_cam.model[0].y)) return false;
+    if (!(theta >= 0.0 && theta < vkl_cam_block.model[0].y)) return false;
     VKL_FLOAT sn, cs;
     vkl_sin_cos(theta, sn, cs);
     ray = VKL_VEC3(q / r * sn, cs);

@@ -3,7 +3,7 @@
 // standard model's do, and its inverse is the standard model's Newton.
 
 bool vkl_omni_project(VKL_VEC3 p, out VKL_VEC2 m) {
-    VKL_FLOAT xi = vkl_cam.model[0].x, w = vkl_cam.model[0].y;
+    VKL_FLOAT xi = vkl_cam_block.model[0].x, w = vkl_cam_block.model[0].y;
     VKL_FLOAT d = length(p);
     m = VKL_VEC2(0.0);
     if (!(p.z > -w * d)) return false;
@@ -14,7 +14,7 @@ bool vkl_omni_project(VKL_VEC3 p, out VKL_VEC2 m) {
 }
 
 bool vkl_omni_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
-    VKL_FLOAT xi = vkl_cam.model[0].x, w = vkl_cam.model[0].y;
+    VKL_FLOAT xi = vkl_cam_block.model[0].x, w = vkl_cam_block.model[0].y;
     ray = VKL_VEC3(0.0, 0.0, 1.0);
     VKL_VEC2 s;
     if (!vkl_standard_undistort(m, s)) return false;

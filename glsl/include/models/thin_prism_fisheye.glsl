@@ -9,17 +9,17 @@
 VKL_VEC2 vkl_tp_distort_jacobian(VKL_VEC2 q, out VKL_MAT2 J) {
     // Fixed reads of the block, no loop: on lavapipe a dynamically indexed uniform array is
     // a chain of selects per read. Unused coefficients are zero.
-    VKL_VEC4 ka = vkl_cam.model[1];          // k1 k2 k3 k4
-    VKL_VEC2 kb = vkl_cam.model[2].xy;       // k5 k6
-    VKL_FLOAT p1 = vkl_cam.model[2].z, p2 = vkl_cam.model[2].w;
-    VKL_VEC4 sp = vkl_cam.model[3];          // s1 s2 s3 s4
+    VKL_VEC4 ka = vkl_cam_block.model[1];          // k1 k2 k3 k4
+    VKL_VEC2 kb = vkl_cam_block.model[2].xy;       // k5 k6
+    VKL_FLOAT p1 = vkl_cam_block.model[2].z, p2 = vkl_cam_block.model[2].w;
+    VKL_VEC4 sp = vkl_cam_block.model[3];          // s1 s2 s3 s4
     VKL_FLOAT s2 = dot(q, q);
     // f(s) = Σ k_i s^i (i = 1..6) and f'(s), by Horner.
     VKL_FLOAT f = s2 * (ka.x + s2 * (ka.y + s2 * (ka.z + s2 * (ka.w + s2 * (kb.x + s2 * kb.y)))));
     VKL_FLOAT df = ka.x + s2 * (2.0 * ka.y + s2 * (3.0 * ka.z + s2 * (4.0 * ka.w + s2 * (5.0 * kb.x + s2 * 6.0 * kb.y))));
     VKL_VEC2 x = q * (1.0 + f);
     VKL_MAT2 dx = VKL_MAT2(1.0 + f) + VKL_MAT2(q * q.x, q * q.y) * (2.0 * df);
-    bool first = vkl_cam.model[0].x > 0.5;
+    bool first = vkl_cam_block.model[0].x > 0.5;
     VKL_VEC2 v = first ? x : q;
     VKL_FLOAT r2 = dot(v, v);
     VKL_FLOAT txy = 2.0 * v.x * v.y;
@@ -85,8 +85,8 @@ bool vkl_tp_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
     if (length(m) == 0.0) return true;
     if (!vkl_contains_distorted(m)) return false;
     // Start where the radial factor alone would put it (model::thin_prism, the same start).
-    VKL_VEC4 ka = vkl_cam.model[1];
-    VKL_VEC2 kb = vkl_cam.model[2].xy;
+    VKL_VEC4 ka = vkl_cam_block.model[1];
+    VKL_VEC2 kb = vkl_cam_block.model[2].xy;
     VKL_FLOAT s2 = dot(m, m);
     VKL_FLOAT f = s2 * (ka.x + s2 * (ka.y + s2 * (ka.z + s2 * (ka.w + s2 * (kb.x + s2 * kb.y)))));
     VKL_VEC2 q = m / (1.0 + f);

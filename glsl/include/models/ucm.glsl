@@ -2,7 +2,7 @@
 // line. model[0].x = α.
 
 bool vkl_ucm_project(VKL_VEC3 p, out VKL_VEC2 m) {
-    VKL_FLOAT a = vkl_cam.model[0].x;
+    VKL_FLOAT a = vkl_cam_block.model[0].x;
     VKL_FLOAT d = length(p);
     m = VKL_VEC2(0.0);
     if (!(p.z > -vkl_unified_w(a) * d)) return false;
@@ -12,7 +12,7 @@ bool vkl_ucm_project(VKL_VEC3 p, out VKL_VEC2 m) {
 }
 
 bool vkl_ucm_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
-    VKL_FLOAT a = vkl_cam.model[0].x;
+    VKL_FLOAT a = vkl_cam_block.model[0].x;
     ray = VKL_VEC3(0.0, 0.0, 1.0);
     VKL_FLOAT r2 = dot(m, m);
     if (a > 0.5 && r2 >= 1.0 / (2.0 * a - 1.0)) return false;

@@ -18,9 +18,27 @@ macro_rules! host_offsets {
             ("tilt", offset_of!($t, tilt)),
             ("untilt", offset_of!($t, untilt)),
             ("domain_info", offset_of!($t, domain_info)),
+        ]
+    };
+}
+
+/// The camera block: the scalar members as one struct (`VklCamera`, [`host_offsets`]), which
+/// the shaders copy out at the top of main(), then the arrays.
+macro_rules! block_offsets {
+    ($t:ty) => {
+        vec![
+            ("values", 0),
             ("model", offset_of!($t, model)),
             ("domain", offset_of!($t, domain)),
         ]
+    };
+}
+
+/// Checks the camera block `block` of `spirv` and its struct of scalar members against `$t`.
+macro_rules! check_camera {
+    ($spirv:expr, $block:expr, $t:ty) => {
+        check($spirv, "VklCamera", host_offsets!($t));
+        check($spirv, $block, block_offsets!($t));
     };
 }
 
@@ -37,25 +55,15 @@ fn check(spirv: &[u8], block: &str, host: Vec<(&str, usize)>) {
 
 #[test]
 fn camera_params_f32_matches_the_glsl_block() {
-    check(
-        shaders::POINTS_COMP,
-        "CameraParams",
-        host_offsets!(CameraParams),
-    );
-    check(
-        shaders::GRID_DEMO_COMP,
-        "CameraParams",
-        host_offsets!(CameraParams),
-    );
+    check_camera!(shaders::POINTS_COMP, "CameraParams", CameraParams);
+    check_camera!(shaders::GRID_DEMO_COMP, "CameraParams", CameraParams);
+    check_camera!(shaders::WARP_COMP, "CameraParams", CameraParams);
+    check_camera!(shaders::DISCARD_COMP, "CameraParams", CameraParams);
 }
 
 #[test]
 fn camera_params_f64_matches_the_glsl_block() {
-    check(
-        shaders::POINTS_COMP_F64,
-        "CameraParams64",
-        host_offsets!(CameraParams64),
-    );
+    check_camera!(shaders::POINTS_COMP_F64, "CameraParams64", CameraParams64);
 }
 
 #[test]
@@ -247,18 +255,24 @@ fn geometry_frame_matches_the_glsl_block() {
             offset_of!(GeometryFrame, previous_end_centre),
         ),
         ("readout_bound", offset_of!(GeometryFrame, readout_bound)),
+    ];
+    // The block holds every member but the rate table as one struct (the shaders copy it out
+    // at the top of main()), then the rate table.
+    let block = vec![
+        ("values", 0),
         ("readout_rates", offset_of!(GeometryFrame, readout_rates)),
     ];
-    check(shaders::GEOMETRY_VERT, "GeometryFrame", host.clone());
-    check(shaders::DISCARD_COMP, "GeometryFrame", host.clone());
-    check(shaders::DISCARD_COMP_BOUNDED, "GeometryFrame", host.clone());
-    check(shaders::GEOMETRY_GEOM, "GeometryFrame", host);
-    // The vertex shader also reads the camera, with the same layout as everywhere.
-    check(
+    for spirv in [
         shaders::GEOMETRY_VERT,
-        "CameraParams",
-        host_offsets!(CameraParams),
-    );
+        shaders::DISCARD_COMP,
+        shaders::DISCARD_COMP_BOUNDED,
+        shaders::GEOMETRY_GEOM,
+    ] {
+        check(spirv, "VklFrame", host.clone());
+        check(spirv, "GeometryFrame", block.clone());
+    }
+    // The vertex shader also reads the camera, with the same layout as everywhere.
+    check_camera!(shaders::GEOMETRY_VERT, "CameraParams", CameraParams);
 }
 
 #[test]

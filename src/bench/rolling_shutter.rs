@@ -5,7 +5,10 @@
 //! and stepping 12 cm sideways during a top-to-bottom readout.
 //!
 //! Each row has the frame time (wall clock of one whole render, readback included: median of
-//! [`FRAMES`] after a warm-up), and the exact path's rows its ratio to the global path's.
+//! [`FRAMES`] after a warm-up), and the exact path's rows its ratio to the global path's. The
+//! two paths' frames alternate, one of each in turn: on a shared machine a frame's time drifts
+//! within seconds by more than the two paths differ by, and alternating frames lets both
+//! medians see the same drift.
 //!
 //! Then the approximation the warp route can draw (chromatic aberration needs it): the same
 //! frame in K = 4 … 64 bands of lines, the warp's pinhole source rendered once per band from
@@ -20,7 +23,7 @@ use glam::DVec3;
 use serde_json::{json, Value};
 
 use super::fixed as f;
-use crate::host::plan::execute;
+use crate::host::plan::{execute, FrameRunner};
 use crate::host::Context;
 use crate::imaging::{Pixels, Rendered};
 use crate::model::rolling_shutter::bands::{band_error_px, distance_range, BAND_COUNTS};
@@ -62,14 +65,13 @@ pub fn pan() -> (Pose, Pose) {
     (start, end)
 }
 
-/// Median wall-clock ms of [`FRAMES`] frames after a warm-up, with `rolling_shutter` as the
-/// request gives it (`None`: the global shutter).
-fn frame_ms(
+/// The vertex path's plan for the first pose of the pan, with `rolling_shutter` as the request
+/// gives it (`None`: the global shutter).
+fn vertex_plan(
     ctx: &Context,
-    scene: &Scene,
     camera: &Camera,
     rolling_shutter: Option<(Readout, Pose)>,
-) -> Result<f64> {
+) -> Result<Plan> {
     let mut request = RenderRequest::color(
         camera,
         PathChoice::Vertex {
@@ -80,8 +82,36 @@ fn frame_ms(
     request.pose = pan().0;
     request.previous_pose = request.pose;
     request.rolling_shutter = rolling_shutter;
-    let plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
-    Ok(plan_frames(ctx, &plan, scene)?.0)
+    Plan::from_request(&request, ctx.gpu().max_image_side())
+}
+
+/// Median wall-clock ms of [`FRAMES`] frames of each of two plans, their frames alternating
+/// after a warm-up frame each.
+fn alternating_ms(ctx: &Context, plans: [&Plan; 2], scene: &Scene) -> Result<[f64; 2]> {
+    let mut runners = [
+        FrameRunner::new(ctx, plans[0], scene, 0, true)?,
+        FrameRunner::new(ctx, plans[1], scene, 0, true)?,
+    ];
+    for r in &mut runners {
+        r.frame(0)?;
+    }
+    let mut times = [Vec::new(), Vec::new()];
+    for _ in 0..FRAMES {
+        for (r, t) in runners.iter_mut().zip(&mut times) {
+            t.push(r.frame(0)?.ms);
+        }
+    }
+    let [a, b] = times;
+    Ok([median(a)?, median(b)?])
+}
+
+/// The median of `times`.
+fn median(mut times: Vec<f64>) -> Result<f64> {
+    times.sort_by(f64::total_cmp);
+    times
+        .get(times.len() / 2)
+        .copied()
+        .ok_or_else(|| Error::internal("a frame per index expected"))
 }
 
 /// The exact vertex path's colour request for `camera` through the pan, read in `readout`
@@ -184,11 +214,8 @@ fn plan_frames(ctx: &Context, plan: &Plan, scene: &Scene) -> Result<(f64, Render
         last = Some(frame.rendered);
         Ok(())
     })?;
-    times.sort_by(f64::total_cmp);
-    match (times.get(FRAMES / 2), last) {
-        (Some(&ms), Some(rendered)) => Ok((ms, rendered)),
-        _ => Err(Error::internal("a frame per index expected")),
-    }
+    let rendered = last.ok_or_else(|| Error::internal("a frame per index expected"))?;
+    Ok((median(times)?, rendered))
 }
 
 /// Every row: per grid, the global path, then the exact path with its ratio to it; then the
@@ -243,10 +270,12 @@ fn global_and_exact(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec
     let mut rows = Vec::new();
     for n in GRIDS {
         let scene = builtin::grid(n);
-        progress(&format!("rolling shutter: grid {n}², global shutter"));
-        let global = frame_ms(ctx, &scene, &camera, None)?;
-        progress(&format!("rolling shutter: grid {n}², exact per vertex"));
-        let exact = frame_ms(ctx, &scene, &camera, Some((Readout::TopToBottom, end)))?;
+        progress(&format!(
+            "rolling shutter: grid {n}², global shutter and exact per vertex, frames alternating"
+        ));
+        let global = vertex_plan(ctx, &camera, None)?;
+        let exact = vertex_plan(ctx, &camera, Some((Readout::TopToBottom, end)))?;
+        let [global, exact] = alternating_ms(ctx, [&global, &exact], &scene)?;
         let quads = format!("{n}²");
         rows.push(json!({"grid": quads, "path": "global", "frame_ms": global}));
         rows.push(json!({

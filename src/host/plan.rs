@@ -7,6 +7,7 @@ use crate::gpu::QueryPool;
 use crate::host::geometry::TargetsReadback;
 use crate::host::readback::{Download, Left};
 use crate::imaging::{BitDepth, Pixels, Raster};
+use crate::model::Camera;
 use crate::pass::geometry::Rendered;
 use crate::plan::antialias::{average, shifted};
 use crate::plan::record::{plan_mesh_at, tessellation};
@@ -113,127 +114,178 @@ fn run_frames(
     each: &mut dyn FnMut(Frame) -> Result<()>,
 ) -> Result<Recorded> {
     let frames: Vec<usize> = frames.into_iter().collect();
+    // Every index checked before any frame is rendered.
     if let Some(&bad) = frames.iter().find(|&&i| i >= plan.poses.len()) {
         return Err(Error::input(format!(
             "frame {bad}: the scene has {} pose(s)",
             plan.poses.len()
         )));
     }
-    let gpu = ctx.gpu();
-    let o = plan.outputs;
-    let lens = matches!(plan.route, Route::LensModel { .. });
-    let antialias = plan.antialias.is_on() && o.color && !lens;
     let first = frames.first().copied().unwrap_or(0);
-    let mesh = plan_mesh_at(plan, scene, first)?;
-    // A tessellation holds its straight-edge bound at the pose it was made for: frames of
-    // other poses get their own.
-    let per_pose = tessellation(plan).is_some();
-    let mut mesh_pose = first;
-    let texture = scene.texture.as_ref();
-    // The 1× recorder: every output, or the data outputs alone when the colour is
-    // anti-aliased.
-    let mut main_plan = plan.clone();
-    if antialias {
-        main_plan.outputs.color = false;
+    let mut runner = FrameRunner::new(ctx, plan, scene, first, timing)?;
+    // The first frame once more before timing: caches warm up on first use.
+    if timing && !frames.is_empty() {
+        runner.frame(first)?;
     }
-    let data = main_plan.outputs;
-    let mut main = if data.color || data.ids || data.flow || data.depth {
-        Some(PlanRecorder::build(gpu, &main_plan, &mesh, texture, 1)?)
-    } else {
-        None
-    };
-    let s = plan.antialias.supersample;
-    let camera = plan.camera().cloned();
-    let mut smooth = match (&camera, antialias) {
-        (Some(cam), true) => {
-            let mut p = plan.clone();
-            p.optics = Optics::Camera(scaled_camera(cam, s)?);
-            p.outputs = OutputSpec {
-                ids: false,
-                flow: false,
-                depth: false,
-                ..o
-            };
-            match plan.route {
-                Route::WarpAndVertex {
-                    method,
-                    chromatic,
-                    map,
-                    ..
-                } => {
-                    p.route = Route::Warp {
+    for &index in &frames {
+        each(runner.frame(index)?)?;
+    }
+    Ok(runner.into_recorded())
+}
+
+/// One plan's recorders and readbacks, built once, rendering frame after frame on the headless
+/// context: what [`execute`] runs, and what a benchmark holds two of to alternate their frames
+/// (a frame's wall time on a shared machine drifts by more than two paths differ by).
+pub struct FrameRunner<'a> {
+    ctx: &'a Context,
+    plan: &'a Plan,
+    scene: &'a Scene,
+    /// Every output, or the data outputs alone when the colour is anti-aliased.
+    main: Option<PlanRecorder>,
+    main_readback: Option<PlanReadback>,
+    /// The anti-aliased colour, at `s×` the resolution.
+    smooth: Option<PlanRecorder>,
+    smooth_readback: Option<PlanReadback>,
+    camera: Option<Camera>,
+    queries: Option<QueryPool>,
+    /// Whether each pose gets its own tessellation, and the pose the mesh holds now.
+    per_pose: bool,
+    mesh_pose: usize,
+    /// Whether the next frame is the first [`FrameRunner::frame`] is asked for after the
+    /// warm-up (the one whose passes are timed).
+    frames_done: usize,
+    warm_up: bool,
+    recorded: Recorded,
+}
+
+impl<'a> FrameRunner<'a> {
+    /// The recorders of `plan` for `scene`, its mesh made for the pose of frame `first`, set
+    /// up; with `timing`, the first frame rendered after the warm-up (the second
+    /// [`FrameRunner::frame`]) also times each pass.
+    pub fn new(
+        ctx: &'a Context,
+        plan: &'a Plan,
+        scene: &'a Scene,
+        first: usize,
+        timing: bool,
+    ) -> Result<Self> {
+        let gpu = ctx.gpu();
+        let o = plan.outputs;
+        let lens = matches!(plan.route, Route::LensModel { .. });
+        let antialias = plan.antialias.is_on() && o.color && !lens;
+        let mesh = plan_mesh_at(plan, scene, first)?;
+        let texture = scene.texture.as_ref();
+        let mut main_plan = plan.clone();
+        if antialias {
+            main_plan.outputs.color = false;
+        }
+        let data = main_plan.outputs;
+        let main = if data.color || data.ids || data.flow || data.depth {
+            Some(PlanRecorder::build(gpu, &main_plan, &mesh, texture, 1)?)
+        } else {
+            None
+        };
+        let s = plan.antialias.supersample;
+        let camera = plan.camera().cloned();
+        let smooth = match (&camera, antialias) {
+            (Some(cam), true) => {
+                let mut p = plan.clone();
+                p.optics = Optics::Camera(scaled_camera(cam, s)?);
+                p.outputs = OutputSpec {
+                    ids: false,
+                    flow: false,
+                    depth: false,
+                    ..o
+                };
+                match plan.route {
+                    Route::WarpAndVertex {
                         method,
                         chromatic,
                         map,
-                    };
+                        ..
+                    } => {
+                        p.route = Route::Warp {
+                            method,
+                            chromatic,
+                            map,
+                        };
+                    }
+                    // Faces as fine as the s× lens camera's pixels.
+                    Route::Cube { side, chromatic } => {
+                        p.route = Route::Cube {
+                            side: side.saturating_mul(s),
+                            chromatic,
+                        };
+                    }
+                    _ => {}
                 }
-                // Faces as fine as the s× lens camera's pixels.
-                Route::Cube { side, chromatic } => {
-                    p.route = Route::Cube {
-                        side: side.saturating_mul(s),
-                        chromatic,
-                    };
-                }
-                _ => {}
+                Some(PlanRecorder::build(gpu, &p, &mesh, texture, 1)?)
             }
-            Some(PlanRecorder::build(gpu, &p, &mesh, texture, 1)?)
+            _ => None,
+        };
+        let mut recorded = Recorded::default();
+        for r in main.iter().chain(smooth.iter()) {
+            recorded.pipelines.extend_from_slice(r.pipelines());
         }
-        _ => None,
-    };
-    let mut recorded = Recorded::default();
-    for r in main.iter().chain(smooth.iter()) {
-        recorded.pipelines.extend_from_slice(r.pipelines());
-    }
-    let queries = main
-        .as_ref()
-        .filter(|_| timing)
-        .and_then(|r| QueryPool::timestamps(gpu, r.timestamp_count()).ok());
-    // SAFETY: each recorder's one-off work, recorded once, before any frame.
-    unsafe {
-        submit_each(
+        let queries = main
+            .as_ref()
+            .filter(|_| timing)
+            .and_then(|r| QueryPool::timestamps(gpu, r.timestamp_count()).ok());
+        // SAFETY: each recorder's one-off work, recorded once, before any frame.
+        unsafe {
+            submit_each(
+                ctx,
+                main.iter().chain(smooth.iter()),
+                PlanRecorder::record_setup,
+            )
+        }?;
+        let main_readback = main
+            .as_ref()
+            .map(|r| PlanReadback::new(gpu, r))
+            .transpose()?;
+        let smooth_readback = smooth
+            .as_ref()
+            .map(|r| PlanReadback::new(gpu, r))
+            .transpose()?;
+        Ok(FrameRunner {
             ctx,
-            main.iter().chain(smooth.iter()),
-            PlanRecorder::record_setup,
-        )
-    }?;
-    let main_readback = main
-        .as_ref()
-        .map(|r| PlanReadback::new(gpu, r))
-        .transpose()?;
-    let smooth_readback = smooth
-        .as_ref()
-        .map(|r| PlanReadback::new(gpu, r))
-        .transpose()?;
-    // Run one recorder's prepared frame and read its outputs back.
-    let run = |r: &PlanRecorder,
-               readback: Option<&PlanReadback>,
-               timestamps: Option<&QueryPool>|
-     -> Result<Rendered> {
-        let readback =
-            readback.ok_or_else(|| Error::internal("a recorder without its readback"))?;
-        ctx.submit(|cmd| {
-            // SAFETY: `cmd` is recording outside a render pass; the recorder was set up and
-            // prepared, and `submit` waits, so nothing it records outlives the recorder or
-            // the readback made for it.
-            unsafe {
-                r.record(cmd, timestamps);
-                readback.record(gpu, cmd, r)
-            }
-        })?;
-        readback.read(r)
-    };
-    // The first frame once more before timing: caches warm up on first use.
-    let warm_up = frames.first().copied().filter(|_| timing);
-    let mut first_timed = true;
-    for (index, timed) in warm_up
-        .map(|i| (i, false))
-        .into_iter()
-        .chain(frames.iter().map(|&i| (i, true)))
-    {
+            plan,
+            scene,
+            main,
+            main_readback,
+            smooth,
+            smooth_readback,
+            camera,
+            queries,
+            // A tessellation holds its straight-edge bound at the pose it was made for: frames
+            // of other poses get their own.
+            per_pose: tessellation(plan).is_some(),
+            mesh_pose: first,
+            frames_done: 0,
+            warm_up: timing,
+            recorded,
+        })
+    }
+
+    /// Renders frame `index` (an index into the plan's poses) and reads it back, with its wall
+    /// time and, on the first frame after the warm-up where the runner times, each pass's GPU
+    /// time.
+    pub fn frame(&mut self, index: usize) -> Result<Frame> {
+        let (ctx, plan, scene) = (self.ctx, self.plan, self.scene);
+        if index >= plan.poses.len() {
+            return Err(Error::input(format!(
+                "frame {index}: the scene has {} pose(s)",
+                plan.poses.len()
+            )));
+        }
+        let gpu = ctx.gpu();
+        let texture = scene.texture.as_ref();
+        let stamps_now = self.frames_done == usize::from(self.warm_up);
+        self.frames_done += 1;
         let start = Instant::now();
-        if per_pose && index != mesh_pose {
+        if self.per_pose && index != self.mesh_pose {
             let mesh = plan_mesh_at(plan, scene, index)?;
-            for r in main.iter_mut().chain(smooth.iter_mut()) {
+            for r in self.main.iter_mut().chain(self.smooth.iter_mut()) {
                 // SAFETY: every submission has completed (`submit` waits on its fence).
                 unsafe { r.set_mesh(gpu, &mesh, texture) }?;
             }
@@ -241,26 +293,23 @@ fn run_frames(
             unsafe {
                 submit_each(
                     ctx,
-                    main.iter().chain(smooth.iter()),
+                    self.main.iter().chain(self.smooth.iter()),
                     PlanRecorder::record_mesh_upload,
                 )
             }?;
-            mesh_pose = index;
+            self.mesh_pose = index;
         }
-        let mut rendered = match &mut main {
+        let stamps = self.queries.as_ref().filter(|_| stamps_now);
+        let mut rendered = match &mut self.main {
             Some(r) => {
                 // SAFETY: no submission using it is pending (`submit` waits on its fence).
                 unsafe { r.prepare(index) }?;
-                let stamps = if timed && first_timed {
-                    queries.as_ref()
-                } else {
-                    None
-                };
-                run(r, main_readback.as_ref(), stamps)?
+                run_recorder(ctx, r, self.main_readback.as_ref(), stamps)?
             }
             None => Rendered::default(),
         };
-        if let (Some(r), Some(cam)) = (&mut smooth, &camera) {
+        if let (Some(r), Some(cam)) = (&mut self.smooth, &self.camera) {
+            let s = plan.antialias.supersample;
             // SAFETY: no submission using it is pending (`submit` waits on its fence).
             unsafe { r.prepare(index) }?;
             let mut images = Vec::new();
@@ -269,7 +318,7 @@ fn run_frames(
                 let big = scaled_camera(&shifted(cam, shift)?, s)?;
                 // SAFETY: the last pass's submission has completed (`submit` waits).
                 unsafe { r.jitter(&big, shift * s as f64) }?;
-                let colour = run(r, smooth_readback.as_ref(), None)?
+                let colour = run_recorder(ctx, r, self.smooth_readback.as_ref(), None)?
                     .color
                     .ok_or_else(|| Error::internal("the anti-aliased pass rendered no colour"))?;
                 images.push(downsample(&colour, s));
@@ -279,35 +328,55 @@ fn run_frames(
             rendered.height = cam.height;
         }
         if rendered.width == 0 {
-            if let Some(cam) = &camera {
+            if let Some(cam) = &self.camera {
                 (rendered.width, rendered.height) = (cam.width, cam.height);
             }
         }
         let ms = start.elapsed().as_secs_f64() * 1e3;
-        if timed {
-            let mut pass_ms = Vec::new();
-            if first_timed {
-                if let (Some(q), Some(r)) = (&queries, &main) {
-                    let ns = q.read_ns()?;
-                    pass_ms = r
-                        .pass_names()
-                        .iter()
-                        .enumerate()
-                        .map(|(i, n)| (*n, (ns[i + 1] - ns[i]) / 1e6))
-                        .collect();
-                    recorded.pass_ms = pass_ms.clone();
-                }
-                first_timed = false;
-            }
-            each(Frame {
-                index,
-                rendered,
-                ms,
-                pass_ms,
-            })?;
+        let mut pass_ms = Vec::new();
+        if let (Some(q), Some(r), true) = (stamps, &self.main, stamps_now) {
+            let ns = q.read_ns()?;
+            pass_ms = r
+                .pass_names()
+                .iter()
+                .enumerate()
+                .map(|(i, n)| (*n, (ns[i + 1] - ns[i]) / 1e6))
+                .collect();
+            self.recorded.pass_ms = pass_ms.clone();
         }
+        Ok(Frame {
+            index,
+            rendered,
+            ms,
+            pass_ms,
+        })
     }
-    Ok(recorded)
+
+    /// The pipelines recorded, and the passes' GPU time of the timed frame.
+    pub fn into_recorded(self) -> Recorded {
+        self.recorded
+    }
+}
+
+/// Runs one recorder's prepared frame and reads its outputs back.
+fn run_recorder(
+    ctx: &Context,
+    r: &PlanRecorder,
+    readback: Option<&PlanReadback>,
+    timestamps: Option<&QueryPool>,
+) -> Result<Rendered> {
+    let gpu = ctx.gpu();
+    let readback = readback.ok_or_else(|| Error::internal("a recorder without its readback"))?;
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is recording outside a render pass; the recorder was set up and
+        // prepared, and `submit` waits, so nothing it records outlives the recorder or the
+        // readback made for it.
+        unsafe {
+            r.record(cmd, timestamps);
+            readback.record(gpu, cmd, r)
+        }
+    })?;
+    readback.read(r)
 }
 
 /// Renders `request` once on the headless context (the plan for `scene`, which sizes the

@@ -8,8 +8,9 @@
 // sign change over 16 cells, the same Illinois false-position refinement, the same bounded
 // loops, so that the GPU finds the root the CPU finds; only the tolerances are f32's.
 //
-// π is Alg. 1's first half (alg1_ndc) on the Sec. 3.1 clip position of the camera-frame point,
-// so the lens is evaluated exactly as for a still camera. The includer declares `frame`
+// π is the camera's model on the camera-frame point through the functions a still camera's
+// vertices go through: the standard model's distortion on the ideal point X/Z, Y/Z, a ray
+// model by Alg. 1's first half (alg1_ndc) on the Sec. 3.1 clip position. The includer declares `frame`
 // (geometry_frame.glsl), the camera model, `const bool DISTORT` and includes alg1.glsl first.
 //
 // VKL_READOUT = 0 (a global shutter, or a still camera) compiles none of it: every caller
@@ -114,10 +115,10 @@ struct VklRsSample {
     float s;
     float g;
     vec2 pixel;
-    vec2 distorted_ndc;
+    vec2 distorted_ndc; // these three: the root's (vkl_rs_finish), a ray model's every sample's
     vec2 ndc;           // alg1_ndc's undistorted NDC (Sec. 3.2's test)
+    vec4 clip;          // the Sec. 3.1 clip position of `camera`
     vec3 camera;        // the camera-frame point at s
-    vec4 clip;          // its Sec. 3.1 clip position
     bool ok;            // the lens sees it, and g is finite
 };
 
@@ -134,25 +135,57 @@ struct VklRsVelocity {
     float slope;
 };
 
-// A sample with its velocity.
+// A sample with its velocity. The standard model goes straight from the camera-frame point to
+// its ideal point X/Z, Y/Z, which Alg. 1 reads back from the Sec. 3.1 clip position through
+// the NDC and the pinhole pixel with four divisions more (and its rounding): the solve runs
+// this twice per vertex, and lavapipe runs every instruction of it for every vertex. The clip
+// position and the NDC are the root's alone (vkl_rs_finish); a ray model's come with its
+// sample.
 VklRsSample vkl_rs_sample_velocity(VklMotion m, vec3 x, float s, out VklRsVelocity v) {
     VklRsSample r;
     r.s = s;
     r.camera = vkl_rs_camera_point(m, x, s);
-    r.clip = frame.projection * vec4(r.camera, 1.0);
-    mat2 J;
-    r.ok = alg1_ndc_jacobian(r.clip, r.distorted_ndc, r.pixel, r.ndc, J);
+    v.camera = vkl_rs_camera_velocity(m, s, r.camera);
+    r.clip = vec4(0.0);
+    r.ndc = vec2(0.0);
+    r.distorted_ndc = vec2(0.0);
+    v.pixel = vec2(0.0);
+    if (DISTORT && VKL_RAY_MODEL) {
+        r.clip = frame.projection * vec4(r.camera, 1.0);
+        mat2 J;
+        r.ok = alg1_ndc_jacobian(r.clip, r.distorted_ndc, r.pixel, r.ndc, J);
+    } else {
+        float z = r.camera.z;
+        vec2 ideal = r.camera.xy / z;
+        vec2 d = ideal;
+        mat2 J = mat2(1.0);
+        bool ok = z > 0.0;
+#ifndef VKL_PLAIN
+        if (DISTORT) ok = ok && vkl_contains_ideal(ideal) && vkl_distort_jacobian(ideal, d, J);
+#endif
+        r.pixel = vkl_to_pixel(d);
+        r.ok = ok && !any(isnan(r.pixel)) && !any(isinf(r.pixel));
+        // The ideal point's velocity by the quotient rule, the pixel's through J.
+        v.pixel = vkl_cam.intrinsics.xy * (J * ((v.camera.xy - ideal * v.camera.z) / z));
+    }
     r.g = s - vkl_line_time(r.pixel);
     r.ok = r.ok && !isnan(r.g) && !isinf(r.g) && !isnan(r.camera.z) && !isinf(r.camera.z);
-    // The clip position's velocity through the projection, the ideal normalized point's
-    // through the viewport (x = (pinhole pixel − c) / f), the distorted one's through J.
-    v.camera = vkl_rs_camera_velocity(m, s, r.camera);
-    vec4 clip_velocity = frame.projection * vec4(v.camera, 0.0);
-    vec2 ndc_velocity = (clip_velocity.xy - r.clip.xy / r.clip.w * clip_velocity.w) / r.clip.w;
-    vec2 f = vkl_cam.intrinsics.xy;
-    v.pixel = f * (J * (ndc_velocity * 0.5 * frame.viewport.xy / f));
     v.slope = VKL_RS_NEWTON ? 1.0 - dot(vkl_line_gradient(), v.pixel) : 1.0;
     return r;
+}
+
+// The root's clip position (Sec. 3.1), undistorted NDC (Sec. 3.2's test) and distorted NDC
+// from its camera-frame point and pixel, as alg1_ndc_jacobian gives them: 0 at or behind the
+// camera, the undistorted NDC where the lens does not see the point (finite, for the
+// rasterizer's clipping alone). A ray model's sample has them already.
+void vkl_rs_finish(inout VklRsSample r) {
+    if (DISTORT && VKL_RAY_MODEL) return;
+    r.clip = frame.projection * vec4(r.camera, 1.0);
+    r.ndc = vec2(0.0);
+    r.distorted_ndc = vec2(0.0);
+    if (!(r.clip.w > 0.0)) return;
+    r.ndc = r.clip.xy / r.clip.w;
+    r.distorted_ndc = r.ok ? (r.pixel + 0.5) / frame.viewport.xy * 2.0 - 1.0 : r.ndc;
 }
 
 // A sample alone (the velocity is dead code the driver drops).
@@ -168,10 +201,10 @@ VklRsSample vkl_rs_tangent(VklRsSample c, VklRsVelocity v, float s) {
     r.s = s;
     r.g = c.g + ds * v.slope;
     r.pixel = c.pixel + ds * v.pixel;
-    r.distorted_ndc = (r.pixel + 0.5) / frame.viewport.xy * 2.0 - 1.0;
     r.camera = c.camera + ds * v.camera;
-    r.clip = frame.projection * vec4(r.camera, 1.0);
-    r.ndc = r.clip.xy / r.clip.w;
+    r.clip = c.clip;
+    r.ndc = c.ndc;
+    r.distorted_ndc = c.distorted_ndc;
     r.ok = c.ok;
     return r;
 }
@@ -419,7 +452,11 @@ bool vkl_rs_moving() {
 // Where this frame's lines see the world point x; false where a VKL_RS_BOUNDED_ONLY module
 // leaves it to a later pass.
 bool vkl_rs_current(vec3 x, out VklRsSample r) {
-    if (vkl_rs_moving()) return vkl_rs_solve(vkl_motion_current(), x, r);
+    if (vkl_rs_moving()) {
+        bool solved = vkl_rs_solve(vkl_motion_current(), x, r);
+        vkl_rs_finish(r);
+        return solved;
+    }
     r = vkl_rs_still(x, frame.view_projection, frame.view);
     return true;
 }
@@ -427,7 +464,9 @@ bool vkl_rs_current(vec3 x, out VklRsSample r) {
 // Where the lines of the frame flow starts from saw it; false as vkl_rs_current.
 bool vkl_rs_previous(vec3 x, out VklRsSample r) {
     if (VKL_RUNTIME(frame.previous_start_centre.w != 0.0)) {
-        return vkl_rs_solve(vkl_motion_previous(), x, r);
+        bool solved = vkl_rs_solve(vkl_motion_previous(), x, r);
+        vkl_rs_finish(r);
+        return solved;
     }
     r = vkl_rs_still(x, frame.previous_view_projection, frame.previous_view);
     return true;

@@ -25,6 +25,21 @@ vec3 alg1_fisheye_point(vec4 clip) {
     return vec3((clip.xy - o * clip.w) / s, clip.w);
 }
 
+// A pixel's NDC (OpenCV pixel centres, Vulkan's [-1, 1] across the image).
+vec2 alg1_pixel_ndc(vec2 pixel) { return (pixel + 0.5) / frame.viewport.xy * 2.0 - 1.0; }
+
+#ifndef VKL_PLAIN
+// The standard model on the ideal point x: its pixel, the Jacobian J, and whether x lies in the
+// valid domain and the pixel is finite.
+bool alg1_lens(vec2 x, out vec2 pixel, out mat2 J) {
+    vec2 d = x;
+    J = mat2(1.0);  // what J is where the domain test fails (the distortion is not evaluated)
+    bool ok = vkl_contains_ideal(x) && vkl_distort_jacobian(x, d, J);
+    pixel = vkl_to_pixel(d);
+    return ok && !any(isnan(pixel)) && !any(isinf(pixel));
+}
+#endif
+
 // Alg. 1 in two halves, so that the compute discard can store a vertex's distorted NDC alone
 // (glsl/discard.comp) and the draw rebuild its clip position from the undistorted one.
 //
@@ -55,7 +70,7 @@ bool alg1_ndc_jacobian(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out ve
                   && vkl_ray_project(p, d);
         pixel = vkl_to_pixel(d);
         ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
-        ndc = (pixel + 0.5) / size * 2.0 - 1.0;
+        ndc = alg1_pixel_ndc(pixel);
         distorted_ndc = ok ? ndc : vec2(0.0);
         return ok;
     }
@@ -68,12 +83,8 @@ bool alg1_ndc_jacobian(vec4 clip, out vec2 distorted_ndc, out vec2 pixel, out ve
 #ifdef VKL_PLAIN
     return true;
 #else
-    vec2 x = vkl_to_normalized(pixel);
-    vec2 d;
-    bool ok = vkl_contains_ideal(x) && vkl_distort_jacobian(x, d, J);
-    pixel = vkl_to_pixel(d);
-    ok = ok && !any(isnan(pixel)) && !any(isinf(pixel));
-    distorted_ndc = ok ? (pixel + 0.5) / size * 2.0 - 1.0 : ndc;
+    bool ok = alg1_lens(vkl_to_normalized(pixel), pixel, J);
+    distorted_ndc = ok ? alg1_pixel_ndc(pixel) : ndc;
     return ok;
 #endif
 }

@@ -9,9 +9,10 @@
 // loops, so that the GPU finds the root the CPU finds; only the tolerances are f32's.
 //
 // π is the camera's model on the camera-frame point through the functions a still camera's
-// vertices go through: the standard model's distortion on the ideal point X/Z, Y/Z, a ray
-// model by Alg. 1's first half (alg1_ndc) on the Sec. 3.1 clip position. The includer declares `frame`
-// (geometry_frame.glsl), the camera model, `const bool DISTORT` and includes alg1.glsl first.
+// vertices go through: the standard model's (alg1_lens) on the ideal point X/Z, Y/Z, a ray
+// model's by Alg. 1's first half (alg1_ndc) on the Sec. 3.1 clip position. The includer
+// declares `frame` (geometry_frame.glsl), the camera model, `const bool DISTORT` and includes
+// alg1.glsl first.
 //
 // VKL_READOUT = 0 (a global shutter, or a still camera) compiles none of it: every caller
 // branches on the constant, which the driver folds away.
@@ -157,14 +158,12 @@ VklRsSample vkl_rs_sample_velocity(VklMotion m, vec3 x, float s, out VklRsVeloci
     } else {
         float z = r.camera.z;
         vec2 ideal = r.camera.xy / z;
-        vec2 d = ideal;
         mat2 J = mat2(1.0);
-        bool ok = z > 0.0;
+        r.pixel = vkl_to_pixel(ideal);
+        r.ok = z > 0.0;
 #ifndef VKL_PLAIN
-        if (DISTORT) ok = ok && vkl_contains_ideal(ideal) && vkl_distort_jacobian(ideal, d, J);
+        if (DISTORT) r.ok = r.ok && alg1_lens(ideal, r.pixel, J);
 #endif
-        r.pixel = vkl_to_pixel(d);
-        r.ok = ok && !any(isnan(r.pixel)) && !any(isinf(r.pixel));
         // The ideal point's velocity by the quotient rule, the pixel's through J.
         v.pixel = vkl_cam.intrinsics.xy * (J * ((v.camera.xy - ideal * v.camera.z) / z));
     }
@@ -185,7 +184,7 @@ void vkl_rs_finish(inout VklRsSample r) {
     r.distorted_ndc = vec2(0.0);
     if (!(r.clip.w > 0.0)) return;
     r.ndc = r.clip.xy / r.clip.w;
-    r.distorted_ndc = r.ok ? (r.pixel + 0.5) / frame.viewport.xy * 2.0 - 1.0 : r.ndc;
+    r.distorted_ndc = r.ok ? alg1_pixel_ndc(r.pixel) : r.ndc;
 }
 
 // A sample alone (the velocity is dead code the driver drops).
@@ -197,15 +196,11 @@ VklRsSample vkl_rs_sample(VklMotion m, vec3 x, float s) {
 // The sample at s on the tangent at c (velocity v; the standard model's Alg. 1).
 VklRsSample vkl_rs_tangent(VklRsSample c, VklRsVelocity v, float s) {
     float ds = s - c.s;
-    VklRsSample r;
+    VklRsSample r = c;
     r.s = s;
     r.g = c.g + ds * v.slope;
     r.pixel = c.pixel + ds * v.pixel;
     r.camera = c.camera + ds * v.camera;
-    r.clip = c.clip;
-    r.ndc = c.ndc;
-    r.distorted_ndc = c.distorted_ndc;
-    r.ok = c.ok;
     return r;
 }
 

@@ -115,11 +115,8 @@ fn run_frames(
 ) -> Result<Recorded> {
     let frames: Vec<usize> = frames.into_iter().collect();
     // Every index checked before any frame is rendered.
-    if let Some(&bad) = frames.iter().find(|&&i| i >= plan.poses.len()) {
-        return Err(Error::input(format!(
-            "frame {bad}: the scene has {} pose(s)",
-            plan.poses.len()
-        )));
+    for &index in &frames {
+        check_frame(plan, index)?;
     }
     let first = frames.first().copied().unwrap_or(0);
     let mut runner = FrameRunner::new(ctx, plan, scene, first, timing)?;
@@ -272,12 +269,7 @@ impl<'a> FrameRunner<'a> {
     /// time.
     pub fn frame(&mut self, index: usize) -> Result<Frame> {
         let (ctx, plan, scene) = (self.ctx, self.plan, self.scene);
-        if index >= plan.poses.len() {
-            return Err(Error::input(format!(
-                "frame {index}: the scene has {} pose(s)",
-                plan.poses.len()
-            )));
-        }
+        check_frame(plan, index)?;
         let gpu = ctx.gpu();
         let texture = scene.texture.as_ref();
         let stamps_now = self.frames_done == usize::from(self.warm_up);
@@ -356,6 +348,17 @@ impl<'a> FrameRunner<'a> {
     pub fn into_recorded(self) -> Recorded {
         self.recorded
     }
+}
+
+/// An error naming frame `index` where the plan has no pose of that index.
+fn check_frame(plan: &Plan, index: usize) -> Result<()> {
+    if index < plan.poses.len() {
+        return Ok(());
+    }
+    Err(Error::input(format!(
+        "frame {index}: the scene has {} pose(s)",
+        plan.poses.len()
+    )))
 }
 
 /// Runs one recorder's prepared frame and reads its outputs back.

@@ -96,8 +96,14 @@ fn camchain(name: &str) -> PathBuf {
     path
 }
 
-fn cameras() -> (PathBuf, PathBuf) {
-    let (l, r) = (tmp("left.json"), tmp("right.json"));
+/// The pair's camera files, named for the test that writes them: the tests run in parallel
+/// threads of one process, and one rewriting a file another's command is reading hands it an
+/// empty file.
+fn cameras(test: &str) -> (PathBuf, PathBuf) {
+    let (l, r) = (
+        tmp(&format!("{test}_left.json")),
+        tmp(&format!("{test}_right.json")),
+    );
     std::fs::write(&l, LEFT).unwrap();
     std::fs::write(&r, RIGHT).unwrap();
     (l, r)
@@ -140,7 +146,7 @@ fn check_infos(dir: &Path, want: &StereoRectification) {
 
 #[test]
 fn every_way_of_giving_the_pair_writes_the_librarys_rectification() {
-    let (l, r) = cameras();
+    let (l, r) = cameras("ways");
     let matrix9 = list(rotation_matrix(RVEC).as_flattened()).replace(' ', "");
     let rvec = list(&RVEC).replace(' ', "");
     let t = list(&T).replace(' ', "");
@@ -219,7 +225,7 @@ fn every_way_of_giving_the_pair_writes_the_librarys_rectification() {
 
 #[test]
 fn the_rectified_pair_is_what_undistort_draws_from_the_written_files() {
-    let (l, r) = cameras();
+    let (l, r) = cameras("undistort");
     let (li, ri) = (tmp("left_in.png"), tmp("right_in.png"));
     common::write_png(&li, 640, 480, false);
     common::write_png(&ri, 640, 480, true);
@@ -287,7 +293,7 @@ fn the_rectified_pair_is_what_undistort_draws_from_the_written_files() {
 
 #[test]
 fn a_vertical_pair_shares_its_columns_and_a_new_size_is_said_in_the_files() {
-    let (l, r) = cameras();
+    let (l, r) = cameras("vertical");
     let dir = out_dir("vertical");
     let run = vklens(&[
         "stereo-rectify",
@@ -322,7 +328,7 @@ fn a_vertical_pair_shares_its_columns_and_a_new_size_is_said_in_the_files() {
 
 #[test]
 fn refusals_exit_2_naming_the_file_key_or_flag_and_write_nothing() {
-    let (l, r) = cameras();
+    let (l, r) = cameras("refusals");
     let no_t = stereo_file("no_t.yml", Some(rotation_matrix(RVEC)), None);
     let bad_r = stereo_file(
         "bad_r.yml",

@@ -3,6 +3,17 @@
 #ifndef VKL_GEOMETRY_FRAME_GLSL
 #define VKL_GEOMETRY_FRAME_GLSL
 
+// A frame's motion during the readout about its middle line (s = ½), `MotionGpu` in
+// src/pass/geometry.rs: the camera-frame point at readout time s is the middle line's, its
+// centre moved by (s − ½) travel and turned back by (s − ½) angle about the axis.
+struct VklMotionBlock {
+    mat3 rotation;                  // R_cw(½): the middle line's world-to-camera rotation
+    vec4 turn;                      // xyz: unit axis, w: angle of R_wc0ᵀ R_wc1 (radians)
+    vec4 centre;                    // xyz: the camera centre C(½); w: 1 where the camera moves
+                                    // during the frame, else 0
+    vec4 travel;                    // xyz: R_cw(½) (C1 − C0)
+};
+
 // Every member but the rate table, read once at the top of main() into `frame` (a private
 // copy) by vkl_load_frame(). lavapipe (Mesa 22 and 23) reads a uniform block member at a
 // uniform offset with one scalar load only outside control flow; inside any branch or loop it
@@ -18,16 +29,11 @@ struct VklFrame {
                                     // fisheye's vertices are dropped nearer than it)
     // A moving rolling shutter (rolling_shutter.glsl; unread where VKL_READOUT is 0): the
     // camera-frame point at the solved readout time goes through this Sec. 3.1 projection, and
-    // the frame's motion runs from `view` (the first line's pose) as below.
+    // the frame's motion is `motion`.
     mat4 projection;
     mat4 previous_view;             // the first line's pose of the frame flow starts from
-    vec4 turn;                      // xyz: unit axis, w: angle of R_wc0ᵀ R_wc1 (radians)
-    vec4 start_centre;              // xyz: the camera centre when the first line is read;
-                                    // w: 1 where the camera moves during the frame, else 0
-    vec4 end_centre;                // xyz: ... when the last line is read
-    vec4 previous_turn;             // the same three for the frame flow starts from
-    vec4 previous_start_centre;
-    vec4 previous_end_centre;
+    VklMotionBlock motion;
+    VklMotionBlock previous_motion; // the motion of the frame flow starts from
     vec4 readout_bound;             // x: the half angle of the cone the line rate holds on
                                     // (radians off the axis; 0: no rate, scan)
 };

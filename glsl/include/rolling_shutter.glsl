@@ -6,7 +6,8 @@
 // vertex appears where g(s) = s − line_time(π(X at pose(s))) is zero (Meingast, Geyer and
 // Sastry, "Geometric models of rolling-shutter cameras", 2005). The same scan for the first
 // sign change over 16 cells, the same Illinois false-position refinement, the same bounded
-// loops, so that the GPU finds the root the CPU finds; only the tolerances are f32's.
+// loops, so that the GPU finds the root the CPU finds; only the tolerances are f32's, and the
+// poses are taken about the middle line's (VklMotion) rather than the first's.
 //
 // π is the camera's model on the camera-frame point through the functions a still camera's
 // vertices go through: the standard model's (alg1_lens) on the ideal point X/Z, Y/Z, a ray
@@ -52,25 +53,35 @@ const uint VKL_RS_BOUNDED_STEPS = 8u;
 // a solve that stops a step early is as far off as that step.
 const float VKL_RS_BOUNDED_STEP_TOLERANCE = 0.25 * VKL_RS_PIXEL_TOLERANCE;
 
-// One frame's motion: the first line's world-to-camera rotation, the unit axis and angle of
-// the turn from the first line's camera frame to the last line's, and the two camera centres.
+// One frame's motion about its middle line (geometry_frame.glsl's VklMotionBlock): the middle
+// line's world-to-camera rotation and camera centre, the unit axis and angle of the turn from
+// the first line's camera frame to the last line's, and the centre's travel in the middle
+// line's camera frame.
 struct VklMotion {
     mat3 rotation;
     vec3 axis;
     float angle;
-    vec3 start_centre;
-    vec3 end_centre;
+    vec3 centre;
+    vec3 travel;
 };
 
+VklMotion vkl_motion(VklMotionBlock b) {
+    return VklMotion(b.rotation, b.turn.xyz, b.turn.w, b.centre.xyz, b.travel.xyz);
+}
+
 VklMotion vkl_motion_current() {
-    return VklMotion(mat3(frame.view), frame.turn.xyz, frame.turn.w, frame.start_centre.xyz,
-                     frame.end_centre.xyz);
+    return vkl_motion(frame.motion);
 }
 
 // The motion of the frame flow starts from.
 VklMotion vkl_motion_previous() {
-    return VklMotion(mat3(frame.previous_view), frame.previous_turn.xyz, frame.previous_turn.w,
-                     frame.previous_start_centre.xyz, frame.previous_end_centre.xyz);
+    return vkl_motion(frame.previous_motion);
+}
+
+// The world point x in the middle line's camera frame, R_cw(½) (x − C(½)): the difference
+// first, exact for points near the camera. Every sample of x's solve starts from it.
+vec3 vkl_rs_middle(VklMotion m, vec3 x) {
+    return m.rotation * (x - m.centre);
 }
 
 // v turned by phi about the motion's axis (Rodrigues' formula), given cos and sin of phi.
@@ -78,19 +89,24 @@ vec3 vkl_rs_turn(VklMotion m, float c, float sn, vec3 v) {
     return v * c + cross(m.axis, v) * sn + m.axis * (dot(m.axis, v) * (1.0 - c));
 }
 
-// The world point x in the camera frame at readout time s: R_cw(s) (x − C(s)) with
-// R_cw(s) = exp(s ω)ᵀ R_cw0 (turned back by s·angle about the axis).
-vec3 vkl_rs_camera_point(VklMotion m, vec3 x, float s) {
-    float phi = -s * m.angle;
-    return vkl_rs_turn(m, cos(phi), sin(phi), m.rotation * (x - mix(m.start_centre, m.end_centre, s)));
+// The point `middle` (vkl_rs_middle) in the camera frame at readout time s, and its velocity
+// d/ds there: with u = s − ½, R_cw(s) (x − C(s)) = exp(u ω)ᵀ (middle − u · travel), since the
+// turn's axis is the same in every line's camera frame. The turn moves the point by
+// −angle · axis × camera, the centre's travel by −exp(u ω)ᵀ travel.
+vec3 vkl_rs_camera_at(VklMotion m, vec3 middle, float s, out vec3 velocity) {
+    float u = s - 0.5;
+    float phi = -u * m.angle;
+    float c = cos(phi);
+    float sn = sin(phi);
+    vec3 camera = vkl_rs_turn(m, c, sn, middle - u * m.travel);
+    velocity = -m.angle * cross(m.axis, camera) - vkl_rs_turn(m, c, sn, m.travel);
+    return camera;
 }
 
-// d/ds of vkl_rs_camera_point at s, where it is `camera`: the turn moves it by
-// −angle · axis × camera, the centre's travel by −R_cw(s) (C1 − C0).
-vec3 vkl_rs_camera_velocity(VklMotion m, float s, vec3 camera) {
-    float phi = -s * m.angle;
-    vec3 travel = vkl_rs_turn(m, cos(phi), sin(phi), m.rotation * (m.end_centre - m.start_centre));
-    return -m.angle * cross(m.axis, camera) - travel;
+// The world point x in the camera frame at readout time s.
+vec3 vkl_rs_camera_point(VklMotion m, vec3 x, float s) {
+    vec3 unused;
+    return vkl_rs_camera_at(m, vkl_rs_middle(m, x), s, unused);
 }
 
 // When the pixel is read (model::rolling_shutter::line_time): 0 the first line, 1 the last.
@@ -142,11 +158,15 @@ struct VklRsVelocity {
 // this twice per vertex, and lavapipe runs every instruction of it for every vertex. The clip
 // position and the NDC are the root's alone (vkl_rs_finish); a ray model's come with its
 // sample.
-VklRsSample vkl_rs_sample_velocity(VklMotion m, vec3 x, float s, out VklRsVelocity v) {
+//
+// `middle` is the point in the middle line's camera frame (vkl_rs_middle), `camera` and
+// `velocity` the point and its velocity at s (vkl_rs_camera_at): the sample at s = ½ has them
+// without a turn (vkl_rs_sample_middle).
+VklRsSample vkl_rs_sample_point(float s, vec3 camera, vec3 velocity, out VklRsVelocity v) {
     VklRsSample r;
     r.s = s;
-    r.camera = vkl_rs_camera_point(m, x, s);
-    v.camera = vkl_rs_camera_velocity(m, s, r.camera);
+    r.camera = camera;
+    v.camera = velocity;
     r.clip = vec4(0.0);
     r.ndc = vec2(0.0);
     r.distorted_ndc = vec2(0.0);
@@ -187,10 +207,24 @@ void vkl_rs_finish(inout VklRsSample r) {
     r.distorted_ndc = r.ok ? alg1_pixel_ndc(r.pixel) : r.ndc;
 }
 
+// The sample at s with its velocity.
+VklRsSample vkl_rs_sample_velocity(VklMotion m, vec3 middle, float s, out VklRsVelocity v) {
+    vec3 velocity;
+    vec3 camera = vkl_rs_camera_at(m, middle, s, velocity);
+    return vkl_rs_sample_point(s, camera, velocity, v);
+}
+
+// The sample at s = ½: the middle line's point itself, moving by −angle · axis × middle −
+// travel.
+VklRsSample vkl_rs_sample_middle(VklMotion m, vec3 middle, out VklRsVelocity v) {
+    vec3 velocity = -m.angle * cross(m.axis, middle) - m.travel;
+    return vkl_rs_sample_point(0.5, middle, velocity, v);
+}
+
 // A sample alone (the velocity is dead code the driver drops).
-VklRsSample vkl_rs_sample(VklMotion m, vec3 x, float s) {
+VklRsSample vkl_rs_sample(VklMotion m, vec3 middle, float s) {
     VklRsVelocity unused;
-    return vkl_rs_sample_velocity(m, x, s, unused);
+    return vkl_rs_sample_velocity(m, middle, s, unused);
 }
 
 // The sample at s on the tangent at c (velocity v; the standard model's Alg. 1).
@@ -212,7 +246,7 @@ VklRsSample vkl_rs_closest(VklRsSample a, VklRsSample b) {
 // Dekker's guard against steps too small to count, a bisection step where the bracket shrank
 // by less than half twice in a row (model::rolling_shutter::refine, step for step). False
 // where the lens does not see the point inside the bracket, or the bracket closes on a jump.
-bool vkl_rs_refine(VklMotion m, vec3 x, VklRsSample a, VklRsSample b, out VklRsSample root) {
+bool vkl_rs_refine(VklMotion m, vec3 middle, VklRsSample a, VklRsSample b, out VklRsSample root) {
     float ga = a.g;
     float gb = b.g;
     int replaced = 0;  // -1: the last step replaced a; 1: b
@@ -237,7 +271,7 @@ bool vkl_rs_refine(VklMotion m, vec3 x, VklRsSample a, VklRsSample b, out VklRsS
         s = (!isnan(s) && !isinf(s) && step < 0.5 * width) ? clamp(s, a.s + step, b.s - step)
                                                              : 0.5 * (a.s + b.s);
         if (!(s > a.s && s < b.s)) break;  // as narrow as f32 makes it
-        VklRsSample c = vkl_rs_sample(m, x, s);
+        VklRsSample c = vkl_rs_sample(m, middle, s);
         if (!c.ok) return false;
         if (c.g == 0.0) {
             root = c;
@@ -261,12 +295,14 @@ bool vkl_rs_refine(VklMotion m, vec3 x, VklRsSample a, VklRsSample b, out VklRsS
     return max(d.x, d.y) <= VKL_RS_MAX_ERROR_PX;
 }
 
-// The distance from x to the segment the camera centre moves along.
-float vkl_rs_path_distance(VklMotion m, vec3 x) {
-    vec3 d = m.end_centre - m.start_centre;
+// The distance from a point to the segment the camera centre moves along, both in the middle
+// line's camera frame (`middle`: vkl_rs_middle), where the centre runs from −travel / 2 to
+// travel / 2.
+float vkl_rs_path_distance(VklMotion m, vec3 middle) {
+    vec3 d = m.travel;
     float dd = dot(d, d);
-    float t = dd > 0.0 ? clamp(dot(x - m.start_centre, d) / dd, 0.0, 1.0) : 0.0;
-    return length(x - (m.start_centre + t * d));
+    float t = dd > 0.0 ? clamp(dot(middle, d) / dd, -0.5, 0.5) : 0.0;
+    return length(middle - t * d);
 }
 
 // model::rolling_shutter::RATE_TABLE: entries of frame_block.readout_rates.
@@ -301,12 +337,13 @@ float vkl_rs_line_rate(float theta) {
 // sample the lens does not see, a ray that could leave the cone, a point nearer the centres'
 // path than the near plane, no convergence in VKL_RS_BOUNDED_STEPS. A point no line reads (g
 // of one sign over [0, 1], known from g at the end of the readout it lies beyond) keeps the
-// position of that end, as the scan gives it.
-bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
-    float distance = vkl_rs_path_distance(m, x);
-    float speed = m.angle + length(m.end_centre - m.start_centre) / distance;
+// position of that end, as the scan gives it. `middle` is x in the middle line's camera frame
+// (vkl_rs_middle), the first sample's point.
+bool vkl_rs_bounded(VklMotion m, vec3 middle, out VklRsSample root) {
+    float distance = vkl_rs_path_distance(m, middle);
+    float speed = m.angle + length(m.travel) / distance;
     VklRsVelocity va;
-    VklRsSample a = vkl_rs_sample_velocity(m, x, 0.5, va);
+    VklRsSample a = vkl_rs_sample_middle(m, middle, va);
     root = a;
     // NaN and infinity fail these comparisons too.
     if (!(VKL_RUNTIME(frame.readout_bound.x > 0.0) && distance >= frame.viewport.w && a.ok)) {
@@ -323,7 +360,7 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
     float s = clamp(a.s - a.g / slope, 0.0, 1.0);
     for (uint i = 0u; i < VKL_RS_BOUNDED_STEPS; i++) {
         VklRsVelocity vc;
-        VklRsSample c = vkl_rs_sample_velocity(m, x, s, vc);
+        VklRsSample c = vkl_rs_sample_velocity(m, middle, s, vc);
         if (!c.ok) return false;
         root = c;
         // g increases: g(0) > 0 or g(1) < 0 puts every root outside the readout.
@@ -361,7 +398,8 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
     return false;
 }
 
-// Where the world point x appears through motion m: the first self-consistent readout time in
+// Where the world point appears through motion m (`middle`: the point in the middle line's
+// camera frame, vkl_rs_middle): the first self-consistent readout time in
 // readout order (`ok` false where the lens does not see it; then `clip` is a finite clip
 // position of the point at some readout time, for the rasterizer's clipping alone). Points no
 // line reads keep their position at the nearer end of the readout.
@@ -374,13 +412,13 @@ bool vkl_rs_bounded(VklMotion m, vec3 x, out VklRsSample root) {
 #ifdef VKL_RS_BOUNDED_ONLY
 // A module for a pass that hands what the bound does not cover to a later dispatch
 // (glsl/discard.comp's stage 3): the bounded solve alone, false where it does not decide.
-bool vkl_rs_solve(VklMotion m, vec3 x, out VklRsSample r) {
-    return vkl_rs_bounded(m, x, r);
+bool vkl_rs_solve(VklMotion m, vec3 middle, out VklRsSample r) {
+    return vkl_rs_bounded(m, middle, r);
 }
 #else
-VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
+VklRsSample vkl_rs_project(VklMotion m, vec3 middle) {
     VklRsSample bounded;
-    if (vkl_rs_bounded(m, x, bounded)) return bounded;
+    if (vkl_rs_bounded(m, middle, bounded)) return bounded;
     VklRsSample previous;
     VklRsSample first;
     VklRsSample last;
@@ -393,7 +431,7 @@ VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
         VklRsSample a;
         VklRsSample b;
         for (; k <= VKL_RS_SCAN_CELLS && !found; k++) {
-            VklRsSample c = vkl_rs_sample(m, x, float(k) / float(VKL_RS_SCAN_CELLS));
+            VklRsSample c = vkl_rs_sample(m, middle, float(k) / float(VKL_RS_SCAN_CELLS));
             if (c.ok) {
                 if (c.g == 0.0) return c;
                 if (has_previous && ((previous.g < 0.0) != (c.g < 0.0))) {
@@ -412,15 +450,15 @@ VklRsSample vkl_rs_project(VklMotion m, vec3 x) {
         }
         if (!found) break;
         VklRsSample root;
-        if (vkl_rs_refine(m, x, a, b, root)) return root;
+        if (vkl_rs_refine(m, middle, a, b, root)) return root;
     }
     VklRsSample end = first.g > 0.0 ? first : last;
     end.ok = !crossed && seen_everywhere;
     return end;
 }
 
-bool vkl_rs_solve(VklMotion m, vec3 x, out VklRsSample r) {
-    r = vkl_rs_project(m, x);
+bool vkl_rs_solve(VklMotion m, vec3 middle, out VklRsSample r) {
+    r = vkl_rs_project(m, middle);
     return true;
 }
 #endif
@@ -439,16 +477,17 @@ VklRsSample vkl_rs_still(vec3 x, mat4 view_projection, mat4 view) {
     return r;
 }
 
-// Whether this frame's camera moves during the readout (start_centre.w: 1 or 0).
+// Whether this frame's camera moves during the readout (motion.centre.w: 1 or 0).
 bool vkl_rs_moving() {
-    return VKL_RUNTIME(frame.start_centre.w != 0.0);
+    return VKL_RUNTIME(frame.motion.centre.w != 0.0);
 }
 
 // Where this frame's lines see the world point x; false where a VKL_RS_BOUNDED_ONLY module
 // leaves it to a later pass.
 bool vkl_rs_current(vec3 x, out VklRsSample r) {
     if (vkl_rs_moving()) {
-        bool solved = vkl_rs_solve(vkl_motion_current(), x, r);
+        VklMotion m = vkl_motion_current();
+        bool solved = vkl_rs_solve(m, vkl_rs_middle(m, x), r);
         vkl_rs_finish(r);
         return solved;
     }
@@ -458,8 +497,9 @@ bool vkl_rs_current(vec3 x, out VklRsSample r) {
 
 // Where the lines of the frame flow starts from saw it; false as vkl_rs_current.
 bool vkl_rs_previous(vec3 x, out VklRsSample r) {
-    if (VKL_RUNTIME(frame.previous_start_centre.w != 0.0)) {
-        bool solved = vkl_rs_solve(vkl_motion_previous(), x, r);
+    if (VKL_RUNTIME(frame.previous_motion.centre.w != 0.0)) {
+        VklMotion m = vkl_motion_previous();
+        bool solved = vkl_rs_solve(m, vkl_rs_middle(m, x), r);
         vkl_rs_finish(r);
         return solved;
     }

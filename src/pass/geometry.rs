@@ -189,16 +189,9 @@ pub struct GeometryFrame {
     pub projection: [[f32; 4]; 4],
     /// The first line's pose of the frame flow starts from (`view` is this frame's).
     pub previous_view: [[f32; 4]; 4],
-    /// xyz: the unit axis, w: the angle of the turn from the first line's camera frame to
-    /// the last line's ([`FrameMotion::axis`], [`FrameMotion::angle`]).
-    pub turn: [f32; 4],
-    /// xyz: the camera centres when the first and when the last line is read.
-    pub start_centre: [f32; 4],
-    pub end_centre: [f32; 4],
-    /// The same three for the frame flow starts from.
-    pub previous_turn: [f32; 4],
-    pub previous_start_centre: [f32; 4],
-    pub previous_end_centre: [f32; 4],
+    /// The frame's motion during the readout, and the motion of the frame flow starts from.
+    pub motion: MotionGpu,
+    pub previous_motion: MotionGpu,
     /// x: the half angle of the cone the lens's line rate was measured on ([`LineRate::cone`],
     /// radians; 0 where it has none, and every vertex is solved by the scan), yzw: 0.
     pub readout_bound: [f32; 4],
@@ -206,6 +199,29 @@ pub struct GeometryFrame {
     /// component i % 4 of row i / 4): with each motion's turn and centres it bounds how fast a
     /// vertex's own line time moves during the readout.
     pub readout_rates: [[f32; 4]; RATE_TABLE / 4],
+}
+
+/// `struct VklMotionBlock` of `glsl/include/geometry_frame.glsl` (std140): a frame's motion
+/// during the readout about its middle line's pose (s = ½), where the shaders evaluate it.
+/// The turn from the first line's camera frame to the last line's has the same axis in every
+/// camera frame of the readout, so the camera-frame point at s is the middle line's turned
+/// by (s − ½) · angle, and the centre's travel is linear in s: the middle line's point is
+/// computed once per vertex, and the solve's first sample, at s = ½, is that point.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct MotionGpu {
+    /// R_cw(½), the middle line's world-to-camera rotation (columns, std140 `mat3`).
+    pub rotation: [[f32; 4]; 3],
+    /// xyz: the unit axis, w: the angle of the turn from the first line's camera frame to
+    /// the last line's ([`FrameMotion::axis`], [`FrameMotion::angle`]).
+    pub turn: [f32; 4],
+    /// xyz: the camera centre C(½) when the middle line is read; w: 1 where the camera moves
+    /// during the frame, else 0 (a still frame takes the global shutter's arithmetic, bit
+    /// for bit).
+    pub centre: [f32; 4],
+    /// xyz: R_cw(½) (C1 − C0), the centre's travel during the readout in the middle line's
+    /// camera frame; w: 0.
+    pub travel: [f32; 4],
 }
 
 /// One frame's poses: when the first line is read, and when the last is (the same for a
@@ -229,15 +245,22 @@ impl Motion {
         self.pose == self.end
     }
 
-    /// The turn (unit axis, angle) and the two camera centres as `GeometryFrame` holds them.
-    fn gpu(&self) -> ([f32; 4], [[f32; 4]; 2]) {
+    /// The motion as `GeometryFrame` holds it.
+    fn gpu(&self) -> MotionGpu {
         let m = FrameMotion::new(self.pose.into(), self.end.into());
-        let axis = m.axis().as_vec3();
-        // w: whether the shaders solve the readout time at all (a still frame takes the
-        // global shutter's arithmetic, bit for bit).
+        let middle = m.at(0.5);
+        let [c0, c1] = m.centres();
         let moving = if self.is_still() { 0.0 } else { 1.0 };
-        let [c0, c1] = m.centres().map(|c| c.as_vec3().extend(moving).to_array());
-        (axis.extend(m.angle() as f32).to_array(), [c0, c1])
+        let r = middle.rotation.as_mat3();
+        MotionGpu {
+            rotation: [r.x_axis, r.y_axis, r.z_axis].map(|c| c.extend(0.0).to_array()),
+            turn: m.axis().as_vec3().extend(m.angle() as f32).to_array(),
+            centre: (0.5 * (c0 + c1)).as_vec3().extend(moving).to_array(),
+            travel: (middle.rotation * (c1 - c0))
+                .as_vec3()
+                .extend(0.0)
+                .to_array(),
+        }
     }
 }
 
@@ -984,8 +1007,6 @@ impl GeometryPass {
         );
         let m = |m: DMat4| m.as_mat4().to_cols_array_2d();
         let (pose, before) = (motion.pose, previous.pose);
-        let (turn, centres) = motion.gpu();
-        let (previous_turn, previous_centres) = previous.gpu();
         GeometryFrame {
             view_projection: m(p * pose.matrix()),
             previous_view_projection: m(p * before.matrix()),
@@ -998,12 +1019,8 @@ impl GeometryPass {
             ],
             projection: m(p),
             previous_view: m(before.matrix()),
-            turn,
-            start_centre: centres[0],
-            end_centre: centres[1],
-            previous_turn,
-            previous_start_centre: previous_centres[0],
-            previous_end_centre: previous_centres[1],
+            motion: motion.gpu(),
+            previous_motion: previous.gpu(),
             readout_bound: [0.0; 4],
             readout_rates: [[0.0; 4]; RATE_TABLE / 4],
         }

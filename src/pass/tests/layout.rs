@@ -228,7 +228,7 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
 
 #[test]
 fn geometry_frame_matches_the_glsl_block() {
-    use crate::pass::geometry::GeometryFrame;
+    use crate::pass::geometry::{GeometryFrame, MotionGpu};
     let host = vec![
         (
             "view_projection",
@@ -242,19 +242,18 @@ fn geometry_frame_matches_the_glsl_block() {
         ("viewport", offset_of!(GeometryFrame, viewport)),
         ("projection", offset_of!(GeometryFrame, projection)),
         ("previous_view", offset_of!(GeometryFrame, previous_view)),
-        ("turn", offset_of!(GeometryFrame, turn)),
-        ("start_centre", offset_of!(GeometryFrame, start_centre)),
-        ("end_centre", offset_of!(GeometryFrame, end_centre)),
-        ("previous_turn", offset_of!(GeometryFrame, previous_turn)),
+        ("motion", offset_of!(GeometryFrame, motion)),
         (
-            "previous_start_centre",
-            offset_of!(GeometryFrame, previous_start_centre),
-        ),
-        (
-            "previous_end_centre",
-            offset_of!(GeometryFrame, previous_end_centre),
+            "previous_motion",
+            offset_of!(GeometryFrame, previous_motion),
         ),
         ("readout_bound", offset_of!(GeometryFrame, readout_bound)),
+    ];
+    let motion = vec![
+        ("rotation", offset_of!(MotionGpu, rotation)),
+        ("turn", offset_of!(MotionGpu, turn)),
+        ("centre", offset_of!(MotionGpu, centre)),
+        ("travel", offset_of!(MotionGpu, travel)),
     ];
     // The block holds every member but the rate table as one struct (the shaders copy it out
     // at the top of main()), then the rate table.
@@ -269,6 +268,7 @@ fn geometry_frame_matches_the_glsl_block() {
         shaders::GEOMETRY_GEOM,
     ] {
         check(spirv, "VklFrame", host.clone());
+        check(spirv, "VklMotionBlock", motion.clone());
         check(spirv, "GeometryFrame", block.clone());
     }
     // The vertex shader also reads the camera, with the same layout as everywhere.

@@ -5,10 +5,10 @@
 //! and stepping 12 cm sideways during a top-to-bottom readout.
 //!
 //! Each row has the frame time (wall clock of one whole render, readback included: median of
-//! [`FRAMES`] after a warm-up), and the exact path's rows its ratio to the global path's. The
-//! two paths' frames alternate, one of each in turn: on a shared machine a frame's time drifts
-//! within seconds by more than the two paths differ by, and alternating frames lets both
-//! medians see the same drift.
+//! at least [`FRAMES`] after a warm-up, and of as many as four seconds hold), and the exact
+//! path's rows its ratio to the global path's. The two paths' frames alternate, one of each in
+//! turn: on a shared machine a frame's time drifts within seconds by more than the two paths
+//! differ by, and alternating frames lets both medians see the same drift.
 //!
 //! Then the approximation the warp route can draw (chromatic aberration needs it): the same
 //! frame in K = 4 … 64 bands of lines, the warp's pinhole source rendered once per band from
@@ -85,8 +85,14 @@ fn vertex_plan(
     Plan::from_request(&request, ctx.gpu().max_image_side())
 }
 
-/// Median wall-clock ms of [`FRAMES`] frames of each of two plans, their frames alternating
-/// after a warm-up frame each.
+/// Wall-clock seconds the two paths' alternating frames run for at least, together: nine of
+/// each fell on one stretch of slow frames often enough to move the ratio by 0.2 from run to
+/// run (the small grid's nine take a fifth of a second, the large grid's two).
+pub const MIN_ALTERNATING_SECONDS: f64 = 4.0;
+
+/// Median wall-clock ms of each of two plans' frames, their frames alternating after a
+/// warm-up frame each: at least [`FRAMES`] of each, and more until they have run for
+/// [`MIN_ALTERNATING_SECONDS`].
 fn alternating_ms(ctx: &Context, plans: [&Plan; 2], scene: &Scene) -> Result<[f64; 2]> {
     let mut runners = [
         FrameRunner::new(ctx, plans[0], scene, 0, true)?,
@@ -96,7 +102,8 @@ fn alternating_ms(ctx: &Context, plans: [&Plan; 2], scene: &Scene) -> Result<[f6
         r.frame(0)?;
     }
     let mut times = [Vec::new(), Vec::new()];
-    for _ in 0..FRAMES {
+    let start = std::time::Instant::now();
+    while times[0].len() < FRAMES || start.elapsed().as_secs_f64() < MIN_ALTERNATING_SECONDS {
         for (r, t) in runners.iter_mut().zip(&mut times) {
             t.push(r.frame(0)?.ms);
         }

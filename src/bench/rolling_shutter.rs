@@ -85,9 +85,10 @@ fn vertex_plan(
     Plan::from_request(&request, ctx.gpu().max_image_side())
 }
 
-/// Wall-clock seconds the two paths' alternating frames run for at least, together: nine of
-/// each fell on one stretch of slow frames often enough to move the ratio by 0.2 from run to
-/// run (the small grid's nine take a fifth of a second, the large grid's two).
+/// Wall-clock seconds the two paths' alternating frames run for at least, together: nine
+/// frames of each (a fifth of a second on the small grid, two seconds on the large one) fell
+/// on one stretch of slow frames often enough to move the ratio by 0.15 and more from run to
+/// run.
 pub const MIN_ALTERNATING_SECONDS: f64 = 4.0;
 
 /// Median wall-clock ms of each of two plans' frames, their frames alternating after a

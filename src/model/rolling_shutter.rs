@@ -313,6 +313,11 @@ impl FrameMotion {
         self.angle
     }
 
+    /// The camera centre at readout time `s`: C(s) = (1 − s) C0 + s C1.
+    pub fn centre_at(&self, s: f64) -> DVec3 {
+        (1.0 - s) * self.centres[0] + s * self.centres[1]
+    }
+
     /// The pose at readout time `s`: slerp of the rotation, the centre linear. At s = 0 and
     /// s = 1 exactly the two poses given.
     pub fn at(&self, s: f64) -> WorldToCamera {
@@ -325,7 +330,7 @@ impl FrameMotion {
         // R_wc(s) = R_wc0 · exp(s ω), so R_cw(s) = exp(s ω)ᵀ R_cw0.
         let turn = DMat3::from_axis_angle(self.axis, s * self.angle);
         let rotation = turn.transpose() * self.start.rotation;
-        let centre = (1.0 - s) * self.centres[0] + s * self.centres[1];
+        let centre = self.centre_at(s);
         WorldToCamera {
             rotation,
             translation: -(rotation * centre),
@@ -342,7 +347,7 @@ impl FrameMotion {
         }
         let pose = self.at(s);
         // R(s) (X − C(s)): the difference first, exact for points near the camera.
-        let centre = (1.0 - s) * self.centres[0] + s * self.centres[1];
+        let centre = self.centre_at(s);
         pose.rotation * (x - centre)
     }
 

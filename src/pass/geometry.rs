@@ -255,7 +255,7 @@ impl Motion {
         MotionGpu {
             rotation: [r.x_axis, r.y_axis, r.z_axis].map(|c| c.extend(0.0).to_array()),
             turn: m.axis().as_vec3().extend(m.angle() as f32).to_array(),
-            centre: (0.5 * (c0 + c1)).as_vec3().extend(moving).to_array(),
+            centre: m.centre_at(0.5).as_vec3().extend(moving).to_array(),
             travel: (middle.rotation * (c1 - c0))
                 .as_vec3()
                 .extend(0.0)

@@ -130,8 +130,13 @@ void vkl_per_vertex(uint i) {
     if (VKL_READOUT != 0u) {
         VklRsSample r;
         VklRsSample q;
-        bool solved = vkl_rs_current(world.xyz, r);
-        if (WRITE_FLOW) solved = vkl_rs_previous(world.xyz, q) && solved;
+        // Both frames' solves (with flow) from one call site: see vkl_rs_at.
+        bool solved = true;
+        for (uint k = 0u; k < (WRITE_FLOW ? 2u : 1u); k++) {
+            VklRsSample p;
+            solved = vkl_rs_at(k == 1u, world.xyz, p) && solved;
+            if (k == 0u) r = p; else q = p;
+        }
         if (!solved) {
             uint slot = atomicAdd(deferred.count, 1u);
             deferred.vertices[slot] = i;
@@ -185,12 +190,12 @@ void main() {
     vkl_load_frame();
     uint i = gl_GlobalInvocationID.x;
 #ifndef VKL_DISCARD_INDICES
-    if (STAGE == 0u) {
-        if (i < pc.count) vkl_per_vertex(i);
-        return;
-    }
-    if (STAGE == 3u) {
-        if (i < deferred.count) vkl_per_vertex(deferred.vertices[i]);
+    // Stages 0 and 3 call vkl_per_vertex from one site: a driver inlines every call site's
+    // copy of the readout solve before specialization drops the stage that does not run
+    // (two sites cost lavapipe twice the compile).
+    if (STAGE == 0u || STAGE == 3u) {
+        bool run = STAGE == 0u ? i < pc.count : i < deferred.count;
+        if (run) vkl_per_vertex(STAGE == 0u ? i : deferred.vertices[i]);
         return;
     }
 #endif

@@ -106,15 +106,19 @@ void main() {
         // A moving rolling shutter: the vertex where its own line reads it, and flow from
         // where the previous frame's lines read it.
         // This module solves every vertex in full: it never leaves one to a later pass.
+        // Both frames' solves (with flow) from one call site: see vkl_rs_at.
         VklRsSample r;
-        vkl_rs_current(in_position, r);
+        VklRsSample q;
+        for (uint k = 0u; k < (WRITE_FLOW ? 2u : 1u); k++) {
+            VklRsSample p;
+            vkl_rs_at(k == 1u, in_position, p);
+            if (k == 0u) r = p; else q = p;
+        }
         gl_Position = r.ok ? alg1_clip(r.clip, r.distorted_ndc) : r.clip;
         v_depth = r.camera.z;
         bool previous_ok = r.ok;
         vec2 previous_pixel = r.pixel;
         if (WRITE_FLOW) {
-            VklRsSample q;
-            vkl_rs_previous(in_position, q);
             previous_ok = q.ok;
             previous_pixel = q.pixel;
         }

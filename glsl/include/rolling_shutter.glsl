@@ -482,28 +482,20 @@ bool vkl_rs_moving() {
     return VKL_RUNTIME(frame.motion.centre.w != 0.0);
 }
 
-// Where this frame's lines see the world point x; false where a VKL_RS_BOUNDED_ONLY module
-// leaves it to a later pass.
-bool vkl_rs_current(vec3 x, out VklRsSample r) {
-    if (vkl_rs_moving()) {
-        VklMotion m = vkl_motion_current();
+// Where the lines of this frame (previous: of the frame flow starts from) see the world point
+// x; false where a VKL_RS_BOUNDED_ONLY module leaves it to a later pass. One function for both
+// frames, so that a shader that needs both calls the solve from one site: a driver inlines
+// every call site's copy before specialization prunes any.
+bool vkl_rs_at(bool previous, vec3 x, out VklRsSample r) {
+    bool moving = previous ? VKL_RUNTIME(frame.previous_motion.centre.w != 0.0) : vkl_rs_moving();
+    if (moving) {
+        VklMotion m = previous ? vkl_motion_previous() : vkl_motion_current();
         bool solved = vkl_rs_solve(m, vkl_rs_middle(m, x), r);
         vkl_rs_finish(r);
         return solved;
     }
-    r = vkl_rs_still(x, frame.view_projection, frame.view);
-    return true;
-}
-
-// Where the lines of the frame flow starts from saw it; false as vkl_rs_current.
-bool vkl_rs_previous(vec3 x, out VklRsSample r) {
-    if (VKL_RUNTIME(frame.previous_motion.centre.w != 0.0)) {
-        VklMotion m = vkl_motion_previous();
-        bool solved = vkl_rs_solve(m, vkl_rs_middle(m, x), r);
-        vkl_rs_finish(r);
-        return solved;
-    }
-    r = vkl_rs_still(x, frame.previous_view_projection, frame.previous_view);
+    r = vkl_rs_still(x, previous ? frame.previous_view_projection : frame.view_projection,
+                     previous ? frame.previous_view : frame.view);
     return true;
 }
 

@@ -6,7 +6,7 @@ mod corpus;
 use crate::Error;
 
 /// The exit code follows the error's kind: 2 for what the user can fix (bad input, a path
-/// that cannot be used, work the device cannot do), 1 for the rest. `tests/cli.rs` checks that
+/// that cannot be used, work the device cannot do), 1 for the rest. `tests/it/cli.rs` checks that
 /// every command exits with it.
 #[test]
 fn exit_codes_follow_the_error_kind() {

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-mod common;
+use crate::common;
 
 use common::{shared_dir, stderr, vklens};
 use vklens::{fisheye_new_camera, optimal_new_camera, Camera};

@@ -3,7 +3,7 @@
 //! line time written out, g scanned on a fine grid and bisected), using the camera's own
 //! forward projection of camera-frame points from the public API.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 
 use common::{stderr, vklens};
 use vklens::{stereo_rectify, Camera, StereoOptions, StereoRectification};

@@ -6,7 +6,7 @@
 //! this detector's noise allows it (the README's table has every camera and path; for k2
 //! the standard deviation itself is near 0.5 % of the value, so a miss there is noise).
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -1,7 +1,7 @@
 //! Every calibration file in `../shared/reference/calibration-files/` loads and equals the
 //! camera `index.json` says it holds; bad files give one clear error naming the problem.
 
-mod common;
+use crate::common;
 
 use common::shared_dir;
 use vklens::Camera;

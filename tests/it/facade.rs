@@ -2,7 +2,7 @@
 //! `SceneRenderer`, `Error`. Checked against OpenCV's own numbers (the shared reference file),
 //! against the f64 reference warp, and on a caller's own Vulkan device under validation.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

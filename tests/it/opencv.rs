@@ -2,7 +2,7 @@
 //! initUndistortRectifyMap + remap; the distort → OpenCV-undistort round trip). `scripts/bootstrap`
 //! installs opencv-python-headless.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

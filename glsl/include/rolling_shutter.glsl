@@ -161,7 +161,7 @@ struct VklRsVelocity {
 //
 // `middle` is the point in the middle line's camera frame (vkl_rs_middle), `camera` and
 // `velocity` the point and its velocity at s (vkl_rs_camera_at): the sample at s = ½ has them
-// without a turn (vkl_rs_sample_middle).
+// without a turn (vkl_rs_bounded's first step).
 VklRsSample vkl_rs_sample_point(float s, vec3 camera, vec3 velocity, out VklRsVelocity v) {
     VklRsSample r;
     r.s = s;
@@ -212,13 +212,6 @@ VklRsSample vkl_rs_sample_velocity(VklMotion m, vec3 middle, float s, out VklRsV
     vec3 velocity;
     vec3 camera = vkl_rs_camera_at(m, middle, s, velocity);
     return vkl_rs_sample_point(s, camera, velocity, v);
-}
-
-// The sample at s = ½: the middle line's point itself, moving by −angle · axis × middle −
-// travel.
-VklRsSample vkl_rs_sample_middle(VklMotion m, vec3 middle, out VklRsVelocity v) {
-    vec3 velocity = -m.angle * cross(m.axis, middle) - m.travel;
-    return vkl_rs_sample_point(0.5, middle, velocity, v);
 }
 
 // A sample alone (the velocity is dead code the driver drops).
@@ -343,24 +336,42 @@ bool vkl_rs_bounded(VklMotion m, vec3 middle, out VklRsSample root) {
     float distance = vkl_rs_path_distance(m, middle);
     float speed = m.angle + length(m.travel) / distance;
     VklRsVelocity va;
-    VklRsSample a = vkl_rs_sample_middle(m, middle, va);
-    root = a;
-    // NaN and infinity fail these comparisons too.
-    if (!(VKL_RUNTIME(frame.readout_bound.x > 0.0) && distance >= frame.viewport.w && a.ok)) {
-        return false;
-    }
-    float theta = acos(clamp(a.camera.z / length(a.camera), -1.0, 1.0));
-    float bound = speed * vkl_rs_line_rate(theta + 0.5 * speed);
-    if (!(bound >= 0.0 && bound <= VKL_RS_MAX_CONTRACTION)) return false;
-    float low = 1.0 - bound;
-    float high = 1.0 + bound;
-    // Newton's steps where the lens's Jacobian gives g′, else a fixed-point step
-    // (|s1 − s*| ≤ L |s0 − s*|) and secant steps; every slope clamped to what the bound allows.
-    float slope = isnan(va.slope) ? 1.0 : clamp(va.slope, low, high);
-    float s = clamp(a.s - a.g / slope, 0.0, 1.0);
-    for (uint i = 0u; i < VKL_RS_BOUNDED_STEPS; i++) {
+    VklRsSample a;
+    float low = 0.0;
+    float high = 0.0;
+    float slope;
+    float s = 0.5;
+    // Step 0 is the sample at s = ½, the middle line's point itself, moving by
+    // −angle · axis × middle − travel; it shares the later steps' one call of the lens (a
+    // driver compiles a copy of the lens model per call site: two sites cost lavapipe half
+    // a second more per pipeline).
+    for (uint i = 0u; i <= VKL_RS_BOUNDED_STEPS; i++) {
+        vec3 velocity;
+        vec3 camera;
+        if (i == 0u) {
+            camera = middle;
+            velocity = -m.angle * cross(m.axis, middle) - m.travel;
+        } else {
+            camera = vkl_rs_camera_at(m, middle, s, velocity);
+        }
         VklRsVelocity vc;
-        VklRsSample c = vkl_rs_sample_velocity(m, middle, s, vc);
+        VklRsSample c = vkl_rs_sample_point(s, camera, velocity, vc);
+        if (i == 0u) {
+            a = c;
+            va = vc;
+            root = a;
+            if (!(VKL_RUNTIME(frame.readout_bound.x > 0.0) && distance >= frame.viewport.w && a.ok)) {
+                return false;
+            }
+            float theta = acos(clamp(a.camera.z / length(a.camera), -1.0, 1.0));
+            float bound = speed * vkl_rs_line_rate(theta + 0.5 * speed);
+            if (!(bound >= 0.0 && bound <= VKL_RS_MAX_CONTRACTION)) return false;
+            low = 1.0 - bound;
+            high = 1.0 + bound;
+            slope = isnan(va.slope) ? 1.0 : clamp(va.slope, low, high);
+            s = clamp(a.s - a.g / slope, 0.0, 1.0);
+            continue;
+        }
         if (!c.ok) return false;
         root = c;
         // g increases: g(0) > 0 or g(1) < 0 puts every root outside the readout.

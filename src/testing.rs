@@ -3,9 +3,21 @@
 
 use crate::host::{geometry_shader_discard_from_env, geometry_shader_from_env};
 use crate::host::{Context, ContextOptions};
+use std::sync::OnceLock;
 
-/// A headless context with the Khronos validation layer on (tests always validate).
-pub(crate) fn validated_context() -> Context {
+/// The test binary's headless context with the Khronos validation layer on (tests always
+/// validate), shared by its tests: one device per binary, not one per test, so that a
+/// pipeline one test built is there for the next (`gpu::PipelineMemo`). The validation
+/// messages are the device's, so a message any test causes fails every test that checks
+/// after it. A test that needs a device of its own (to own it, or to open it with other
+/// options) calls [`new_validated_context`] or `Context::new`.
+pub(crate) fn validated_context() -> &'static Context {
+    static SHARED: OnceLock<Context> = OnceLock::new();
+    SHARED.get_or_init(new_validated_context)
+}
+
+/// A headless context of its own with the validation layer on.
+pub(crate) fn new_validated_context() -> Context {
     Context::new(ContextOptions {
         validation: true,
         device: std::env::var("VKLENS_DEVICE")

@@ -9,8 +9,9 @@ use ash::vk;
 use crate::gpu::{image_transition, record_compute_download, Access, Buffer, Image};
 use crate::{Device, ImageRef, InverseMethod, Pixels, Raster, WarpMethod, WarpOptions, Warper};
 
+/// A device of the test's own: a `Device` owns its context.
 fn device() -> Device {
-    Device::from_context(crate::testing::validated_context())
+    Device::from_context(crate::testing::new_validated_context())
 }
 
 fn pattern(width: u32, height: u32) -> Raster {

@@ -77,6 +77,8 @@ pub(crate) struct GpuInner {
     pub(crate) max_cube_side: u32,
     /// Whether RGBA32F images can be sampled with linear filtering (optimal tiling).
     pub(crate) float_linear: bool,
+    /// The compute pipelines built last, handed out again for the same shader and constants.
+    pub(crate) compute_pipelines: pipeline::PipelineMemo,
     /// Present when vklens created the device (the headless `host::Context`); destroys it last.
     pub(crate) owner: Option<Owned>,
 }
@@ -127,6 +129,7 @@ impl Gpu {
                 max_image_side: props.limits.max_image_dimension2_d,
                 max_cube_side: props.limits.max_image_dimension_cube,
                 float_linear: float_linear(instance, physical_device),
+                compute_pipelines: Default::default(),
                 owner: None,
             }),
         })
@@ -208,6 +211,8 @@ impl Drop for GpuInner {
         // This assumes no clone of the allocator `Arc` (which `Gpu::allocator` hands out)
         // outlives the device: its drop would free memory of a destroyed device.
         unsafe {
+            // The memo's pipelines, which no user holds any more, go before the device.
+            self.compute_pipelines.clear();
             // The allocator goes before the device it allocates from.
             ManuallyDrop::drop(&mut self.allocator);
             if let Some(owner) = self.owner.take() {

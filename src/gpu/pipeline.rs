@@ -1,5 +1,8 @@
 //! Compute pipelines (with specialization constants) and descriptor pools.
 
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+
 use crate::error::VkCall;
 use ash::vk;
 
@@ -66,20 +69,186 @@ impl SpecConstants {
 }
 
 /// A compute pipeline with its shader module, descriptor-set layout (set 0) and layout.
+///
+/// Pipelines are shared: a device keeps the last [`PipelineMemo::CAPACITY`] it built, and
+/// `new` with the same SPIR-V, bindings, push size and constants hands out the one built
+/// before (see [`PipelineMemo`]).
 pub struct ComputePipeline {
     gpu: Gpu,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     pub set_layout: vk::DescriptorSetLayout,
-    module: vk::ShaderModule,
+    /// The Vulkan objects, shared with the device's memo and every other `ComputePipeline`
+    /// built the same; the last holder destroys them.
+    _handles: Arc<ComputeHandles>,
     /// The specialization constants it was built with (what a plan can be checked against).
     pub constants: SpecConstants,
     bindings: Vec<vk::DescriptorType>,
 }
 
+/// The Vulkan objects of one compute pipeline, destroyed with the last reference.
+pub(crate) struct ComputeHandles {
+    device: ash::Device,
+    raw: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    module: vk::ShaderModule,
+}
+
+impl ComputeHandles {
+    /// Builds the module, set layout, pipeline layout and pipeline.
+    fn build(
+        gpu: &Gpu,
+        spirv: &[u8],
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+        constants: &SpecConstants,
+    ) -> Result<Self> {
+        // From here on, `handles` owns what is created, so an early return cleans up.
+        let mut handles = ComputeHandles {
+            device: gpu.device().clone(),
+            raw: vk::Pipeline::null(),
+            layout: vk::PipelineLayout::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            module: shader_module(gpu, spirv)?,
+        };
+        let stages = vk::ShaderStageFlags::COMPUTE;
+        handles.set_layout = set_layout(gpu, bindings, stages)?;
+        handles.layout = pipeline_layout(gpu, handles.set_layout, push_size, stages)?;
+
+        let (map, data) = specialization_data(constants);
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&map)
+            .data(&data);
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(handles.module)
+            .name(c"main")
+            .specialization_info(&spec);
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(handles.layout);
+        // SAFETY: `info` points at `stage`, `spec`, `map` and `data`, alive across the call; each
+        // map entry lies inside `data` (4 bytes per constant); the module and the layout are live
+        // objects of this device. On error `handles`' Drop destroys what was made.
+        handles.raw = unsafe {
+            gpu.device()
+                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .map_err(|(_, e)| e)
+                .call("vkCreateComputePipelines")?[0]
+        };
+        Ok(handles)
+    }
+}
+
+impl Drop for ComputeHandles {
+    fn drop(&mut self) {
+        // SAFETY: the four handles were created from this device for this pipeline and are
+        // destroyed only here, by the last reference (null ones, left by a failed build, are
+        // ignored by Vulkan); every `ComputePipeline` holding them is gone, and with it any
+        // recording that used them, which its owner waited for.
+        unsafe {
+            self.device.destroy_pipeline(self.raw, None);
+            self.device.destroy_pipeline_layout(self.layout, None);
+            self.device
+                .destroy_descriptor_set_layout(self.set_layout, None);
+            self.device.destroy_shader_module(self.module, None);
+        }
+    }
+}
+
+/// The compute pipelines a device built last, by what they were built from: the SPIR-V bytes,
+/// set 0's bindings, the push size and the specialization constants.
+///
+/// Building a pipeline is where a driver compiles its shader, and on a CPU driver that is
+/// most of a small job's time (seconds for the rolling shutter's solve on lavapipe). Every
+/// `Warper`, scene renderer or test that builds the same pipeline on the same device gets the
+/// one built before. Drivers with a pipeline cache of their own cache compilations across
+/// pipelines, but lavapipe's is empty; this memo holds the pipelines themselves. It keeps
+/// the last [`Self::CAPACITY`] (the oldest goes first), so a process that builds pipelines
+/// with ever new constants holds a bounded number.
+#[derive(Default)]
+pub(crate) struct PipelineMemo {
+    entries: Mutex<VecDeque<MemoEntry>>,
+}
+
+struct MemoEntry {
+    spirv: Box<[u8]>,
+    bindings: Vec<vk::DescriptorType>,
+    push_size: u32,
+    constants: SpecConstants,
+    /// Filled by the first thread to build it; a second asking meanwhile waits for it
+    /// instead of compiling the same shader again.
+    built: Arc<Mutex<Option<Arc<ComputeHandles>>>>,
+}
+
+impl PipelineMemo {
+    /// How many pipelines a device keeps.
+    pub const CAPACITY: usize = 64;
+
+    /// The pipeline built from these, built now if the memo has none.
+    fn get_or_build(
+        &self,
+        gpu: &Gpu,
+        spirv: &[u8],
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+        constants: &SpecConstants,
+    ) -> Result<Arc<ComputeHandles>> {
+        let slot = {
+            let mut entries = self
+                .entries
+                .lock()
+                .map_err(|_| Error::internal("the pipeline memo's lock was poisoned"))?;
+            let found = entries.iter().find(|e| {
+                e.push_size == push_size
+                    && e.constants == *constants
+                    && e.bindings == bindings
+                    && *e.spirv == *spirv
+            });
+            match found {
+                Some(e) => e.built.clone(),
+                None => {
+                    if entries.len() >= Self::CAPACITY {
+                        entries.pop_front();
+                    }
+                    let built = Arc::new(Mutex::new(None));
+                    entries.push_back(MemoEntry {
+                        spirv: spirv.into(),
+                        bindings: bindings.to_vec(),
+                        push_size,
+                        constants: constants.clone(),
+                        built: built.clone(),
+                    });
+                    built
+                }
+            }
+        };
+        let mut built = slot
+            .lock()
+            .map_err(|_| Error::internal("a pipeline memo entry's lock was poisoned"))?;
+        if let Some(handles) = built.as_ref() {
+            return Ok(handles.clone());
+        }
+        let handles = Arc::new(ComputeHandles::build(
+            gpu, spirv, bindings, push_size, constants,
+        )?);
+        *built = Some(handles.clone());
+        Ok(handles)
+    }
+
+    /// Drops every pipeline the memo holds (those still in use live on with their users).
+    pub(crate) fn clear(&self) {
+        if let Ok(mut entries) = self.entries.lock() {
+            entries.clear();
+        }
+    }
+}
+
 impl ComputePipeline {
     /// Builds a pipeline from SPIR-V whose set 0 has `bindings` (binding i has type
-    /// `bindings[i]`) and whose push-constant block has `push_size` bytes.
+    /// `bindings[i]`) and whose push-constant block has `push_size` bytes, or hands out the
+    /// one this device built from the same (see [`PipelineMemo`]).
     pub fn new(
         gpu: &Gpu,
         spirv: &[u8],
@@ -87,44 +256,19 @@ impl ComputePipeline {
         push_size: u32,
         constants: SpecConstants,
     ) -> Result<Self> {
-        let device = gpu.device();
-        let module = shader_module(gpu, spirv)?;
-        // From here on, `pipeline` owns what is created, so an early return cleans up.
-        let mut pipeline = ComputePipeline {
+        let handles = gpu
+            .inner
+            .compute_pipelines
+            .get_or_build(gpu, spirv, bindings, push_size, &constants)?;
+        Ok(ComputePipeline {
             gpu: gpu.clone(),
-            raw: vk::Pipeline::null(),
-            layout: vk::PipelineLayout::null(),
-            set_layout: vk::DescriptorSetLayout::null(),
-            module,
+            raw: handles.raw,
+            layout: handles.layout,
+            set_layout: handles.set_layout,
+            _handles: handles,
             constants,
             bindings: bindings.to_vec(),
-        };
-        let stages = vk::ShaderStageFlags::COMPUTE;
-        pipeline.set_layout = set_layout(gpu, bindings, stages)?;
-        pipeline.layout = pipeline_layout(gpu, pipeline.set_layout, push_size, stages)?;
-
-        let (map, data) = specialization_data(&pipeline.constants);
-        let spec = vk::SpecializationInfo::default()
-            .map_entries(&map)
-            .data(&data);
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(c"main")
-            .specialization_info(&spec);
-        let info = vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(pipeline.layout);
-        // SAFETY: `info` points at `stage`, `spec`, `map` and `data`, alive across the call; each
-        // map entry lies inside `data` (4 bytes per constant); `module` and the layout are live
-        // objects of this device. On error `pipeline`'s Drop destroys what was made.
-        pipeline.raw = unsafe {
-            device
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
-                .map_err(|(_, e)| e)
-                .call("vkCreateComputePipelines")?[0]
-        };
-        Ok(pipeline)
+        })
     }
 
     /// Records a dispatch of `groups` workgroups with descriptor set `set` bound at 0 and
@@ -200,21 +344,6 @@ impl ComputePipeline {
     /// Descriptor types of set 0, by binding.
     pub fn bindings(&self) -> &[vk::DescriptorType] {
         &self.bindings
-    }
-}
-
-impl Drop for ComputePipeline {
-    fn drop(&mut self) {
-        let d = self.gpu.device();
-        // SAFETY: the four handles were created from this device for this pipeline and are
-        // destroyed only here (null ones, left by a failed `new`, are ignored by Vulkan); no
-        // pending work still uses them.
-        unsafe {
-            d.destroy_pipeline(self.raw, None);
-            d.destroy_pipeline_layout(self.layout, None);
-            d.destroy_descriptor_set_layout(self.set_layout, None);
-            d.destroy_shader_module(self.module, None);
-        }
     }
 }
 
@@ -484,4 +613,52 @@ pub unsafe fn write_storage_image_descriptors(
     // SAFETY: `writes` points at `infos`, both alive across the call; `set`, the bindings and
     // the views are as the function's contract says.
     unsafe { gpu.device().update_descriptor_sets(&writes, &[]) };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::shaders::COPY_COMP;
+    use crate::pass::spec::NEAREST;
+
+    fn copy(gpu: &Gpu, constants: SpecConstants) -> ComputePipeline {
+        let storage = vk::DescriptorType::STORAGE_IMAGE;
+        ComputePipeline::new(gpu, COPY_COMP, &[storage, storage], 16, constants).unwrap()
+    }
+
+    #[test]
+    fn a_pipeline_built_twice_is_built_once_and_outlives_its_memo_entry() {
+        // A device of its own: the memo's contents are this test's alone.
+        let ctx = crate::testing::new_validated_context();
+        let gpu = ctx.gpu();
+        let a = copy(gpu, SpecConstants::new());
+        let b = copy(gpu, SpecConstants::new());
+        assert_eq!(
+            a.raw, b.raw,
+            "the same SPIR-V and constants: the same pipeline"
+        );
+        let c = copy(gpu, SpecConstants::new().bool(NEAREST, true));
+        assert_ne!(a.raw, c.raw, "other constants: another pipeline");
+        // The same bytes from another address are the same shader.
+        let moved = COPY_COMP.to_vec();
+        let storage = vk::DescriptorType::STORAGE_IMAGE;
+        let d = ComputePipeline::new(gpu, &moved, &[storage, storage], 16, SpecConstants::new())
+            .unwrap();
+        assert_eq!(a.raw, d.raw);
+        // Past the capacity the oldest entry goes; the pipelines built from it stay usable and
+        // a new request builds anew.
+        let held = a.raw;
+        for i in 0..PipelineMemo::CAPACITY as u32 {
+            copy(
+                gpu,
+                SpecConstants::new().u32(SpecId::new("UNUSED", 100 + i), 1),
+            );
+        }
+        let e = copy(gpu, SpecConstants::new());
+        assert_ne!(e.raw, held, "evicted: built again");
+        assert_eq!(a.raw, held);
+        drop((b, c, d, e));
+        drop(a);
+        crate::testing::assert_no_validation_messages(&ctx);
+    }
 }

@@ -297,6 +297,7 @@ impl Context {
             max_image_side: props.limits.max_image_dimension2_d,
             max_cube_side: props.limits.max_image_dimension_cube,
             float_linear: crate::gpu::float_linear(&instance, physical),
+            compute_pipelines: Default::default(),
             owner: owned,
         });
         let pool_info = vk::CommandPoolCreateInfo::default()

@@ -452,8 +452,9 @@ vkl_error vkl_camera_undistort_points(vkl_camera c, const double *uv, size_t n, 
 
 /*
  The camera's model as camera files name it (`opencv`, `brown`, `opencv_fisheye`, `omni`,
- `ucm`, `eucm`, `double_sphere`, `fov`, `equirectangular`, `ftheta`, `ocam`): a static
- NUL-terminated string the caller never frees; NULL for a NULL camera.
+ `ucm`, `eucm`, `double_sphere`, `fov`, `equirectangular`, `ftheta`, `ocam`, `division`,
+ `thin_prism_fisheye`): a static NUL-terminated string the caller never frees; NULL for a
+ NULL camera.
 
  # Safety
  `c` is NULL or a live camera.

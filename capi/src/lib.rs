@@ -515,8 +515,9 @@ unsafe fn write_pairs(out: *mut f64, values: &[Option<[f64; 2]>]) {
 }
 
 /// The camera's model as camera files name it (`opencv`, `brown`, `opencv_fisheye`, `omni`,
-/// `ucm`, `eucm`, `double_sphere`, `fov`, `equirectangular`, `ftheta`, `ocam`): a static
-/// NUL-terminated string the caller never frees; NULL for a NULL camera.
+/// `ucm`, `eucm`, `double_sphere`, `fov`, `equirectangular`, `ftheta`, `ocam`, `division`,
+/// `thin_prism_fisheye`): a static NUL-terminated string the caller never frees; NULL for a
+/// NULL camera.
 ///
 /// # Safety
 /// `c` is NULL or a live camera.
@@ -526,21 +527,21 @@ pub unsafe extern "C" fn vkl_camera_model(c: vkl_camera) -> *const c_char {
     let Ok(c) = (unsafe { arg(c, "camera") }) else {
         return ptr::null();
     };
-    let name: &'static CStr = match c.camera.model_name() {
-        "opencv" => c"opencv",
-        "brown" => c"brown",
-        "opencv_fisheye" => c"opencv_fisheye",
-        "omni" => c"omni",
-        "ucm" => c"ucm",
-        "eucm" => c"eucm",
-        "double_sphere" => c"double_sphere",
-        "fov" => c"fov",
-        "equirectangular" => c"equirectangular",
-        "ftheta" => c"ftheta",
-        "ocam" => c"ocam",
-        _ => c"unknown",
-    };
-    name.as_ptr()
+    c_name(c.camera.model_name()).map_or(ptr::null(), CStr::as_ptr)
+}
+
+/// `name` as a NUL-terminated string that lives as long as the process: the library's own
+/// name for the model, so that no list here can fall behind the library's models. Each
+/// distinct name is allocated once (there are as many as there are models).
+fn c_name(name: &'static str) -> Option<&'static CStr> {
+    static NAMES: Mutex<Vec<(&'static str, &'static CStr)>> = Mutex::new(Vec::new());
+    let mut names = NAMES.lock().ok()?;
+    if let Some((_, c)) = names.iter().find(|(n, _)| *n == name) {
+        return Some(c);
+    }
+    let c: &'static CStr = Box::leak(CString::new(name).ok()?.into_boxed_c_str());
+    names.push((name, c));
+    Some(c)
 }
 
 /// Camera-frame points (X, Y, Z; 3n doubles, OpenCV's frame) to distorted pixels (2n
@@ -1580,4 +1581,42 @@ pub unsafe extern "C" fn vkl_frame_copy(
 pub unsafe extern "C" fn vkl_frame_free(f: *mut vkl_frame) {
     // SAFETY: the caller's contract, as `free` needs it.
     release(|| unsafe { free(f) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vklens_core::internal::model::{samples::sample_cameras, BrownRadial, ModelKind};
+
+    /// The C name of every model of the library's list, through a camera of that model.
+    #[test]
+    fn vkl_camera_model_names_every_model_as_camera_files_do() {
+        let mut named = Vec::new();
+        let brown = Camera::from_brown(&BrownRadial::new(800, 600, 0.15, 0.1).unwrap()).unwrap();
+        let cameras = sample_cameras().unwrap();
+        for (label, camera) in cameras.into_iter().chain([("brown", brown)]) {
+            let expected = if label == "brown" {
+                "brown"
+            } else {
+                camera.model().name()
+            };
+            let mut handle: vkl_camera = ptr::null_mut();
+            new_camera(&mut handle, camera).unwrap();
+            // SAFETY: `handle` is the live camera just made; the name is static.
+            let name = unsafe { CStr::from_ptr(vkl_camera_model(handle)) };
+            assert_eq!(name.to_str().unwrap(), expected, "{label}");
+            // SAFETY: made above, freed once.
+            unsafe { vkl_camera_free(&mut handle) };
+            named.push(expected);
+        }
+        for kind in ModelKind::ALL {
+            assert!(
+                named.contains(&kind.name()),
+                "no sample camera of {}",
+                kind.name()
+            );
+        }
+        // SAFETY: NULL is allowed.
+        assert!(unsafe { vkl_camera_model(ptr::null_mut()) }.is_null());
+    }
 }

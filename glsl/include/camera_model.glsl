@@ -74,7 +74,7 @@ layout(constant_id = 5) const uint VKL_NEWTON_ITERATIONS = 20;
 #define VKL_MODEL_OPENCV 0u
 // 1: OpenCV's fisheye model (model::Fisheye). VKL_RADIAL then says whether any k is non-zero.
 #define VKL_MODEL_FISHEYE 1u
-// 2..9: the other models of the table (model::ModelKind, in its order), one include each
+// 2..11: the other models of the table (model::ModelKind, in its order), one include each
 // under include/models/. Each maps camera-frame rays, and the pinhole-side maps a warp needs
 // follow from its forward map and inverse (vkl_distort_jacobian, vkl_undistort_newton).
 #define VKL_MODEL_OMNI 2u

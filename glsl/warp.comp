@@ -16,6 +16,10 @@
 // vklens:variant rgba8 VKL_RGBA8
 // vklens:variant r32ui VKL_R32UI
 // vklens:variant r32f VKL_R32F
+// The undistort direction (MODE 1) runs the forward model alone: its modules leave the
+// inverses out, which the driver would otherwise compile before specialization drops them.
+// vklens:variant forward VKL_WARP_FORWARD
+// vklens:variant rgba8_forward VKL_RGBA8,VKL_WARP_FORWARD
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

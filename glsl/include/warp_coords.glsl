@@ -22,6 +22,7 @@ layout(constant_id = 16) const bool RECTIFY = false;
 // Source pixel (OpenCV pixel-centre convention) for output pixel `p`; false: no valid source.
 bool vkl_warp_source(vec2 p, vec4 ideal, mat3 rectify, float scale, out vec2 src) {
     src = vec2(0.0);
+#ifndef VKL_WARP_FORWARD
     if (MODE == 0u) {
         vec2 d = vkl_to_normalized(p) / scale;
         vec2 x;
@@ -36,6 +37,7 @@ bool vkl_warp_source(vec2 p, vec4 ideal, mat3 rectify, float scale, out vec2 src
         src = x * ideal.xy + ideal.zw;
         return ok;
     }
+#endif
     vec2 x = (p - ideal.zw) / ideal.xy;
     if (RECTIFY) {
         vec3 ray = rectify * vec3(p, 1.0);

@@ -20,6 +20,12 @@ pub const GRID_DEMO_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/grid
 pub const WARP_COMP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.spv"));
 /// `glsl/warp.comp`, rgba8 images (8-bit data).
 pub const WARP_COMP_RGBA8: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.rgba8.spv"));
+/// `glsl/warp.comp`, rgba32f images, MODE 1 (undistort) alone: the forward model, no inverse.
+pub const WARP_COMP_FORWARD: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.forward.spv"));
+/// `glsl/warp.comp`, rgba8 images, MODE 1 (undistort) alone: the forward model, no inverse.
+pub const WARP_COMP_RGBA8_FORWARD: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.rgba8_forward.spv"));
 /// `glsl/warp.comp`, r32ui images (object IDs, nearest only).
 pub const WARP_COMP_R32UI: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/warp.comp.r32ui.spv"));
 /// `glsl/warp.comp`, r32f images (depth, nearest only).

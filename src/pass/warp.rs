@@ -231,7 +231,9 @@ impl WarpPass {
             .u32(spec::BORDER, desc.border.gpu_id())
             .bool(spec::WRITE_MASK, desc.write_mask);
         let spirv = match desc.format {
+            PixelFormat::Rgba8 if mode == 1 => shaders::WARP_COMP_RGBA8_FORWARD,
             PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,
+            PixelFormat::Rgba32F if mode == 1 => shaders::WARP_COMP_FORWARD,
             PixelFormat::Rgba32F => shaders::WARP_COMP,
             PixelFormat::R32Uint => shaders::WARP_COMP_R32UI,
             PixelFormat::R32Float => shaders::WARP_COMP_R32F,

@@ -105,7 +105,13 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
             with(&coords),
         ),
         ("warp.comp", shaders::WARP_COMP, warp.clone()),
-        ("warp.comp (rgba8)", shaders::WARP_COMP_RGBA8, warp),
+        ("warp.comp (rgba8)", shaders::WARP_COMP_RGBA8, warp.clone()),
+        ("warp.comp (forward)", shaders::WARP_COMP_FORWARD, warp.clone()),
+        (
+            "warp.comp (rgba8, forward)",
+            shaders::WARP_COMP_RGBA8_FORWARD,
+            warp,
+        ),
         (
             "warp_raster.frag",
             shaders::WARP_RASTER_FRAG,

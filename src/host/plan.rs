@@ -665,7 +665,7 @@ mod tests {
             "rolling_shutter_chromatic.toml",
         ] {
             let (plan, scene) = two_pose_plan(name);
-            let expected = one_after_the_other(&ctx, &plan, &scene);
+            let expected = one_after_the_other(ctx, &plan, &scene);
             assert!(
                 !same(&expected[0], &expected[1]),
                 "{name}: the two poses must render differently for this test to mean anything"
@@ -677,7 +677,7 @@ mod tests {
                     "{name}: {refused} frames in flight"
                 );
             }
-            let got = both_in_one_submission(&ctx, &plan, &scene, 2);
+            let got = both_in_one_submission(ctx, &plan, &scene, 2);
             for frame in 0..2 {
                 assert!(
                     same(&got[frame], &expected[frame]),
@@ -685,12 +685,12 @@ mod tests {
                 );
             }
             // One set of uniforms for both: the first frame draws with the second's pose.
-            let shared = both_in_one_submission(&ctx, &plan, &scene, 1);
+            let shared = both_in_one_submission(ctx, &plan, &scene, 1);
             assert!(
                 same(&shared[0], &expected[1]),
                 "{name}: with one frame in flight the first frame should show the second pose"
             );
         }
-        assert_no_validation_messages(&ctx);
+        assert_no_validation_messages(ctx);
     }
 }

@@ -44,14 +44,14 @@ fn run(file: &SceneFile) -> (crate::plan::Plan, crate::host::plan::Recorded) {
     let scene = load_geometry(file).unwrap();
     let p = plan(file, &scene).unwrap();
     let mut frames = 0;
-    let recorded = execute(&ctx, &p, &scene, 0..1, &mut |f| {
+    let recorded = execute(ctx, &p, &scene, 0..1, &mut |f| {
         assert!(f.rendered.color.is_some() || f.rendered.ids.is_some());
         frames += 1;
         Ok(())
     })
     .unwrap();
     assert_eq!(frames, 1);
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
     (p, recorded)
 }
 
@@ -297,7 +297,7 @@ fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
     let p = plan(&file, &scene).unwrap();
     // The headless execution of frame 1 …
     let mut expected = None;
-    execute(&ctx, &p, &scene, 1..2, &mut |f| {
+    execute(ctx, &p, &scene, 1..2, &mut |f| {
         expected = Some(f.rendered);
         Ok(())
     })
@@ -328,13 +328,13 @@ fn a_plan_records_into_the_callers_command_buffer_with_timestamps_per_pass() {
     assert_eq!(got.ids, expected.ids, "IDs differ");
     assert_eq!(got.width, expected.width);
     // The headless path times each pass of the same recorder on its first frame.
-    let times = execute(&ctx, &p, &scene, 0..1, &mut |_| Ok(()))
+    let times = execute(ctx, &p, &scene, 0..1, &mut |_| Ok(()))
         .unwrap()
         .pass_ms;
     assert_eq!(times.len(), 1);
     assert_eq!(times[0].0, "Alg. 1 (vertex + discard)");
     assert!(times[0].1 > 0.0);
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -352,7 +352,7 @@ fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
     let p = plan(&file, &scene).unwrap();
     assert!(matches!(p.route, Route::Warp { .. }), "{:?}", p.route);
     let mut expected = None;
-    execute(&ctx, &p, &scene, 0..1, &mut |f| {
+    execute(ctx, &p, &scene, 0..1, &mut |f| {
         expected = Some(f.rendered);
         Ok(())
     })
@@ -395,7 +395,7 @@ fn the_warp_routes_depth_records_into_the_callers_command_buffer_too() {
         "the grid should fill most of the frame ({surface} of {n})"
     );
     assert!(got.iter().all(|&z| z.is_infinite() || z > 0.0));
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -411,7 +411,7 @@ fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
     let frame = |file: &SceneFile| {
         let p = plan(file, &scene).unwrap();
         let mut out = None;
-        execute(&ctx, &p, &scene, 0..1, &mut |f| {
+        execute(ctx, &p, &scene, 0..1, &mut |f| {
             out = Some(f.rendered);
             Ok(())
         })
@@ -480,7 +480,7 @@ fn render_keys_anti_alias_the_colour_and_leave_the_data_at_one_sample() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("[render] supersample"), "{e}");
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -516,7 +516,7 @@ fn a_scene_of_many_frames_warps_through_a_map_built_once() {
     let ctx = validated_context();
     let frame = |p: &crate::plan::Plan| {
         let mut out = None;
-        let recorded = execute(&ctx, p, &scene, 2..3, &mut |f| {
+        let recorded = execute(ctx, p, &scene, 2..3, &mut |f| {
             out = Some(f.rendered.color.unwrap());
             Ok(())
         })
@@ -551,7 +551,7 @@ fn a_scene_of_many_frames_warps_through_a_map_built_once() {
         "{differ} of {} pixels differ by more than 2 grey levels",
         mapped.len()
     );
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -615,7 +615,7 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
     );
     let ctx = validated_context();
     let mut planned = None;
-    let recorded = execute(&ctx, &p, &scene, 0..1, &mut |f| {
+    let recorded = execute(ctx, &p, &scene, 0..1, &mut |f| {
         planned = f.rendered.color;
         Ok(())
     })
@@ -636,7 +636,7 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
         crate::plan::RenderRequest::color(&camera, crate::plan::PathChoice::Cube { side });
     request.pose = p.poses[0];
     request.chromatic = Some(scales);
-    let flag = crate::host::plan::render_request(&ctx, &scene, &request, &mut |_| {})
+    let flag = crate::host::plan::render_request(ctx, &scene, &request, &mut |_| {})
         .unwrap()
         .color
         .unwrap();
@@ -651,13 +651,13 @@ fn a_lens_past_a_pinholes_reach_is_planned_on_the_cheaper_of_alg1_and_the_cube_m
     // Supersampled, the faces are as fine as the larger camera's pixels.
     let file = parse(&format!("{chromatic}[render]\nsupersample = 2\n"));
     let p2 = plan(&file, &scene).unwrap();
-    execute(&ctx, &p2, &scene, 0..1, &mut |f| {
+    execute(ctx, &p2, &scene, 0..1, &mut |f| {
         let c = f.rendered.color.expect("colour");
         assert_eq!((c.width, c.height), (480, 480));
         Ok(())
     })
     .unwrap();
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 
     // A cube map carries colour alone: chromatic aberration with IDs cannot be planned.
     let with_ids = format!("{chromatic}[outputs]\nids = true\n");
@@ -818,7 +818,7 @@ fn a_moving_rolling_shutter_renders_per_vertex_and_its_still_frames_as_the_globa
     );
     let frames = |p: &crate::plan::Plan| {
         let mut out = Vec::new();
-        execute(&ctx, p, &scene, 0..2, &mut |f| {
+        execute(ctx, p, &scene, 0..2, &mut |f| {
             out.push(f.rendered);
             Ok(())
         })
@@ -859,7 +859,7 @@ fn a_moving_rolling_shutter_renders_per_vertex_and_its_still_frames_as_the_globa
             && e.contains("with 64 bands"),
         "{e}"
     );
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -933,7 +933,7 @@ fn the_rolling_shutter_example_and_its_global_twin_render_and_differ() {
         let scene = load_geometry(&file).unwrap();
         let p = plan(&file, &scene).unwrap();
         let mut out = None;
-        execute(&ctx, &p, &scene, 0..1, &mut |f| {
+        execute(ctx, &p, &scene, 0..1, &mut |f| {
             out = Some(f.rendered);
             Ok(())
         })
@@ -953,7 +953,7 @@ fn the_rolling_shutter_example_and_its_global_twin_render_and_differ() {
         changed > board / 10,
         "{changed} of {board} px change square"
     );
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -967,7 +967,7 @@ fn a_moving_rolling_shutter_without_distortion_renders_through_the_pinhole_pass(
         let p = plan(file, &scene).unwrap();
         assert_eq!(p.route, Route::Pinhole);
         let mut out = Vec::new();
-        execute(&ctx, &p, &scene, 0..2, &mut |f| {
+        execute(ctx, &p, &scene, 0..2, &mut |f| {
             out.push(f.rendered.ids.unwrap());
             Ok(())
         })
@@ -987,7 +987,7 @@ fn a_moving_rolling_shutter_without_distortion_renders_through_the_pinhole_pass(
         changed > 500,
         "{changed} pixels change object under the turn"
     );
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 /// The barrel lens over the grid, colour alone, panning during the second frame's top-to-bottom
@@ -1222,7 +1222,7 @@ fn bands_render_chromatic_colour_and_exact_ids_in_one_frame() {
     p.optics = crate::plan::Optics::Camera(camera);
     p.background = [0.0, 0.0, 0.0, 1.0];
     let mut out = Vec::new();
-    let recorded = execute(&ctx, &p, &scene, 0..2, &mut |f| {
+    let recorded = execute(ctx, &p, &scene, 0..2, &mut |f| {
         out.push(f.rendered);
         Ok(())
     })
@@ -1236,7 +1236,7 @@ fn bands_render_chromatic_colour_and_exact_ids_in_one_frame() {
         assert!(c.iter().all(|p| p[3] == 255));
         assert!(f.ids.as_ref().unwrap().iter().any(|&id| id != 0));
     }
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 /// Frame 0 of `plan` rendered once.
@@ -1263,10 +1263,10 @@ fn bands_approach_the_exact_vertex_path_as_they_multiply() {
     let ctx = validated_context();
     let camera = small_barrel();
     let scene = crate::scene::builtin::grid(16);
-    let frame = |p: &crate::plan::Plan| first_frame(&ctx, p, &scene);
+    let frame = |p: &crate::plan::Plan| first_frame(ctx, p, &scene);
     let max = ctx.gpu().max_image_side();
     // What the warp's resampling leaves against the vertex path's raster, camera still.
-    let floor = still_colour_mad(&ctx, &camera, &scene).unwrap();
+    let floor = still_colour_mad(ctx, &camera, &scene).unwrap();
     // Rows, and columns read against the pan's sweep: band rects of either kind.
     for (readout, counts) in [
         (Readout::TopToBottom, &[1, 4, 16][..]),
@@ -1279,7 +1279,7 @@ fn bands_approach_the_exact_vertex_path_as_they_multiply() {
         let excess: Vec<f64> = counts
             .iter()
             .map(|&k| {
-                let p = bands_plan(&ctx, &camera, readout, k).unwrap();
+                let p = bands_plan(ctx, &camera, readout, k).unwrap();
                 colour_mad(&frame(&p), &exact).unwrap() - floor
             })
             .collect();
@@ -1293,7 +1293,7 @@ fn bands_approach_the_exact_vertex_path_as_they_multiply() {
             .collect();
         assert!(error[1] < 0.3 * error[0], "{readout}: {error:?}");
     }
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 /// The cube map's plan for `camera` through the bench's pan, read in `readout` order, in
@@ -1331,7 +1331,7 @@ fn cube_bands_approach_the_exact_vertex_path_as_they_multiply() {
     // A lens both routes draw: the vertex path exactly per vertex, the cube map by its rays.
     let camera = small_barrel();
     let scene = crate::scene::builtin::grid(16);
-    let frame = |p: &crate::plan::Plan| first_frame(&ctx, p, &scene);
+    let frame = |p: &crate::plan::Plan| first_frame(ctx, p, &scene);
     let max = ctx.gpu().max_image_side();
     // What the cube map's resampling (faces, then the sphere warp) leaves against the vertex
     // path's raster, camera still at the pan's first pose.
@@ -1369,7 +1369,7 @@ fn cube_bands_approach_the_exact_vertex_path_as_they_multiply() {
             "{readout}: {excess:?} above {floor}"
         );
     }
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 /// The 200° fisheye in the room, lateral colour, turning about 1° during its second frame's
@@ -1439,7 +1439,7 @@ fn a_lens_no_pinhole_holds_takes_its_bands_through_the_cube_map() {
     p.bands = Some(8);
     p.background = [0.0, 0.0, 0.0, 1.0];
     let mut out = Vec::new();
-    let recorded = execute(&ctx, &p, &scene, 0..2, &mut |f| {
+    let recorded = execute(ctx, &p, &scene, 0..2, &mut |f| {
         out.push(f.rendered.color.unwrap());
         Ok(())
     })
@@ -1452,5 +1452,5 @@ fn a_lens_no_pinhole_holds_takes_its_bands_through_the_cube_map() {
         assert!(c.iter().all(|p| p[3] == 255));
     }
     assert_ne!(out[0].pixels, out[1].pixels);
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }

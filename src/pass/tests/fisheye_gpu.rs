@@ -51,7 +51,7 @@ fn gpu_forward_within_2e3_px_of_opencv_and_the_formula() {
         let inside = &pts["inside"];
         let want = rows::<2>(&inside["pixel"]);
         let got = run_points(
-            &ctx,
+            ctx,
             &camera,
             PointsMode::Distort,
             Precision::F32,
@@ -68,7 +68,7 @@ fn gpu_forward_within_2e3_px_of_opencv_and_the_formula() {
         xyz.extend(rows::<3>(&pts["beyond90"]["xyz"]));
         let mut want3 = want.clone();
         want3.extend(rows::<2>(&pts["beyond90"]["pixel"]));
-        let got3 = run_project(&ctx, &camera, Precision::F32, &xyz).expect("gpu run");
+        let got3 = run_project(ctx, &camera, Precision::F32, &xyz).expect("gpu run");
         for (g, w) in got3.iter().zip(&want3) {
             let g = g.expect("in the domain");
             worst = worst.max((DVec2::from(g) - DVec2::from(*w)).length());
@@ -76,13 +76,13 @@ fn gpu_forward_within_2e3_px_of_opencv_and_the_formula() {
         println!("{name}: GPU forward max error {worst:.2e} px");
         assert!(worst <= 2e-3, "{name}: {worst} px");
         let outside = rows::<3>(&pts["beyond_max_fov"]["xyz"]);
-        let refused = run_project(&ctx, &camera, Precision::F32, &outside).expect("gpu run");
+        let refused = run_project(ctx, &camera, Precision::F32, &outside).expect("gpu run");
         assert!(
             refused.iter().all(Option::is_none),
             "{name}: past the field of view"
         );
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -102,7 +102,7 @@ fn gpu_inverse_within_1e3_px_of_the_model_and_invalid_outside_the_domain() {
             if precision == Precision::F64 && !ctx.gpu().supports_float64() {
                 continue;
             }
-            let rays = run_unproject(&ctx, &camera, precision, &pixels).expect("gpu run");
+            let rays = run_unproject(ctx, &camera, precision, &pixels).expect("gpu run");
             let mut worst = 0.0_f64;
             for (p, got) in pixels.iter().zip(&rays) {
                 let want = camera.unproject(DVec2::from(*p));
@@ -126,13 +126,13 @@ fn gpu_inverse_within_1e3_px_of_the_model_and_invalid_outside_the_domain() {
             };
             assert!(worst <= bound, "{name} {precision}: {worst} px");
             let fold = rows::<2>(&pts["beyond_fold_pixels"]);
-            let past = run_unproject(&ctx, &camera, precision, &fold).expect("gpu run");
+            let past = run_unproject(ctx, &camera, precision, &fold).expect("gpu run");
             assert!(past.iter().all(Option::is_none), "{name}: past the fold");
         }
         // The pinhole-side inverse (normalized X/Z, Y/Z) agrees with the CPU below 90°.
         let inside = rows::<2>(&pts["inside"]["pixel"]);
         let got = run_points(
-            &ctx,
+            ctx,
             &camera,
             PointsMode::Undistort(InverseMethod::Newton),
             Precision::F32,
@@ -153,7 +153,7 @@ fn gpu_inverse_within_1e3_px_of_the_model_and_invalid_outside_the_domain() {
             assert!(err <= 1e-3, "{name} {p:?}: {err:e}");
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -162,7 +162,7 @@ fn the_standard_models_inverses_are_refused_for_a_fisheye() {
     let (_, camera, _) = cases().remove(0);
     for method in [InverseMethod::Heikkila, InverseMethod::FixedPoint(5)] {
         let e = run_points(
-            &ctx,
+            ctx,
             &camera,
             PointsMode::Undistort(method),
             Precision::F32,
@@ -172,5 +172,5 @@ fn the_standard_models_inverses_are_refused_for_a_fisheye() {
         .to_string();
         assert!(e.contains("fisheye") && e.contains("newton"), "{e}");
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }

@@ -100,7 +100,7 @@ fn the_vertex_path_and_the_cube_warp_agree_on_a_200_degree_fisheye() {
     let camera = fisheye_200();
     let scene = checker_room();
     let vertex = render_scene(
-        &ctx,
+        ctx,
         &scene,
         &request(
             &camera,
@@ -114,7 +114,7 @@ fn the_vertex_path_and_the_cube_warp_agree_on_a_200_degree_fisheye() {
     .expect("vertex path");
     let side = crate::model::overscan::cube_face_side(&camera, 2.0);
     let cube = render_scene(
-        &ctx,
+        ctx,
         &scene,
         &request(&camera, PathChoice::Cube { side }),
         &mut |_| {},
@@ -156,7 +156,7 @@ fn the_vertex_path_and_the_cube_warp_agree_on_a_200_degree_fisheye() {
         (only_cube as f64) < 0.05 * seen as f64,
         "{only_cube} px only in the cube warp"
     );
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -170,7 +170,7 @@ fn the_warp_path_turns_to_a_cube_map_where_no_pinhole_source_fits_and_says_why()
         method: InverseMethod::Newton,
         density: 1.0,
     };
-    let out = render_scene(&ctx, &checker_room(), &request(&camera, warp), &mut |m| {
+    let out = render_scene(ctx, &checker_room(), &request(&camera, warp), &mut |m| {
         said.push(m.to_string())
     })
     .expect("never a failure");
@@ -183,7 +183,7 @@ fn the_warp_path_turns_to_a_cube_map_where_no_pinhole_source_fits_and_says_why()
     // IDs cannot go through a cube: refused with the way out named.
     let mut r = request(&camera, warp);
     r.outputs.ids = true;
-    let e = render_scene(&ctx, &checker_room(), &r, &mut |_| {}).unwrap_err();
+    let e = render_scene(ctx, &checker_room(), &r, &mut |_| {}).unwrap_err();
     assert_eq!(e.argument_name(), Some("path"), "{e}");
     assert!(e.to_string().contains("the vertex path renders"), "{e}");
     // A standard lens whose overscanned source would pass the device limit: refused for the
@@ -204,7 +204,7 @@ fn the_warp_path_turns_to_a_cube_map_where_no_pinhole_source_fits_and_says_why()
     let why = pinhole_source_refusal(&wide, 8.0, 16384).expect("too large at density 8");
     assert!(why.contains("16384 px"), "{why}");
     assert!(pinhole_source_refusal(&wide, 1.0, 16384).is_none());
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 /// A fisheye whose domain reaches 180° (θ_d never folds, no `max_fov_deg`), a little off the
@@ -242,7 +242,7 @@ fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
     let pose = cube_request.pose;
     let side = crate::model::overscan::cube_face_side(&camera, 2.0);
     cube_request.path = PathChoice::Cube { side };
-    let cube = render_scene(&ctx, &scene, &cube_request, &mut |_| {}).expect("cube path");
+    let cube = render_scene(ctx, &scene, &cube_request, &mut |_| {}).expect("cube path");
     let b = rgba8(&cube);
     // The image circle: θ_d(π) f = 60π px.
     let inner = 0.75 * 60.0 * std::f64::consts::PI;
@@ -262,7 +262,7 @@ fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
             Outputs::color_only(Some(ColorFormat::Rgba8)),
         );
         desc.discard = discard;
-        let vertex = crate::host::geometry::render(&ctx, desc, &scene.mesh, None, &pose, &pose)
+        let vertex = crate::host::geometry::render(ctx, desc, &scene.mesh, None, &pose, &pose)
             .expect("vertex path");
         let a = rgba8(&vertex);
         let far = centre
@@ -284,5 +284,5 @@ fn triangles_wrapping_behind_a_fisheye_that_sees_everything_are_dropped() {
         // wall (measured: 52 % without the rule); with it, checker edges differ (2.9 %).
         assert!(far < 0.05, "{}: {far}", discard.name());
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }

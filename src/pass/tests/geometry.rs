@@ -122,7 +122,7 @@ fn ids_depth_and_flow_match_a_ray_cast_through_the_f64_model() {
     let previous = Pose::look_at(DVec3::new(0.13, -0.04, -1.02), DVec3::ZERO, DVec3::Y);
     let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
     let r = render(
-        &ctx,
+        ctx,
         lens(&camera, DEFAULT_DELTA),
         &mesh,
         None,
@@ -130,7 +130,7 @@ fn ids_depth_and_flow_match_a_ray_cast_through_the_f64_model() {
         &previous,
     )
     .unwrap();
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
     let c = compare_ids(&camera, &pose, n, &r);
     assert!(c.checked > 300_000);
     assert_eq!((c.wrong, c.holes), (0, 0), "IDs off the oracle");
@@ -231,7 +231,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             rolling_shutter: None,
             max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
         };
-        let color = render_scene(&ctx, &scene, &request, &mut |_| {})
+        let color = render_scene(ctx, &scene, &request, &mut |_| {})
             .unwrap()
             .color
             .unwrap();
@@ -255,7 +255,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             "{name}: marker centroid {worst} px from projectPoints"
         );
     }
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -268,15 +268,7 @@ fn barrel_discard_shows_the_border_and_stretches_nothing() {
     let scene = builtin::grid(n);
     let pose = Pose::look_at(DVec3::new(0.0, 0.0, -0.25), DVec3::ZERO, DVec3::Y);
     let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
-    let r = render(
-        &ctx,
-        lens(&camera, DEFAULT_DELTA),
-        &mesh,
-        None,
-        &pose,
-        &pose,
-    )
-    .unwrap();
+    let r = render(ctx, lens(&camera, DEFAULT_DELTA), &mesh, None, &pose, &pose).unwrap();
     let c = compare_ids(&camera, &pose, n, &r);
     assert_eq!((c.wrong, c.holes), (0, 0), "{} checked", c.checked);
     // The middles of the image's sides lie outside the pinhole frustum (their undistorted
@@ -294,10 +286,10 @@ fn barrel_discard_shows_the_border_and_stretches_nothing() {
     // Even with δ huge, vertices past the lens's fold (where the forward model would bring
     // them back into the image as stretched triangles) are caught by the valid-domain test
     // in the vertex shader: still nothing wrong.
-    let r = render(&ctx, lens(&camera, 1e6), &mesh, None, &pose, &pose).unwrap();
+    let r = render(ctx, lens(&camera, 1e6), &mesh, None, &pose, &pose).unwrap();
     let c = compare_ids(&camera, &pose, n, &r);
     assert_eq!(c.wrong, 0);
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -311,15 +303,7 @@ fn geometry_behind_the_camera_gives_holes_never_garbage() {
     let eye = DVec3::new(0.0, 0.0, -0.03);
     let pose = Pose::look_at(eye, eye + DVec3::new(0.0, 1.0, 0.6), DVec3::Z);
     let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
-    let r = render(
-        &ctx,
-        lens(&camera, DEFAULT_DELTA),
-        &mesh,
-        None,
-        &pose,
-        &pose,
-    )
-    .unwrap();
+    let r = render(ctx, lens(&camera, DEFAULT_DELTA), &mesh, None, &pose, &pose).unwrap();
     let c = compare_ids(&camera, &pose, n, &r);
     assert!(c.checked > 100_000);
     assert_eq!(
@@ -332,7 +316,7 @@ fn geometry_behind_the_camera_gives_holes_never_garbage() {
         c.holes,
         c.checked
     );
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -357,7 +341,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         .chain([0])
         .collect();
     let r = render(
-        &ctx,
+        ctx,
         lens(&camera, DEFAULT_DELTA),
         &scene.mesh,
         None,
@@ -388,10 +372,10 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         rolling_shutter: None,
         max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
     };
-    let warped = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
+    let warped = render_scene(ctx, &scene, &request, &mut |_| {}).unwrap();
     assert!(warped.ids.unwrap().iter().all(|i| valid.contains(i)));
     let pinhole = render(
-        &ctx,
+        ctx,
         GeometryDesc::new(
             camera.clone(),
             Projection::Pinhole,
@@ -423,7 +407,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
     };
     let geometry = crate::model::warp::WarpGeometry::distort(camera.clone(), InverseMethod::Newton);
     let (bilinear, _) = crate::host::warp::run_warp(
-        &ctx,
+        ctx,
         crate::pass::warp::WarpDesc {
             geometry,
             coordinates: crate::pass::warp::Coordinates::Analytic,
@@ -443,7 +427,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
         })
         .count();
     assert!(mixed > 1000, "bilinear IDs should mix at edges: {mixed}");
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -470,12 +454,12 @@ fn vertex_and_warp_paths_agree_on_a_finely_tessellated_scene() {
         rolling_shutter: None,
         max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
     };
-    let vertex = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
+    let vertex = render_scene(ctx, &scene, &request, &mut |_| {}).unwrap();
     request.path = PathChoice::Warp {
         method: InverseMethod::Newton,
         density: 1.0,
     };
-    let warp = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
+    let warp = render_scene(ctx, &scene, &request, &mut |_| {}).unwrap();
     let (a, b) = (vertex.color.unwrap(), warp.color.unwrap());
     let (mut sum, mut count, mut big) = (0f64, 0usize, 0usize);
     for i in 0..a.len() {
@@ -495,7 +479,7 @@ fn vertex_and_warp_paths_agree_on_a_finely_tessellated_scene() {
         (big as f64) < 0.002 * count as f64,
         "{big} pixels differ by > 25 %"
     );
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -531,11 +515,11 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
         rolling_shutter: None,
         max_error_px: crate::plan::scene_file::DEFAULT_MAX_ERROR_PX,
     };
-    let got = render_scene(&ctx, &scene, &request, &mut |_| {}).unwrap();
+    let got = render_scene(ctx, &scene, &request, &mut |_| {}).unwrap();
     // The host round trip: the overscanned pinhole render read back, then warped.
     let ov = crate::overscan(&camera, 1.0).unwrap();
     let pinhole = render_scene(
-        &ctx,
+        ctx,
         &scene,
         &RenderRequest {
             camera: ov.clone(),
@@ -564,7 +548,7 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
             fill,
             write_mask: false,
         };
-        run_warp(&ctx, desc, &raster).unwrap().0
+        run_warp(ctx, desc, &raster).unwrap().0
     };
     let ids = warp(
         Pixels::R32Uint(pinhole.ids.unwrap()),
@@ -594,7 +578,7 @@ fn the_warp_paths_ids_and_depth_stay_on_the_gpu_and_equal_the_host_round_trip() 
     assert!(got_ids.iter().any(|&i| i != 0), "the boxes are in view");
     let got_depth: Vec<u32> = got.depth.unwrap().iter().map(|z| z.to_bits()).collect();
     assert!(got_depth == expected_depth, "depth differs");
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 /// Renders `desc` with the geometry-shader discard and with the compute discard: the same
@@ -708,7 +692,7 @@ fn the_compute_discard_renders_what_the_geometry_shader_does() {
         },
         all,
     );
-    same_with_both_discards(&ctx, desc, &mesh, &pose, &previous, "flow scene");
+    same_with_both_discards(ctx, desc, &mesh, &pose, &previous, "flow scene");
 
     // The barrel discard scene (most of the grid outside the frustum), with δ as the seed
     // sets it and with δ huge (only the valid domain drops triangles).
@@ -717,8 +701,7 @@ fn the_compute_discard_renders_what_the_geometry_shader_does() {
     let pose = Pose::look_at(DVec3::new(0.0, 0.0, -0.25), DVec3::ZERO, DVec3::Y);
     let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
     for delta in [DEFAULT_DELTA, 1e6] {
-        let ids =
-            same_with_both_discards(&ctx, lens(&camera, delta), &mesh, &pose, &pose, "barrel");
+        let ids = same_with_both_discards(ctx, lens(&camera, delta), &mesh, &pose, &pose, "barrel");
         assert!(
             ids.iter().filter(|&&i| i == 0).count() > 1000,
             "the discard dropped nothing"
@@ -731,7 +714,7 @@ fn the_compute_discard_renders_what_the_geometry_shader_does() {
     let pose = Pose::look_at(eye, eye + DVec3::new(0.0, 1.0, 0.6), DVec3::Z);
     let mesh = tessellate(&scene.mesh, &pose, &camera, 4.0).unwrap();
     same_with_both_discards(
-        &ctx,
+        ctx,
         lens(&camera, DEFAULT_DELTA),
         &mesh,
         &pose,
@@ -800,7 +783,7 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
         d
     };
     let fresh = |camera: &Camera, pose: &Pose| {
-        render(&ctx, desc(camera), mesh, None, pose, pose)
+        render(ctx, desc(camera), mesh, None, pose, pose)
             .unwrap()
             .ids
             .unwrap()
@@ -893,5 +876,5 @@ fn the_compute_discard_restores_what_an_earlier_frame_dropped() {
     );
     assert!(first_ids == expected_near, "the first lens");
     assert!(second_ids == fresh(&mild, &aside), "the second lens");
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }

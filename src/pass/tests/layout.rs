@@ -106,7 +106,11 @@ fn shaders_declare_the_spec_constants_the_host_sets() {
         ),
         ("warp.comp", shaders::WARP_COMP, warp.clone()),
         ("warp.comp (rgba8)", shaders::WARP_COMP_RGBA8, warp.clone()),
-        ("warp.comp (forward)", shaders::WARP_COMP_FORWARD, warp.clone()),
+        (
+            "warp.comp (forward)",
+            shaders::WARP_COMP_FORWARD,
+            warp.clone(),
+        ),
         (
             "warp.comp (rgba8, forward)",
             shaders::WARP_COMP_RGBA8_FORWARD,

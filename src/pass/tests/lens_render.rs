@@ -19,7 +19,7 @@ fn image_based_render_matches_the_reference() {
     // resamples it bilinearly).
     let ctx = validated_context();
     let scene = builtin::boxes();
-    let mesh = upload_mesh(&ctx, &scene.mesh, scene.texture.as_ref());
+    let mesh = upload_mesh(ctx, &scene.mesh, scene.texture.as_ref());
     for lens in ["achromat.50mm.dat", "biconvex.50mm.dat"] {
         let p = shipped(lens);
         let framing = Optics::new(&p, (240, 160), 0.15, 1.0, None).unwrap();
@@ -35,7 +35,7 @@ fn image_based_render_matches_the_reference() {
             LensRenderOptions::default(),
         )
         .unwrap();
-        let frame = renderer.render(&ctx, &mesh, &pose).unwrap();
+        let frame = renderer.render(ctx, &mesh, &pose).unwrap();
         let reference = render_reference(
             &optics,
             &[Channel {
@@ -57,7 +57,7 @@ fn image_based_render_matches_the_reference() {
         assert!(db > 28.0, "{lens}: PSNR {db:.1} dB against the reference");
         assert!(model.max_angle_deg() < options.max_angle_deg);
     }
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 /// A white wall `distance` metres ahead, wider than any view.
@@ -97,9 +97,9 @@ fn vignetting_falls_off_as_the_reference_does() {
     )
     .unwrap();
     let wall = white_wall(5.0);
-    let mesh = upload_mesh(&ctx, &wall, None);
+    let mesh = upload_mesh(ctx, &wall, None);
     let frame = renderer
-        .render(&ctx, &mesh, &crate::scene::Pose::IDENTITY)
+        .render(ctx, &mesh, &crate::scene::Pose::IDENTITY)
         .unwrap();
     let mut profile = Vec::new();
     for k in 0..=10 {
@@ -128,7 +128,7 @@ fn vignetting_falls_off_as_the_reference_does() {
         "{profile:?}"
     );
     assert!(profile[10] < 0.3 && profile[0] > 0.99, "{profile:?}");
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 /// A white square of side `side` centred at (x, 0, z), facing the camera.
@@ -171,7 +171,7 @@ fn chromatic_aberration_comes_out_of_the_glass() {
     // On the axis, 2 m away, in focus (d line): what differs between channels is where each
     // wavelength focuses (longitudinal colour), seen as the spot's spread.
     let mesh = square(0.0, 2.0, 0.05);
-    let gpu_mesh = upload_mesh(&ctx, &mesh, None);
+    let gpu_mesh = upload_mesh(ctx, &mesh, None);
     let scene = crate::scene::Scene {
         name: "square".into(),
         mesh: mesh.clone(),
@@ -191,7 +191,7 @@ fn chromatic_aberration_comes_out_of_the_glass() {
         let mut renderer =
             LensRenderer::new(ctx.gpu(), &models, LensRenderOptions::default()).unwrap();
         let frame = renderer
-            .render(&ctx, &gpu_mesh, &crate::scene::Pose::IDENTITY)
+            .render(ctx, &gpu_mesh, &crate::scene::Pose::IDENTITY)
             .unwrap();
         let channels: Vec<Channel> = RGB_WAVELENGTHS
             .iter()
@@ -231,5 +231,5 @@ fn chromatic_aberration_comes_out_of_the_glass() {
         achromat.0.abs() < singlet.0 / 4.0 && achromat.1.abs() < singlet.1 / 4.0,
         "achromat {achromat:?} vs singlet {singlet:?}"
     );
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }

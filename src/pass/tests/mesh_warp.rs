@@ -37,7 +37,7 @@ fn mesh_error_shrinks_with_n_and_the_image_matches_the_compute_warp() {
         bit_depth: BitDepth::U8,
     };
     let error = |n: u32| {
-        let m = run_mesh_warp(&ctx, &g, n, MeshWarpOutput::Coordinates, &source).unwrap();
+        let m = run_mesh_warp(ctx, &g, n, MeshWarpOutput::Coordinates, &source).unwrap();
         let (mut worst, mut covered, mut sourced) = (0f64, 0, 0);
         for y in (0..h).step_by(5) {
             for x in (0..w).step_by(5) {
@@ -69,9 +69,9 @@ fn mesh_error_shrinks_with_n_and_the_image_matches_the_compute_warp() {
     // Measured 0.012 px at 128×128 on this camera (the bench table has more).
     assert!(fine < 0.02, "{fine}");
 
-    let mesh = run_mesh_warp(&ctx, &g, 128, MeshWarpOutput::Image, &source).unwrap();
+    let mesh = run_mesh_warp(ctx, &g, 128, MeshWarpOutput::Image, &source).unwrap();
     let (compute, _) = run_warp(
-        &ctx,
+        ctx,
         WarpDesc {
             geometry: g.clone(),
             coordinates: Coordinates::Analytic,
@@ -92,5 +92,5 @@ fn mesh_error_shrinks_with_n_and_the_image_matches_the_compute_warp() {
     let mean = sum / mesh.len() as f64;
     // The sampler's 8-bit sub-texel weights against the compute warp's f32 bilinear.
     assert!(mean < 0.01, "mean difference {mean}");
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }

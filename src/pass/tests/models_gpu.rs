@@ -51,8 +51,8 @@ fn every_model_projects_on_the_gpu_as_on_the_cpu() {
     let points = directions();
     let fitted = fitted_inverse_cameras().expect("fitted samples");
     for (name, camera) in sample_cameras().expect("samples").into_iter().chain(fitted) {
-        for precision in precisions(&ctx) {
-            let got = run_project(&ctx, &camera, precision, &points).expect("gpu run");
+        for precision in precisions(ctx) {
+            let got = run_project(ctx, &camera, precision, &points).expect("gpu run");
             let mut worst = 0.0f64;
             for (p, g) in points.iter().zip(&got) {
                 let p = DVec3::from(*p);
@@ -92,7 +92,7 @@ fn every_model_projects_on_the_gpu_as_on_the_cpu() {
             assert!(worst <= bound, "{name} {precision}: {worst} px");
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -107,8 +107,8 @@ fn every_model_unprojects_on_the_gpu_within_1e_3_px() {
                 pixels.push([i as f64 / 32.0 * (w - 1.0), j as f64 / 24.0 * (h - 1.0)]);
             }
         }
-        for precision in precisions(&ctx) {
-            let rays = run_unproject(&ctx, &camera, precision, &pixels).expect("gpu run");
+        for precision in precisions(ctx) {
+            let rays = run_unproject(ctx, &camera, precision, &pixels).expect("gpu run");
             let (mut worst, mut valid) = (0.0f64, 0);
             for (p, g) in pixels.iter().zip(&rays) {
                 let px = DVec2::from(*p);
@@ -146,5 +146,5 @@ fn every_model_unprojects_on_the_gpu_within_1e_3_px() {
             assert!(worst <= bound, "{name} {precision}: {worst} px");
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }

@@ -19,7 +19,7 @@ fn gpu_forward_within_2e3_px_of_opencv() {
             .map(|p| p.undistorted_normalized)
             .collect();
         let out =
-            run_points(&ctx, &cam, PointsMode::Distort, Precision::F32, &inputs).expect("gpu run");
+            run_points(ctx, &cam, PointsMode::Distort, Precision::F32, &inputs).expect("gpu run");
         let mut worst = 0.0_f64;
         for (p, got) in case.points.iter().zip(&out) {
             let got = got.expect("forward is defined on every reference point");
@@ -32,7 +32,7 @@ fn gpu_forward_within_2e3_px_of_opencv() {
             case.name
         );
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 /// Newton on the GPU for every in-domain reference point: per point, the f32 forward error
@@ -49,7 +49,7 @@ fn gpu_newton_errors(precision: Precision) -> NewtonErrors {
         let cam = case.camera().expect("camera");
         let inputs: Vec<[f64; 2]> = case.points.iter().map(|p| p.distorted_pixel).collect();
         let out = run_points(
-            &ctx,
+            ctx,
             &cam,
             PointsMode::Undistort(InverseMethod::Newton),
             precision,
@@ -81,7 +81,7 @@ fn gpu_newton_errors(precision: Precision) -> NewtonErrors {
         }
         all.push((case.name.clone(), rows));
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
     all
 }
 
@@ -147,7 +147,7 @@ fn gpu_approximations_agree_with_their_cpu_twins() {
         let inputs: Vec<[f64; 2]> = case.points.iter().map(|p| p.distorted_pixel).collect();
         for method in [InverseMethod::Heikkila, InverseMethod::FixedPoint(5)] {
             let out = run_points(
-                &ctx,
+                ctx,
                 &cam,
                 PointsMode::Undistort(method),
                 Precision::F32,
@@ -183,7 +183,7 @@ fn gpu_approximations_agree_with_their_cpu_twins() {
             assert!(worst <= 5e-3, "{} {method}: {worst}", case.name);
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -325,5 +325,5 @@ fn specialization_constants_compile_out_unused_terms() {
         worst < 2e-3,
         "with VKL_PRISM=false the shader is not the prism-free model"
     );
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }

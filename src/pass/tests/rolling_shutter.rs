@@ -186,7 +186,7 @@ fn each_vertex_lands_where_the_f64_solve_puts_it() {
     let ctx = validated_context();
     let mesh = builtin::grid(24).mesh;
     for readout in [Readout::TopToBottom, Readout::RightToLeft] {
-        let a = gpu_against_f64(&ctx, &mesh, readout, pan(), previous_pan());
+        let a = gpu_against_f64(ctx, &mesh, readout, pan(), previous_pan());
         assert_eq!(a.checked, mesh.vertices.len(), "the grid is in view");
         // The pan's bound lets every vertex skip the scan: this is the bounded solve.
         assert_eq!(bounded_vertices(&mesh, readout, pan()), mesh.vertices.len());
@@ -196,7 +196,7 @@ fn each_vertex_lands_where_the_f64_solve_puts_it() {
         // A pixel's worth of readout time is 1/511: the solve finds the same line.
         assert!(a.s <= 1e-5, "{readout}: readout time off by {}", a.s);
     }
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -216,12 +216,12 @@ fn a_motion_too_fast_for_the_bound_is_scanned_and_lands_where_the_f64_solve_puts
         "no vertex is bounded"
     );
     assert_eq!(bounded_vertices(&mesh, readout, before), 0);
-    let a = gpu_against_f64(&ctx, &mesh, readout, now, before);
+    let a = gpu_against_f64(ctx, &mesh, readout, now, before);
     assert!(a.checked > mesh.vertices.len() / 2, "{a:?}");
     assert!(a.pixel <= 1e-3, "pixel off by {} px", a.pixel);
     assert!(a.flow <= 2e-3, "flow off by {} px", a.flow);
     assert!(a.s <= 1e-4, "readout time off by {}", a.s);
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 /// The exact frame: every pixel's ray cast from the pose of the line that reads it.
@@ -318,7 +318,7 @@ fn a_moving_frame_matches_a_ray_cast_from_each_lines_own_pose() {
         let mut d = desc(Some(readout), discard);
         d.outputs.flow = flow;
         let got = render_moving(
-            &ctx,
+            ctx,
             d,
             &mesh,
             None,
@@ -339,7 +339,7 @@ fn a_moving_frame_matches_a_ray_cast_from_each_lines_own_pose() {
             discard.name()
         );
     }
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -349,17 +349,9 @@ fn a_still_camera_renders_the_global_shutters_frame_bit_for_bit() {
     let ctx = validated_context();
     let mesh = builtin::grid(8).mesh;
     let (pose, _) = pan();
-    let global = render(
-        &ctx,
-        desc(None, Discard::Compute),
-        &mesh,
-        None,
-        &pose,
-        &pose,
-    )
-    .unwrap();
+    let global = render(ctx, desc(None, Discard::Compute), &mesh, None, &pose, &pose).unwrap();
     let still = render_moving(
-        &ctx,
+        ctx,
         desc(None, Discard::Compute),
         &mesh,
         None,
@@ -383,7 +375,7 @@ fn a_still_camera_renders_the_global_shutters_frame_bit_for_bit() {
     // A global pass refuses a frame that moves rather than drawing it from one pose.
     let (start, end) = pan();
     let refused = render_moving(
-        &ctx,
+        ctx,
         desc(None, Discard::Compute),
         &mesh,
         None,
@@ -391,5 +383,5 @@ fn a_still_camera_renders_the_global_shutters_frame_bit_for_bit() {
         (&start, &end),
     );
     assert!(refused.is_err_and(|e| e.to_string().contains("global")));
-    assert_no_validation_messages(&ctx);
+    assert_no_validation_messages(ctx);
 }

@@ -122,13 +122,13 @@ fn a_cube_of_direction_colours_gives_every_pixel_its_direction() {
     let faces = direction_cube(256);
     for camera in [fisheye_200(), gopro()] {
         let (out, mask) =
-            run_sphere_warp(&ctx, &camera, SphereSource::Cube(&faces), &options()).expect("warp");
+            run_sphere_warp(ctx, &camera, SphereSource::Cube(&faces), &options()).expect("warp");
         let worst = worst_error(&camera, &out, &mask);
         println!("{}: worst colour error {worst:.2e}", camera.model_name());
         // Bilinear interpolation of a smooth function over 256² faces: well under 1e-3.
         assert!(worst < 1e-3, "{}: {worst}", camera.model_name());
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -137,14 +137,14 @@ fn a_panorama_of_direction_colours_gives_every_pixel_its_direction() {
     let (w, h) = (1024, 512);
     let pano = float_raster(w, h, |u, v| colour_of(equirect_direction(u, v, (w, h))));
     for camera in [fisheye_200(), gopro()] {
-        let (out, mask) = run_sphere_warp(&ctx, &camera, SphereSource::Equirect(&pano), &options())
-            .expect("warp");
+        let (out, mask) =
+            run_sphere_warp(ctx, &camera, SphereSource::Equirect(&pano), &options()).expect("warp");
         let worst = worst_error(&camera, &out, &mask);
         println!("{}: worst colour error {worst:.2e}", camera.model_name());
         // Coarser than the cube near the poles; the seam at ±180° wraps.
         assert!(worst < 5e-3, "{}: {worst}", camera.model_name());
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -160,14 +160,14 @@ fn a_constant_cube_gives_a_constant_image_without_seams() {
     let faces = [0; 6].map(|_| face.clone());
     let camera = fisheye_200();
     let (out, mask) =
-        run_sphere_warp(&ctx, &camera, SphereSource::Cube(&faces), &options()).expect("warp");
+        run_sphere_warp(ctx, &camera, SphereSource::Cube(&faces), &options()).expect("warp");
     let Pixels::Rgba8(px) = &out.pixels else {
         panic!("an 8-bit source gives an 8-bit output")
     };
     let valid: Vec<_> = px.iter().zip(&mask).filter(|(_, m)| **m > 127).collect();
     assert!(valid.len() > 300_000, "{} valid pixels", valid.len());
     assert!(valid.iter().all(|(p, _)| **p == colour), "a seam or a hole");
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -181,7 +181,7 @@ fn chromatic_channels_see_their_own_magnified_directions() {
         ..options()
     };
     let (out, mask) =
-        run_sphere_warp(&ctx, &camera, SphereSource::Cube(&faces), &opts).expect("warp");
+        run_sphere_warp(ctx, &camera, SphereSource::Cube(&faces), &opts).expect("warp");
     let Pixels::Rgba32F(px) = &out.pixels else {
         panic!()
     };
@@ -204,7 +204,7 @@ fn chromatic_channels_see_their_own_magnified_directions() {
         }
     }
     assert!(worst < 1e-3, "{worst}");
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -212,7 +212,7 @@ fn mismatched_faces_are_refused_naming_the_face() {
     let ctx = crate::testing::validated_context();
     let mut faces = direction_cube(32);
     faces[3] = float_raster(32, 16, |_, _| [0.0; 4]);
-    let e = run_sphere_warp(&ctx, &fisheye_200(), SphereSource::Cube(&faces), &options())
+    let e = run_sphere_warp(ctx, &fisheye_200(), SphereSource::Cube(&faces), &options())
         .unwrap_err()
         .to_string();
     assert!(e.contains("-y") && e.contains("32×16"), "{e}");

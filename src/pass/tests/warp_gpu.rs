@@ -136,7 +136,7 @@ fn gpu_warp_matches_the_f64_reference_on_every_shared_camera() {
                 WarpGeometry::distort(cam.clone(), InverseMethod::Newton),
                 coords,
                 PixelFormat::Rgba32F,
-                &ctx,
+                ctx,
             );
             // f32 coordinates are within ~1e-3 px of f64 (up to 7e-3 px near folds); on this
             // image a 1e-3 px shift changes a value by at most ~1e-3 at the sharpest edge.
@@ -152,7 +152,7 @@ fn gpu_warp_matches_the_f64_reference_on_every_shared_camera() {
             );
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -169,7 +169,7 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
             chroma.clone(),
             coords,
             PixelFormat::Rgba32F,
-            &ctx,
+            ctx,
         );
         assert!(d.mean < 5e-6 && d.max < 2e-3 && d.mask_mismatch * 1000 <= total);
     }
@@ -178,7 +178,7 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
         WarpGeometry::undistort(fig2.clone()),
         Coordinates::Analytic,
         PixelFormat::Rgba32F,
-        &ctx,
+        ctx,
     );
     assert!(und.mean < 5e-6 && und.max < 2e-3 && und.mask_mismatch * 1000 <= total);
     // 8-bit: the GPU stores rgba8, so rounding to 1/255 (≤ 0.00196) comes on top.
@@ -187,7 +187,7 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
         WarpGeometry::distort(fig2.clone(), InverseMethod::Newton),
         Coordinates::Analytic,
         PixelFormat::Rgba8,
-        &ctx,
+        ctx,
     );
     assert!(d8.mean < 1e-3 && d8.max < 2.5e-3 && d8.mask_mismatch * 1000 <= total);
     for method in [InverseMethod::Heikkila, InverseMethod::FixedPoint(5)] {
@@ -196,14 +196,14 @@ fn chromatic_undistort_and_8bit_variants_match_the_reference() {
             WarpGeometry::distort(fig2.clone(), method),
             Coordinates::Analytic,
             PixelFormat::Rgba32F,
-            &ctx,
+            ctx,
         );
         assert!(
             d.mean < 5e-6 && d.max < 2e-3 && d.mask_mismatch * 1000 <= total,
             "{method}"
         );
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -226,7 +226,7 @@ fn every_interpolation_and_border_matches_the_reference() {
                     coords,
                     PixelFormat::Rgba32F,
                     filter,
-                    &ctx,
+                    ctx,
                 );
                 // Nearest flips to the neighbouring pixel where f32 and f64 coordinates sit on
                 // either side of a half-pixel: a step of the test image on a few pixels.
@@ -249,7 +249,7 @@ fn every_interpolation_and_border_matches_the_reference() {
             _ => assert_eq!(n, 0, "{}: pixels filled", border.name()),
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -261,7 +261,7 @@ fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
     for name in ["prism_tilt", "rational_wide"] {
         let cam = crate::testing::reference_camera(name);
         let g = WarpGeometry::distort(cam.clone(), InverseMethod::Newton);
-        let exact = &read_maps(&ctx, &g, Coordinates::Map).unwrap()[0];
+        let exact = &read_maps(ctx, &g, Coordinates::Map).unwrap()[0];
         for (coords, bound) in [
             (
                 Coordinates::CoarseMap {
@@ -288,7 +288,7 @@ fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
                 2e-3,
             ),
         ] {
-            let coarse = &read_maps(&ctx, &g, coords).unwrap()[0];
+            let coarse = &read_maps(ctx, &g, coords).unwrap()[0];
             let (mut worst, mut residual, mut lost, mut gained) = (0.0f64, 0.0f64, 0usize, 0usize);
             for (i, (e, c)) in exact.iter().zip(coarse).enumerate() {
                 let p = DVec2::new(
@@ -331,7 +331,7 @@ fn coarse_maps_trade_bounded_error_and_conservative_validity_for_speed() {
             }
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -360,7 +360,7 @@ fn a_full_camera_per_channel_matches_the_reference() {
         geometry.clone(),
         Coordinates::Map,
         PixelFormat::Rgba32F,
-        &ctx,
+        ctx,
     );
     assert!(d.mean < 5e-6 && d.max < 2e-3 && d.mask_mismatch * 1000 <= total);
     // Analytic mode refuses (three full models per pixel belong in a map).
@@ -374,7 +374,7 @@ fn a_full_camera_per_channel_matches_the_reference() {
         write_mask: true,
     };
     assert!(crate::pass::warp::WarpPass::new(ctx.gpu(), desc).is_err());
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -418,7 +418,7 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
             };
             // The host's f64 estimate of this interpolation (at cell centres, where it peaks).
             let estimate = g.coarse_interpolation_error(stride, interpolation).unwrap();
-            let coarse = &read_maps(&ctx, &g, coords).unwrap()[0];
+            let coarse = &read_maps(ctx, &g, coords).unwrap()[0];
             assert_eq!(coarse.len(), (w * h) as usize);
             for (i, c) in coarse.iter().enumerate() {
                 let p = DVec2::new((i as u32 % w) as f64, (i as u32 / w) as f64);
@@ -431,7 +431,7 @@ fn coarse_maps_cover_images_that_are_not_a_multiple_of_the_stride() {
             }
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -479,7 +479,7 @@ fn the_coarse_map_check_is_compiled_out_only_where_the_f64_estimate_allows() {
             "{name} {interpolation:?}"
         );
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -520,8 +520,8 @@ fn the_fragment_shader_warp_matches_the_compute_warp() {
                 fill: [0.25, 0.0, 0.0, 0.0],
                 write_mask: true,
             };
-            let (compute, mask) = run_warp(&ctx, desc.clone(), source).expect("compute warp");
-            let raster = run_raster_warp(&ctx, desc, source).expect("fragment warp");
+            let (compute, mask) = run_warp(ctx, desc.clone(), source).expect("compute warp");
+            let raster = run_raster_warp(ctx, desc, source).expect("fragment warp");
             let (a, b) = (rgba(&compute), rgba(&raster));
             assert_eq!(a.len(), b.len());
             let worst = a
@@ -549,7 +549,7 @@ fn the_fragment_shader_warp_matches_the_compute_warp() {
             }
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 fn rgba(r: &Raster) -> Vec<[f32; 4]> {

@@ -48,7 +48,7 @@ fn folding_lenses_get_a_clean_masked_border_not_streaks() {
         let source = flat(o.width, o.height, 200);
         let fill = [1.0, 0.0, 1.0, 1.0];
         let (out, mask) = run_warp(
-            &ctx,
+            ctx,
             desc(g, PixelFormat::Rgba8, Sampling::Bilinear, fill),
             &source,
         )
@@ -105,7 +105,7 @@ fn folding_lenses_get_a_clean_masked_border_not_streaks() {
             );
         }
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -124,7 +124,7 @@ fn a_one_pixel_image_and_a_large_one() {
     )
     .unwrap();
     let (out, mask) = run_warp(
-        &ctx,
+        ctx,
         desc(
             WarpGeometry::distort(tiny, InverseMethod::Newton),
             PixelFormat::Rgba8,
@@ -149,7 +149,7 @@ fn a_one_pixel_image_and_a_large_one() {
     )
     .unwrap();
     let (out, mask) = run_warp(
-        &ctx,
+        ctx,
         desc(
             WarpGeometry::distort(big, InverseMethod::Newton),
             PixelFormat::Rgba8,
@@ -177,7 +177,7 @@ fn a_one_pixel_image_and_a_large_one() {
         )
         .unwrap();
         let e = run_warp(
-            &ctx,
+            ctx,
             desc(
                 WarpGeometry::distort(huge, InverseMethod::Newton),
                 PixelFormat::Rgba8,
@@ -189,7 +189,7 @@ fn a_one_pixel_image_and_a_large_one() {
         .expect_err("refused");
         assert!(e.to_string().contains("larger than"), "{e}");
     }
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }
 
 #[test]
@@ -221,7 +221,7 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
     };
     let g = WarpGeometry::distort(cam, InverseMethod::Newton);
     let (out, mask) = run_warp(
-        &ctx,
+        ctx,
         desc(g.clone(), PixelFormat::R32Uint, Sampling::Nearest, [0.0; 4]),
         &source,
     )
@@ -243,7 +243,7 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
         bit_depth: BitDepth::F32,
     };
     let (blended, _) = run_warp(
-        &ctx,
+        ctx,
         desc(g, PixelFormat::Rgba32F, Sampling::Bilinear, [0.0; 4]),
         &as_float,
     )
@@ -282,5 +282,5 @@ fn object_ids_are_never_blended_but_bilinear_colour_is() {
         ),
     );
     assert!(e.is_err());
-    crate::testing::assert_no_validation_messages(&ctx);
+    crate::testing::assert_no_validation_messages(ctx);
 }

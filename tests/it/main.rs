@@ -1,6 +1,7 @@
 //! The integration tests: the command line, the public API and the cross-checks against
-//! OpenCV's own calibration and remap. One binary for all of them, because each binary links the whole library: a binary
-//! per file cost the test command minutes of linking on two cores.
+//! OpenCV's own calibration and remap. One binary for all of them, because each binary links
+//! the whole library: a binary per file cost the test command minutes of linking on two
+//! cores.
 
 mod common;
 

@@ -25,6 +25,7 @@ pub(crate) fn new_validated_context() -> Context {
             .filter(|s| !s.is_empty()),
         geometry_shader: geometry_shader_from_env(),
         geometry_shader_discard: geometry_shader_discard_from_env(),
+        pipeline_cache: None,
     })
     .expect("a Vulkan device with the validation layer (README: the test command installs both)")
 }

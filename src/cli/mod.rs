@@ -423,8 +423,39 @@ pub(crate) fn load_camera(path: &std::path::Path) -> Result<Camera, CliError> {
 }
 
 /// A headless context from the environment; validation messages are checked by `finish`.
+/// The driver's pipeline cache is kept in the user's cache folder (`VKLENS_PIPELINE_CACHE`
+/// names another file; set empty, none).
 pub(crate) fn context() -> Result<crate::host::Context, CliError> {
-    crate::host::Context::from_env()
+    let mut options = crate::host::ContextOptions::from_env();
+    if std::env::var_os("VKLENS_PIPELINE_CACHE").is_none() {
+        options.pipeline_cache = user_pipeline_cache(options.device.as_deref());
+    }
+    crate::host::Context::new(options)
+}
+
+/// `$XDG_CACHE_HOME/vklens/pipelines-DEVICE.bin` (else `~/.cache/…`): a file per device
+/// choice, since a cache holds one device's pipelines.
+fn user_pipeline_cache(device: Option<&str>) -> Option<std::path::PathBuf> {
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .filter(|d| !d.is_empty())
+        .map(std::path::PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("HOME")
+                .filter(|d| !d.is_empty())
+                .map(|home| std::path::PathBuf::from(home).join(".cache"))
+        })?;
+    let device: String = device
+        .unwrap_or("default")
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    Some(base.join("vklens").join(format!("pipelines-{device}.bin")))
 }
 
 /// Fails if the validation layer (when on) reported anything.

@@ -475,7 +475,7 @@ impl GraphicsPipeline {
         // when the subpass has a depth attachment. On error `pipeline`'s Drop cleans up.
         pipeline.raw = unsafe {
             device
-                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_graphics_pipelines(gpu.pipeline_cache(), &[info], None)
                 .map_err(|(_, e)| e)
                 .call("vkCreateGraphicsPipelines")?[0]
         };

@@ -79,6 +79,8 @@ pub(crate) struct GpuInner {
     pub(crate) float_linear: bool,
     /// The compute pipelines built last, handed out again for the same shader and constants.
     pub(crate) compute_pipelines: pipeline::PipelineMemo,
+    /// The driver's pipeline cache every pipeline is created with (null: none), owned here.
+    pub(crate) pipeline_cache: vk::PipelineCache,
     /// Present when vklens created the device (the headless `host::Context`); destroys it last.
     pub(crate) owner: Option<Owned>,
 }
@@ -130,6 +132,7 @@ impl Gpu {
                 max_cube_side: props.limits.max_image_dimension_cube,
                 float_linear: float_linear(instance, physical_device),
                 compute_pipelines: Default::default(),
+                pipeline_cache: vk::PipelineCache::null(),
                 owner: None,
             }),
         })
@@ -150,6 +153,10 @@ impl Gpu {
     /// The ash device.
     pub fn device(&self) -> &ash::Device {
         &self.inner.device
+    }
+    /// The driver's pipeline cache pipelines are created with (null: none).
+    pub fn pipeline_cache(&self) -> vk::PipelineCache {
+        self.inner.pipeline_cache
     }
     /// The queue one-off work is submitted to.
     pub fn queue(&self) -> vk::Queue {
@@ -211,8 +218,11 @@ impl Drop for GpuInner {
         // This assumes no clone of the allocator `Arc` (which `Gpu::allocator` hands out)
         // outlives the device: its drop would free memory of a destroyed device.
         unsafe {
-            // The memo's pipelines, which no user holds any more, go before the device.
+            // The memo's pipelines, which no user holds any more, go before the device, and
+            // the pipeline cache with them (a null one is ignored).
             self.compute_pipelines.clear();
+            self.device
+                .destroy_pipeline_cache(self.pipeline_cache, None);
             // The allocator goes before the device it allocates from.
             ManuallyDrop::drop(&mut self.allocator);
             if let Some(owner) = self.owner.take() {

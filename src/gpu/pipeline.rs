@@ -133,7 +133,7 @@ impl ComputeHandles {
         // objects of this device. On error `handles`' Drop destroys what was made.
         handles.raw = unsafe {
             gpu.device()
-                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .create_compute_pipelines(gpu.pipeline_cache(), &[info], None)
                 .map_err(|(_, e)| e)
                 .call("vkCreateComputePipelines")?[0]
         };

@@ -27,11 +27,18 @@ pub struct ContextOptions {
     /// Drop the vertex path's triangles in a geometry shader (Lambers et al.'s own discard)
     /// where the device has one, instead of the faster compute discard: for comparisons.
     pub geometry_shader_discard: bool,
+    /// A file that keeps the driver's pipeline cache (`VkPipelineCache`) between runs: read
+    /// when the context opens (a missing file, or one another device or driver wrote, starts
+    /// the cache empty), written when it closes (to a temporary file beside it, then renamed,
+    /// so that a run never sees half a file). `None`: no cache. Drivers that compile shaders
+    /// at pipeline creation (most GPUs) start faster with it; lavapipe keeps nothing in it.
+    pub pipeline_cache: Option<std::path::PathBuf>,
 }
 
 impl ContextOptions {
     /// From the environment: `VKLENS_VALIDATION=1` turns validation on, `VKLENS_DEVICE`
-    /// picks the device, `VKLENS_GEOMETRY_SHADER=0` leaves the geometry-shader feature off.
+    /// picks the device, `VKLENS_GEOMETRY_SHADER=0` leaves the geometry-shader feature off,
+    /// `VKLENS_PIPELINE_CACHE=FILE` keeps the pipeline cache in FILE.
     pub fn from_env() -> Self {
         ContextOptions {
             validation: matches!(
@@ -43,6 +50,9 @@ impl ContextOptions {
                 .filter(|s| !s.is_empty()),
             geometry_shader: geometry_shader_from_env(),
             geometry_shader_discard: geometry_shader_discard_from_env(),
+            pipeline_cache: std::env::var_os("VKLENS_PIPELINE_CACHE")
+                .filter(|p| !p.is_empty())
+                .map(std::path::PathBuf::from),
         }
     }
 }
@@ -70,6 +80,8 @@ pub struct Context {
     submitting: Mutex<()>,
     messages: Arc<Mutex<Vec<String>>>,
     validation: bool,
+    /// Where the pipeline cache is written when the context closes.
+    pipeline_cache_file: Option<std::path::PathBuf>,
 }
 
 unsafe extern "system" fn on_debug_message(
@@ -282,6 +294,10 @@ impl Context {
         let props = unsafe { instance.get_physical_device_properties(physical) };
         // SAFETY: the same physical device of the same live instance as the query above.
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let pipeline_cache = match &options.pipeline_cache {
+            Some(path) => create_pipeline_cache(&device, &props, path),
+            None => vk::PipelineCache::null(),
+        };
         let gpu = Gpu::from_inner(GpuInner {
             device,
             queue,
@@ -298,6 +314,7 @@ impl Context {
             max_cube_side: props.limits.max_image_dimension_cube,
             float_linear: crate::gpu::float_linear(&instance, physical),
             compute_pipelines: Default::default(),
+            pipeline_cache,
             owner: owned,
         });
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -316,6 +333,9 @@ impl Context {
             submitting: Mutex::new(()),
             messages,
             validation: options.validation,
+            pipeline_cache_file: options
+                .pipeline_cache
+                .filter(|_| pipeline_cache != vk::PipelineCache::null()),
         })
     }
 
@@ -427,7 +447,56 @@ impl Drop for Context {
                 .device()
                 .destroy_command_pool(self.command_pool, None);
         }
+        if let Some(path) = &self.pipeline_cache_file {
+            // A cache that cannot be written costs the next run its compiles, nothing else:
+            // closing a context is no place to fail.
+            let _ = save_pipeline_cache(&self.gpu, path);
+        }
     }
+}
+
+/// `VkPipelineCacheHeaderVersionOne`'s size: length, version, vendor and device ids, UUID.
+const CACHE_HEADER_BYTES: usize = 16 + vk::UUID_SIZE;
+
+/// A pipeline cache seeded from `path` where the file holds this device's and driver's data
+/// (its header names them), else empty; null where the driver cannot make one.
+fn create_pipeline_cache(
+    device: &ash::Device,
+    props: &vk::PhysicalDeviceProperties,
+    path: &std::path::Path,
+) -> vk::PipelineCache {
+    let data = std::fs::read(path).unwrap_or_default();
+    let ours = data.len() >= CACHE_HEADER_BYTES && {
+        let word = |i: usize| u32::from_le_bytes([data[i], data[i + 1], data[i + 2], data[i + 3]]);
+        word(0) as usize >= CACHE_HEADER_BYTES
+            && word(4) == vk::PipelineCacheHeaderVersion::ONE.as_raw() as u32
+            && word(8) == props.vendor_id
+            && word(12) == props.device_id
+            && data[16..CACHE_HEADER_BYTES] == props.pipeline_cache_uuid
+    };
+    let initial: &[u8] = if ours { &data } else { &[] };
+    let info = vk::PipelineCacheCreateInfo::default().initial_data(initial);
+    // SAFETY: `info` points at `initial`, alive across the call; its header was checked to be
+    // this device's (Vulkan leaves data of another device or driver to the driver, which
+    // ignores it, but an unchecked file is nothing to hand a driver).
+    unsafe { device.create_pipeline_cache(&info, None) }.unwrap_or_default()
+}
+
+/// Writes the device's pipeline cache to `path` by way of a temporary file beside it.
+fn save_pipeline_cache(gpu: &Gpu, path: &std::path::Path) -> std::io::Result<()> {
+    // SAFETY: the cache is a live object of this device (null caches are not saved), and no
+    // pipeline is being created from it: the context is closing.
+    let data = unsafe { gpu.device().get_pipeline_cache_data(gpu.pipeline_cache()) }
+        .map_err(std::io::Error::other)?;
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    let mut temporary = path.as_os_str().to_owned();
+    temporary.push(format!(".{}.tmp", std::process::id()));
+    std::fs::write(&temporary, &data)?;
+    std::fs::rename(&temporary, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&temporary);
+    })
 }
 
 /// Picks a physical device and a queue family with compute and graphics.
@@ -498,4 +567,66 @@ fn pick_device(
         ))
     })?;
     Ok((c.1, c.2))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::{shaders::COPY_COMP, ComputePipeline, SpecConstants};
+
+    fn options(cache: &std::path::Path) -> ContextOptions {
+        ContextOptions {
+            validation: true,
+            pipeline_cache: Some(cache.to_path_buf()),
+            ..ContextOptions::from_env()
+        }
+    }
+
+    fn build_copy(ctx: &Context) {
+        let storage = vk::DescriptorType::STORAGE_IMAGE;
+        ComputePipeline::new(
+            ctx.gpu(),
+            COPY_COMP,
+            &[storage, storage],
+            16,
+            SpecConstants::new(),
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn the_pipeline_cache_file_is_written_on_close_and_read_back() {
+        let dir = std::env::temp_dir().join(format!("vklens-cache-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let file = dir.join("sub").join("pipelines.bin");
+        let ctx = Context::new(options(&file)).unwrap();
+        build_copy(&ctx);
+        crate::testing::assert_no_validation_messages(&ctx);
+        drop(ctx);
+        let written = std::fs::read(&file).expect("the cache file is written on close");
+        assert!(
+            written.len() >= CACHE_HEADER_BYTES,
+            "{} bytes",
+            written.len()
+        );
+        // Its header names this device, so the next context is seeded with it; no temporary
+        // file is left beside it.
+        let ctx = Context::new(options(&file)).unwrap();
+        build_copy(&ctx);
+        crate::testing::assert_no_validation_messages(&ctx);
+        drop(ctx);
+        let names: Vec<_> = std::fs::read_dir(file.parent().unwrap())
+            .unwrap()
+            .flatten()
+            .collect();
+        assert_eq!(names.len(), 1, "{names:?}");
+        // A file of another device (or none of Vulkan's) starts the cache empty.
+        std::fs::write(&file, b"not a pipeline cache, and longer than a header is").unwrap();
+        let ctx = Context::new(options(&file)).unwrap();
+        build_copy(&ctx);
+        crate::testing::assert_no_validation_messages(&ctx);
+        drop(ctx);
+        assert!(std::fs::read(&file).unwrap().len() >= CACHE_HEADER_BYTES);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

@@ -734,6 +734,7 @@ fn a_device_without_geometry_shaders_renders_the_vertex_path_through_the_compute
             .filter(|s| !s.is_empty()),
         geometry_shader: false,
         geometry_shader_discard: false,
+        pipeline_cache: None,
     })
     .unwrap();
     assert!(!ctx.gpu().supports_geometry_shader());

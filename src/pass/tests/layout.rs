@@ -356,6 +356,7 @@ fn the_geometry_path_compiles_unasked_outputs_and_terms_out() {
         device: None,
         geometry_shader: true,
         geometry_shader_discard: false,
+        pipeline_cache: None,
     })
     .unwrap();
     let camera = crate::model::Camera::from_coeffs(
@@ -451,6 +452,7 @@ fn the_discard_leaves_the_domain_table_out_only_where_its_bound_needs_none() {
         device: None,
         geometry_shader: true,
         geometry_shader_discard: false,
+        pipeline_cache: None,
     })
     .unwrap();
     let k = Intrinsics {

@@ -484,8 +484,9 @@ fn create_pipeline_cache(
 
 /// Writes the device's pipeline cache to `path` by way of a temporary file beside it.
 fn save_pipeline_cache(gpu: &Gpu, path: &std::path::Path) -> std::io::Result<()> {
-    // SAFETY: the cache is a live object of this device (null caches are not saved), and no
-    // pipeline is being created from it: the context is closing.
+    // SAFETY: the cache is a live object of this device (null caches are not saved), and
+    // internally synchronized (it was made without the externally-synchronized flag), so
+    // pipelines that other holders of the device create meanwhile are no hazard.
     let data = unsafe { gpu.device().get_pipeline_cache_data(gpu.pipeline_cache()) }
         .map_err(std::io::Error::other)?;
     if let Some(dir) = path.parent() {

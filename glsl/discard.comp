@@ -130,13 +130,7 @@ void vkl_per_vertex(uint i) {
     if (VKL_READOUT != 0u) {
         VklRsSample r;
         VklRsSample q;
-        // Both frames' solves (with flow) from one call site: see vkl_rs_at.
-        bool solved = true;
-        for (uint k = 0u; k < (WRITE_FLOW ? 2u : 1u); k++) {
-            VklRsSample p;
-            solved = vkl_rs_at(k == 1u, world.xyz, p) && solved;
-            if (k == 0u) r = p; else q = p;
-        }
+        bool solved = vkl_rs_frames(world.xyz, r, q);
         if (!solved) {
             uint slot = atomicAdd(deferred.count, 1u);
             deferred.vertices[slot] = i;

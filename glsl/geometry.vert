@@ -106,14 +106,9 @@ void main() {
         // A moving rolling shutter: the vertex where its own line reads it, and flow from
         // where the previous frame's lines read it.
         // This module solves every vertex in full: it never leaves one to a later pass.
-        // Both frames' solves (with flow) from one call site: see vkl_rs_at.
         VklRsSample r;
         VklRsSample q;
-        for (uint k = 0u; k < (WRITE_FLOW ? 2u : 1u); k++) {
-            VklRsSample p;
-            vkl_rs_at(k == 1u, in_position, p);
-            if (k == 0u) r = p; else q = p;
-        }
+        vkl_rs_frames(in_position, r, q);
         gl_Position = r.ok ? alg1_clip(r.clip, r.distorted_ndc) : r.clip;
         v_depth = r.camera.z;
         bool previous_ok = r.ok;

@@ -12,8 +12,8 @@
 // π is the camera's model on the camera-frame point through the functions a still camera's
 // vertices go through: the standard model's (alg1_lens) on the ideal point X/Z, Y/Z, a ray
 // model's by Alg. 1's first half (alg1_ndc) on the Sec. 3.1 clip position. The includer
-// declares `frame` (geometry_frame.glsl), the camera model, `const bool DISTORT` and includes
-// alg1.glsl first.
+// declares `frame` (geometry_frame.glsl), the camera model, `const bool DISTORT`, `WRITE_FLOW`
+// (whether flow needs the previous frame too) and includes alg1.glsl first.
 //
 // VKL_READOUT = 0 (a global shutter, or a still camera) compiles none of it: every caller
 // branches on the constant, which the driver folds away.
@@ -368,6 +368,9 @@ bool vkl_rs_bounded(VklMotion m, vec3 middle, out VklRsSample root) {
             if (!(bound >= 0.0 && bound <= VKL_RS_MAX_CONTRACTION)) return false;
             low = 1.0 - bound;
             high = 1.0 + bound;
+            // Newton's steps where the lens's Jacobian gives g′, else a fixed-point step
+            // (|s1 − s*| ≤ L |s0 − s*|) and secant steps; every slope clamped to what the
+            // bound allows.
             slope = isnan(va.slope) ? 1.0 : clamp(va.slope, low, high);
             s = clamp(a.s - a.g / slope, 0.0, 1.0);
             continue;
@@ -508,6 +511,18 @@ bool vkl_rs_at(bool previous, vec3 x, out VklRsSample r) {
     r = vkl_rs_still(x, previous ? frame.previous_view_projection : frame.view_projection,
                      previous ? frame.previous_view : frame.view);
     return true;
+}
+
+// This frame's solve into r and, with flow, the previous frame's into q, both from vkl_rs_at's
+// one call site; false where either is left to a later pass.
+bool vkl_rs_frames(vec3 x, out VklRsSample r, out VklRsSample q) {
+    bool solved = true;
+    for (uint k = 0u; k < (WRITE_FLOW ? 2u : 1u); k++) {
+        VklRsSample p;
+        solved = vkl_rs_at(k == 1u, x, p) && solved;
+        if (k == 0u) r = p; else q = p;
+    }
+    return solved;
 }
 
 #endif

@@ -64,6 +64,22 @@ pub use model::stereo::{stereo_rectify, PairRotation, StereoOptions, StereoRecti
 pub use model::{Camera, Intrinsics, InverseMethod};
 pub use pass::warp::PixelFormat;
 
+/// The names of the camera models vklens knows, as camera files spell them (`"model": NAME`), in
+/// the order of the library's model list (`src/model/list.rs`; it only grows at the end). A
+/// Brown headset lens (`"brown"`) runs as its exact twin, `opencv`.
+///
+/// ```
+/// let models = vklens::camera_models();
+/// assert_eq!(models[0], "opencv");
+/// assert!(models.contains(&"double_sphere"));
+/// ```
+pub fn camera_models() -> Vec<&'static str> {
+    model::ModelKind::ALL
+        .into_iter()
+        .map(model::ModelKind::name)
+        .collect()
+}
+
 /// Rolling-shutter sensors: a world point seen through a camera that moves while its lines are
 /// read appears where its own line's readout time agrees with the pose it was seen from
 /// (`docs/rolling-shutter.md`).

@@ -451,15 +451,25 @@ vkl_error vkl_camera_distort_points(vkl_camera c, const double *xy, size_t n, do
 vkl_error vkl_camera_undistort_points(vkl_camera c, const double *uv, size_t n, double *xy_out);
 
 /*
- The camera's model as camera files name it (`opencv`, `brown`, `opencv_fisheye`, `omni`,
- `ucm`, `eucm`, `double_sphere`, `fov`, `equirectangular`, `ftheta`, `ocam`, `division`,
- `thin_prism_fisheye`): a static NUL-terminated string the caller never frees; NULL for a
- NULL camera.
+ The camera's model as camera files name it: `brown` for a Brown headset lens, else one of
+ the names `vkl_model_name` lists (`opencv`, `opencv_fisheye`, `double_sphere`, ...). A
+ static NUL-terminated string the caller never frees; NULL for a NULL camera.
 
  # Safety
  `c` is NULL or a live camera.
  */
 const char *vkl_camera_model(vkl_camera c);
+
+/*
+ `name` as a NUL-terminated string that lives as long as the process: the library's own
+ name for the model, so that no list here can fall behind the library's models. Each
+ distinct name is allocated once (there are as many as there are models).
+ The name of the `index`-th camera model vklens knows (0: `opencv`, OpenCV's standard model),
+ as camera files and `vkl_camera_model` spell it; NULL past the last. The list is the
+ library's own model list, in its order, which only ever grows at the end. A static
+ NUL-terminated string the caller never frees.
+ */
+const char *vkl_model_name(size_t index);
 
 /*
  Camera-frame points (X, Y, Z; 3n doubles, OpenCV's frame) to distorted pixels (2n

@@ -514,10 +514,9 @@ unsafe fn write_pairs(out: *mut f64, values: &[Option<[f64; 2]>]) {
     }
 }
 
-/// The camera's model as camera files name it (`opencv`, `brown`, `opencv_fisheye`, `omni`,
-/// `ucm`, `eucm`, `double_sphere`, `fov`, `equirectangular`, `ftheta`, `ocam`, `division`,
-/// `thin_prism_fisheye`): a static NUL-terminated string the caller never frees; NULL for a
-/// NULL camera.
+/// The camera's model as camera files name it: `brown` for a Brown headset lens, else one of
+/// the names `vkl_model_name` lists (`opencv`, `opencv_fisheye`, `double_sphere`, ...). A
+/// static NUL-terminated string the caller never frees; NULL for a NULL camera.
 ///
 /// # Safety
 /// `c` is NULL or a live camera.
@@ -533,6 +532,21 @@ pub unsafe extern "C" fn vkl_camera_model(c: vkl_camera) -> *const c_char {
 /// `name` as a NUL-terminated string that lives as long as the process: the library's own
 /// name for the model, so that no list here can fall behind the library's models. Each
 /// distinct name is allocated once (there are as many as there are models).
+/// The name of the `index`-th camera model vklens knows (0: `opencv`, OpenCV's standard model),
+/// as camera files and `vkl_camera_model` spell it; NULL past the last. The list is the
+/// library's own model list, in its order, which only ever grows at the end. A static
+/// NUL-terminated string the caller never frees.
+#[no_mangle]
+pub extern "C" fn vkl_model_name(index: usize) -> *const c_char {
+    catch_unwind(|| {
+        vklens_core::camera_models()
+            .get(index)
+            .and_then(|name| c_name(name))
+            .map_or(ptr::null(), CStr::as_ptr)
+    })
+    .unwrap_or(ptr::null())
+}
+
 fn c_name(name: &'static str) -> Option<&'static CStr> {
     static NAMES: Mutex<Vec<(&'static str, &'static CStr)>> = Mutex::new(Vec::new());
     let mut names = NAMES.lock().ok()?;
@@ -1615,7 +1629,11 @@ mod tests {
                 "no sample camera of {}",
                 kind.name()
             );
+            // SAFETY: the name is static.
+            let listed = unsafe { CStr::from_ptr(vkl_model_name(kind.gpu_id() as usize)) };
+            assert_eq!(listed.to_str().unwrap(), kind.name());
         }
+        assert!(vkl_model_name(ModelKind::ALL.len()).is_null());
         // SAFETY: NULL is allowed.
         assert!(unsafe { vkl_camera_model(ptr::null_mut()) }.is_null());
     }

@@ -71,22 +71,12 @@ layout(constant_id = 5) const uint VKL_NEWTON_ITERATIONS = 20;
 // Which camera model the shader is specialized for (pass::spec::MODEL). 0: OpenCV's standard
 // model (a Brown lens runs as its standard twin). A shader specialized for a model this file
 // does not implement answers "invalid" everywhere rather than evaluate the wrong model.
-#define VKL_MODEL_OPENCV 0u
-// 1: OpenCV's fisheye model (model::Fisheye). VKL_RADIAL then says whether any k is non-zero.
-#define VKL_MODEL_FISHEYE 1u
-// 2..11: the other models of the table (model::ModelKind, in its order), one include each
-// under include/models/. Each maps camera-frame rays, and the pinhole-side maps a warp needs
-// follow from its forward map and inverse (vkl_distort_jacobian, vkl_undistort_newton).
-#define VKL_MODEL_OMNI 2u
-#define VKL_MODEL_UCM 3u
-#define VKL_MODEL_EUCM 4u
-#define VKL_MODEL_DOUBLE_SPHERE 5u
-#define VKL_MODEL_FOV 6u
-#define VKL_MODEL_EQUIRECTANGULAR 7u
-#define VKL_MODEL_FTHETA 8u
-#define VKL_MODEL_OCAM 9u
-#define VKL_MODEL_DIVISION 10u
-#define VKL_MODEL_THIN_PRISM_FISHEYE 11u
+// 1: OpenCV's fisheye model (model::Fisheye); VKL_RADIAL then says whether any k is non-zero.
+// The others: the rest of the model list (src/model/list.rs, model::ModelKind), one include
+// each under include/models/. Each maps camera-frame rays, and the pinhole-side maps a warp
+// needs follow from its forward map and inverse (vkl_distort_jacobian, vkl_undistort_newton).
+// build.rs writes the ids, the includes and the dispatch from that list.
+#include "model_ids.glsl"
 layout(constant_id = 6) const uint VKL_MODEL = VKL_MODEL_OPENCV;
 // false: every ideal point this shader tests either lies inside the domain's smallest boundary
 // radius or is dropped whatever the answer (the compute discard, when its Sec. 3.2 bound lies
@@ -520,54 +510,9 @@ bool vkl_standard_undistort(VKL_VEC2 d, out VKL_VEC2 x) {
     return true;
 }
 
-// One include per model of the table (and what they share).
+// What the models' includes share, then each model's include and the dispatch over them.
 #include "models/common.glsl"
-#include "models/omni.glsl"
-#include "models/ucm.glsl"
-#include "models/eucm.glsl"
-#include "models/double_sphere.glsl"
-#include "models/fov.glsl"
-#include "models/equirectangular.glsl"
-#include "models/ftheta.glsl"
-#include "models/ocam.glsl"
-#include "models/division.glsl"
-#include "models/thin_prism_fisheye.glsl"
-
-// A ray model's forward map: camera-frame point (any length, any hemisphere) -> distorted
-// normalized point. False outside the model's domain.
-bool vkl_ray_project(VKL_VEC3 p, out VKL_VEC2 m) {
-    m = VKL_VEC2(0.0);
-    if (VKL_FISHEYE) return vkl_fisheye_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_OMNI) return vkl_omni_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_UCM) return vkl_ucm_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_EUCM) return vkl_eucm_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_DOUBLE_SPHERE) return vkl_ds_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_FOV) return vkl_fov_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_EQUIRECTANGULAR) return vkl_equirect_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_FTHETA) return vkl_ftheta_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_OCAM) return vkl_ocam_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_DIVISION) return vkl_division_project(p, m);
-    if (VKL_MODEL == VKL_MODEL_THIN_PRISM_FISHEYE) return vkl_tp_project(p, m);
-    return false;
-}
-
-// A ray model's inverse: distorted normalized point -> unit camera-frame ray. False outside
-// the domain.
-bool vkl_ray_unproject(VKL_VEC2 m, out VKL_VEC3 ray) {
-    ray = VKL_VEC3(0.0, 0.0, 1.0);
-    if (VKL_FISHEYE) return vkl_fisheye_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_OMNI) return vkl_omni_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_UCM) return vkl_ucm_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_EUCM) return vkl_eucm_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_DOUBLE_SPHERE) return vkl_ds_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_FOV) return vkl_fov_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_EQUIRECTANGULAR) return vkl_equirect_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_FTHETA) return vkl_ftheta_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_OCAM) return vkl_ocam_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_DIVISION) return vkl_division_unproject(m, ray);
-    if (VKL_MODEL == VKL_MODEL_THIN_PRISM_FISHEYE) return vkl_tp_unproject(m, ray);
-    return false;
-}
+#include "model_dispatch.glsl"
 
 // The pinhole side of a model after the fisheye: ideal normalized x -> distorted normalized,
 // and its Jacobian by central differences (it only steers Newton's refinements; the residual

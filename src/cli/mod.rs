@@ -80,6 +80,39 @@ pub fn exit_code(e: &crate::Error) -> i32 {
 
 const ABOUT: &str = "Realistic, calibrated camera-lens effects with raw Vulkan.";
 
+/// [`LONG_ABOUT`] with the models of the list (`src/model/list.rs`) and their keys in place of
+/// `{MODELS}`, wrapped to 100 columns.
+fn long_about() -> String {
+    use crate::model::ModelKind;
+    let models: Vec<String> = ModelKind::ALL
+        .into_iter()
+        .filter(|k| !matches!(k, ModelKind::Standard | ModelKind::Fisheye))
+        .map(|k| match k.file_keys() {
+            keys if keys.starts_with("none") => format!("\"{}\"", k.name()),
+            keys => format!("\"{}\" ({keys})", k.name()),
+        })
+        .collect();
+    let sentence = format!(
+        "Every other model the field calibrates, exact to its tool: vklens JSON with \"model\": {}, \
+         or \"colmap\" (colmap_model, params: all 18 of COLMAP's models)",
+        models.join(", ")
+    );
+    let mut wrapped = String::new();
+    let mut line = 0;
+    for word in sentence.split(' ') {
+        if line > 0 && line + 1 + word.len() > 100 {
+            wrapped.push('\n');
+            line = 0;
+        } else if line > 0 {
+            wrapped.push(' ');
+            line += 1;
+        }
+        wrapped.push_str(word);
+        line += word.len();
+    }
+    LONG_ABOUT.replace("{MODELS}", &wrapped)
+}
+
 const LONG_ABOUT: &str = "\
 vklens applies the OpenCV standard camera model (fx fy cx cy; k1..k6, p1 p2, s1..s4, tau_x tau_y)
 exactly as OpenCV computes it, on the CPU in f64 or on any Vulkan device (Mesa lavapipe included)
@@ -92,11 +125,7 @@ or a Brown headset lens {\"model\": \"brown\", \"width\", \"height\", \"c1\", \"
 Fisheye cameras (OpenCV's cv2.fisheye, k1..k4): vklens JSON with \"model\": \"opencv_fisheye\"
 (optional \"alpha\" skew and \"max_fov_deg\"), ROS camera_info with distortion_model equidistant,
 a Kalibr camchain (cam0, or --camera-index N), or a COLMAP cameras.txt.
-Every other model the field calibrates, exact to its tool: vklens JSON with \"model\": \"omni\"
-(xi, dist_coeffs k1 k2 p1 p2), \"ucm\" (alpha), \"eucm\" (alpha, beta), \"double_sphere\" (xi,
-alpha), \"fov\" (omega), \"equirectangular\", \"ftheta\" (NCore's keys), \"ocam\" (poly,
-inverse_poly, c, d, e), \"division\" (k), \"thin_prism_fisheye\", or \"colmap\" (colmap_model,
-params: all 18 of COLMAP's models); and the tools' own files as they write them: Kalibr, Basalt,
+{MODELS}; and the tools' own files as they write them: Kalibr, Basalt,
 COLMAP cameras.txt, camodocal/VINS (MEI, PINHOLE, KANNALA_BRANDT, SCARAMUZZA), ORB-SLAM2/3,
 OKVIS, EuRoC sensor.yaml, SVO, DSO/DM-VIO camera.txt, LSD-SLAM/PTAM, stella_vslam, Kimera,
 Gyroflow lens profiles, OpenCV stereo files (M1 D1 M2 D2 ...), OCamCalib calib_results.txt,
@@ -130,7 +159,7 @@ Examples:
   vklens bench inverse --json";
 
 #[derive(Parser, Debug)]
-#[command(name = "vklens", version, about = ABOUT, long_about = LONG_ABOUT)]
+#[command(name = "vklens", version, about = ABOUT, long_about = long_about())]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,

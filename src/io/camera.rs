@@ -392,7 +392,7 @@ fn camera_from_single_tree(tree: &Value) -> Result<Camera> {
         Some(Value::String(m)) if m == "opencv_fisheye" => {
             return fisheye_from_tree(tree);
         }
-        Some(Value::String(m)) if super::models::MODEL_NAMES.contains(&m.as_str()) => {
+        Some(Value::String(m)) if super::models::model_names().contains(&m.as_str()) => {
             let obj = tree
                 .as_object()
                 .ok_or_else(|| Error::input("expected an object/mapping at the top level"))?;
@@ -403,7 +403,7 @@ fn camera_from_single_tree(tree: &Value) -> Result<Camera> {
         Some(Value::String(m)) if m != "opencv" => {
             return Err(Error::input(format!(
                 "`model` is `{m}`; vklens reads `opencv` (OpenCV's standard model, the default), `opencv_fisheye`, `brown`, `{}`",
-                super::models::MODEL_NAMES.join("`, `")
+                super::models::model_names().join("`, `")
             )));
         }
         Some(Value::String(_)) | None => {}

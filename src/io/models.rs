@@ -8,32 +8,25 @@ use serde_json::{json, Map, Value};
 use super::camera::{dimension, intrinsics_from, number_field, number_list, parse_float};
 use crate::error::{Error, Result};
 use crate::model::division::Division;
-use crate::model::double_sphere::DoubleSphere;
 use crate::model::equirect::Equirectangular;
 use crate::model::eucm::Eucm;
 use crate::model::fov::Fov;
 use crate::model::ftheta::{FTheta, Reference};
 use crate::model::ocam::Ocam;
 use crate::model::omni::Omni;
-use crate::model::table::RayModel;
 use crate::model::thin_prism::ThinPrismFisheye;
-use crate::model::ucm::Ucm;
-use crate::model::{Camera, Intrinsics, Lens};
+use crate::model::{Camera, Intrinsics, Lens, ModelKind};
 
-/// The model names this module reads.
-pub const MODEL_NAMES: [&str; 11] = [
-    Omni::NAME,
-    Ucm::NAME,
-    Eucm::NAME,
-    DoubleSphere::NAME,
-    Fov::NAME,
-    Equirectangular::NAME,
-    FTheta::NAME,
-    Ocam::NAME,
-    Division::NAME,
-    ThinPrismFisheye::NAME,
-    "colmap",
-];
+/// The model names this module reads: every model of the list but OpenCV's two (read by
+/// `io::camera`), and `"colmap"`.
+pub fn model_names() -> Vec<&'static str> {
+    ModelKind::ALL
+        .into_iter()
+        .filter(|k| !matches!(k, ModelKind::Standard | ModelKind::Fisheye))
+        .map(ModelKind::name)
+        .chain(["colmap"])
+        .collect()
+}
 
 /// NCore's rolling-shutter names (`shutter_type`), kept on an f-theta camera.
 pub const SHUTTER_TYPES: [&str; 5] = [
@@ -44,11 +37,22 @@ pub const SHUTTER_TYPES: [&str; 5] = [
     "GLOBAL",
 ];
 
-/// A vklens JSON camera of model `model` (one of [`MODEL_NAMES`]).
+/// A vklens JSON camera of model `model` (one of [`model_names`]).
 pub fn camera_from_json(model: &str, obj: &Map<String, Value>) -> Result<Camera> {
     let width = dimension(obj, &["width", "image_width"])?;
     let height = dimension(obj, &["height", "image_height"])?;
     let num = |k: &str| number_field(obj, k);
+    // A model whose parameters are named numbers reads them by the names its row lists.
+    if let Some(kind) = ModelKind::from_name(model) {
+        if let Some(names) = kind.scalar_params() {
+            let values = names.iter().map(|n| num(n)).collect::<Result<Vec<f64>>>()?;
+            if let Some(lens) = Lens::from_params(kind, &values) {
+                let lens = lens?;
+                return Camera::with_lens(width, height, pinhole_k(obj)?, lens)
+                    .map_err(Error::from);
+            }
+        }
+    }
     let (lens, intrinsics) = match model {
         "omni" => {
             let (key, d) = match obj.get("dist_coeffs") {
@@ -63,17 +67,6 @@ pub fn camera_from_json(model: &str, obj: &Map<String, Value>) -> Result<Camera>
             })?;
             (Lens::Omni(Omni::new(num("xi")?, d)?), pinhole_k(obj)?)
         }
-        "ucm" => (Lens::Ucm(Ucm::new(num("alpha")?)?), pinhole_k(obj)?),
-        "eucm" => (
-            Lens::Eucm(Eucm::new(num("alpha")?, num("beta")?)?),
-            pinhole_k(obj)?,
-        ),
-        "double_sphere" => (
-            Lens::DoubleSphere(DoubleSphere::new(num("xi")?, num("alpha")?)?),
-            pinhole_k(obj)?,
-        ),
-        "fov" => (Lens::Fov(Fov::new(num("omega")?)?), pinhole_k(obj)?),
-        "division" => (Lens::Division(Division::new(num("k")?)?), pinhole_k(obj)?),
         "thin_prism_fisheye" => {
             let list = |key: &str, n: usize| -> Result<Vec<f64>> {
                 let v = number_list(required(obj, key)?, key)?;

@@ -33,7 +33,10 @@ impl Division {
 }
 
 impl RayModel for Division {
-    const NAME: &'static str = "division";
+    fn from_params(values: &[f64]) -> Result<Self, ModelError> {
+        let [k] = super::table::exactly(values)?;
+        Division::new(k)
+    }
 
     fn param_names(&self) -> Vec<&'static str> {
         vec!["k"]

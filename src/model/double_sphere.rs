@@ -46,7 +46,10 @@ impl DoubleSphere {
 }
 
 impl RayModel for DoubleSphere {
-    const NAME: &'static str = "double_sphere";
+    fn from_params(values: &[f64]) -> Result<Self, ModelError> {
+        let [xi, alpha] = super::table::exactly(values)?;
+        DoubleSphere::new(xi, alpha)
+    }
 
     fn param_names(&self) -> Vec<&'static str> {
         vec!["xi", "alpha"]

@@ -31,8 +31,6 @@ impl Equirectangular {
 }
 
 impl RayModel for Equirectangular {
-    const NAME: &'static str = "equirectangular";
-
     fn param_names(&self) -> Vec<&'static str> {
         Vec::new()
     }

@@ -43,7 +43,10 @@ impl Eucm {
 }
 
 impl RayModel for Eucm {
-    const NAME: &'static str = "eucm";
+    fn from_params(values: &[f64]) -> Result<Self, ModelError> {
+        let [alpha, beta] = super::table::exactly(values)?;
+        Eucm::new(alpha, beta)
+    }
 
     fn param_names(&self) -> Vec<&'static str> {
         vec!["alpha", "beta"]

@@ -259,8 +259,6 @@ impl Fisheye {
 }
 
 impl RayModel for Fisheye {
-    const NAME: &'static str = "opencv_fisheye";
-
     fn param_names(&self) -> Vec<&'static str> {
         vec!["k1", "k2", "k3", "k4", "alpha"]
     }

@@ -51,7 +51,10 @@ impl Fov {
 }
 
 impl RayModel for Fov {
-    const NAME: &'static str = "fov";
+    fn from_params(values: &[f64]) -> Result<Self, ModelError> {
+        let [omega] = super::table::exactly(values)?;
+        Fov::new(omega)
+    }
 
     fn param_names(&self) -> Vec<&'static str> {
         vec!["omega"]

@@ -247,8 +247,6 @@ impl FTheta {
 }
 
 impl RayModel for FTheta {
-    const NAME: &'static str = "ftheta";
-
     fn param_names(&self) -> Vec<&'static str> {
         vec!["max_angle", "c", "d", "e"]
     }

@@ -2,105 +2,170 @@
 //!
 //! OpenCV's standard model (and Brown's, its exact twin) is evaluated on the pinhole-normalized
 //! point with its own inverses ([`super::opencv`]); every other model maps camera-frame rays
-//! ([`super::table::RayModel`]), past 90° off the axis where it sees there. Adding a model is
-//! one file with its `RayModel` implementation, one variant here, one arm in each `match` of
-//! `for_each_ray_model!`, and its GLSL include (see `docs/how-it-works.md`).
+//! ([`super::table::RayModel`]), past 90° off the axis where it sees there. The models are the
+//! rows of `list.rs`; adding one: `docs/how-it-works.md#adding-a-model`.
 
 use glam::{DMat2, DVec2, DVec3};
 
-use super::division::Division;
-use super::double_sphere::DoubleSphere;
-use super::equirect::Equirectangular;
-use super::eucm::Eucm;
-use super::fisheye::Fisheye;
-use super::fov::Fov;
-use super::ftheta::FTheta;
-use super::ocam::Ocam;
-use super::omni::Omni;
 use super::opencv::OpenCvDistortion;
 use super::table::{self, RayModel};
-use super::thin_prism::ThinPrismFisheye;
-use super::ucm::Ucm;
+use super::ModelError;
 
-/// Which model a lens is: the shaders' `VKL_MODEL` specialization constant is
-/// [`ModelKind::gpu_id`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum ModelKind {
-    /// OpenCV's standard model (k1..k6, p1 p2, s1..s4, τx τy), and Brown's radial model.
-    #[default]
-    Standard,
-    /// OpenCV's fisheye model (Kannala–Brandt k1..k4).
-    Fisheye,
-    /// Mei's unified model with radial-tangential distortion.
-    Omni,
-    /// Basalt's unified camera model.
-    Ucm,
-    /// The enhanced unified camera model.
-    Eucm,
-    /// The double sphere model.
-    DoubleSphere,
-    /// Devernay and Faugeras' field-of-view model.
-    Fov,
-    /// The equirectangular panorama.
-    Equirectangular,
-    /// NVIDIA's f-theta model.
-    FTheta,
-    /// Scaramuzza's OCamCalib model.
-    Ocam,
-    /// Fitzgibbon's division model (COLMAP's).
-    Division,
-    /// COLMAP's thin-prism fisheyes (THIN_PRISM_FISHEYE, RAD_TAN_THIN_PRISM_FISHEYE).
-    ThinPrismFisheye,
+/// Builds, from the rows of `list.rs`: [`ModelKind`] and its tables, [`Lens`], and
+/// `for_each_ray_model!`, the one `match` over the ray models every dispatch goes through.
+macro_rules! camera_models {
+    (
+        standard: {
+            $(#[$sdoc:meta])*
+            $standard:ident = $sid:literal, name: $sname:literal, params: custom($skeys:literal),
+            glsl: ($sdefine:ident),
+            inverse_cost: $scost:literal, focal_length: $sfocal:literal;
+        }
+        rays: {$(
+            $(#[$doc:meta])*
+            $variant:ident = $id:literal, rust: $module:ident :: $ty:ident, name: $name:literal,
+            params: $pkind:ident $pargs:tt, glsl: ($define:ident, $prefix:ident, $include:literal),
+            inverse_cost: $cost:literal, focal_length: $focal:literal;
+        )*}
+    ) => {
+        /// Which model a lens is: the shaders' `VKL_MODEL` specialization constant is
+        /// [`ModelKind::gpu_id`]. One variant per row of `src/model/list.rs`.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+        pub enum ModelKind {
+            $(#[$sdoc])*
+            #[default]
+            $standard = $sid,
+            $($(#[$doc])* $variant = $id,)*
+        }
+
+        impl ModelKind {
+            /// Every model, in `gpu_id` order.
+            pub const ALL: [ModelKind; 1 + [$($name),*].len()] =
+                [ModelKind::$standard, $(ModelKind::$variant),*];
+
+            /// The model's name in vklens camera files (and the C API's `vkl_camera_model`).
+            pub fn name(self) -> &'static str {
+                match self {
+                    ModelKind::$standard => $sname,
+                    $(ModelKind::$variant => $name,)*
+                }
+            }
+
+            /// The model of a vklens camera file's `"model"` name.
+            pub fn from_name(name: &str) -> Option<ModelKind> {
+                ModelKind::ALL.into_iter().find(|k| k.name() == name)
+            }
+
+            /// Whether the camera's fx fy are a focal length a pinhole image can share (the
+            /// undistorted image's default): not for f-theta and OCamCalib (their polynomials
+            /// carry the scale) nor for the equirectangular panorama (fx fy are pixels per
+            /// radian).
+            pub fn has_focal_length(self) -> bool {
+                match self {
+                    ModelKind::$standard => $sfocal,
+                    $(ModelKind::$variant => $focal,)*
+                }
+            }
+
+            /// The GPU inverse's cost per pixel relative to the fisheye's (`list.rs`).
+            pub fn inverse_cost(self) -> f64 {
+                match self {
+                    ModelKind::$standard => $scost,
+                    $(ModelKind::$variant => $cost,)*
+                }
+            }
+
+            /// The keys of a vklens JSON camera of this model beside width, height and fx fy
+            /// cx cy, as `vklens --help` lists them.
+            pub fn file_keys(self) -> &'static str {
+                match self {
+                    ModelKind::$standard => $skeys,
+                    $(ModelKind::$variant => camera_models!(@keys $pkind $pargs),)*
+                }
+            }
+
+            /// The parameters a vklens JSON camera gives as named numbers, in the order
+            /// [`Lens::from_params`] takes them; `None` for models whose files need lists or
+            /// flags (read by `io::models`) and for the standard model.
+            pub fn scalar_params(self) -> Option<&'static [&'static str]> {
+                match self {
+                    ModelKind::$standard => None,
+                    $(ModelKind::$variant => camera_models!(@names $pkind $pargs),)*
+                }
+            }
+        }
+
+        /// The lens model of a camera and its parameters.
+        #[derive(Debug, Clone, PartialEq)]
+        pub enum Lens {
+            $(#[$sdoc])*
+            $standard {
+                /// The 14 coefficients.
+                distortion: OpenCvDistortion,
+                /// How many coefficients the camera was given (4, 5, 8, 12 or 14).
+                coeff_count: usize,
+                /// `Some((c1, c2))` for a Brown radial lens (the Durham radial-correction
+                /// paper).
+                brown: Option<(f64, f64)>,
+                /// A bound on the ideal normalized radius the file gives (Basalt's `rpmax`):
+                /// the valid domain ends there, or earlier where the lens folds.
+                max_radius: Option<f64>,
+            },
+            $($(#[$doc])* $variant(super::$module::$ty),)*
+        }
+
+        impl Lens {
+            /// Which model this is.
+            pub fn kind(&self) -> ModelKind {
+                match self {
+                    Lens::$standard { .. } => ModelKind::$standard,
+                    $(Lens::$variant(_) => ModelKind::$variant,)*
+                }
+            }
+
+            /// The lens of a model whose parameters are named numbers
+            /// ([`ModelKind::scalar_params`]), validated by the model; `None` for the others.
+            pub fn from_params(kind: ModelKind, values: &[f64]) -> Option<Result<Lens, ModelError>> {
+                match kind {
+                    ModelKind::$standard => None,
+                    $(ModelKind::$variant => camera_models!(
+                        @build $pkind $pargs, $variant, super::$module::$ty, values),)*
+                }
+            }
+        }
+
+        camera_models!(@dispatch ($) $($variant)*);
+    };
+    (@names custom $keys:tt) => { None };
+    (@names named [$($n:literal),*]) => { Some(&[$($n),*]) };
+    (@keys custom ($keys:literal)) => { $keys };
+    (@keys named [$first:literal $(, $rest:literal)*]) => { concat!($first $(, ", ", $rest)*) };
+    (@build custom $keys:tt, $variant:ident, $ty:ty, $values:ident) => { None };
+    (@build named [$($n:literal),*], $variant:ident, $ty:ty, $values:ident) => {
+        Some(<$ty>::from_params($values).map(Lens::$variant))
+    };
+    // `$d` is a `$`, so that the generated macro can have metavariables of its own.
+    (@dispatch ($d:tt) $($variant:ident)*) => {
+        /// Runs `$body` with `$m` bound to the ray model inside `$lens`, or `$standard` for
+        /// the standard model.
+        macro_rules! for_each_ray_model {
+            ($d lens:expr, $d m:ident => $d body:expr, standard => $d standard:expr) => {
+                match $d lens {
+                    Lens::Standard { .. } => $d standard,
+                    $(Lens::$variant($d m) => $d body,)*
+                }
+            };
+        }
+    };
 }
 
-impl ModelKind {
-    /// Every model, in `gpu_id` order.
-    pub const ALL: [ModelKind; 12] = [
-        ModelKind::Standard,
-        ModelKind::Fisheye,
-        ModelKind::Omni,
-        ModelKind::Ucm,
-        ModelKind::Eucm,
-        ModelKind::DoubleSphere,
-        ModelKind::Fov,
-        ModelKind::Equirectangular,
-        ModelKind::FTheta,
-        ModelKind::Ocam,
-        ModelKind::Division,
-        ModelKind::ThinPrismFisheye,
-    ];
+include!("list.rs");
 
-    /// The value of the shaders' `VKL_MODEL` constant (`glsl/include/camera_model.glsl`).
+impl ModelKind {
+    /// The value of the shaders' `VKL_MODEL` constant (generated by `build.rs` from the same
+    /// list).
     pub fn gpu_id(self) -> u32 {
         self as u32
-    }
-
-    /// The model's name in vklens camera files.
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelKind::Standard => "opencv",
-            ModelKind::Fisheye => "opencv_fisheye",
-            ModelKind::Omni => Omni::NAME,
-            ModelKind::Ucm => Ucm::NAME,
-            ModelKind::Eucm => Eucm::NAME,
-            ModelKind::DoubleSphere => DoubleSphere::NAME,
-            ModelKind::Fov => Fov::NAME,
-            ModelKind::Equirectangular => Equirectangular::NAME,
-            ModelKind::FTheta => FTheta::NAME,
-            ModelKind::Ocam => Ocam::NAME,
-            ModelKind::Division => Division::NAME,
-            ModelKind::ThinPrismFisheye => ThinPrismFisheye::NAME,
-        }
-    }
-
-    /// Whether the camera's fx fy are a focal length a pinhole image can share (the
-    /// undistorted image's default): not for f-theta and OCamCalib (their polynomials carry
-    /// the scale) nor for the equirectangular panorama (fx fy are pixels per radian).
-    pub fn has_focal_length(self) -> bool {
-        !matches!(
-            self,
-            ModelKind::FTheta | ModelKind::Ocam | ModelKind::Equirectangular
-        )
     }
 
     /// Whether the model maps camera-frame rays (every model but the standard one): its
@@ -110,85 +175,7 @@ impl ModelKind {
     }
 }
 
-/// The lens model of a camera and its parameters.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Lens {
-    /// OpenCV's standard model.
-    Standard {
-        /// The 14 coefficients.
-        distortion: OpenCvDistortion,
-        /// How many coefficients the camera was given (4, 5, 8, 12 or 14).
-        coeff_count: usize,
-        /// `Some((c1, c2))` for a Brown radial lens (the Durham radial-correction paper).
-        brown: Option<(f64, f64)>,
-        /// A bound on the ideal normalized radius the file gives (Basalt's `rpmax`): the
-        /// valid domain ends there, or earlier where the lens folds.
-        max_radius: Option<f64>,
-    },
-    /// OpenCV's fisheye model.
-    Fisheye(Fisheye),
-    /// Mei's unified model with radial-tangential distortion.
-    Omni(Omni),
-    /// Basalt's unified camera model.
-    Ucm(Ucm),
-    /// The enhanced unified camera model.
-    Eucm(Eucm),
-    /// The double sphere model.
-    DoubleSphere(DoubleSphere),
-    /// The field-of-view model.
-    Fov(Fov),
-    /// The equirectangular panorama.
-    Equirectangular(Equirectangular),
-    /// NVIDIA's f-theta model.
-    FTheta(FTheta),
-    /// Scaramuzza's OCamCalib model.
-    Ocam(Ocam),
-    /// Fitzgibbon's division model.
-    Division(Division),
-    /// COLMAP's thin-prism fisheyes.
-    ThinPrismFisheye(ThinPrismFisheye),
-}
-
-/// Runs `$body` with `$m` bound to the ray model inside `$lens`, or `$standard` for the
-/// standard model: the one place that lists the ray models' variants.
-macro_rules! for_each_ray_model {
-    ($lens:expr, $m:ident => $body:expr, standard => $standard:expr) => {
-        match $lens {
-            Lens::Standard { .. } => $standard,
-            Lens::Fisheye($m) => $body,
-            Lens::Omni($m) => $body,
-            Lens::Ucm($m) => $body,
-            Lens::Eucm($m) => $body,
-            Lens::DoubleSphere($m) => $body,
-            Lens::Fov($m) => $body,
-            Lens::Equirectangular($m) => $body,
-            Lens::FTheta($m) => $body,
-            Lens::Ocam($m) => $body,
-            Lens::Division($m) => $body,
-            Lens::ThinPrismFisheye($m) => $body,
-        }
-    };
-}
-
 impl Lens {
-    /// Which model this is.
-    pub fn kind(&self) -> ModelKind {
-        match self {
-            Lens::Standard { .. } => ModelKind::Standard,
-            Lens::Fisheye(_) => ModelKind::Fisheye,
-            Lens::Omni(_) => ModelKind::Omni,
-            Lens::Ucm(_) => ModelKind::Ucm,
-            Lens::Eucm(_) => ModelKind::Eucm,
-            Lens::DoubleSphere(_) => ModelKind::DoubleSphere,
-            Lens::Fov(_) => ModelKind::Fov,
-            Lens::Equirectangular(_) => ModelKind::Equirectangular,
-            Lens::FTheta(_) => ModelKind::FTheta,
-            Lens::Ocam(_) => ModelKind::Ocam,
-            Lens::Division(_) => ModelKind::Division,
-            Lens::ThinPrismFisheye(_) => ModelKind::ThinPrismFisheye,
-        }
-    }
-
     /// The model's own parameter names and values (not fx fy cx cy), as camera files write
     /// them; the standard model's are its 14 coefficients.
     pub fn params(&self) -> Vec<(&'static str, f64)> {
@@ -242,11 +229,12 @@ impl Lens {
 mod tests {
     use super::*;
 
-    /// The shaders number the models as `ModelKind` does: each `#define VKL_MODEL_<NAME> <id>u`
-    /// of `glsl/include/camera_model.glsl` against `gpu_id`.
+    /// The shaders number and dispatch the models as `ModelKind` does: build.rs generates
+    /// both includes from `list.rs`; this checks what it wrote against `gpu_id` and the names.
     #[test]
     fn the_shaders_number_the_models_as_the_host_does() {
-        let glsl = include_str!("../../glsl/include/camera_model.glsl");
+        let ids = include_str!(concat!(env!("OUT_DIR"), "/glsl/model_ids.glsl"));
+        let dispatch = include_str!(concat!(env!("OUT_DIR"), "/glsl/model_dispatch.glsl"));
         for (i, kind) in ModelKind::ALL.into_iter().enumerate() {
             assert_eq!(kind.gpu_id(), i as u32);
             let name = match kind {
@@ -255,16 +243,44 @@ mod tests {
                 k => k.name().to_ascii_uppercase(),
             };
             let define = format!("#define VKL_MODEL_{name} {i}u");
-            assert!(glsl.contains(&define), "camera_model.glsl lacks `{define}`");
-            // One include per model of the table (the fisheye's is the standard stages').
+            assert!(ids.contains(&define), "model_ids.glsl lacks `{define}`");
+            // One include per model (the fisheye's is the standard stages').
             if kind.is_ray_model() && kind != ModelKind::Fisheye {
                 let include = format!("#include \"models/{}.glsl\"", kind.name());
                 assert!(
-                    glsl.contains(&include),
-                    "camera_model.glsl lacks `{include}`"
+                    dispatch.contains(&include),
+                    "model_dispatch.glsl lacks `{include}`"
                 );
+                assert!(std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("glsl/include/models")
+                    .join(format!("{}.glsl", kind.name()))
+                    .is_file());
+            }
+            if kind.is_ray_model() {
+                let arm = format!("if (VKL_MODEL == VKL_MODEL_{name}) return vkl_");
+                assert_eq!(dispatch.matches(&arm).count(), 2, "{}", kind.name());
             }
         }
+    }
+
+    /// Names round-trip, and every model with named-number parameters builds from them.
+    #[test]
+    fn every_row_names_and_builds_its_model() {
+        for kind in ModelKind::ALL {
+            assert_eq!(ModelKind::from_name(kind.name()), Some(kind));
+            if let Some(names) = kind.scalar_params() {
+                let lens = Lens::from_params(kind, &vec![0.5; names.len()])
+                    .expect("a scalar-parameter model builds")
+                    .expect("0.5 is valid for every such model");
+                assert_eq!(lens.kind(), kind);
+                let params: Vec<&str> = lens.params().into_iter().map(|(n, _)| n).collect();
+                assert_eq!(params, names, "{}", kind.name());
+                assert!(Lens::from_params(kind, &[]).unwrap().is_err());
+            } else {
+                assert!(Lens::from_params(kind, &[]).is_none());
+            }
+        }
+        assert_eq!(ModelKind::from_name("brown"), None);
     }
 }
 

@@ -161,8 +161,6 @@ impl Ocam {
 }
 
 impl RayModel for Ocam {
-    const NAME: &'static str = "ocam";
-
     fn param_names(&self) -> Vec<&'static str> {
         vec!["c", "d", "e"]
     }

@@ -104,8 +104,6 @@ impl Omni {
 }
 
 impl RayModel for Omni {
-    const NAME: &'static str = "omni";
-
     fn param_names(&self) -> Vec<&'static str> {
         vec!["xi", "k1", "k2", "p1", "p2"]
     }

@@ -6,8 +6,9 @@
 //! `fx fy cx cy` (`u = fx·m.x + cx`, `v = fy·m.y + cy`), and back from `m` to the unit ray. A
 //! model gives, in one place:
 //!
-//! * its name as camera files spell it and its parameters ([`RayModel::NAME`],
-//!   [`RayModel::param_names`], [`RayModel::params`]);
+//! * its parameters ([`RayModel::param_names`], [`RayModel::params`], and
+//!   [`RayModel::from_params`] where they are named numbers); its name and everything else
+//!   the list of models holds is its row in `list.rs`;
 //! * its forward map, written once generic over [`Scalar`] ([`RayModel::project_generic`]):
 //!   the same code gives the value and, through [`Jet`], the exact analytic Jacobian;
 //! * its valid domain ([`RayModel::contains_ray`]), the explicit "invalid" of vklens: a point
@@ -24,12 +25,22 @@ use super::jet::{Jet, Scalar};
 
 /// One camera model of the table (see the module documentation).
 pub trait RayModel {
-    /// The model's name in vklens camera files (`"model": NAME`).
-    const NAME: &'static str;
     /// The names of the model's own parameters, in [`RayModel::params`]'s order.
     fn param_names(&self) -> Vec<&'static str>;
     /// The model's own parameters (not fx fy cx cy).
     fn params(&self) -> Vec<f64>;
+    /// The model from the named numbers its row of `list.rs` lists (`params: [...]`), in that
+    /// order, validated. Models whose parameters are lists or flags keep this default and read
+    /// their files in `io::models`.
+    fn from_params(values: &[f64]) -> Result<Self, super::ModelError>
+    where
+        Self: Sized,
+    {
+        let _ = values;
+        Err(super::ModelError::Other(
+            "this model's parameters are not named numbers".into(),
+        ))
+    }
     /// The forward map without the domain check: camera-frame point → distorted normalized
     /// point. `None` only where it is undefined (a zero denominator).
     fn project_generic<T: Scalar>(&self, p: [T; 3]) -> Option<[T; 2]>;
@@ -45,6 +56,16 @@ pub trait RayModel {
     fn gpu_params(&self) -> Vec<f64> {
         self.params()
     }
+}
+
+/// `values` as exactly `N` numbers (a row's `params` count), for [`RayModel::from_params`].
+pub(crate) fn exactly<const N: usize>(values: &[f64]) -> Result<[f64; N], super::ModelError> {
+    values.try_into().map_err(|_| {
+        super::ModelError::Other(format!(
+            "the model takes {N} parameter(s), got {}",
+            values.len()
+        ))
+    })
 }
 
 /// Scalars in the camera block's `model` array (`glsl/include/camera_model.glsl`).

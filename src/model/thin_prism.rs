@@ -145,8 +145,6 @@ impl ThinPrismFisheye {
 }
 
 impl RayModel for ThinPrismFisheye {
-    const NAME: &'static str = "thin_prism_fisheye";
-
     fn param_names(&self) -> Vec<&'static str> {
         let mut v: Vec<&'static str> =
             ["k1", "k2", "k3", "k4", "k5", "k6"][..self.radial.len()].to_vec();

@@ -54,7 +54,10 @@ pub(crate) fn check_unit_interval(name: &'static str, v: f64) -> Result<(), Mode
 }
 
 impl RayModel for Ucm {
-    const NAME: &'static str = "ucm";
+    fn from_params(values: &[f64]) -> Result<Self, ModelError> {
+        let [alpha] = super::table::exactly(values)?;
+        Ucm::new(alpha)
+    }
 
     fn param_names(&self) -> Vec<&'static str> {
         vec!["alpha"]

@@ -29,24 +29,12 @@ pub fn inverse_candidates_for(terms: crate::model::Terms) -> Vec<(InverseMethod,
 }
 
 /// GPU cost per pixel (ns, f32, lavapipe) of a ray model's inverse: the fisheye's 70 (Newton
-/// on θ, as `bench inverse` measured it) scaled by each model's 1080p inverse time relative to
-/// the fisheye's in two `vklens bench models` runs (docs/benchmarks.md): closed forms about
-/// 0.6–0.8 of it, the omni model (the standard model's Newton on its radial-tangential part)
-/// and the thin-prism fisheyes (Newton on their plane) about 2.6× and 3×.
+/// on θ, as `bench inverse` measured it) scaled by the model's `inverse_cost` in
+/// `src/model/list.rs` (closed forms about 0.6–0.8 of it, the omni model and the thin-prism
+/// fisheyes, Newton on their plane, about 2.6× and 3×).
 pub fn ray_model_inverse_ns(model: crate::model::ModelKind) -> f64 {
-    use crate::model::ModelKind as M;
     const FISHEYE_NS: f64 = 70.0;
-    let relative = match model {
-        M::Standard | M::Fisheye => 1.0,
-        M::Omni => 2.6,
-        M::Ucm | M::Eucm | M::DoubleSphere => 0.65,
-        M::Fov | M::Division => 0.8,
-        M::Equirectangular => 0.6,
-        M::FTheta => 1.6,
-        M::Ocam => 0.75,
-        M::ThinPrismFisheye => 3.0,
-    };
-    FISHEYE_NS * relative
+    FISHEYE_NS * model.inverse_cost()
 }
 
 /// [`inverse_candidates_for`] a lens with every term.

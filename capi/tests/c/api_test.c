@@ -75,6 +75,17 @@ static void cameras(void) {
 
     /* Every model of the table through the same calls: a double sphere seeing past 90°. */
     expect("model of the standard camera", strcmp(vkl_camera_model(c), "opencv") == 0);
+    /* The model list: every name distinct, "opencv" first, NULL past the last. */
+    size_t models = 0;
+    while (vkl_model_name(models)) {
+        for (size_t j = 0; j < models; ++j)
+            expect("model names are distinct", strcmp(vkl_model_name(j), vkl_model_name(models)) != 0);
+        models++;
+    }
+    expect("opencv is model 0", models > 0 && strcmp(vkl_model_name(0), "opencv") == 0);
+    int listed = 0;
+    for (size_t j = 0; j < models; ++j) listed |= strcmp(vkl_model_name(j), "double_sphere") == 0;
+    expect("the double sphere is listed", listed);
     expect("model of NULL", vkl_camera_model(NULL) == NULL);
     const char *ds_path = "vkl_api_test_ds.json";
     FILE *f = fopen(ds_path, "w");

@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
-use vklens::internal::gpu::{global_barrier, image_transition, Access, Buffer, Image};
+use vklens::gpu::{global_barrier, image_transition, Access, Buffer, Image};
 use vklens::{Camera, EnabledFeatures, Gpu, ImageRef, WarpOptions, Warper};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -30,8 +30,14 @@
 //! ```
 //!
 //! Every fallible call returns [`Result`]; an [`Error`]'s [`ErrorKind`] says what the caller
-//! can do about it. Everything under [`internal`] is the machinery behind this surface: usable,
-//! but not kept stable.
+//! can do about it.
+//!
+//! Beneath this surface are the layers it is built from, bottom first: [`model`] (camera
+//! models as f64 maths), [`lens`], [`io`], [`imaging`] and [`scene`] (no Vulkan), [`gpu`] (one
+//! owning type per Vulkan object), [`pass`] (record-only GPU passes), [`host`] (the headless
+//! submit path) and [`plan`] (the planner and its recorder). The command line is built on
+//! them; they are public for it and for callers who need a layer itself, but unlike the items
+//! re-exported here they are not kept stable between minor versions.
 
 // `!(x > 0.0)` is how this crate says "x is positive and not NaN": a NaN must fail every
 // check (the answer is an explicit invalid, never silent garbage). `partial_cmp` would hide that.
@@ -107,13 +113,27 @@ pub mod rolling_shutter {
     };
 }
 
-/// The layers behind the public surface, bottom first: `model`, `lens`, `io`, `imaging` and
-/// `scene` (no Vulkan), `gpu` (one owning type per Vulkan object), `pass` (record-only GPU
-/// passes), `plan` (what to record for a scene, and its recorder), then `bench` and `cli` on top.
-/// See `docs/architecture.md`. Public for the tests, the benches and the command line; not
-/// kept stable.
+// The layers beneath the surface above, bottom first: `model`, `lens`, `io`, `imaging` and
+// `scene` (no Vulkan), `gpu` (one owning type per Vulkan object), `pass` (record-only GPU
+// passes), `host` (the headless submit path) and `plan` (what to record for a scene, and its
+// recorder). See `docs/architecture.md`. They are public for the command line (`vklens-cli`)
+// and for callers who need a layer itself; unlike the items above, they are not kept stable
+// between minor versions.
 #[allow(missing_docs)]
-#[doc(hidden)]
-pub mod internal;
-// Inside the crate every layer keeps its short path (`crate::model`, `crate::gpu`, ...).
-use internal::{bench, gpu, host, imaging, io, lens, model, pass, plan, scene};
+pub mod gpu;
+#[allow(missing_docs)]
+pub mod host;
+#[allow(missing_docs)]
+pub mod imaging;
+#[allow(missing_docs)]
+pub mod io;
+#[allow(missing_docs)]
+pub mod lens;
+#[allow(missing_docs)]
+pub mod model;
+#[allow(missing_docs)]
+pub mod pass;
+#[allow(missing_docs)]
+pub mod plan;
+#[allow(missing_docs)]
+pub mod scene;

@@ -1600,7 +1600,7 @@ pub unsafe extern "C" fn vkl_frame_free(f: *mut vkl_frame) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use vklens_core::internal::model::{samples::sample_cameras, BrownRadial, ModelKind};
+    use vklens_core::model::{samples::sample_cameras, BrownRadial, ModelKind};
 
     /// The C name of every model of the library's list, through a camera of that model.
     #[test]

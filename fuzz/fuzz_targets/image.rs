@@ -8,6 +8,6 @@ fuzz_target!(|data: &[u8]| {
     let ext = ["png", "exr"][kind as usize % 2];
     let path = std::env::temp_dir().join(format!("vklens-fuzz-image-{}.{ext}", std::process::id()));
     if std::fs::write(&path, body).is_ok() {
-        let _ = vklens::internal::imaging::file::load(&path);
+        let _ = vklens::imaging::file::load(&path);
     }
 });

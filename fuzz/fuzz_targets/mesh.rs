@@ -8,6 +8,6 @@ fuzz_target!(|data: &[u8]| {
     let ext = ["obj", "gltf", "glb"][kind as usize % 3];
     let path = std::env::temp_dir().join(format!("vklens-fuzz-mesh-{}.{ext}", std::process::id()));
     if std::fs::write(&path, body).is_ok() {
-        let _ = vklens::internal::scene::load::load_file(&path);
+        let _ = vklens::scene::load::load_file(&path);
     }
 });

@@ -4,6 +4,6 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
-        let _ = vklens::internal::cli::parse_point_rows(text, true);
+        let _ = vklens_cli::commands::parse_point_rows(text, true);
     }
 });

@@ -54,8 +54,9 @@ impl Device {
         &self.ctx
     }
 
-    /// Wraps an existing headless context.
-    pub(crate) fn from_context(ctx: Context) -> Self {
+    /// A device over a headless context opened with the `host` layer (as the command line
+    /// opens it, with its pipeline cache file).
+    pub fn from_context(ctx: Context) -> Self {
         Device { ctx }
     }
 }

@@ -7,8 +7,6 @@ mod image;
 mod scene;
 mod warper;
 
-pub(crate) use warper::warp_geometry;
-
 #[cfg(test)]
 mod tests;
 

@@ -155,6 +155,13 @@ impl WarpOptions {
     pub fn precorrect() -> Self {
         Self::new(WarpDirection::Precorrect)
     }
+
+    /// The warp these options describe for `camera`, checked, as f64 geometry (a type of the
+    /// `model` layer): where each output pixel takes its light from. The GPU warp, the CPU
+    /// reference warp and the coordinate maps all follow it.
+    pub fn geometry(&self, camera: &Camera) -> Result<crate::model::warp::WarpGeometry> {
+        warp_geometry(camera, self)
+    }
 }
 
 /// The warp's geometry for `camera` and `options`, checked: the f64 description the GPU warp,

@@ -2,6 +2,7 @@
 //! back) for the command line, the tests, the benches and the facade's `Warper::run`. The
 //! passes themselves (`pass/`) only record into a command buffer the caller owns.
 
+pub mod bands_study;
 mod context;
 pub mod geometry;
 pub mod grid_demo;

@@ -1256,7 +1256,7 @@ fn first_frame(
 
 #[test]
 fn bands_approach_the_exact_vertex_path_as_they_multiply() {
-    use crate::bench::rolling_shutter::{
+    use crate::host::bands_study::{
         bands_error_px, bands_plan, colour_mad, exact_request, still_colour_mad,
     };
     use crate::model::rolling_shutter::Readout;
@@ -1306,7 +1306,7 @@ fn cube_bands_plan(
     max_image_side: u32,
 ) -> crate::plan::Plan {
     use crate::plan::{PathChoice, ReadoutSource, RenderRequest, Shutter};
-    let (start, end) = crate::bench::rolling_shutter::pan();
+    let (start, end) = crate::host::bands_study::pan();
     let mut request = RenderRequest::color(camera, PathChoice::cube(camera, 2.0));
     request.pose = start;
     request.previous_pose = start;
@@ -1325,7 +1325,7 @@ fn cube_bands_plan(
 
 #[test]
 fn cube_bands_approach_the_exact_vertex_path_as_they_multiply() {
-    use crate::bench::rolling_shutter::{colour_mad, exact_request};
+    use crate::host::bands_study::{colour_mad, exact_request};
     use crate::model::rolling_shutter::Readout;
     let ctx = validated_context();
     // A lens both routes draw: the vertex path exactly per vertex, the cube map by its rays.

@@ -1,5 +1,5 @@
 //! Outputs are written safely: never half-written, never mixed by concurrent writers
-//! (`tests/it/outputs.rs` runs the commands on symlinks, devices, folders and one file named twice).
+//! (`cli/tests/it/outputs.rs` runs the commands on symlinks, devices, folders and one file named twice).
 
 use std::path::{Path, PathBuf};
 

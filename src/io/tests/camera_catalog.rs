@@ -2,7 +2,7 @@
 //! file gives them, image sizes for files without one, what real files do to their text
 //! (CRLF, tabs, `key:value`, `%YAML:1.0` and comments, `e-002`, wrapped and aligned lists),
 //! and the writers of every format that can hold a camera, read back to the same pixels. The
-//! files are small ones written here in each tool's layout (`tests/it/cli_cameras.rs` runs
+//! files are small ones written here in each tool's layout (`cli/tests/it/cli_cameras.rs` runs
 //! `vklens cameras` and `vklens convert` on them).
 
 use crate::io::camera::{list_cameras, parse_camera_with};

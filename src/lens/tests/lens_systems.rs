@@ -1,6 +1,6 @@
 //! Real lens systems (Heidrich et al.): the shipped prescriptions against their published first-order
 //! figures, the centres of projection of the image-based model, and the OpenCV fit at a finite
-//! focus (`tests/it/cli_lens.rs` runs `vklens lens` on them).
+//! focus (`cli/tests/it/cli_lens.rs` runs `vklens lens` on them).
 
 use crate::lens::{analyse, trace, LAMBDA_D};
 

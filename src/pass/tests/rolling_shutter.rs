@@ -43,7 +43,7 @@ fn camera() -> Camera {
 
 // A fast pan with a step sideways during the readout: the camera turns about 7° and moves 12 cm
 // between the first line and the last, 1.6 m from the grid (the bench's scene).
-use crate::bench::rolling_shutter::pan;
+use crate::host::bands_study::pan;
 
 /// The frame before: the same pan, a readout earlier.
 fn previous_pan() -> (Pose, Pose) {

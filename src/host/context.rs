@@ -119,6 +119,170 @@ unsafe extern "system" fn on_debug_message(
     vk::FALSE
 }
 
+/// The instance, with the validation layer and a messenger collecting its messages into
+/// `messages` when `validation` is on.
+fn create_instance(
+    entry: &ash::Entry,
+    validation: bool,
+    messages: &Arc<Mutex<Vec<String>>>,
+) -> Result<(
+    ash::Instance,
+    Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+)> {
+    let mut layers = Vec::new();
+    let mut extensions = Vec::new();
+    if validation {
+        // SAFETY: `entry` holds a loaded Vulkan library; this global query has no other
+        // preconditions.
+        let available = unsafe {
+            entry
+                .enumerate_instance_layer_properties()
+                .call("vkEnumerateInstanceLayerProperties")?
+        };
+        let found = available.iter().any(|l| {
+            l.layer_name_as_c_str()
+                .map(|n| n == VALIDATION_LAYER)
+                .unwrap_or(false)
+        });
+        if !found {
+            return Err(Error::NoVulkan("the Khronos validation layer was requested but is not installed (apt-get install vulkan-validationlayers)".into()));
+        }
+        layers.push(VALIDATION_LAYER.as_ptr());
+        extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"vklens")
+        .engine_name(c"vklens")
+        .api_version(vk::API_VERSION_1_1);
+    let info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&extensions);
+    // SAFETY: `info` and everything it points at (`app`, the `'static` layer and extension
+    // names in `layers` and `extensions`) outlive the call; no allocation callbacks.
+    let instance = unsafe {
+        entry
+            .create_instance(&info, None)
+            .call("vkCreateInstance")?
+    };
+
+    let debug = if validation {
+        let loader = ash::ext::debug_utils::Instance::new(entry, &instance);
+        let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+            )
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE
+                    | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
+            )
+            .pfn_user_callback(Some(on_debug_message))
+            .user_data(Arc::as_ptr(messages) as *mut c_void);
+        // SAFETY: the instance was created with VK_EXT_debug_utils (pushed above when
+        // validation is on); the user data points at `messages`, which `Owned` keeps alive
+        // until the messenger is destroyed, and `on_debug_message` checks for null.
+        match unsafe { loader.create_debug_utils_messenger(&info, None) } {
+            Ok(m) => Some((loader, m)),
+            Err(e) => {
+                // SAFETY: nothing was created from the instance (the messenger failed), and
+                // it is not used again.
+                unsafe { instance.destroy_instance(None) };
+                return Err(Error::Vulkan {
+                    call: "vkCreateDebugUtilsMessengerEXT",
+                    result: e,
+                });
+            }
+        }
+    } else {
+        None
+    };
+    Ok((instance, debug))
+}
+
+/// A device made from `physical`, its queue and allocator.
+struct OpenedDevice {
+    device: ash::Device,
+    queue: vk::Queue,
+    allocator: Allocator,
+    float64: bool,
+    geometry_shader: bool,
+}
+
+/// Opens the device with one queue of `family` and the features vklens uses where the device
+/// has them (refusing one without the storage formats the maps need), and its allocator. On
+/// failure nothing of the device is left; the instance is the caller's to destroy.
+fn open_device(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    family: u32,
+    options: &ContextOptions,
+) -> Result<OpenedDevice> {
+    let priorities = [1.0f32];
+    let queue_info = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(family)
+        .queue_priorities(&priorities)];
+    // f64 shader variants (the precise inverse near folds) need shaderFloat64; enable it
+    // where the device has it (lavapipe does) and fall back to f32 elsewhere.
+    // SAFETY: `physical` was enumerated from this live instance by `pick_device`.
+    let supported = unsafe { instance.get_physical_device_features(physical) };
+    let float64 = supported.shader_float64 == vk::TRUE;
+    // rg32f coordinate maps and r8 masks are "extended" storage-image formats.
+    if supported.shader_storage_image_extended_formats != vk::TRUE {
+        return Err(Error::NoVulkan(
+            "no Vulkan device matches: the device lacks shaderStorageImageExtendedFormats".into(),
+        ));
+    }
+    // The geometry path can drop triangles in a geometry shader (lavapipe has them); it
+    // has a compute discard for devices without.
+    let geometry_shader = options.geometry_shader && supported.geometry_shader == vk::TRUE;
+    let features = vk::PhysicalDeviceFeatures::default()
+        .shader_float64(float64)
+        .geometry_shader(geometry_shader)
+        .shader_storage_image_extended_formats(true);
+    let device_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_info)
+        .enabled_features(&features);
+    // SAFETY: `physical` belongs to `instance`; `family` is one of its queue families and
+    // one queue of it is requested; every enabled feature was checked as supported above;
+    // `device_info` and what it points at outlive the call.
+    let device = match unsafe { instance.create_device(physical, &device_info, None) } {
+        Ok(d) => d,
+        Err(e) => {
+            return Err(Error::Vulkan {
+                call: "vkCreateDevice",
+                result: e,
+            })
+        }
+    };
+    // SAFETY: the device was created with one queue in `family`, so index 0 exists.
+    let queue = unsafe { device.get_device_queue(family, 0) };
+    let allocator = match Allocator::new(&AllocatorCreateDesc {
+        instance: instance.clone(),
+        device: device.clone(),
+        physical_device: physical,
+        debug_settings: Default::default(),
+        buffer_device_address: false,
+        allocation_sizes: Default::default(),
+    }) {
+        Ok(a) => a,
+        Err(e) => {
+            // SAFETY: nothing has been created from the new device and nothing else holds
+            // it; the caller then destroys the instance it came from, after it.
+            unsafe { device.destroy_device(None) };
+            return Err(e.into());
+        }
+    };
+    Ok(OpenedDevice {
+        device,
+        queue,
+        allocator,
+        float64,
+        geometry_shader,
+    })
+}
+
 impl Context {
     /// Creates a context with options from the environment (see [`ContextOptions::from_env`]).
     pub fn from_env() -> Result<Self> {
@@ -133,75 +297,7 @@ impl Context {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::NoVulkan(format!("cannot load the Vulkan library ({e}); install it with: apt-get install libvulkan1 mesa-vulkan-drivers")))?;
         let messages = Arc::new(Mutex::new(Vec::new()));
 
-        let mut layers = Vec::new();
-        let mut extensions = Vec::new();
-        if options.validation {
-            // SAFETY: `entry` holds a loaded Vulkan library; this global query has no other
-            // preconditions.
-            let available = unsafe {
-                entry
-                    .enumerate_instance_layer_properties()
-                    .call("vkEnumerateInstanceLayerProperties")?
-            };
-            let found = available.iter().any(|l| {
-                l.layer_name_as_c_str()
-                    .map(|n| n == VALIDATION_LAYER)
-                    .unwrap_or(false)
-            });
-            if !found {
-                return Err(Error::NoVulkan("the Khronos validation layer was requested but is not installed (apt-get install vulkan-validationlayers)".into()));
-            }
-            layers.push(VALIDATION_LAYER.as_ptr());
-            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
-        }
-        let app = vk::ApplicationInfo::default()
-            .application_name(c"vklens")
-            .engine_name(c"vklens")
-            .api_version(vk::API_VERSION_1_1);
-        let info = vk::InstanceCreateInfo::default()
-            .application_info(&app)
-            .enabled_layer_names(&layers)
-            .enabled_extension_names(&extensions);
-        // SAFETY: `info` and everything it points at (`app`, the `'static` layer and extension
-        // names in `layers` and `extensions`) outlive the call; no allocation callbacks.
-        let instance = unsafe {
-            entry
-                .create_instance(&info, None)
-                .call("vkCreateInstance")?
-        };
-
-        let debug = if options.validation {
-            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
-                        | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
-                )
-                .message_type(
-                    vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE
-                        | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
-                )
-                .pfn_user_callback(Some(on_debug_message))
-                .user_data(Arc::as_ptr(&messages) as *mut c_void);
-            // SAFETY: the instance was created with VK_EXT_debug_utils (pushed above when
-            // validation is on); the user data points at `messages`, which `Owned` keeps alive
-            // until the messenger is destroyed, and `on_debug_message` checks for null.
-            match unsafe { loader.create_debug_utils_messenger(&info, None) } {
-                Ok(m) => Some((loader, m)),
-                Err(e) => {
-                    // SAFETY: nothing was created from the instance (the messenger failed), and
-                    // it is not used again.
-                    unsafe { instance.destroy_instance(None) };
-                    return Err(Error::Vulkan {
-                        call: "vkCreateDebugUtilsMessengerEXT",
-                        result: e,
-                    });
-                }
-            }
-        } else {
-            None
-        };
+        let (instance, debug) = create_instance(&entry, options.validation, &messages)?;
         let mut owned = Some(Owned {
             _entry: entry,
             instance,
@@ -228,68 +324,17 @@ impl Context {
             Ok(p) => p,
             Err(e) => return Err(fail(&mut owned, e)),
         };
-        let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(family)
-            .queue_priorities(&priorities)];
-        // f64 shader variants (the precise inverse near folds) need shaderFloat64; enable it
-        // where the device has it (lavapipe does) and fall back to f32 elsewhere.
-        // SAFETY: `physical` was enumerated from this live instance by `pick_device`.
-        let supported = unsafe { instance.get_physical_device_features(physical) };
-        let float64 = supported.shader_float64 == vk::TRUE;
-        // rg32f coordinate maps and r8 masks are "extended" storage-image formats.
-        if supported.shader_storage_image_extended_formats != vk::TRUE {
-            return Err(fail(
-                &mut owned,
-                Error::NoVulkan(
-                    "no Vulkan device matches: the device lacks shaderStorageImageExtendedFormats"
-                        .into(),
-                ),
-            ));
-        }
-        // The geometry path can drop triangles in a geometry shader (lavapipe has them); it
-        // has a compute discard for devices without.
-        let geometry_shader = options.geometry_shader && supported.geometry_shader == vk::TRUE;
-        let features = vk::PhysicalDeviceFeatures::default()
-            .shader_float64(float64)
-            .geometry_shader(geometry_shader)
-            .shader_storage_image_extended_formats(true);
-        let device_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_info)
-            .enabled_features(&features);
-        // SAFETY: `physical` belongs to `instance`; `family` is one of its queue families and
-        // one queue of it is requested; every enabled feature was checked as supported above;
-        // `device_info` and what it points at outlive the call.
-        let device = match unsafe { instance.create_device(physical, &device_info, None) } {
+        let opened = match open_device(&instance, physical, family, &options) {
             Ok(d) => d,
-            Err(e) => {
-                return Err(fail(
-                    &mut owned,
-                    Error::Vulkan {
-                        call: "vkCreateDevice",
-                        result: e,
-                    },
-                ))
-            }
+            Err(e) => return Err(fail(&mut owned, e)),
         };
-        // SAFETY: the device was created with one queue in `family`, so index 0 exists.
-        let queue = unsafe { device.get_device_queue(family, 0) };
-        let allocator = match Allocator::new(&AllocatorCreateDesc {
-            instance: instance.clone(),
-            device: device.clone(),
-            physical_device: physical,
-            debug_settings: Default::default(),
-            buffer_device_address: false,
-            allocation_sizes: Default::default(),
-        }) {
-            Ok(a) => a,
-            Err(e) => {
-                // SAFETY: nothing has been created from the new device and nothing else holds
-                // it; `fail` then destroys the instance it came from, after it.
-                unsafe { device.destroy_device(None) };
-                return Err(fail(&mut owned, e.into()));
-            }
-        };
+        let OpenedDevice {
+            device,
+            queue,
+            allocator,
+            float64,
+            geometry_shader,
+        } = opened;
         // SAFETY: `physical` was enumerated from this live instance.
         let props = unsafe { instance.get_physical_device_properties(physical) };
         // SAFETY: the same physical device of the same live instance as the query above.

@@ -31,6 +31,7 @@
 //!   pixel and the distorted pixel, in both directions, with an explicit "invalid".
 
 pub mod brown;
+pub mod camera;
 pub mod division;
 pub mod domain;
 pub mod double_sphere;
@@ -67,10 +68,11 @@ use std::str::FromStr;
 use glam::{DMat2, DVec2};
 
 pub use brown::BrownRadial;
+pub use camera::Camera;
 pub use domain::ValidDomain;
 pub use fisheye::Fisheye;
 pub use lens::{Lens, ModelKind};
-pub use opencv::{Camera, Intrinsics, OpenCvDistortion, Terms};
+pub use opencv::{Intrinsics, OpenCvDistortion, Terms};
 pub use projection::{vulkan_projection, Frustum};
 
 /// Largest magnitude accepted for any parameter; beyond it a model is certainly a unit or

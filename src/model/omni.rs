@@ -18,8 +18,9 @@ use glam::{DVec2, DVec3};
 
 use super::domain::ValidDomain;
 use super::jet::Scalar;
-use super::opencv::{Camera, Intrinsics, OpenCvDistortion};
+use super::opencv::{Intrinsics, OpenCvDistortion};
 use super::table::{norm3, unit, RayModel};
+use super::Camera;
 use super::{check_finite, InverseMethod, ModelError, ABSURD_MAGNITUDE};
 
 /// Mei's model: ξ and the radial-tangential k1 k2 p1 p2.

@@ -19,7 +19,7 @@ use crate::imaging::cpu_warp::{Border, Sampling};
 use crate::imaging::{Pixels, Raster};
 pub use crate::model::warp::MapInterpolation;
 use crate::model::warp::{coarse_cells, coarse_size, Direction, WarpGeometry};
-use crate::model::{Camera, InverseMethod, Terms};
+use crate::model::{InverseMethod, Terms};
 
 /// How output pixels get their source coordinates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -177,6 +177,278 @@ fn f4(v: [f64; 4]) -> [f32; 4] {
     v.map(|x| x as f32)
 }
 
+/// Refuses a warp description the shaders cannot run.
+fn check_desc(gpu: &Gpu, desc: &WarpDesc) -> Result<()> {
+    let g = &desc.geometry;
+    if matches!(desc.format, PixelFormat::R32Uint | PixelFormat::R32Float)
+        && (desc.sampling != Sampling::Nearest || g.is_chromatic())
+    {
+        return Err(Error::Input(
+                "object IDs (R32_UINT) and depth (R32_SFLOAT) are sampled nearest and without chromatic aberration".into(),
+            ));
+    }
+    if let Coordinates::CoarseMap { stride, refine, .. } = desc.coordinates {
+        if !(2..=64).contains(&stride) || refine > 8 || g.direction != Direction::Distort {
+            return Err(Error::Input(
+                    "a coarse map needs the distort direction, a stride in 2..=64 and at most 8 refinement steps".into(),
+                ));
+        }
+    }
+    if g.channel_cameras.is_some() && desc.coordinates == Coordinates::Analytic {
+        return Err(Error::Input(
+            "per-channel cameras need precomputed maps (Coordinates::Map)".into(),
+        ));
+    }
+    check_sizes(gpu, g)
+}
+
+/// The spec constants the warp and map shaders share for a camera's (or the channels'
+/// union of) terms: direction, inverse method, rectification.
+fn model_constants(g: &WarpGeometry, terms: Terms) -> crate::gpu::SpecConstants {
+    let (method, iterations) = method_constants(g.method);
+    CameraParams::spec_constants(terms)
+        .u32(spec::MODE, direction_mode(g))
+        .u32(spec::METHOD, method)
+        .u32(spec::FIXED_POINT_ITERATIONS, iterations)
+        .bool(spec::RECTIFY, g.output_to_ray().is_some())
+}
+
+/// The shaders' `MODE`: 0 distort (the inverse per pixel), 1 undistort (the forward model).
+fn direction_mode(g: &WarpGeometry) -> u32 {
+    match g.direction {
+        Direction::Distort => 0,
+        Direction::Undistort => 1,
+    }
+}
+
+/// The warp's own pipeline: the shader variant for the pixel format and direction, specialized
+/// for the camera's terms, the sampling, the border and the mask.
+fn warp_pipeline(gpu: &Gpu, desc: &WarpDesc) -> Result<ComputePipeline> {
+    let g = &desc.geometry;
+    let mode = direction_mode(g);
+    let constants = model_constants(g, g.camera.terms())
+        .bool(spec::CHROMATIC, g.is_chromatic())
+        .bool(spec::USE_MAP, desc.coordinates.uses_map())
+        .bool(spec::NEAREST, desc.sampling == Sampling::Nearest)
+        .bool(spec::BICUBIC, desc.sampling == Sampling::Bicubic)
+        .u32(spec::BORDER, desc.border.gpu_id())
+        .bool(spec::WRITE_MASK, desc.write_mask);
+    let spirv = match desc.format {
+        PixelFormat::Rgba8 if mode == 1 => shaders::WARP_COMP_RGBA8_FORWARD,
+        PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,
+        PixelFormat::Rgba32F if mode == 1 => shaders::WARP_COMP_FORWARD,
+        PixelFormat::Rgba32F => shaders::WARP_COMP,
+        PixelFormat::R32Uint => shaders::WARP_COMP_R32UI,
+        PixelFormat::R32Float => shaders::WARP_COMP_R32F,
+    };
+    let storage = vk::DescriptorType::STORAGE_IMAGE;
+    ComputePipeline::new(
+        gpu,
+        spirv,
+        &[
+            vk::DescriptorType::UNIFORM_BUFFER,
+            storage,
+            storage,
+            storage,
+            storage,
+            storage,
+            storage,
+        ],
+        std::mem::size_of::<WarpPush>() as u32,
+        constants,
+    )
+}
+
+/// The warp's push constants: the ideal camera, the channels' scales, the fill, the sizes,
+/// the rectification and the whole output as the band.
+fn warp_push(desc: &WarpDesc) -> WarpPush {
+    let g = &desc.geometry;
+    let scales = g.chromatic.unwrap_or([1.0; 3]);
+    let k = &g.ideal;
+    WarpPush {
+        ideal: f4([k.fx, k.fy, k.cx, k.cy]),
+        chromatic: f4([scales[0], scales[1], scales[2], 1.0]),
+        fill: desc.fill,
+        sizes: [
+            g.source_size.0,
+            g.source_size.1,
+            g.output_size.0,
+            g.output_size.1,
+        ],
+        rectify: g.output_to_ray().map_or([[0.0; 4]; 3], |h| {
+            [h.x_axis, h.y_axis, h.z_axis].map(|c| f4([c.x, c.y, c.z, 0.0]))
+        }),
+        band: [0, 0, g.output_size.0, g.output_size.1],
+    }
+}
+
+/// Map images usable as storage and copied out (`read_maps`: tests, benches and engines that
+/// cache them).
+const MAP_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
+    vk::ImageUsageFlags::STORAGE.as_raw() | vk::ImageUsageFlags::TRANSFER_SRC.as_raw(),
+);
+
+/// The [R, G, B] maps: real ones in map mode (one per channel that differs), 1×1
+/// placeholders otherwise (the bindings exist in every variant).
+fn map_images(gpu: &Gpu, desc: &WarpDesc) -> Result<Vec<Image>> {
+    let g = &desc.geometry;
+    let (mw, mh) = if desc.coordinates.uses_map() {
+        g.output_size
+    } else {
+        (1, 1)
+    };
+    (0..3)
+        .map(|c| {
+            let real = desc.coordinates.uses_map() && (c == 1 || g.is_chromatic());
+            let (w, h) = if real { (mw, mh) } else { (1, 1) };
+            Image::new_2d(gpu, "warp.map", MAP_FORMAT, w, h, MAP_USAGE)
+        })
+        .collect()
+}
+
+/// What map mode adds to a warp: the map pipelines (the solve, and the upsampler of a coarse
+/// map), their sets' pool, each channel's camera, the coarse images and the recorded steps.
+#[derive(Default)]
+struct MapParts {
+    pipelines: Vec<ComputePipeline>,
+    pool: Option<DescriptorPool>,
+    cameras: Vec<Buffer>,
+    coarse: Vec<Image>,
+    steps: Vec<MapStep>,
+}
+
+impl MapParts {
+    fn new(gpu: &Gpu, desc: &WarpDesc, maps: &[Image], push: WarpPush) -> Result<Self> {
+        let g = &desc.geometry;
+        let chromatic = g.is_chromatic();
+        let storage = vk::DescriptorType::STORAGE_IMAGE;
+        let mut map_pipelines = Vec::new();
+        let channels: Vec<usize> = if chromatic { vec![0, 1, 2] } else { vec![1] };
+        // One pipeline serves every channel: the union of their term groups.
+        let terms = channels
+            .iter()
+            .map(|&c| g.channel_camera(c).terms())
+            .fold(Terms::default(), Terms::union);
+        let base = model_constants(g, terms);
+        let (stride, refine, interpolation) = match desc.coordinates {
+            Coordinates::CoarseMap {
+                stride,
+                refine,
+                interpolation,
+            } => (stride, refine, interpolation),
+            _ => (1, 0, MapInterpolation::Bilinear),
+        };
+        let uniform = vk::DescriptorType::UNIFORM_BUFFER;
+        map_pipelines.push(ComputePipeline::new(
+            gpu,
+            shaders::INVERSE_MAP_COMP,
+            &[uniform, storage],
+            std::mem::size_of::<WarpPush>() as u32,
+            base.clone().u32(spec::STRIDE, stride),
+        )?);
+        if stride > 1 {
+            // The per-pixel forward check is compiled out when the host's f64 estimate says
+            // interpolation cannot reach the tolerance (and no fold is in view).
+            let check = g
+                .coarse_interpolation_error(stride, interpolation)
+                .is_none_or(|e| e > 0.5 * COARSE_MAX_RESIDUAL_PX as f64);
+            map_pipelines.push(ComputePipeline::new(
+                gpu,
+                shaders::UPSAMPLE_MAP_COMP,
+                &[uniform, storage, storage],
+                std::mem::size_of::<WarpPush>() as u32,
+                base.u32(spec::STRIDE, stride)
+                    .u32(spec::REFINE, refine)
+                    .f32(spec::MAX_RESIDUAL_PX, COARSE_MAX_RESIDUAL_PX)
+                    .bool(spec::CHECK_RESIDUAL, check)
+                    .bool(spec::CUBIC, interpolation == MapInterpolation::Cubic),
+            )?);
+        }
+        let steps_per_channel = if stride > 1 { 2 } else { 1 };
+        let mpool = DescriptorPool::for_pipeline(
+            gpu,
+            &map_pipelines[map_pipelines.len() - 1],
+            (channels.len() * steps_per_channel) as u32,
+        )?;
+        let (ow, oh) = g.output_size;
+        let (cw, ch) = coarse_size((ow, oh), stride);
+        let (cells_x, cells_y) = coarse_cells((ow, oh), stride);
+        let mut parts = MapParts {
+            pipelines: map_pipelines,
+            ..MapParts::default()
+        };
+        for &c in &channels {
+            let cam = Buffer::from_pod(
+                gpu,
+                "warp.map.camera",
+                &[CameraParams::from_camera(g.channel_camera(c))],
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+            )?;
+            let mut p = push;
+            p.chromatic = [g.channel_scale(c) as f32, 0.0, 0.0, 0.0];
+            if stride == 1 {
+                parts.solve_step(gpu, &mpool, &cam, maps[c].view, p, (ow, oh), false)?;
+            } else {
+                let coarse = Image::new_2d(gpu, "warp.map.coarse", MAP_FORMAT, cw, ch, MAP_USAGE)?;
+                let mut cp = p;
+                cp.sizes = [p.sizes[0], p.sizes[1], cw, ch];
+                parts.solve_step(gpu, &mpool, &cam, coarse.view, cp, (cw, ch), true)?;
+                let up = mpool.allocate(&parts.pipelines[1])?;
+                // SAFETY: the set was just allocated from a pool made for this pipeline's
+                // layout, so no work uses it yet; the buffers and views are this pass's
+                // own, alive.
+                unsafe { write_buffer_descriptors(gpu, up, &[(0, uniform, &cam)]) };
+                // SAFETY: as above.
+                unsafe {
+                    write_storage_image_descriptors(gpu, up, &[(1, coarse.view), (2, maps[c].view)])
+                };
+                parts.steps.push(MapStep {
+                    pipeline: 1,
+                    set: up,
+                    push: p,
+                    // One invocation per coarse cell (glsl/upsample_map.comp).
+                    groups: (cells_x.div_ceil(8), cells_y.div_ceil(8)),
+                    barrier_after: false,
+                });
+                parts.coarse.push(coarse);
+            }
+            parts.cameras.push(cam);
+        }
+        parts.pool = Some(mpool);
+        Ok(parts)
+    }
+
+    /// A step of the map solve (`pipelines[0]`): `cam`'s inverse per pixel of a `size` map
+    /// into `target`, a barrier after it where the upsampler reads it next.
+    #[allow(clippy::too_many_arguments)]
+    fn solve_step(
+        &mut self,
+        gpu: &Gpu,
+        pool: &DescriptorPool,
+        cam: &Buffer,
+        target: vk::ImageView,
+        push: WarpPush,
+        size: (u32, u32),
+        barrier_after: bool,
+    ) -> Result<()> {
+        let set = pool.allocate(&self.pipelines[0])?;
+        let uniform = vk::DescriptorType::UNIFORM_BUFFER;
+        // SAFETY: the set was just allocated from a pool made for this pipeline's layout, so
+        // no work uses it yet; the buffers and views are this pass's own, alive.
+        unsafe { write_buffer_descriptors(gpu, set, &[(0, uniform, cam)]) };
+        // SAFETY: as above.
+        unsafe { write_storage_image_descriptors(gpu, set, &[(1, target)]) };
+        self.steps.push(MapStep {
+            pipeline: 0,
+            set,
+            push,
+            groups: (size.0.div_ceil(8), size.1.div_ceil(8)),
+            barrier_after,
+        });
+        Ok(())
+    }
+}
+
 impl WarpPass {
     /// Builds the pipelines (terms the camera does not use are compiled out; the single-fetch
     /// variant when there is no chromatic aberration) and, in map mode, the map images.
@@ -188,72 +460,9 @@ impl WarpPass {
     /// flight, chosen by [`WarpPass::select_frame`].
     pub fn with_frames(gpu: &Gpu, desc: WarpDesc, frames: usize) -> Result<Self> {
         let frames = frames.clamp(1, MAX_FRAMES_IN_FLIGHT);
+        check_desc(gpu, &desc)?;
         let g = &desc.geometry;
-        if matches!(desc.format, PixelFormat::R32Uint | PixelFormat::R32Float)
-            && (desc.sampling != Sampling::Nearest || g.is_chromatic())
-        {
-            return Err(Error::Input(
-                "object IDs (R32_UINT) and depth (R32_SFLOAT) are sampled nearest and without chromatic aberration".into(),
-            ));
-        }
-        if let Coordinates::CoarseMap { stride, refine, .. } = desc.coordinates {
-            if !(2..=64).contains(&stride) || refine > 8 || g.direction != Direction::Distort {
-                return Err(Error::Input(
-                    "a coarse map needs the distort direction, a stride in 2..=64 and at most 8 refinement steps".into(),
-                ));
-            }
-        }
-        if g.channel_cameras.is_some() && desc.coordinates == Coordinates::Analytic {
-            return Err(Error::Input(
-                "per-channel cameras need precomputed maps (Coordinates::Map)".into(),
-            ));
-        }
-        check_sizes(gpu, g)?;
-        let chromatic = g.is_chromatic();
-        let (method, iterations) = method_constants(g.method);
-        let mode = match g.direction {
-            Direction::Distort => 0,
-            Direction::Undistort => 1,
-        };
-        let rectify = g.output_to_ray();
-        let with_model = |cam: &Camera| {
-            CameraParams::spec_constants(cam.terms())
-                .u32(spec::MODE, mode)
-                .u32(spec::METHOD, method)
-                .u32(spec::FIXED_POINT_ITERATIONS, iterations)
-                .bool(spec::RECTIFY, rectify.is_some())
-        };
-        let constants = with_model(&g.camera)
-            .bool(spec::CHROMATIC, chromatic)
-            .bool(spec::USE_MAP, desc.coordinates.uses_map())
-            .bool(spec::NEAREST, desc.sampling == Sampling::Nearest)
-            .bool(spec::BICUBIC, desc.sampling == Sampling::Bicubic)
-            .u32(spec::BORDER, desc.border.gpu_id())
-            .bool(spec::WRITE_MASK, desc.write_mask);
-        let spirv = match desc.format {
-            PixelFormat::Rgba8 if mode == 1 => shaders::WARP_COMP_RGBA8_FORWARD,
-            PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,
-            PixelFormat::Rgba32F if mode == 1 => shaders::WARP_COMP_FORWARD,
-            PixelFormat::Rgba32F => shaders::WARP_COMP,
-            PixelFormat::R32Uint => shaders::WARP_COMP_R32UI,
-            PixelFormat::R32Float => shaders::WARP_COMP_R32F,
-        };
-        let storage = vk::DescriptorType::STORAGE_IMAGE;
-        let pipeline = ComputePipeline::new(
-            gpu,
-            spirv,
-            &[
-                vk::DescriptorType::UNIFORM_BUFFER,
-                storage,
-                storage,
-                storage,
-                storage,
-                storage,
-                storage,
-            ],
-            std::mem::size_of::<WarpPush>() as u32,
-            constants,
-        )?;
+        let pipeline = warp_pipeline(gpu, &desc)?;
         let pool = DescriptorPool::for_pipeline(gpu, &pipeline, frames as u32)?;
         let sets = (0..frames)
             .map(|_| pool.allocate(&pipeline))
@@ -275,39 +484,8 @@ impl WarpPass {
                 )
             };
         }
-        let scales = g.chromatic.unwrap_or([1.0; 3]);
-        let k = &g.ideal;
-        let push = WarpPush {
-            ideal: f4([k.fx, k.fy, k.cx, k.cy]),
-            chromatic: f4([scales[0], scales[1], scales[2], 1.0]),
-            fill: desc.fill,
-            sizes: [
-                g.source_size.0,
-                g.source_size.1,
-                g.output_size.0,
-                g.output_size.1,
-            ],
-            rectify: rectify.map_or([[0.0; 4]; 3], |h| {
-                [h.x_axis, h.y_axis, h.z_axis].map(|c| f4([c.x, c.y, c.z, 0.0]))
-            }),
-            band: [0, 0, g.output_size.0, g.output_size.1],
-        };
-
-        // Maps: real ones in map mode (one per channel that differs), 1×1 placeholders
-        // otherwise (the bindings exist in every variant).
-        let (mw, mh) = if desc.coordinates.uses_map() {
-            g.output_size
-        } else {
-            (1, 1)
-        };
-        // TRANSFER_SRC: `read_maps` copies maps out (for tests, benches and engines that cache them).
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-        let mut maps = Vec::new();
-        for c in 0..3 {
-            let real = desc.coordinates.uses_map() && (c == 1 || chromatic);
-            let (w, h) = if real { (mw, mh) } else { (1, 1) };
-            maps.push(Image::new_2d(gpu, "warp.map", MAP_FORMAT, w, h, usage)?);
-        }
+        let push = warp_push(&desc);
+        let maps = map_images(gpu, &desc)?;
         let map_views: Vec<(u32, vk::ImageView)> =
             (0..3).map(|c| (MAP_BINDINGS[c], maps[c].view)).collect();
         for &set in &sets {
@@ -315,142 +493,11 @@ impl WarpPass {
             // so no work uses it yet; the buffers and views are this pass's own, alive.
             unsafe { write_storage_image_descriptors(gpu, set, &map_views) };
         }
-
-        let mut map_pipelines = Vec::new();
-        let mut map_pool = None;
-        let mut map_cameras = Vec::new();
-        let mut coarse_maps = Vec::new();
-        let mut map_steps = Vec::new();
-        if desc.coordinates.uses_map() {
-            let channels: Vec<usize> = if chromatic { vec![0, 1, 2] } else { vec![1] };
-            // One pipeline serves every channel: the union of their term groups.
-            let terms = channels
-                .iter()
-                .map(|&c| g.channel_camera(c).terms())
-                .fold(Terms::default(), Terms::union);
-            let base = CameraParams::spec_constants(terms)
-                .u32(spec::MODE, mode)
-                .u32(spec::METHOD, method)
-                .u32(spec::FIXED_POINT_ITERATIONS, iterations)
-                .bool(spec::RECTIFY, rectify.is_some());
-            let (stride, refine, interpolation) = match desc.coordinates {
-                Coordinates::CoarseMap {
-                    stride,
-                    refine,
-                    interpolation,
-                } => (stride, refine, interpolation),
-                _ => (1, 0, MapInterpolation::Bilinear),
-            };
-            let uniform = vk::DescriptorType::UNIFORM_BUFFER;
-            map_pipelines.push(ComputePipeline::new(
-                gpu,
-                shaders::INVERSE_MAP_COMP,
-                &[uniform, storage],
-                std::mem::size_of::<WarpPush>() as u32,
-                base.clone().u32(spec::STRIDE, stride),
-            )?);
-            if stride > 1 {
-                // The per-pixel forward check is compiled out when the host's f64 estimate says
-                // interpolation cannot reach the tolerance (and no fold is in view).
-                let check = g
-                    .coarse_interpolation_error(stride, interpolation)
-                    .is_none_or(|e| e > 0.5 * COARSE_MAX_RESIDUAL_PX as f64);
-                map_pipelines.push(ComputePipeline::new(
-                    gpu,
-                    shaders::UPSAMPLE_MAP_COMP,
-                    &[uniform, storage, storage],
-                    std::mem::size_of::<WarpPush>() as u32,
-                    base.u32(spec::STRIDE, stride)
-                        .u32(spec::REFINE, refine)
-                        .f32(spec::MAX_RESIDUAL_PX, COARSE_MAX_RESIDUAL_PX)
-                        .bool(spec::CHECK_RESIDUAL, check)
-                        .bool(spec::CUBIC, interpolation == MapInterpolation::Cubic),
-                )?);
-            }
-            let steps_per_channel = if stride > 1 { 2 } else { 1 };
-            let mpool = DescriptorPool::for_pipeline(
-                gpu,
-                &map_pipelines[map_pipelines.len() - 1],
-                (channels.len() * steps_per_channel) as u32,
-            )?;
-            let (ow, oh) = g.output_size;
-            let (cw, ch) = coarse_size((ow, oh), stride);
-            let (cells_x, cells_y) = coarse_cells((ow, oh), stride);
-            for &c in &channels {
-                let cam = Buffer::from_pod(
-                    gpu,
-                    "warp.map.camera",
-                    &[CameraParams::from_camera(g.channel_camera(c))],
-                    vk::BufferUsageFlags::UNIFORM_BUFFER,
-                )?;
-                let mut p = push;
-                p.chromatic = [g.channel_scale(c) as f32, 0.0, 0.0, 0.0];
-                if stride == 1 {
-                    let set = mpool.allocate(&map_pipelines[0])?;
-                    // SAFETY: the set was just allocated from a pool made for this pipeline's
-                    // layout, so no work uses it yet; the buffers and views are this pass's
-                    // own, alive.
-                    unsafe { write_buffer_descriptors(gpu, set, &[(0, uniform, &cam)]) };
-                    // SAFETY: the set was just allocated from a pool made for this pipeline's
-                    // layout, so no work uses it yet; the buffers and views are this pass's
-                    // own, alive.
-                    unsafe { write_storage_image_descriptors(gpu, set, &[(1, maps[c].view)]) };
-                    map_steps.push(MapStep {
-                        pipeline: 0,
-                        set,
-                        push: p,
-                        groups: (ow.div_ceil(8), oh.div_ceil(8)),
-                        barrier_after: false,
-                    });
-                } else {
-                    let coarse = Image::new_2d(gpu, "warp.map.coarse", MAP_FORMAT, cw, ch, usage)?;
-                    let solve = mpool.allocate(&map_pipelines[0])?;
-                    // SAFETY: the set was just allocated from a pool made for this pipeline's
-                    // layout, so no work uses it yet; the buffers and views are this pass's
-                    // own, alive.
-                    unsafe { write_buffer_descriptors(gpu, solve, &[(0, uniform, &cam)]) };
-                    // SAFETY: the set was just allocated from a pool made for this pipeline's
-                    // layout, so no work uses it yet; the buffers and views are this pass's
-                    // own, alive.
-                    unsafe { write_storage_image_descriptors(gpu, solve, &[(1, coarse.view)]) };
-                    let mut cp = p;
-                    cp.sizes = [p.sizes[0], p.sizes[1], cw, ch];
-                    map_steps.push(MapStep {
-                        pipeline: 0,
-                        set: solve,
-                        push: cp,
-                        groups: (cw.div_ceil(8), ch.div_ceil(8)),
-                        barrier_after: true,
-                    });
-                    let up = mpool.allocate(&map_pipelines[1])?;
-                    // SAFETY: the set was just allocated from a pool made for this pipeline's
-                    // layout, so no work uses it yet; the buffers and views are this pass's
-                    // own, alive.
-                    unsafe { write_buffer_descriptors(gpu, up, &[(0, uniform, &cam)]) };
-                    // SAFETY: the set was just allocated from a pool made for this pipeline's
-                    // layout, so no work uses it yet; the buffers and views are this pass's
-                    // own, alive.
-                    unsafe {
-                        write_storage_image_descriptors(
-                            gpu,
-                            up,
-                            &[(1, coarse.view), (2, maps[c].view)],
-                        )
-                    };
-                    map_steps.push(MapStep {
-                        pipeline: 1,
-                        set: up,
-                        push: p,
-                        // One invocation per coarse cell (glsl/upsample_map.comp).
-                        groups: (cells_x.div_ceil(8), cells_y.div_ceil(8)),
-                        barrier_after: false,
-                    });
-                    coarse_maps.push(coarse);
-                }
-                map_cameras.push(cam);
-            }
-            map_pool = Some(mpool);
-        }
+        let map = if desc.coordinates.uses_map() {
+            MapParts::new(gpu, &desc, &maps, push)?
+        } else {
+            MapParts::default()
+        };
         Ok(WarpPass {
             gpu: gpu.clone(),
             desc,
@@ -460,11 +507,11 @@ impl WarpPass {
             slot: 0,
             _camera: camera,
             maps,
-            map_pipelines,
-            _map_pool: map_pool,
-            _map_cameras: map_cameras,
-            _coarse: coarse_maps,
-            map_steps,
+            map_pipelines: map.pipelines,
+            _map_pool: map.pool,
+            _map_cameras: map.cameras,
+            _coarse: map.coarse,
+            map_steps: map.steps,
             push,
         })
     }

@@ -15,7 +15,7 @@ use crate::imaging::Raster;
 use crate::model::rolling_shutter::bands::Band;
 use crate::model::rolling_shutter::FrameMotion;
 use crate::model::warp::WarpGeometry;
-use crate::model::{Camera, OpenCvDistortion};
+use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::cube_stage::CubeStage;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
@@ -155,6 +155,88 @@ impl BandedSource {
     }
 }
 
+/// What every pass of a recorder is built with: the device, the plan, the frames in flight.
+struct Builder<'a> {
+    gpu: &'a Gpu,
+    plan: &'a Plan,
+    frames: usize,
+}
+
+impl Builder<'_> {
+    /// The colour target's format: half floats for EXR output, else 8-bit.
+    fn color_format(&self) -> ColorFormat {
+        if self.plan.outputs.exr {
+            ColorFormat::Rgba16F
+        } else {
+            ColorFormat::Rgba8
+        }
+    }
+
+    /// The images the plan asks the geometry path for.
+    fn outputs(&self) -> Outputs {
+        let o = self.plan.outputs;
+        Outputs {
+            color: o.color.then_some(self.color_format()),
+            ids: o.ids,
+            flow: o.flow,
+            depth: o.depth,
+        }
+    }
+
+    /// A geometry pass (Alg. 1 or the pinhole render) with its targets.
+    fn geometry(
+        &self,
+        camera: &Camera,
+        projection: Projection,
+        outputs: Outputs,
+    ) -> Result<(GeometryPass, GeometryTargets)> {
+        let mut desc = GeometryDesc::new(camera.clone(), projection, outputs);
+        desc.background = self.plan.background;
+        desc.readout = self.plan.shutter.moving_readout();
+        let pass = GeometryPass::with_frames(self.gpu, desc, self.frames)?;
+        let targets = GeometryTargets::new(self.gpu, &pass)?;
+        Ok((pass, targets))
+    }
+
+    /// The warp route's stage with its overscanned pinhole source camera and geometry.
+    fn warp_stage(
+        &self,
+        camera: &Camera,
+        method: InverseMethod,
+        chromatic: Option<[f64; 3]>,
+        map: bool,
+        data: DataOutputs,
+    ) -> Result<(WarpStage, Camera, WarpGeometry)> {
+        let plan = self.plan;
+        let (source, mut g) = WarpGeometry::overscanned(camera, method, plan.density)?;
+        if let Some(s) = chromatic {
+            g = g.with_chromatic(s)?;
+        }
+        // The warp reads RGBA8 or RGBA32F sources.
+        let f = if self.color_format() == ColorFormat::Rgba8 {
+            ColorFormat::Rgba8
+        } else {
+            ColorFormat::Rgba32F
+        };
+        let coordinates = if map {
+            super::MAP_COORDINATES
+        } else {
+            Coordinates::Analytic
+        };
+        let stage = WarpStage::with_data(
+            self.gpu,
+            source.clone(),
+            g.clone(),
+            coordinates,
+            f,
+            plan.background,
+            data,
+            self.frames,
+        )?;
+        Ok((stage, source, g))
+    }
+}
+
 /// The passes of one plan, built once; any number of frames recorded.
 pub struct PlanRecorder {
     /// Alg. 1 or the pinhole render with its targets (every output it renders).
@@ -234,58 +316,18 @@ impl PlanRecorder {
                 crate::pass::geometry::MAX_FRAMES_IN_FLIGHT
             )));
         }
-        let o = plan.outputs;
-        let format = if o.exr {
-            ColorFormat::Rgba16F
-        } else {
-            ColorFormat::Rgba8
-        };
-        let outputs = Outputs {
-            color: o.color.then_some(format),
-            ids: o.ids,
-            flow: o.flow,
-            depth: o.depth,
-        };
-        let geometry = |camera: &Camera, projection, outputs| -> Result<_> {
-            let mut desc = GeometryDesc::new(camera.clone(), projection, outputs);
-            desc.background = plan.background;
-            desc.readout = plan.shutter.moving_readout();
-            let pass = GeometryPass::with_frames(gpu, desc, frames)?;
-            let targets = GeometryTargets::new(gpu, &pass)?;
-            Ok((pass, targets))
-        };
-        let warp_stage = |camera: &Camera,
-                          method,
-                          chromatic: Option<[f64; 3]>,
-                          map: bool,
-                          data: DataOutputs|
-         -> Result<(WarpStage, Camera, WarpGeometry)> {
-            let (source, mut g) = WarpGeometry::overscanned(camera, method, plan.density)?;
-            if let Some(s) = chromatic {
-                g = g.with_chromatic(s)?;
-            }
-            // The warp reads RGBA8 or RGBA32F sources.
-            let f = if format == ColorFormat::Rgba8 {
-                ColorFormat::Rgba8
-            } else {
-                ColorFormat::Rgba32F
-            };
-            let stage = WarpStage::with_data(
-                gpu,
-                source.clone(),
-                g.clone(),
-                if map {
-                    super::MAP_COORDINATES
-                } else {
-                    Coordinates::Analytic
-                },
-                f,
-                plan.background,
-                data,
-                frames,
-            )?;
-            Ok((stage, source, g))
-        };
+        let banded = matches!(
+            plan.route,
+            Route::Warp { .. } | Route::WarpAndVertex { .. } | Route::Cube { .. }
+        ) && plan.bands.is_some();
+        if plan.shutter.moving_readout().is_some()
+            && !matches!(plan.route, Route::Pinhole | Route::Vertex { .. })
+            && !banded
+        {
+            return Err(internal(
+                "a camera moving during a rolling shutter's readout is drawn by the vertex path, or by the warp in bands: the planner routes it there",
+            ));
+        }
         let mut r = PlanRecorder {
             geometry: None,
             warp: None,
@@ -301,7 +343,7 @@ impl PlanRecorder {
             previous_pose: plan.previous_pose,
             names: Vec::new(),
             warp_source: None,
-            outputs: o,
+            outputs: plan.outputs,
             vignetting: matches!(
                 plan.route,
                 Route::LensModel {
@@ -312,132 +354,26 @@ impl PlanRecorder {
             frames_in_flight: frames,
             pipelines: Vec::new(),
         };
-        let lens_delta = Projection::Lens { delta: plan.delta };
-        let banded = matches!(
-            plan.route,
-            Route::Warp { .. } | Route::WarpAndVertex { .. } | Route::Cube { .. }
-        ) && plan.bands.is_some();
-        if plan.shutter.moving_readout().is_some()
-            && !matches!(plan.route, Route::Pinhole | Route::Vertex { .. })
-            && !banded
-        {
-            return Err(internal(
-                "a camera moving during a rolling shutter's readout is drawn by the vertex path, or by the warp in bands: the planner routes it there",
-            ));
-        }
-        match &plan.route {
-            Route::LensModel { .. } => {
-                let setting = plan
-                    .lens()
-                    .ok_or_else(|| internal("a lens plan without a lens"))?;
-                r.lens = Some(LensRenderer::new(
-                    gpu,
-                    &setting.models,
-                    LensRenderOptions {
-                        frames_in_flight: frames,
-                        ..Default::default()
-                    },
-                )?);
-                r.names.push("image-based lens model (cells + film)");
-                r.pipelines.push(RecordedPipeline {
-                    kind: PassKind::LensModel,
-                    constants: Vec::new(),
-                });
-            }
-            route => {
-                let camera = plan
-                    .camera()
-                    .ok_or_else(|| internal("a camera plan without a camera"))?;
-                match route {
-                    Route::Pinhole => {
-                        r.geometry = Some(geometry(camera, Projection::Pinhole, outputs)?);
-                        r.names.push("pinhole render");
-                    }
-                    Route::Vertex { .. } => {
-                        r.geometry = Some(geometry(camera, lens_delta, outputs)?);
-                        r.names.push("Alg. 1 (vertex + discard)");
-                    }
-                    Route::Warp {
-                        method,
-                        chromatic,
-                        map,
-                    } => {
-                        if o.flow {
-                            return Err(internal(
-                                "flow takes Alg. 1 (Lambers et al. Table 1): no plan routes it through the warp",
-                            ));
-                        }
-                        let data = DataOutputs {
-                            ids: o.ids,
-                            depth: o.depth,
-                        };
-                        r.set_warp(warp_stage(camera, *method, *chromatic, *map, data)?);
-                        r.set_bands(gpu, plan)?;
-                    }
-                    Route::WarpAndVertex {
-                        method,
-                        chromatic,
-                        map,
-                        ..
-                    } => {
-                        if o.color {
-                            let none = DataOutputs::default();
-                            r.set_warp(warp_stage(camera, *method, *chromatic, *map, none)?);
-                            r.set_bands(gpu, plan)?;
-                        }
-                        r.geometry = Some(geometry(
-                            camera,
-                            lens_delta,
-                            Outputs {
-                                color: None,
-                                ..outputs
-                            },
-                        )?);
-                        r.names.push("Alg. 1 (vertex + discard), data outputs");
-                    }
-                    Route::Cube { side, chromatic } => {
-                        if o.ids || o.flow || o.depth {
-                            return Err(internal(
-                                "the planner routes only colour through a cube map",
-                            ));
-                        }
-                        // Within this device's limits and the cube budget.
-                        let (f, side) = super::limits::device_cube_faces(gpu, format, *side);
-                        let options = SphereWarpOptions {
-                            chromatic: *chromatic,
-                            fill: plan.background,
-                            write_mask: false,
-                        };
-                        let mut stage =
-                            CubeStage::with_frames(gpu, camera, side, f, &options, frames)?;
-                        r.pipelines.extend([
-                            RecordedPipeline::geometry(&stage.pass),
-                            RecordedPipeline::compute(PassKind::SphereWarp, stage.warp.pipeline()),
-                        ]);
-                        match (plan.bands, plan.shutter.moving_readout()) {
-                            (Some(count), Some(readout)) => {
-                                let bands = crate::model::rolling_shutter::bands::bands(
-                                    readout,
-                                    camera.width,
-                                    camera.height,
-                                    count,
-                                );
-                                // SAFETY: the stage is new: nothing recorded with it exists.
-                                unsafe { stage.set_bands(bands.len()) }?;
-                                r.cube_bands = Some(bands);
-                                r.names.push("cube faces + sphere warp per band");
-                            }
-                            _ => r
-                                .names
-                                .extend(["cube faces (6 pinhole renders)", "sphere warp"]),
-                        }
-                        r.cube = Some(stage);
-                    }
-                    Route::LensModel { .. } => {
-                        return Err(internal("the lens route is handled above"))
-                    }
-                }
-            }
+        let b = Builder { gpu, plan, frames };
+        if let Route::LensModel { .. } = plan.route {
+            let setting = plan
+                .lens()
+                .ok_or_else(|| internal("a lens plan without a lens"))?;
+            r.lens = Some(LensRenderer::new(
+                gpu,
+                &setting.models,
+                LensRenderOptions {
+                    frames_in_flight: frames,
+                    ..Default::default()
+                },
+            )?);
+            r.names.push("image-based lens model (cells + film)");
+            r.pipelines.push(RecordedPipeline {
+                kind: PassKind::LensModel,
+                constants: Vec::new(),
+            });
+        } else {
+            r.build_camera_route(&b)?;
         }
         if let Some((pass, _)) = &r.geometry {
             r.pipelines.push(RecordedPipeline::geometry(pass));
@@ -445,6 +381,120 @@ impl PlanRecorder {
         // SAFETY: the passes are new: nothing recorded with them exists yet.
         unsafe { r.bind_mesh() };
         Ok(r)
+    }
+
+    /// The passes of a route through a camera (every route but the lens model's).
+    fn build_camera_route(&mut self, b: &Builder) -> Result<()> {
+        let (gpu, plan) = (b.gpu, b.plan);
+        let o = plan.outputs;
+        let outputs = b.outputs();
+        let camera = plan
+            .camera()
+            .ok_or_else(|| internal("a camera plan without a camera"))?;
+        let lens_delta = Projection::Lens { delta: plan.delta };
+        let r = self;
+        match &plan.route {
+            Route::Pinhole => {
+                r.geometry = Some(b.geometry(camera, Projection::Pinhole, outputs)?);
+                r.names.push("pinhole render");
+            }
+            Route::Vertex { .. } => {
+                r.geometry = Some(b.geometry(camera, lens_delta, outputs)?);
+                r.names.push("Alg. 1 (vertex + discard)");
+            }
+            Route::Warp {
+                method,
+                chromatic,
+                map,
+            } => {
+                if o.flow {
+                    return Err(internal(
+                        "flow takes Alg. 1 (Lambers et al. Table 1): no plan routes it through the warp",
+                    ));
+                }
+                let data = DataOutputs {
+                    ids: o.ids,
+                    depth: o.depth,
+                };
+                r.set_warp(b.warp_stage(camera, *method, *chromatic, *map, data)?);
+                r.set_bands(gpu, plan)?;
+            }
+            Route::WarpAndVertex {
+                method,
+                chromatic,
+                map,
+                ..
+            } => {
+                if o.color {
+                    let none = DataOutputs::default();
+                    r.set_warp(b.warp_stage(camera, *method, *chromatic, *map, none)?);
+                    r.set_bands(gpu, plan)?;
+                }
+                r.geometry = Some(b.geometry(
+                    camera,
+                    lens_delta,
+                    Outputs {
+                        color: None,
+                        ..outputs
+                    },
+                )?);
+                r.names.push("Alg. 1 (vertex + discard), data outputs");
+            }
+            Route::Cube { side, chromatic } => r.build_cube(b, camera, *side, *chromatic)?,
+            Route::LensModel { .. } => return Err(internal("the lens route has no camera")),
+        }
+        Ok(())
+    }
+
+    /// The cube route's stage: six faces and the sphere warp, in bands where the camera moves
+    /// during the readout.
+    fn build_cube(
+        &mut self,
+        b: &Builder,
+        camera: &Camera,
+        side: u32,
+        chromatic: Option<[f64; 3]>,
+    ) -> Result<()> {
+        let (gpu, plan, frames) = (b.gpu, b.plan, b.frames);
+        let o = plan.outputs;
+        let format = b.color_format();
+        let r = self;
+        if o.ids || o.flow || o.depth {
+            return Err(internal(
+                "the planner routes only colour through a cube map",
+            ));
+        }
+        // Within this device's limits and the cube budget.
+        let (f, side) = super::limits::device_cube_faces(gpu, format, side);
+        let options = SphereWarpOptions {
+            chromatic,
+            fill: plan.background,
+            write_mask: false,
+        };
+        let mut stage = CubeStage::with_frames(gpu, camera, side, f, &options, frames)?;
+        r.pipelines.extend([
+            RecordedPipeline::geometry(&stage.pass),
+            RecordedPipeline::compute(PassKind::SphereWarp, stage.warp.pipeline()),
+        ]);
+        match (plan.bands, plan.shutter.moving_readout()) {
+            (Some(count), Some(readout)) => {
+                let bands = crate::model::rolling_shutter::bands::bands(
+                    readout,
+                    camera.width,
+                    camera.height,
+                    count,
+                );
+                // SAFETY: the stage is new: nothing recorded with it exists.
+                unsafe { stage.set_bands(bands.len()) }?;
+                r.cube_bands = Some(bands);
+                r.names.push("cube faces + sphere warp per band");
+            }
+            _ => r
+                .names
+                .extend(["cube faces (6 pinhole renders)", "sphere warp"]),
+        }
+        r.cube = Some(stage);
+        Ok(())
     }
 
     /// Points every pass that draws the mesh with a set of its own at it (the cube faces and

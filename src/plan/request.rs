@@ -121,63 +121,15 @@ impl Plan {
         scene: Option<&Scene>,
         max_image_side: u32,
     ) -> Result<Plan> {
+        check_request(request)?;
         let aa = request.antialias;
-        if !(1..=MAX_SUPERSAMPLE).contains(&aa.supersample) {
-            return Err(Error::argument(
-                "supersample",
-                format!(
-                    "{}: the supersampling factor must be in 1..={MAX_SUPERSAMPLE}",
-                    aa.supersample
-                ),
-            ));
-        }
-        if !(1..=MAX_JITTER).contains(&aa.jitter) {
-            return Err(Error::argument(
-                "jitter",
-                format!(
-                    "{}: the jittered passes must be in 1..={MAX_JITTER}",
-                    aa.jitter
-                ),
-            ));
-        }
-        if !request.background.iter().all(|c| c.is_finite()) {
-            return Err(Error::argument(
-                "background",
-                format!("{:?}: expected four finite numbers", request.background),
-            ));
-        }
         let camera = &request.camera;
         let o = request.outputs;
         let chromatic = request.chromatic;
         let mut steps = Vec::new();
-        let step = |stage, why: String| Step { stage, why };
         let mut delta = DEFAULT_DELTA;
         let mut density = 1.0;
-        let shutter = match request.rolling_shutter {
-            None => super::Shutter::Global,
-            Some((readout, end)) if end == request.pose => super::Shutter::Rolling {
-                readout,
-                from: super::ReadoutSource::Request,
-            },
-            Some((readout, _)) => {
-                if scene.is_none()
-                    && !matches!(
-                        request.path,
-                        PathChoice::Vertex { .. } | PathChoice::Pinhole
-                    )
-                {
-                    return Err(Error::argument(
-                        "rolling_shutter",
-                        format!("the camera moves during the {readout} readout: only the vertex path draws each line from its own pose (the warp and cube paths draw a frame from one pose, a global shutter's image); use the vertex path"),
-                    ));
-                }
-                super::Shutter::Moving {
-                    readout,
-                    from: super::ReadoutSource::Request,
-                    frame: 0,
-                }
-            }
-        };
+        let shutter = request_shutter(request, scene)?;
         let (route, expected) = match request.path {
             PathChoice::Vertex { .. } | PathChoice::Pinhole if chromatic.is_some() => {
                 return Err(Error::argument(
@@ -186,140 +138,25 @@ impl Plan {
                 ));
             }
             PathChoice::Pinhole => {
-                steps.push(step(
-                    Stage::PinholeRender,
-                    "the pinhole path was asked for: the camera's distortion is not applied".into(),
-                ));
+                steps.push(Step {
+                    stage: Stage::PinholeRender,
+                    why: "the pinhole path was asked for: the camera's distortion is not applied"
+                        .into(),
+                });
                 (Route::Pinhole, 0.0)
             }
             PathChoice::Vertex {
                 delta: d,
                 tessellate,
             } => {
-                if !(d.is_finite() && d >= 0.0) {
-                    return Err(Error::argument(
-                        "delta",
-                        format!("{d}: the discard tolerance must be a number ≥ 0"),
-                    ));
-                }
-                if let Some(l) = tessellate {
-                    if !(l.is_finite() && l >= 0.25) {
-                        return Err(Error::argument(
-                            "tessellate",
-                            format!("{l}: expected an edge length in pixels ≥ 0.25"),
-                        ));
-                    }
-                    steps.push(step(
-                        Stage::Tessellation,
-                        format!("edges longer than {l} px split, at the pose of each frame"),
-                    ));
-                }
                 delta = d;
-                steps.push(step(
-                    Stage::VertexRender,
-                    format!("the vertex path was asked for; discard δ = {d} + D"),
-                ));
-                // Not measured without the scene: the straight edges between vertices are
-                // what the tessellation bounds.
-                (Route::Vertex { tessellate }, f64::NAN)
+                vertex_route(d, tessellate, &mut steps)?
             }
             PathChoice::Warp { method, density: q } => {
-                if o.flow {
-                    return Err(Error::argument(
-                        "path",
-                        "flow needs the vertex path: its vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1)",
-                    ));
-                }
-                if !(q.is_finite() && q > 0.0 && q <= 16.0) {
-                    return Err(Error::argument(
-                        "density",
-                        format!("{q}: source pixels per output pixel must be in (0, 16]"),
-                    ));
-                }
                 density = q;
-                // At s× (supersampling), as the anti-aliased source is rendered.
-                let s = if o.color { aa.supersample } else { 1 };
-                let big = scaled_camera(camera, s)?;
-                match pinhole_source_refusal(&big, q, max_image_side) {
-                    Some(why) => {
-                        if o.ids || o.depth {
-                            return Err(Error::argument(
-                                "path",
-                                format!("{why}: the warp path would need a cube map, which carries colour only; the vertex path renders IDs and depth"),
-                            ));
-                        }
-                        let side = cube_face_side(camera, q);
-                        push_cube_steps(
-                            &mut steps,
-                            format!(
-                                "{why}{}: a cube map of six {side}×{side} faces instead",
-                                if s > 1 {
-                                    format!(" at {s}× supersampling")
-                                } else {
-                                    String::new()
-                                }
-                            ),
-                            chromatic.is_some(),
-                        );
-                        (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX)
-                    }
-                    None => {
-                        steps.push(step(
-                            Stage::OverscannedRender,
-                            format!(
-                                "the warp's source, covering every valid output pixel at {q} source px per output px (Lambers et al. Sec. 3.3)"
-                            ),
-                        ));
-                        steps.push(step(
-                            Stage::Warp {
-                                chromatic: chromatic.is_some(),
-                            },
-                            format!(
-                                "the warp path was asked for: {method} per pixel, colour bilinear{}",
-                                if o.ids || o.depth {
-                                    ", IDs and depth nearest"
-                                } else {
-                                    ""
-                                }
-                            ),
-                        ));
-                        let error = inverse_error_px(camera, method).unwrap_or(f64::NAN);
-                        (
-                            Route::Warp {
-                                method,
-                                chromatic,
-                                map: false,
-                            },
-                            error,
-                        )
-                    }
-                }
+                warp_route(request, method, q, max_image_side, &mut steps)?
             }
-            PathChoice::Cube { side } => {
-                if o.ids || o.flow || o.depth {
-                    return Err(Error::argument(
-                        "path",
-                        "IDs, flow and depth through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); the vertex path renders them",
-                    ));
-                }
-                if side < 2 {
-                    return Err(Error::argument(
-                        "density",
-                        format!("cube faces of {side} px: the density must be positive (faces are 2·f·density px)"),
-                    ));
-                }
-                push_cube_steps(
-                    &mut steps,
-                    if beyond_a_pinhole(camera) {
-                        "the cube path was asked for; the lens sees 90° and more off its axis"
-                            .into()
-                    } else {
-                        "the cube path was asked for".into()
-                    },
-                    chromatic.is_some(),
-                );
-                (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX)
-            }
+            PathChoice::Cube { side } => cube_route(request, side, &mut steps)?,
         };
         // A moving rolling shutter on the warp or cube path: in bands of lines.
         let banded = match (request.rolling_shutter, scene, &route) {
@@ -374,6 +211,211 @@ impl Plan {
             estimated_ms: f64::NAN,
         })
     }
+}
+
+/// Refuses a request's antialiasing and background where they are out of range.
+fn check_request(request: &RenderRequest) -> Result<()> {
+    let aa = request.antialias;
+    if !(1..=MAX_SUPERSAMPLE).contains(&aa.supersample) {
+        return Err(Error::argument(
+            "supersample",
+            format!(
+                "{}: the supersampling factor must be in 1..={MAX_SUPERSAMPLE}",
+                aa.supersample
+            ),
+        ));
+    }
+    if !(1..=MAX_JITTER).contains(&aa.jitter) {
+        return Err(Error::argument(
+            "jitter",
+            format!(
+                "{}: the jittered passes must be in 1..={MAX_JITTER}",
+                aa.jitter
+            ),
+        ));
+    }
+    if !request.background.iter().all(|c| c.is_finite()) {
+        return Err(Error::argument(
+            "background",
+            format!("{:?}: expected four finite numbers", request.background),
+        ));
+    }
+    Ok(())
+}
+
+/// The request's shutter; a camera moving during the readout is refused on the warp and cube
+/// paths without a scene to size their bands by.
+fn request_shutter(request: &RenderRequest, scene: Option<&Scene>) -> Result<super::Shutter> {
+    Ok(match request.rolling_shutter {
+        None => super::Shutter::Global,
+        Some((readout, end)) if end == request.pose => super::Shutter::Rolling {
+            readout,
+            from: super::ReadoutSource::Request,
+        },
+        Some((readout, _)) => {
+            if scene.is_none()
+                && !matches!(
+                    request.path,
+                    PathChoice::Vertex { .. } | PathChoice::Pinhole
+                )
+            {
+                return Err(Error::argument(
+                    "rolling_shutter",
+                    format!("the camera moves during the {readout} readout: only the vertex path draws each line from its own pose (the warp and cube paths draw a frame from one pose, a global shutter's image); use the vertex path"),
+                ));
+            }
+            super::Shutter::Moving {
+                readout,
+                from: super::ReadoutSource::Request,
+                frame: 0,
+            }
+        }
+    })
+}
+
+/// The vertex path as asked for: its discard δ and tessellation checked.
+fn vertex_route(d: f64, tessellate: Option<f64>, steps: &mut Vec<Step>) -> Result<(Route, f64)> {
+    let step = |stage, why: String| Step { stage, why };
+    if !(d.is_finite() && d >= 0.0) {
+        return Err(Error::argument(
+            "delta",
+            format!("{d}: the discard tolerance must be a number ≥ 0"),
+        ));
+    }
+    if let Some(l) = tessellate {
+        if !(l.is_finite() && l >= 0.25) {
+            return Err(Error::argument(
+                "tessellate",
+                format!("{l}: expected an edge length in pixels ≥ 0.25"),
+            ));
+        }
+        steps.push(step(
+            Stage::Tessellation,
+            format!("edges longer than {l} px split, at the pose of each frame"),
+        ));
+    }
+    steps.push(step(
+        Stage::VertexRender,
+        format!("the vertex path was asked for; discard δ = {d} + D"),
+    ));
+    // Not measured without the scene: the straight edges between vertices are
+    // what the tessellation bounds.
+    Ok((Route::Vertex { tessellate }, f64::NAN))
+}
+
+/// The warp path as asked for, or a cube map where no pinhole source can hold the lens.
+fn warp_route(
+    request: &RenderRequest,
+    method: InverseMethod,
+    q: f64,
+    max_image_side: u32,
+    steps: &mut Vec<Step>,
+) -> Result<(Route, f64)> {
+    let (camera, o, aa, chromatic) = (
+        &request.camera,
+        request.outputs,
+        request.antialias,
+        request.chromatic,
+    );
+    let step = |stage, why: String| Step { stage, why };
+    if o.flow {
+        return Err(Error::argument(
+            "path",
+            "flow needs the vertex path: its vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1)",
+        ));
+    }
+    if !(q.is_finite() && q > 0.0 && q <= 16.0) {
+        return Err(Error::argument(
+            "density",
+            format!("{q}: source pixels per output pixel must be in (0, 16]"),
+        ));
+    }
+    // At s× (supersampling), as the anti-aliased source is rendered.
+    let s = if o.color { aa.supersample } else { 1 };
+    let big = scaled_camera(camera, s)?;
+    Ok(match pinhole_source_refusal(&big, q, max_image_side) {
+        Some(why) => {
+            if o.ids || o.depth {
+                return Err(Error::argument(
+                    "path",
+                    format!("{why}: the warp path would need a cube map, which carries colour only; the vertex path renders IDs and depth"),
+                ));
+            }
+            let side = cube_face_side(camera, q);
+            push_cube_steps(
+                steps,
+                format!(
+                    "{why}{}: a cube map of six {side}×{side} faces instead",
+                    if s > 1 {
+                        format!(" at {s}× supersampling")
+                    } else {
+                        String::new()
+                    }
+                ),
+                chromatic.is_some(),
+            );
+            (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX)
+        }
+        None => {
+            steps.push(step(
+                Stage::OverscannedRender,
+                format!(
+                    "the warp's source, covering every valid output pixel at {q} source px per output px (Lambers et al. Sec. 3.3)"
+                ),
+            ));
+            steps.push(step(
+                Stage::Warp {
+                    chromatic: chromatic.is_some(),
+                },
+                format!(
+                    "the warp path was asked for: {method} per pixel, colour bilinear{}",
+                    if o.ids || o.depth {
+                        ", IDs and depth nearest"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+            let error = inverse_error_px(camera, method).unwrap_or(f64::NAN);
+            (
+                Route::Warp {
+                    method,
+                    chromatic,
+                    map: false,
+                },
+                error,
+            )
+        }
+    })
+}
+
+/// The cube path as asked for.
+fn cube_route(request: &RenderRequest, side: u32, steps: &mut Vec<Step>) -> Result<(Route, f64)> {
+    let (camera, o, chromatic) = (&request.camera, request.outputs, request.chromatic);
+    if o.ids || o.flow || o.depth {
+        return Err(Error::argument(
+            "path",
+            "IDs, flow and depth through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); the vertex path renders them",
+        ));
+    }
+    if side < 2 {
+        return Err(Error::argument(
+            "density",
+            format!(
+                "cube faces of {side} px: the density must be positive (faces are 2·f·density px)"
+            ),
+        ));
+    }
+    push_cube_steps(
+        steps,
+        if beyond_a_pinhole(camera) {
+            "the cube path was asked for; the lens sees 90° and more off its axis".into()
+        } else {
+            "the cube path was asked for".into()
+        },
+        chromatic.is_some(),
+    );
+    Ok((Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX))
 }
 
 /// The fewest bands of lines that draw `request`'s moving rolling shutter (`readout`,

@@ -366,257 +366,16 @@ impl SceneFile {
             }
         }
         let dir = path.parent().unwrap_or(Path::new("."));
-        let resolve = |p: &str| -> PathBuf {
-            let p = Path::new(p);
-            if p.is_absolute() {
-                p.to_path_buf()
-            } else {
-                dir.join(p)
-            }
-        };
-
-        let geometry = r.table(&root, "geometry", &["scene"])?;
-        let scene = r.string(geometry, "geometry", "scene")?.ok_or_else(|| {
-            r.err(
-                "[geometry] scene",
-                "missing: a built-in scene (checkerboard, grid, boxes, room) or a mesh file",
-            )
-        })?;
-        let builtin = ["checkerboard", "grid", "boxes", "room"]
-            .iter()
-            .any(|b| scene == *b || scene.starts_with(&format!("{b}:")));
-        let geometry = if builtin {
-            scene.to_string()
-        } else {
-            resolve(scene).display().to_string()
-        };
-
-        let optics_t = r.table(
-            &root,
-            "optics",
-            &["camera", "lens", "focus_m", "fstop", "sensor_mm", "pixels"],
-        )?;
-        let camera = r.string(optics_t, "optics", "camera")?;
-        let lens = r.string(optics_t, "optics", "lens")?;
-        let optics = match (camera, lens) {
-            (Some(_), Some(_)) => {
-                return Err(r.err("[optics]", "give camera or lens, not both"));
-            }
-            (None, None) => {
-                return Err(r.err(
-                    "[optics]",
-                    "missing: camera = \"CAM.yml\" (a calibrated camera) or lens = \"LENS.dat\" (a prescription)",
-                ));
-            }
-            (Some(c), None) => {
-                for k in ["focus_m", "fstop", "sensor_mm", "pixels"] {
-                    if optics_t.is_some_and(|t| t.contains_key(k)) {
-                        return Err(r.err(
-                            &format!("[optics] {k}"),
-                            "only for a lens prescription (the camera file fixes its own)",
-                        ));
-                    }
-                }
-                OpticsSpec::Camera(resolve(c))
-            }
-            (None, Some(l)) => {
-                let focus_m = r.opt_number(optics_t, "optics", "focus_m")?;
-                if let Some(f) = focus_m {
-                    if !(f > 0.0) {
-                        return Err(r.err(
-                            "[optics] focus_m",
-                            format!("expected metres > 0, found {f}"),
-                        ));
-                    }
-                }
-                let f_number = r.opt_number(optics_t, "optics", "fstop")?;
-                let sensor = match optics_t.and_then(|t| t.get("sensor_mm")) {
-                    Some(v) => r.numbers::<2>(v, "[optics] sensor_mm")?,
-                    None => [36.0, 24.0],
-                };
-                if !(sensor[0] > 0.0 && sensor[1] > 0.0) {
-                    return Err(r.err("[optics] sensor_mm", "expected two positive sizes in mm"));
-                }
-                let pixels = match optics_t.and_then(|t| t.get("pixels")) {
-                    Some(v) => r.numbers::<2>(v, "[optics] pixels")?,
-                    None => [480.0, 320.0],
-                };
-                if !pixels
-                    .iter()
-                    .all(|p| p.fract() == 0.0 && (1.0..=16384.0).contains(p))
-                {
-                    return Err(r.err("[optics] pixels", "expected two whole numbers in 1..=16384"));
-                }
-                OpticsSpec::Lens {
-                    path: resolve(l),
-                    focus_m,
-                    f_number,
-                    sensor_mm: (sensor[0], sensor[1]),
-                    pixels: (pixels[0] as u32, pixels[1] as u32),
-                }
-            }
-        };
-
-        let e = r.table(
-            &root,
-            "effects",
-            &[
-                "distortion",
-                "chromatic_aberration",
-                "chromatic_scales",
-                "vignetting",
-                "depth_of_field",
-                "lens_samples",
-            ],
-        )?;
-        let chromatic_scales = match e.and_then(|t| t.get("chromatic_scales")) {
-            Some(v) => {
-                let s = r.numbers::<3>(v, "[effects] chromatic_scales")?;
-                if !s.iter().all(|x| (0.5..=2.0).contains(x)) {
-                    return Err(r.err(
-                        "[effects] chromatic_scales",
-                        "expected three radial scales R, G, B near 1 (0.5..2)",
-                    ));
-                }
-                s
-            }
-            None => [1.0; 3],
-        };
-        let lens_samples = r
-            .opt_whole(e, "effects", "lens_samples", 1..=1024)?
-            .unwrap_or(10);
-        let effects = Effects {
-            distortion: r.bool(e, "effects", "distortion", true)?,
-            chromatic_aberration: r.bool(e, "effects", "chromatic_aberration", false)?,
-            chromatic_scales,
-            vignetting: r.bool(e, "effects", "vignetting", false)?,
-            depth_of_field: r.bool(e, "effects", "depth_of_field", false)?,
-            lens_samples,
-        };
-        if effects.chromatic_aberration
-            && matches!(optics, OpticsSpec::Camera(_))
-            && e.is_none_or(|t| !t.contains_key("chromatic_scales"))
-        {
-            return Err(r.err(
-                "[effects] chromatic_scales",
-                "missing: a camera file has no glass data, so chromatic_aberration needs the per-channel radial scales, e.g. [1.002, 1.0, 0.998]",
-            ));
-        }
-
-        let o = r.table(
-            &root,
-            "outputs",
-            &["color", "ids", "flow", "depth", "format"],
-        )?;
-        let exr = match r.string(o, "outputs", "format")? {
-            None | Some("png") => false,
-            Some("exr") => true,
-            Some(other) => {
-                return Err(r.err(
-                    "[outputs] format",
-                    format!("expected \"png\" or \"exr\", found {other:?}"),
-                ));
-            }
-        };
-        let outputs = OutputSpec {
-            color: r.bool(o, "outputs", "color", true)?,
-            ids: r.bool(o, "outputs", "ids", false)?,
-            flow: r.bool(o, "outputs", "flow", false)?,
-            depth: r.bool(o, "outputs", "depth", false)?,
-            exr,
-        };
-        if !(outputs.color || outputs.ids || outputs.flow || outputs.depth) {
-            return Err(r.err(
-                "[outputs]",
-                "every output is off: ask for color, ids, flow or depth",
-            ));
-        }
-
-        let a = r.table(&root, "accuracy", &["max_error_px"])?;
-        let max_error_px = r
-            .opt_number(a, "accuracy", "max_error_px")?
-            .unwrap_or(DEFAULT_MAX_ERROR_PX);
-        if !(max_error_px > 0.0) {
-            return Err(r.err(
-                "[accuracy] max_error_px",
-                format!("expected pixels > 0, found {max_error_px}"),
-            ));
-        }
-
-        let render = r.table(&root, "render", &["background", "supersample", "jitter"])?;
-        let background = match render.and_then(|t| t.get("background")) {
-            Some(v) => r.numbers::<4>(v, "[render] background")?.map(|c| c as f32),
-            None => super::DEFAULT_BACKGROUND,
-        };
-        let antialias = Antialias {
-            supersample: r
-                .opt_whole(render, "render", "supersample", 1..=super::MAX_SUPERSAMPLE)?
-                .unwrap_or(1),
-            jitter: r
-                .opt_whole(render, "render", "jitter", 1..=super::MAX_JITTER)?
-                .unwrap_or(1),
-        };
-
-        let sensor_t = r.table(&root, "sensor", &["rolling_shutter"])?;
-        let sensor = SensorSpec {
-            rolling_shutter: r
-                .string(sensor_t, "sensor", "rolling_shutter")?
-                .map(|s| {
-                    s.parse::<Readout>()
-                        .map_err(|e| r.err("[sensor] rolling_shutter", e.to_string()))
-                })
-                .transpose()?,
-        };
-
-        let mut poses = Vec::new();
-        let mut end_poses = Vec::new();
-        match root.get("poses") {
-            None => {}
-            Some(Value::Array(a)) => {
-                for (i, v) in a.iter().enumerate() {
-                    let (pose, end) = r.frame_pose(v, &format!("[[poses]] #{}", i + 1))?;
-                    poses.push(pose);
-                    end_poses.push(end);
-                }
-            }
-            Some(v) => {
-                return Err(r.err(
-                    "poses",
-                    format!("expected [[poses]] tables, found {}", v.type_str()),
-                ));
-            }
-        }
-        if let Some(seq) = r.table(&root, "pose_sequence", &["from", "to", "frames"])? {
-            if !poses.is_empty() {
-                return Err(r.err(
-                    "[pose_sequence]",
-                    "give [[poses]] or [pose_sequence], not both",
-                ));
-            }
-            let from = r.pose(
-                seq.get("from")
-                    .ok_or_else(|| r.err("[pose_sequence] from", "missing"))?,
-                "[pose_sequence] from",
-            )?;
-            let to = r.pose(
-                seq.get("to")
-                    .ok_or_else(|| r.err("[pose_sequence] to", "missing"))?,
-                "[pose_sequence] to",
-            )?;
-            let frames = match seq.get("frames") {
-                Some(Value::Integer(n)) if (1..=100_000).contains(n) => *n as usize,
-                Some(v) => {
-                    return Err(r.err(
-                        "[pose_sequence] frames",
-                        format!("expected a whole number 1..=100000, found {v}"),
-                    ));
-                }
-                None => return Err(r.err("[pose_sequence] frames", "missing")),
-            };
-            poses = interpolate(&from, &to, frames);
-            end_poses = vec![None; frames];
-        }
-
+        // Table by table in the documentation's order, so that a file with several mistakes
+        // is told about the first.
+        let geometry = r.geometry(&root, dir)?;
+        let optics = r.optics(&root, dir)?;
+        let effects = r.effects(&root, &optics)?;
+        let outputs = r.outputs(&root)?;
+        let max_error_px = r.accuracy(&root)?;
+        let (background, antialias) = r.render(&root)?;
+        let sensor = r.sensor(&root)?;
+        let (poses, end_poses) = r.poses(&root)?;
         Ok(SceneFile {
             source: path.to_path_buf(),
             geometry,
@@ -630,6 +389,297 @@ impl SceneFile {
             background,
             antialias,
         })
+    }
+}
+
+/// `p` relative to the scene file's folder `dir`, unless absolute.
+fn resolve(dir: &Path, p: &str) -> PathBuf {
+    let p = Path::new(p);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        dir.join(p)
+    }
+}
+
+/// One reader per table of the scene file, in the order the file's documentation lists them.
+impl Reader<'_> {
+    /// `[geometry]`: a built-in scene or a mesh file.
+    fn geometry(&self, root: &Table, dir: &Path) -> Result<String, SceneFileError> {
+        let geometry = self.table(root, "geometry", &["scene"])?;
+        let scene = self.string(geometry, "geometry", "scene")?.ok_or_else(|| {
+            self.err(
+                "[geometry] scene",
+                "missing: a built-in scene (checkerboard, grid, boxes, room) or a mesh file",
+            )
+        })?;
+        let builtin = ["checkerboard", "grid", "boxes", "room"]
+            .iter()
+            .any(|b| scene == *b || scene.starts_with(&format!("{b}:")));
+        let geometry = if builtin {
+            scene.to_string()
+        } else {
+            resolve(dir, scene).display().to_string()
+        };
+        Ok(geometry)
+    }
+
+    /// `[optics]`: a camera file or a lens prescription with its film and focus.
+    fn optics(&self, root: &Table, dir: &Path) -> Result<OpticsSpec, SceneFileError> {
+        let optics_t = self.table(
+            root,
+            "optics",
+            &["camera", "lens", "focus_m", "fstop", "sensor_mm", "pixels"],
+        )?;
+        let camera = self.string(optics_t, "optics", "camera")?;
+        let lens = self.string(optics_t, "optics", "lens")?;
+        let optics = match (camera, lens) {
+            (Some(_), Some(_)) => {
+                return Err(self.err("[optics]", "give camera or lens, not both"));
+            }
+            (None, None) => {
+                return Err(self.err(
+                "[optics]",
+                "missing: camera = \"CAM.yml\" (a calibrated camera) or lens = \"LENS.dat\" (a prescription)",
+            ));
+            }
+            (Some(c), None) => {
+                for k in ["focus_m", "fstop", "sensor_mm", "pixels"] {
+                    if optics_t.is_some_and(|t| t.contains_key(k)) {
+                        return Err(self.err(
+                            &format!("[optics] {k}"),
+                            "only for a lens prescription (the camera file fixes its own)",
+                        ));
+                    }
+                }
+                OpticsSpec::Camera(resolve(dir, c))
+            }
+            (None, Some(l)) => {
+                let focus_m = self.opt_number(optics_t, "optics", "focus_m")?;
+                if let Some(f) = focus_m {
+                    if !(f > 0.0) {
+                        return Err(self.err(
+                            "[optics] focus_m",
+                            format!("expected metres > 0, found {f}"),
+                        ));
+                    }
+                }
+                let f_number = self.opt_number(optics_t, "optics", "fstop")?;
+                let sensor = match optics_t.and_then(|t| t.get("sensor_mm")) {
+                    Some(v) => self.numbers::<2>(v, "[optics] sensor_mm")?,
+                    None => [36.0, 24.0],
+                };
+                if !(sensor[0] > 0.0 && sensor[1] > 0.0) {
+                    return Err(self.err("[optics] sensor_mm", "expected two positive sizes in mm"));
+                }
+                let pixels = match optics_t.and_then(|t| t.get("pixels")) {
+                    Some(v) => self.numbers::<2>(v, "[optics] pixels")?,
+                    None => [480.0, 320.0],
+                };
+                if !pixels
+                    .iter()
+                    .all(|p| p.fract() == 0.0 && (1.0..=16384.0).contains(p))
+                {
+                    return Err(
+                        self.err("[optics] pixels", "expected two whole numbers in 1..=16384")
+                    );
+                }
+                OpticsSpec::Lens {
+                    path: resolve(dir, l),
+                    focus_m,
+                    f_number,
+                    sensor_mm: (sensor[0], sensor[1]),
+                    pixels: (pixels[0] as u32, pixels[1] as u32),
+                }
+            }
+        };
+        Ok(optics)
+    }
+
+    /// `[effects]`, checked against the optics.
+    fn effects(&self, root: &Table, optics: &OpticsSpec) -> Result<Effects, SceneFileError> {
+        let e = self.table(
+            root,
+            "effects",
+            &[
+                "distortion",
+                "chromatic_aberration",
+                "chromatic_scales",
+                "vignetting",
+                "depth_of_field",
+                "lens_samples",
+            ],
+        )?;
+        let chromatic_scales = match e.and_then(|t| t.get("chromatic_scales")) {
+            Some(v) => {
+                let s = self.numbers::<3>(v, "[effects] chromatic_scales")?;
+                if !s.iter().all(|x| (0.5..=2.0).contains(x)) {
+                    return Err(self.err(
+                        "[effects] chromatic_scales",
+                        "expected three radial scales R, G, B near 1 (0.5..2)",
+                    ));
+                }
+                s
+            }
+            None => [1.0; 3],
+        };
+        let lens_samples = self
+            .opt_whole(e, "effects", "lens_samples", 1..=1024)?
+            .unwrap_or(10);
+        let effects = Effects {
+            distortion: self.bool(e, "effects", "distortion", true)?,
+            chromatic_aberration: self.bool(e, "effects", "chromatic_aberration", false)?,
+            chromatic_scales,
+            vignetting: self.bool(e, "effects", "vignetting", false)?,
+            depth_of_field: self.bool(e, "effects", "depth_of_field", false)?,
+            lens_samples,
+        };
+        if effects.chromatic_aberration
+            && matches!(optics, OpticsSpec::Camera(_))
+            && e.is_none_or(|t| !t.contains_key("chromatic_scales"))
+        {
+            return Err(self.err(
+            "[effects] chromatic_scales",
+            "missing: a camera file has no glass data, so chromatic_aberration needs the per-channel radial scales, e.g. [1.002, 1.0, 0.998]",
+        ));
+        }
+        Ok(effects)
+    }
+
+    /// `[outputs]`: at least one.
+    fn outputs(&self, root: &Table) -> Result<OutputSpec, SceneFileError> {
+        let o = self.table(
+            root,
+            "outputs",
+            &["color", "ids", "flow", "depth", "format"],
+        )?;
+        let exr = match self.string(o, "outputs", "format")? {
+            None | Some("png") => false,
+            Some("exr") => true,
+            Some(other) => {
+                return Err(self.err(
+                    "[outputs] format",
+                    format!("expected \"png\" or \"exr\", found {other:?}"),
+                ));
+            }
+        };
+        let outputs = OutputSpec {
+            color: self.bool(o, "outputs", "color", true)?,
+            ids: self.bool(o, "outputs", "ids", false)?,
+            flow: self.bool(o, "outputs", "flow", false)?,
+            depth: self.bool(o, "outputs", "depth", false)?,
+            exr,
+        };
+        if !(outputs.color || outputs.ids || outputs.flow || outputs.depth) {
+            return Err(self.err(
+                "[outputs]",
+                "every output is off: ask for color, ids, flow or depth",
+            ));
+        }
+        Ok(outputs)
+    }
+
+    /// `[accuracy] max_error_px`.
+    fn accuracy(&self, root: &Table) -> Result<f64, SceneFileError> {
+        let a = self.table(root, "accuracy", &["max_error_px"])?;
+        let max_error_px = self
+            .opt_number(a, "accuracy", "max_error_px")?
+            .unwrap_or(DEFAULT_MAX_ERROR_PX);
+        if !(max_error_px > 0.0) {
+            return Err(self.err(
+                "[accuracy] max_error_px",
+                format!("expected pixels > 0, found {max_error_px}"),
+            ));
+        }
+        Ok(max_error_px)
+    }
+
+    /// `[render]`: the background and the antialiasing.
+    fn render(&self, root: &Table) -> Result<([f32; 4], Antialias), SceneFileError> {
+        let render = self.table(root, "render", &["background", "supersample", "jitter"])?;
+        let background = match render.and_then(|t| t.get("background")) {
+            Some(v) => self
+                .numbers::<4>(v, "[render] background")?
+                .map(|c| c as f32),
+            None => super::DEFAULT_BACKGROUND,
+        };
+        let antialias = Antialias {
+            supersample: self
+                .opt_whole(render, "render", "supersample", 1..=super::MAX_SUPERSAMPLE)?
+                .unwrap_or(1),
+            jitter: self
+                .opt_whole(render, "render", "jitter", 1..=super::MAX_JITTER)?
+                .unwrap_or(1),
+        };
+        Ok((background, antialias))
+    }
+
+    /// `[sensor]`: the rolling shutter's readout.
+    fn sensor(&self, root: &Table) -> Result<SensorSpec, SceneFileError> {
+        let sensor_t = self.table(root, "sensor", &["rolling_shutter"])?;
+        let sensor = SensorSpec {
+            rolling_shutter: self
+                .string(sensor_t, "sensor", "rolling_shutter")?
+                .map(|s| {
+                    s.parse::<Readout>()
+                        .map_err(|e| self.err("[sensor] rolling_shutter", e.to_string()))
+                })
+                .transpose()?,
+        };
+        Ok(sensor)
+    }
+
+    /// `[[poses]]` or `[pose_sequence]`: each frame's pose, and its end pose where it has one.
+    fn poses(&self, root: &Table) -> Result<(Vec<Pose>, Vec<Option<Pose>>), SceneFileError> {
+        let mut poses = Vec::new();
+        let mut end_poses = Vec::new();
+        match root.get("poses") {
+            None => {}
+            Some(Value::Array(a)) => {
+                for (i, v) in a.iter().enumerate() {
+                    let (pose, end) = self.frame_pose(v, &format!("[[poses]] #{}", i + 1))?;
+                    poses.push(pose);
+                    end_poses.push(end);
+                }
+            }
+            Some(v) => {
+                return Err(self.err(
+                    "poses",
+                    format!("expected [[poses]] tables, found {}", v.type_str()),
+                ));
+            }
+        }
+        if let Some(seq) = self.table(root, "pose_sequence", &["from", "to", "frames"])? {
+            if !poses.is_empty() {
+                return Err(self.err(
+                    "[pose_sequence]",
+                    "give [[poses]] or [pose_sequence], not both",
+                ));
+            }
+            let from = self.pose(
+                seq.get("from")
+                    .ok_or_else(|| self.err("[pose_sequence] from", "missing"))?,
+                "[pose_sequence] from",
+            )?;
+            let to = self.pose(
+                seq.get("to")
+                    .ok_or_else(|| self.err("[pose_sequence] to", "missing"))?,
+                "[pose_sequence] to",
+            )?;
+            let frames = match seq.get("frames") {
+                Some(Value::Integer(n)) if (1..=100_000).contains(n) => *n as usize,
+                Some(v) => {
+                    return Err(self.err(
+                        "[pose_sequence] frames",
+                        format!("expected a whole number 1..=100000, found {v}"),
+                    ));
+                }
+                None => return Err(self.err("[pose_sequence] frames", "missing")),
+            };
+            poses = interpolate(&from, &to, frames);
+            end_poses = vec![None; frames];
+        }
+        Ok((poses, end_poses))
     }
 }
 

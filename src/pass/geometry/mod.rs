@@ -31,6 +31,20 @@ use crate::model::rolling_shutter::{FrameMotion, LineRate, Readout, RATE_TABLE};
 use crate::model::{vulkan_projection, Camera, Frustum};
 use crate::scene::{Mesh, Pose, Vertex};
 
+mod discard;
+mod frame;
+mod mesh;
+mod targets;
+
+use discard::{discard_bound, DiscardPass};
+pub use discard::{discard_margin, discard_needs_domain_table, DiscardPush};
+use frame::Motion;
+pub use frame::{GeometryFrame, MotionGpu};
+use mesh::vertex_bindings;
+pub use mesh::{MeshBuffers, Texture};
+use targets::Slot;
+pub use targets::{GeometrySlots, GeometryTargets};
+
 /// How vertices are projected.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Projection {
@@ -175,413 +189,6 @@ impl GeometryDesc {
     }
 }
 
-/// `uniform GeometryFrame` of `glsl/include/geometry_frame.glsl` (std140).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct GeometryFrame {
-    pub view_projection: [[f32; 4]; 4],
-    pub previous_view_projection: [[f32; 4]; 4],
-    pub view: [[f32; 4]; 4],
-    /// width, height, discard bound 1 + δ + D, near.
-    pub viewport: [f32; 4],
-    /// The Sec. 3.1 projection alone: a moving rolling shutter's camera-frame points go
-    /// through it at their own readout time.
-    pub projection: [[f32; 4]; 4],
-    /// The first line's pose of the frame flow starts from (`view` is this frame's).
-    pub previous_view: [[f32; 4]; 4],
-    /// The frame's motion during the readout, and the motion of the frame flow starts from.
-    pub motion: MotionGpu,
-    pub previous_motion: MotionGpu,
-    /// x: the half angle of the cone the lens's line rate was measured on ([`LineRate::cone`],
-    /// radians; 0 where it has none, and every vertex is solved by the scan), yzw: 0.
-    pub readout_bound: [f32; 4],
-    /// The line rate of cones of growing half angle ([`LineRate::per_radian`], entry i in
-    /// component i % 4 of row i / 4): with each motion's turn and centres it bounds how fast a
-    /// vertex's own line time moves during the readout.
-    pub readout_rates: [[f32; 4]; RATE_TABLE / 4],
-}
-
-/// `struct VklMotionBlock` of `glsl/include/geometry_frame.glsl` (std140): a frame's motion
-/// during the readout about its middle line's pose (s = ½), where the shaders evaluate it.
-/// The turn from the first line's camera frame to the last line's has the same axis in every
-/// camera frame of the readout, so the camera-frame point at s is the middle line's turned
-/// by (s − ½) · angle, and the centre's travel is linear in s: the middle line's point is
-/// computed once per vertex, and the solve's first sample, at s = ½, is that point.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct MotionGpu {
-    /// R_cw(½), the middle line's world-to-camera rotation (columns, std140 `mat3`).
-    pub rotation: [[f32; 4]; 3],
-    /// xyz: the unit axis, w: the angle of the turn from the first line's camera frame to
-    /// the last line's ([`FrameMotion::axis`], [`FrameMotion::angle`]).
-    pub turn: [f32; 4],
-    /// xyz: the camera centre C(½) when the middle line is read; w: 1 where the camera moves
-    /// during the frame, else 0 (a still frame takes the global shutter's arithmetic, bit
-    /// for bit).
-    pub centre: [f32; 4],
-    /// xyz: R_cw(½) (C1 − C0), the centre's travel during the readout in the middle line's
-    /// camera frame; w: 0.
-    pub travel: [f32; 4],
-}
-
-/// One frame's poses: when the first line is read, and when the last is (the same for a
-/// camera that does not move during the frame).
-#[derive(Debug, Clone, Copy)]
-struct Motion {
-    pose: Pose,
-    end: Pose,
-}
-
-impl Motion {
-    fn new(pose: Pose, end: Pose) -> Self {
-        Motion { pose, end }
-    }
-
-    fn still(pose: Pose) -> Self {
-        Motion { pose, end: pose }
-    }
-
-    fn is_still(&self) -> bool {
-        self.pose == self.end
-    }
-
-    /// The motion as `GeometryFrame` holds it.
-    fn gpu(&self) -> MotionGpu {
-        let m = FrameMotion::new(self.pose.into(), self.end.into());
-        let middle = m.at(0.5);
-        let [c0, c1] = m.centres();
-        let moving = if self.is_still() { 0.0 } else { 1.0 };
-        let r = middle.rotation.as_mat3();
-        MotionGpu {
-            rotation: [r.x_axis, r.y_axis, r.z_axis].map(|c| c.extend(0.0).to_array()),
-            turn: m.axis().as_vec3().extend(m.angle() as f32).to_array(),
-            centre: m.centre_at(0.5).as_vec3().extend(moving).to_array(),
-            travel: (middle.rotation * (c1 - c0))
-                .as_vec3()
-                .extend(0.0)
-                .to_array(),
-        }
-    }
-}
-
-/// Lambers et al. Sec. 3.2's D for a camera: how far past ±1 the undistorted NDC of the distorted
-/// image border reaches. The seed undistorts the four corners; this uses the whole border
-/// (and the fold boundary where it lies inside the image), as the overscan does, because for
-/// mustache and strongly tangential lenses the extremes are not at the corners.
-pub fn discard_margin(camera: &Camera) -> f64 {
-    let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
-    valid_region_boundary(camera)
-        .iter()
-        .map(|p| {
-            let ndc = DVec2::new(
-                2.0 * (p.x - f.left) / (f.right - f.left) - 1.0,
-                2.0 * (p.y - f.top) / (f.bottom - f.top) - 1.0,
-            );
-            ndc.x.abs().max(ndc.y.abs()) - 1.0
-        })
-        .fold(0.0, f64::max)
-}
-
-/// 1 + δ + D for a projection (infinite for a pinhole render).
-fn discard_bound(projection: &Projection, camera: &Camera) -> Result<f64> {
-    match *projection {
-        Projection::Lens { delta } => {
-            if !(delta.is_finite() && delta >= 0.0) {
-                return Err(Error::Input(format!(
-                    "δ = {delta}: the discard tolerance must be ≥ 0"
-                )));
-            }
-            if camera.model().is_ray_model() {
-                // A ray model's (a fisheye's…) vertices are tested in its own distorted image (alg1.glsl): its
-                // domain check, not a frustum, keeps the model from folding; a triangle off
-                // the image is clipped by the rasterizer like any other.
-                return Ok(f64::INFINITY);
-            }
-            Ok(1.0 + delta + discard_margin(camera))
-        }
-        Projection::Pinhole => Ok(f64::INFINITY),
-    }
-}
-
-/// Whether the compute discard's per-vertex pass needs the valid domain's table: not when
-/// every vertex inside `bound` (1 + δ + D on undistorted NDC) lies inside the domain's smallest
-/// boundary radius, for then a vertex beyond that radius is dropped by the bound whatever the
-/// table would say (`VKL_DOMAIN_TABLE` in `glsl/include/camera_model.glsl`). The margin covers
-/// the GPU's f32 rounding of both tests. A fisheye's domain is its own cone, tested without
-/// the table.
-pub fn discard_needs_domain_table(camera: &Camera, bound: f64) -> bool {
-    if camera.model().is_ray_model() {
-        // Only an omni lens reads the table (its radial-tangential part's domain).
-        return matches!(
-            camera.model(),
-            crate::model::ModelKind::Omni | crate::model::ModelKind::ThinPrismFisheye
-        );
-    }
-    if !bound.is_finite() {
-        return true;
-    }
-    let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
-    let centre = DVec2::new(f.left + f.right, f.top + f.bottom) / 2.0;
-    let half = DVec2::new(f.right - f.left, f.bottom - f.top) / 2.0 * bound;
-    let corner = centre.abs() + half;
-    !(corner.length() <= camera.domain().min_ideal_radius() * (1.0 - 1e-4))
-}
-
-/// The vertex layout of [`Vertex`].
-const VERTEX_ATTRIBUTES: [Attribute; 4] = [
-    (0, vk::Format::R32G32B32_SFLOAT, 0),
-    (1, vk::Format::R32G32_SFLOAT, 12),
-    (2, vk::Format::R8G8B8A8_UNORM, 20),
-    (3, vk::Format::R32_UINT, 24),
-];
-/// Binding 0: the mesh's vertices.
-const MESH_BINDING: VertexBinding = (std::mem::size_of::<Vertex>() as u32, &VERTEX_ATTRIBUTES);
-/// Binding 1 with the compute discard: the distorted NDC (`in_distorted_ndc`).
-const POSITION_BINDING: VertexBinding = (8, &[(4, vk::Format::R32G32_SFLOAT, 0)]);
-/// Binding 2 with the compute discard and flow: the motion (`in_motion`).
-const MOTION_BINDING: VertexBinding = (16, &[(5, vk::Format::R32G32B32A32_SFLOAT, 0)]);
-
-/// The draw's vertex bindings: the mesh's vertices, then (`pulled`: the compute discard ran)
-/// its positions and, with `flow`, its motion. The pipeline is built with these and the draw
-/// binds one buffer for each.
-/// A moving rolling shutter reads the motion binding for its solved readout times (its `w`)
-/// with flow or without.
-fn vertex_bindings(pulled: bool, flow: bool) -> &'static [VertexBinding<'static>] {
-    match (pulled, flow) {
-        (true, true) => &[MESH_BINDING, POSITION_BINDING, MOTION_BINDING],
-        (true, false) => &[MESH_BINDING, POSITION_BINDING],
-        _ => &[MESH_BINDING],
-    }
-}
-
-/// An RGBA8 texture for sampling, staged for upload ([`Texture::record_upload`]).
-pub struct Texture {
-    gpu: Gpu,
-    pub image: Image,
-    staging: Buffer,
-}
-
-impl Texture {
-    /// Stages `raster` (any pixel type, converted to 8-bit RGBA).
-    pub fn new(gpu: &Gpu, raster: &Raster) -> Result<Self> {
-        raster.check()?;
-        let bytes: Vec<u8> = match &raster.pixels {
-            Pixels::Rgba8(p) => p.iter().flatten().copied().collect(),
-            _ => (0..raster.len())
-                .flat_map(|i| {
-                    raster
-                        .rgba_f32(i)
-                        .map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8)
-                })
-                .collect(),
-        };
-        Ok(Texture {
-            image: Image::new_2d(
-                gpu,
-                "texture",
-                vk::Format::R8G8B8A8_UNORM,
-                raster.width,
-                raster.height,
-                vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-            )?,
-            staging: Buffer::from_pod(
-                gpu,
-                "texture.upload",
-                &bytes,
-                vk::BufferUsageFlags::TRANSFER_SRC,
-            )?,
-            gpu: gpu.clone(),
-        })
-    }
-
-    /// Records the upload; afterwards the image is in `SHADER_READ_ONLY_OPTIMAL`, visible to
-    /// fragment shaders. Record it once, before the first use.
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass.
-    pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds `record_upload`'s contract: `cmd` is recording outside a
-        // render pass. The image has TRANSFER_DST and SAMPLED usage and UNDEFINED is a valid
-        // old layout as it is overwritten whole; `staging` holds it as tightly packed RGBA8,
-        // which relies on an RGBA8 raster having width × height pixels (`new` does not check).
-        unsafe {
-            image_transition(
-                &self.gpu,
-                cmd,
-                self.image.raw,
-                Access::Nothing,
-                Access::TransferWrite,
-            );
-            self.gpu.device().cmd_copy_buffer_to_image(
-                cmd,
-                self.staging.raw,
-                self.image.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[self.image.whole_copy()],
-            );
-            image_transition(
-                &self.gpu,
-                cmd,
-                self.image.raw,
-                Access::TransferWrite,
-                Access::FragmentSampled,
-            );
-        }
-    }
-}
-
-/// A mesh on the GPU: vertex and index buffers and its texture (white if it has none), and
-/// what the compute discard keeps per mesh (`DiscardBuffers`).
-pub struct MeshBuffers {
-    discard: DiscardBuffers,
-    pub vertices: Buffer,
-    pub indices: Buffer,
-    pub index_count: u32,
-    pub vertex_count: u32,
-    pub texture: Texture,
-}
-
-/// The compute discard's per-mesh state (`glsl/discard.comp`; it reads the positions from the
-/// mesh's own vertex buffer).
-struct DiscardBuffers {
-    /// Per vertex, read by the draw as vertex attributes: the distorted NDC (two floats), and
-    /// the flow with its validity (four).
-    positions: Buffer,
-    motion: Buffer,
-    /// The vertices the last discard dropped, behind the indirect dispatch that visits them
-    /// (`Dropped` in the shader: groups, 1, 1, count, then the list).
-    dropped: Buffer,
-    /// The vertices a moving rolling shutter's per-vertex stage left to stage 3, as `dropped`
-    /// (`Deferred` in the shader).
-    deferred: Buffer,
-    /// Which triangles each vertex belongs to (compressed rows: vertex v's triangles are
-    /// `incidence[incidence_start[v] .. incidence_start[v + 1]]`).
-    incidence_start: Buffer,
-    incidence: Buffer,
-    /// The index buffer the draw uses: the mesh's, but for the triangles of dropped vertices,
-    /// which are degenerate.
-    kept: Buffer,
-}
-
-/// The dropped-vertex buffer's header (`Dropped` in `glsl/discard.comp`): no workgroups,
-/// y = z = 1, no vertices.
-const DROPPED_HEADER: [u32; 4] = [0, 1, 1, 0];
-
-/// The triangles each vertex belongs to, as compressed rows: (start per vertex and one past
-/// the last, triangle ids).
-fn incidence(indices: &[u32], vertex_count: usize) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; vertex_count + 1];
-    for &i in indices {
-        start[i as usize + 1] += 1;
-    }
-    for v in 0..vertex_count {
-        start[v + 1] += start[v];
-    }
-    let mut next = start.clone();
-    let mut triangles = vec![0u32; indices.len()];
-    for (k, &i) in indices.iter().enumerate() {
-        let slot = &mut next[i as usize];
-        triangles[*slot as usize] = (k / 3) as u32;
-        *slot += 1;
-    }
-    (start, triangles)
-}
-
-impl MeshBuffers {
-    /// Uploads a (validated) mesh; the texture is staged for [`Self::record_upload`].
-    pub fn new(gpu: &Gpu, mesh: &Mesh, texture: Option<&Raster>) -> Result<Self> {
-        mesh.validate("mesh")
-            .map_err(|e| Error::Input(e.to_string()))?;
-        let white = Raster {
-            width: 1,
-            height: 1,
-            pixels: Pixels::Rgba8(vec![[255; 4]]),
-            bit_depth: BitDepth::U8,
-        };
-        use vk::BufferUsageFlags as U;
-        let n = mesh.vertices.len();
-        let (start, triangles) = incidence(&mesh.indices, n);
-        let mut dropped = DROPPED_HEADER.to_vec();
-        dropped.resize(DROPPED_HEADER.len() + n, 0);
-        let storage = U::STORAGE_BUFFER;
-        let per_vertex = |name, bytes: u64| {
-            Buffer::new(
-                gpu,
-                name,
-                n as u64 * bytes,
-                U::VERTEX_BUFFER | storage | U::TRANSFER_SRC,
-                MemoryLocation::GpuOnly,
-            )
-        };
-        let discard = DiscardBuffers {
-            positions: per_vertex("mesh.discard.positions", 8)?,
-            motion: per_vertex("mesh.discard.motion", 16)?,
-            dropped: Buffer::from_pod(
-                gpu,
-                "mesh.discard.dropped",
-                &dropped,
-                storage | U::INDIRECT_BUFFER | U::TRANSFER_DST,
-            )?,
-            deferred: Buffer::from_pod(
-                gpu,
-                "mesh.discard.deferred",
-                &dropped,
-                storage | U::INDIRECT_BUFFER | U::TRANSFER_DST,
-            )?,
-            incidence_start: Buffer::from_pod(
-                gpu,
-                "mesh.discard.incidence_start",
-                &start,
-                storage,
-            )?,
-            incidence: Buffer::from_pod(gpu, "mesh.discard.incidence", &triangles, storage)?,
-            // Starts as the mesh's own indices: the first discard has nothing to restore.
-            kept: Buffer::from_pod(
-                gpu,
-                "mesh.discard.kept",
-                &mesh.indices,
-                U::INDEX_BUFFER | storage,
-            )?,
-        };
-        Ok(MeshBuffers {
-            discard,
-            // The discard's per-vertex pass reads the positions too.
-            vertices: Buffer::from_pod(
-                gpu,
-                "mesh.vertices",
-                &mesh.vertices,
-                U::VERTEX_BUFFER | storage,
-            )?,
-            indices: Buffer::from_pod(
-                gpu,
-                "mesh.indices",
-                &mesh.indices,
-                U::INDEX_BUFFER | storage,
-            )?,
-            index_count: mesh.indices.len() as u32,
-            vertex_count: n as u32,
-            texture: Texture::new(gpu, texture.unwrap_or(&white))?,
-        })
-    }
-
-    /// The compute discard's per-vertex results of the last draw: the distorted NDC (two
-    /// floats), and the motion (flow, its validity, and a moving rolling shutter's solved
-    /// readout time; four floats). Transfer sources, for tests to read back.
-    #[cfg(test)]
-    pub(crate) fn discard_results(&self) -> [&Buffer; 2] {
-        [&self.discard.positions, &self.discard.motion]
-    }
-
-    /// Records the texture upload (see [`Texture::record_upload`]).
-    ///
-    /// # Safety
-    /// `cmd` must be recording outside a render pass.
-    pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
-        // SAFETY: the caller upholds this function's contract, which is `Texture::record_upload`'s.
-        unsafe { self.texture.record_upload(cmd) }
-    }
-}
-
 /// The geometry pass: pipeline, render pass, camera and frame uniforms.
 pub struct GeometryPass {
     gpu: Gpu,
@@ -624,23 +231,6 @@ struct FrameSlot {
 /// Most frames in flight a geometry pass keeps uniforms and sets for (the warp's limit).
 pub const MAX_FRAMES_IN_FLIGHT: usize = crate::pass::warp::MAX_FRAMES_IN_FLIGHT;
 
-/// The compute discard's pipelines (`glsl/discard.comp`, STAGE 0 per vertex, 1 restore,
-/// 2 drop, and for a moving rolling shutter 3, the vertices stage 0 deferred) and the pool of
-/// their sets (one per frame in flight, in [`FrameSlot`]).
-struct DiscardPass {
-    stages: [ComputePipeline; 3],
-    deferred: Option<ComputePipeline>,
-    pool: DescriptorPool,
-}
-
-/// `DiscardPush` of `glsl/discard.comp`: how many vertices (stage 0; the other stages read
-/// their count from the dropped list).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct DiscardPush {
-    pub count: u32,
-}
-
 impl GeometryPass {
     pub fn new(gpu: &Gpu, desc: GeometryDesc) -> Result<Self> {
         Self::with_frames(gpu, desc, 1)
@@ -651,32 +241,11 @@ impl GeometryPass {
     /// discard buffers are shared: the frames must run on one queue, in the order recorded
     /// (the barriers `record` records order them there).
     pub fn with_frames(gpu: &Gpu, desc: GeometryDesc, frames: usize) -> Result<Self> {
-        if !(1..=MAX_FRAMES_IN_FLIGHT).contains(&frames) {
-            return Err(Error::Input(format!(
-                "{frames} frames in flight: a geometry pass keeps 1 to {MAX_FRAMES_IN_FLIGHT}"
-            )));
-        }
+        check_desc(gpu, &desc, frames)?;
         let cam = &desc.camera;
-        if cam.width > gpu.max_image_side() || cam.height > gpu.max_image_side() {
-            return Err(Error::Input(format!(
-                "{}×{} is larger than the device's {} px image limit",
-                cam.width,
-                cam.height,
-                gpu.max_image_side()
-            )));
-        }
-        if !(desc.near > 0.0 && desc.far > desc.near && desc.far.is_finite()) {
-            return Err(Error::Input(format!(
-                "near {} / far {}: need 0 < near < far",
-                desc.near, desc.far
-            )));
-        }
         let lens = matches!(desc.projection, Projection::Lens { .. });
         let discard_bound = discard_bound(&desc.projection, cam)?;
         let formats = desc.outputs.formats();
-        if formats.iter().all(|f| f.is_none()) {
-            return Err(Error::Input("no output was asked for".into()));
-        }
         let render_pass = RenderPass::new(
             gpu,
             &formats,
@@ -753,44 +322,7 @@ impl GeometryPass {
         } else {
             None
         };
-        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, frames as u32)?;
-        let uniform = vk::DescriptorType::UNIFORM_BUFFER;
-        let mut slots = Vec::with_capacity(frames);
-        for _ in 0..frames {
-            let camera = Buffer::from_pod(
-                gpu,
-                "geometry.camera",
-                &[CameraParams::from_camera(cam)],
-                vk::BufferUsageFlags::UNIFORM_BUFFER,
-            )?;
-            let frame = Buffer::from_pod(
-                gpu,
-                "geometry.frame",
-                &[GeometryFrame::zeroed()],
-                vk::BufferUsageFlags::UNIFORM_BUFFER,
-            )?;
-            let set = pool.allocate(&pipeline)?;
-            let uniforms = [(0, uniform, &camera), (1, uniform, &frame)];
-            // SAFETY: the set was just allocated from a pool made for this pipeline's layout,
-            // so no work uses it yet; the buffers are this pass's own, alive.
-            unsafe { crate::gpu::write_buffer_descriptors(gpu, set, &uniforms) };
-            let discard_set = match &discard {
-                Some(d) => {
-                    let set = d.pool.allocate(&d.stages[0])?;
-                    // SAFETY: as above, for the discard's layout, whose bindings 0 and 1 are
-                    // these uniforms too.
-                    unsafe { crate::gpu::write_buffer_descriptors(gpu, set, &uniforms) };
-                    Some(set)
-                }
-                None => None,
-            };
-            slots.push(FrameSlot {
-                camera,
-                frame,
-                set,
-                discard_set,
-            });
-        }
+        let (pool, slots) = frame_slots(gpu, cam, &pipeline, discard.as_ref(), frames)?;
         let mut pass = GeometryPass {
             gpu: gpu.clone(),
             sampler: Sampler::new(gpu, vk::Filter::LINEAR, vk::SamplerAddressMode::REPEAT)?,
@@ -1284,281 +816,87 @@ impl GeometryPass {
     }
 }
 
-impl DiscardPass {
-    /// The three stages' pipelines, specialized like the vertex shader (camera terms,
-    /// DISTORT, WRITE_FLOW), and a pool for one set per frame in flight (their uniforms are
-    /// the frame's own; the mesh's buffers are written by [`GeometryPass::bind_mesh`]).
-    /// `rolling`: frames may move during a rolling shutter's readout, so the per-vertex stage
-    /// carries the readout solve (glsl/discard.comp says why the modules differ).
-    fn new(gpu: &Gpu, vertex: SpecConstants, rolling: bool, frames: usize) -> Result<Self> {
-        use vk::DescriptorType as T;
-        let (uniform, storage) = (T::UNIFORM_BUFFER, T::STORAGE_BUFFER);
-        let mut bindings = [storage; 11];
-        bindings[0] = uniform;
-        bindings[1] = uniform;
-        let pipeline = |stage: u32| {
-            ComputePipeline::new(
-                gpu,
-                match (stage, rolling) {
-                    (0, true) => shaders::DISCARD_COMP_BOUNDED,
-                    (0, false) => shaders::DISCARD_COMP_GLOBAL,
-                    (3, _) => shaders::DISCARD_COMP,
-                    _ => shaders::DISCARD_COMP_INDICES,
-                },
-                &bindings,
-                std::mem::size_of::<DiscardPush>() as u32,
-                vertex.clone().u32(spec::DISCARD_STAGE, stage),
-            )
-        };
-        let stages = [pipeline(0)?, pipeline(1)?, pipeline(2)?];
-        let deferred = if rolling { Some(pipeline(3)?) } else { None };
-        // One set per frame for all: their set layouts are identically defined, hence
-        // compatible.
-        let pool = DescriptorPool::for_pipeline(gpu, &stages[0], frames as u32)?;
-        Ok(DiscardPass {
-            stages,
-            deferred,
-            pool,
-        })
+/// Refuses a desc and frame count the pass cannot render.
+fn check_desc(gpu: &Gpu, desc: &GeometryDesc, frames: usize) -> Result<()> {
+    if !(1..=MAX_FRAMES_IN_FLIGHT).contains(&frames) {
+        return Err(Error::Input(format!(
+            "{frames} frames in flight: a geometry pass keeps 1 to {MAX_FRAMES_IN_FLIGHT}"
+        )));
     }
-
-    /// Points `set` (a frame's discard set) at `mesh`'s buffers.
-    ///
-    /// # Safety
-    /// No pending work uses the set ([`GeometryPass::bind_mesh`]'s contract).
-    unsafe fn bind(gpu: &Gpu, set: vk::DescriptorSet, mesh: &MeshBuffers) {
-        let m = &mesh.discard;
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
-        // SAFETY: the set has the discard pipeline's layout with these storage buffers at
-        // these bindings, the buffers are the mesh's own, live; no pending work uses the set
-        // (the function's contract).
-        unsafe {
-            crate::gpu::write_buffer_descriptors(
-                gpu,
-                set,
-                &[
-                    (2, storage, &mesh.vertices),
-                    (3, storage, &m.positions),
-                    (4, storage, &m.motion),
-                    (5, storage, &m.dropped),
-                    (6, storage, &m.incidence_start),
-                    (7, storage, &m.incidence),
-                    (8, storage, &mesh.indices),
-                    (9, storage, &m.kept),
-                    (10, storage, &m.deferred),
-                ],
-            )
-        };
+    let cam = &desc.camera;
+    if cam.width > gpu.max_image_side() || cam.height > gpu.max_image_side() {
+        return Err(Error::Input(format!(
+            "{}×{} is larger than the device's {} px image limit",
+            cam.width,
+            cam.height,
+            gpu.max_image_side()
+        )));
     }
-
-    /// Records the three stages with the barriers around them: the restore of the triangles
-    /// the last discard of this mesh dropped, the dropped list emptied, the per-vertex pass,
-    /// the drop; after earlier draws' reads of the index and attribute buffers (they are
-    /// reused every frame), and before this draw's.
-    ///
-    /// # Safety
-    /// `cmd` is recording outside a render pass on a queue with graphics and compute; `mesh`
-    /// is the mesh last bound to `set` ([`Self::bind`]) and stays alive until the work
-    /// completes.
-    unsafe fn record(
-        &self,
-        gpu: &Gpu,
-        cmd: vk::CommandBuffer,
-        mesh: &MeshBuffers,
-        set: vk::DescriptorSet,
-    ) {
-        use crate::gpu::global_barrier;
-        use Access::{ComputeReadWrite, IndexBuffer, IndirectBuffer, TransferWrite, VertexBuffer};
-        let m = &mesh.discard;
-        let none = bytemuck::bytes_of(&DiscardPush { count: 0 });
-        // A discard stage: compute shaders reading and writing the buffers, in a dispatch
-        // whose group count (the dropped list's header) may be read indirectly.
-        let discard = [ComputeReadWrite, IndirectBuffer];
-        let draw = [IndexBuffer, VertexBuffer];
-        // SAFETY: the caller upholds this function's contract; the push constants are the
-        // `DiscardPush` the pipelines were built with; the per-vertex dispatch covers exactly
-        // the vertices the buffers were sized for in `MeshBuffers::new`, and the indirect ones
-        // read `m.dropped`'s header (INDIRECT_BUFFER usage), whose group count stage 0 keeps
-        // at ceil(count / 64) ≤ the vertex count / 64 + 1.
-        unsafe {
-            // Earlier draws of this mesh read `kept` and the attributes; earlier discards wrote
-            // them and the dropped list.
-            let earlier = [IndexBuffer, VertexBuffer, ComputeReadWrite, IndirectBuffer];
-            global_barrier(gpu, cmd, earlier, discard);
-            let [per_vertex, restore, drop] = &self.stages;
-            restore.record_dispatch_indirect(cmd, set, none, &m.dropped, 0);
-            // The restore has read the list (and its dispatch the header) before it is emptied;
-            // its writes of `kept` come before the drop's.
-            global_barrier(gpu, cmd, discard, [TransferWrite, ComputeReadWrite]);
-            let header = bytemuck::cast_slice(&DROPPED_HEADER);
-            gpu.device()
-                .cmd_update_buffer(cmd, m.dropped.raw, 0, header);
-            if self.deferred.is_some() {
-                gpu.device()
-                    .cmd_update_buffer(cmd, m.deferred.raw, 0, header);
-            }
-            global_barrier(gpu, cmd, TransferWrite, ComputeReadWrite);
-            let push = DiscardPush {
-                count: mesh.vertex_count,
-            };
-            per_vertex.record_dispatch(
-                cmd,
-                set,
-                bytemuck::bytes_of(&push),
-                (push.count.div_ceil(64).max(1), 1),
-            );
-            global_barrier(gpu, cmd, ComputeReadWrite, discard);
-            if let Some(deferred) = &self.deferred {
-                deferred.record_dispatch_indirect(cmd, set, none, &m.deferred, 0);
-                global_barrier(gpu, cmd, ComputeReadWrite, discard);
-            }
-            drop.record_dispatch_indirect(cmd, set, none, &m.dropped, 0);
-            global_barrier(gpu, cmd, ComputeReadWrite, draw);
-        }
+    if !(desc.near > 0.0 && desc.far > desc.near && desc.far.is_finite()) {
+        return Err(Error::Input(format!(
+            "near {} / far {}: need 0 < near < far",
+            desc.near, desc.far
+        )));
     }
+    if desc.outputs.formats().iter().all(|f| f.is_none()) {
+        return Err(Error::Input("no output was asked for".into()));
+    }
+    Ok(())
 }
 
-/// Extra camera-and-pose slots of a [`GeometryPass`] ([`GeometryPass::slots`]).
-pub struct GeometrySlots {
-    // The sets live in the pool; the uniform buffers they point at live in the slots.
-    _pool: DescriptorPool,
-    slots: Vec<Slot>,
-}
-
-impl GeometrySlots {
-    pub fn len(&self) -> usize {
-        self.slots.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.slots.is_empty()
-    }
-}
-
-struct Slot {
-    camera: Buffer,
-    frame: Buffer,
-    set: vk::DescriptorSet,
-}
-
-/// The images a [`GeometryPass`] renders into (the host reads them back with
-/// `host::geometry::TargetsReadback`).
-pub struct GeometryTargets {
-    outputs: Outputs,
-    /// By location: colour, ID, flow, depth.
-    targets: [Option<Image>; 4],
-    _depth_buffer: Image,
-    pub framebuffer: Framebuffer,
-    extent: vk::Extent2D,
-}
-
-impl GeometryTargets {
-    pub fn new(gpu: &Gpu, pass: &GeometryPass) -> Result<Self> {
-        let c = &pass.desc.camera;
-        let extent = vk::Extent2D {
-            width: c.width,
-            height: c.height,
-        };
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
-            | vk::ImageUsageFlags::TRANSFER_SRC
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::STORAGE;
-        let formats = pass.desc.outputs.formats();
-        let names = [
-            "geometry.color",
-            "geometry.ids",
-            "geometry.flow",
-            "geometry.depth",
-        ];
-        let mut targets: [Option<Image>; 4] = Default::default();
-        for (i, f) in formats.iter().enumerate() {
-            if let Some(format) = *f {
-                // RGBA16F is not a required storage format; it need not be one.
-                let usage = if format == vk::Format::R16G16B16A16_SFLOAT {
-                    usage & !vk::ImageUsageFlags::STORAGE
-                } else {
-                    usage
-                };
-                targets[i] = Some(Image::new_2d(
-                    gpu,
-                    names[i],
-                    format,
-                    extent.width,
-                    extent.height,
-                    usage,
-                )?);
-            }
-        }
-        let depth_buffer = Image::new_2d(
+/// One [`FrameSlot`] per frame in flight, its sets allocated from the returned pool and
+/// pointed at its own uniforms (the compute discard's too, where the pass has it).
+fn frame_slots(
+    gpu: &Gpu,
+    cam: &Camera,
+    pipeline: &GraphicsPipeline,
+    discard: Option<&DiscardPass>,
+    frames: usize,
+) -> Result<(DescriptorPool, Vec<FrameSlot>)> {
+    let pool = DescriptorPool::for_pipeline(gpu, pipeline, frames as u32)?;
+    let uniform = vk::DescriptorType::UNIFORM_BUFFER;
+    let mut slots = Vec::with_capacity(frames);
+    for _ in 0..frames {
+        let camera = Buffer::from_pod(
             gpu,
-            "geometry.depth_buffer",
-            vk::Format::D32_SFLOAT,
-            extent.width,
-            extent.height,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            "geometry.camera",
+            &[CameraParams::from_camera(cam)],
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
-        let mut views: Vec<vk::ImageView> = targets.iter().flatten().map(|t| t.view).collect();
-        views.push(depth_buffer.view);
-        // SAFETY: the views are of images just made for this render pass's attachments,
-        // `extent` large.
-        let framebuffer = unsafe { Framebuffer::new(gpu, &pass.render_pass, &views, extent) }?;
-        Ok(GeometryTargets {
-            outputs: pass.desc.outputs,
-            targets,
-            _depth_buffer: depth_buffer,
-            framebuffer,
-            extent,
-        })
+        let frame = Buffer::from_pod(
+            gpu,
+            "geometry.frame",
+            &[GeometryFrame::zeroed()],
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+        )?;
+        let set = pool.allocate(pipeline)?;
+        let uniforms = [(0, uniform, &camera), (1, uniform, &frame)];
+        // SAFETY: the set was just allocated from a pool made for this pipeline's layout,
+        // so no work uses it yet; the buffers are this pass's own, alive.
+        unsafe { crate::gpu::write_buffer_descriptors(gpu, set, &uniforms) };
+        let discard_set = match discard {
+            Some(d) => {
+                let set = d.pool.allocate(&d.stages[0])?;
+                // SAFETY: as above, for the discard's layout, whose bindings 0 and 1 are
+                // these uniforms too.
+                unsafe { crate::gpu::write_buffer_descriptors(gpu, set, &uniforms) };
+                Some(set)
+            }
+            None => None,
+        };
+        slots.push(FrameSlot {
+            camera,
+            frame,
+            set,
+            discard_set,
+        });
     }
-
-    /// The colour image (when rendered), e.g. as the source of a warp.
-    pub fn color(&self) -> Option<&Image> {
-        self.targets[0].as_ref()
-    }
-
-    /// The ID image (when rendered).
-    pub fn ids(&self) -> Option<&Image> {
-        self.targets[1].as_ref()
-    }
-
-    /// The camera-depth image (when rendered; R32F metres, +inf where nothing was drawn).
-    pub fn depth(&self) -> Option<&Image> {
-        self.targets[3].as_ref()
-    }
-
-    /// Every output by location (colour, IDs, flow, depth), those rendered. After
-    /// [`GeometryPass::record`] they are in the pass's final layout (`TRANSFER_SRC_OPTIMAL` by
-    /// default).
-    pub fn images(&self) -> [Option<&Image>; 4] {
-        self.targets.each_ref().map(Option::as_ref)
-    }
-
-    /// What the pass renders.
-    pub fn outputs(&self) -> Outputs {
-        self.outputs
-    }
-
-    /// The size of every output (the pass's camera).
-    pub fn extent(&self) -> vk::Extent2D {
-        self.extent
-    }
+    Ok((pool, slots))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn incidence_lists_each_vertexs_triangles() {
-        // Two triangles sharing an edge, and a degenerate one repeating a vertex.
-        let (start, triangles) = incidence(&[0, 1, 2, 2, 1, 3, 3, 3, 0], 5);
-        let of = |v: usize| &triangles[start[v] as usize..start[v + 1] as usize];
-        assert_eq!(of(0), [0, 2]);
-        assert_eq!(of(1), [0, 1]);
-        assert_eq!(of(2), [0, 1]);
-        assert_eq!(of(3), [1, 2, 2]);
-        assert_eq!(of(4), [] as [u32; 0]);
-    }
 
     #[test]
     fn the_discard_reads_positions_where_the_vertex_buffer_has_them() {

@@ -2,9 +2,10 @@
 //! any [`Gpu`]: [`PlanRecorder`]. The headless `host::plan::execute` submits it and reads back;
 //! [`PlanRecorder::record`] can write a timestamp after every pass.
 //!
-//! What it records per route: a pinhole render or Alg. 1 (every output), the warp path's
-//! pinhole render + warp (colour, and depth by a second, nearest warp), both for warp + Alg. 1,
-//! a cube map's six faces + the sphere warp, or the lens model's frame.
+//! What it records per route (`Stages`, one variant per kind of route, each holding exactly
+//! its stages): a pinhole render or Alg. 1 (every output), the warp path's pinhole render +
+//! warp (colour, and depth by a second, nearest warp), both for warp + Alg. 1, a cube map's
+//! six faces + the sphere warp, or the lens model's frame.
 
 use ash::vk;
 use glam::DVec2;
@@ -155,11 +156,83 @@ impl BandedSource {
     }
 }
 
-/// What every pass of a recorder is built with: the device, the plan, the frames in flight.
+/// The geometry path's pass with its targets: the pinhole render or Alg. 1.
+type GeometryStage = (GeometryPass, GeometryTargets);
+
+/// The warp route's stages: the pinhole source render and the warps (IDs and depth nearest
+/// where asked), the source camera and warp geometry as built (jittered passes shift both),
+/// and its bands where the camera moves during the readout.
+struct WarpRoute {
+    stage: WarpStage,
+    source: Camera,
+    geometry: WarpGeometry,
+    bands: Option<BandedSource>,
+}
+
+/// What a recorder records, by the plan's route: each variant holds exactly the stages its
+/// route has, so no combination of passes exists that no route makes.
+// One per recorder, built once and never moved in a loop: its size costs nothing.
+#[allow(clippy::large_enum_variant)]
+enum Stages {
+    /// [`Route::Pinhole`] and [`Route::Vertex`] (every output), and [`Route::WarpAndVertex`]
+    /// when it asks for no colour (Alg. 1 for IDs, flow and depth alone).
+    Geometry(GeometryStage),
+    /// [`Route::Warp`], and [`Route::WarpAndVertex`] with Alg. 1 for its data outputs.
+    Warp {
+        warp: Box<WarpRoute>,
+        data: Option<GeometryStage>,
+    },
+    /// [`Route::Cube`]: six faces and the sphere warp, in bands (one set of faces each, in the
+    /// stage's slots) where the camera moves during the readout.
+    Cube {
+        cube: CubeStage,
+        bands: Option<Vec<Band>>,
+    },
+    /// [`Route::LensModel`]: Heidrich et al.'s image-based model.
+    Lens(LensRenderer),
+}
+
+impl Stages {
+    /// The geometry pass, where the route has one.
+    fn geometry(&self) -> Option<&GeometryStage> {
+        match self {
+            Stages::Geometry(g) => Some(g),
+            Stages::Warp { data, .. } => data.as_ref(),
+            Stages::Cube { .. } | Stages::Lens(_) => None,
+        }
+    }
+
+    fn geometry_mut(&mut self) -> Option<&mut GeometryStage> {
+        match self {
+            Stages::Geometry(g) => Some(g),
+            Stages::Warp { data, .. } => data.as_mut(),
+            Stages::Cube { .. } | Stages::Lens(_) => None,
+        }
+    }
+
+    fn warp(&self) -> Option<&WarpRoute> {
+        match self {
+            Stages::Warp { warp, .. } => Some(warp),
+            _ => None,
+        }
+    }
+
+    fn warp_mut(&mut self) -> Option<&mut WarpRoute> {
+        match self {
+            Stages::Warp { warp, .. } => Some(warp),
+            _ => None,
+        }
+    }
+}
+
+/// What every pass of a recorder is built with: the device, the plan, the frames in flight;
+/// and, as they are built, the passes' names and pipelines.
 struct Builder<'a> {
     gpu: &'a Gpu,
     plan: &'a Plan,
     frames: usize,
+    names: Vec<&'static str>,
+    pipelines: Vec<RecordedPipeline>,
 }
 
 impl Builder<'_> {
@@ -235,23 +308,196 @@ impl Builder<'_> {
         )?;
         Ok((stage, source, g))
     }
+
+    /// The stages of the plan's route.
+    fn stages(&mut self) -> Result<Stages> {
+        let plan = self.plan;
+        if let Route::LensModel { .. } = plan.route {
+            let setting = plan
+                .lens()
+                .ok_or_else(|| internal("a lens plan without a lens"))?;
+            let lens = LensRenderer::new(
+                self.gpu,
+                &setting.models,
+                LensRenderOptions {
+                    frames_in_flight: self.frames,
+                    ..Default::default()
+                },
+            )?;
+            self.names.push("image-based lens model (cells + film)");
+            self.pipelines.push(RecordedPipeline {
+                kind: PassKind::LensModel,
+                constants: Vec::new(),
+            });
+            return Ok(Stages::Lens(lens));
+        }
+        let camera = plan
+            .camera()
+            .ok_or_else(|| internal("a camera plan without a camera"))?;
+        let o = plan.outputs;
+        let outputs = self.outputs();
+        let lens_delta = Projection::Lens { delta: plan.delta };
+        let stages = match &plan.route {
+            Route::Pinhole => {
+                self.names.push("pinhole render");
+                Stages::Geometry(self.geometry(camera, Projection::Pinhole, outputs)?)
+            }
+            Route::Vertex { .. } => {
+                self.names.push("Alg. 1 (vertex + discard)");
+                Stages::Geometry(self.geometry(camera, lens_delta, outputs)?)
+            }
+            Route::Warp {
+                method,
+                chromatic,
+                map,
+            } => {
+                if o.flow {
+                    return Err(internal(
+                        "flow takes Alg. 1 (Lambers et al. Table 1): no plan routes it through the warp",
+                    ));
+                }
+                let data = DataOutputs {
+                    ids: o.ids,
+                    depth: o.depth,
+                };
+                let warp = self.warp_route(camera, *method, *chromatic, *map, data)?;
+                Stages::Warp { warp, data: None }
+            }
+            Route::WarpAndVertex {
+                method,
+                chromatic,
+                map,
+                ..
+            } => {
+                let warp = if o.color {
+                    let none = DataOutputs::default();
+                    Some(self.warp_route(camera, *method, *chromatic, *map, none)?)
+                } else {
+                    None
+                };
+                let data_outputs = Outputs {
+                    color: None,
+                    ..outputs
+                };
+                let data = self.geometry(camera, lens_delta, data_outputs)?;
+                self.names.push("Alg. 1 (vertex + discard), data outputs");
+                match warp {
+                    Some(warp) => Stages::Warp {
+                        warp,
+                        data: Some(data),
+                    },
+                    None => Stages::Geometry(data),
+                }
+            }
+            Route::Cube { side, chromatic } => self.cube(camera, *side, *chromatic)?,
+            Route::LensModel { .. } => return Err(internal("the lens route has no camera")),
+        };
+        if let Some((pass, _)) = stages.geometry() {
+            self.pipelines.push(RecordedPipeline::geometry(pass));
+        }
+        Ok(stages)
+    }
+
+    /// The warp route's stages, and its bands where the plan draws a moving rolling shutter
+    /// in them: one slot of the source render per band and frame in flight.
+    fn warp_route(
+        &mut self,
+        camera: &Camera,
+        method: InverseMethod,
+        chromatic: Option<[f64; 3]>,
+        map: bool,
+        data: DataOutputs,
+    ) -> Result<Box<WarpRoute>> {
+        let (stage, source, geometry) = self.warp_stage(camera, method, chromatic, map, data)?;
+        self.pipelines.extend([
+            RecordedPipeline::geometry(&stage.pass),
+            RecordedPipeline::compute(PassKind::Warp, stage.warp.pipeline()),
+        ]);
+        for d in stage.data_warps() {
+            self.pipelines.push(RecordedPipeline::compute(
+                PassKind::DataWarp,
+                d.warp.pipeline(),
+            ));
+        }
+        let plan = self.plan;
+        let bands = match (plan.bands, plan.shutter.moving_readout()) {
+            (Some(count), Some(readout)) => {
+                let (w, h) = geometry.output_size;
+                let bands = crate::model::rolling_shutter::bands::bands(readout, w, h, count);
+                let slots = stage.pass.slots((bands.len() * self.frames) as u32)?;
+                self.names
+                    .push("pinhole render + warp per band (overscanned)");
+                Some(BandedSource {
+                    gpu: self.gpu.clone(),
+                    poses: vec![Vec::new(); self.frames],
+                    bands,
+                    slots,
+                    camera: source.clone(),
+                    frame: 0,
+                })
+            }
+            _ => {
+                self.names.extend(["pinhole render (overscanned)", "warp"]);
+                None
+            }
+        };
+        Ok(Box::new(WarpRoute {
+            stage,
+            source,
+            geometry,
+            bands,
+        }))
+    }
+
+    /// The cube route's stage: six faces and the sphere warp, in bands where the camera moves
+    /// during the readout.
+    fn cube(&mut self, camera: &Camera, side: u32, chromatic: Option<[f64; 3]>) -> Result<Stages> {
+        let (gpu, plan) = (self.gpu, self.plan);
+        let o = plan.outputs;
+        if o.ids || o.flow || o.depth {
+            return Err(internal(
+                "the planner routes only colour through a cube map",
+            ));
+        }
+        // Within this device's limits and the cube budget.
+        let (f, side) = super::limits::device_cube_faces(gpu, self.color_format(), side);
+        let options = SphereWarpOptions {
+            chromatic,
+            fill: plan.background,
+            write_mask: false,
+        };
+        let mut cube = CubeStage::with_frames(gpu, camera, side, f, &options, self.frames)?;
+        self.pipelines.extend([
+            RecordedPipeline::geometry(&cube.pass),
+            RecordedPipeline::compute(PassKind::SphereWarp, cube.warp.pipeline()),
+        ]);
+        let bands = match (plan.bands, plan.shutter.moving_readout()) {
+            (Some(count), Some(readout)) => {
+                let bands = crate::model::rolling_shutter::bands::bands(
+                    readout,
+                    camera.width,
+                    camera.height,
+                    count,
+                );
+                // SAFETY: the stage is new: nothing recorded with it exists.
+                unsafe { cube.set_bands(bands.len()) }?;
+                self.names.push("cube faces + sphere warp per band");
+                Some(bands)
+            }
+            _ => {
+                self.names
+                    .extend(["cube faces (6 pinhole renders)", "sphere warp"]);
+                None
+            }
+        };
+        Ok(Stages::Cube { cube, bands })
+    }
 }
 
 /// The passes of one plan, built once; any number of frames recorded.
 pub struct PlanRecorder {
-    /// Alg. 1 or the pinhole render with its targets (every output it renders).
-    geometry: Option<(GeometryPass, GeometryTargets)>,
-    /// The warp path's colour (and IDs and depth, nearest, where a request asks for them
-    /// through the warp).
-    warp: Option<WarpStage>,
-    /// The cube path's colour.
-    cube: Option<CubeStage>,
-    /// The warp's bands, where it draws a moving rolling shutter.
-    bands: Option<BandedSource>,
-    /// The cube map's bands, where it draws a moving rolling shutter: one set of faces each,
-    /// in the stage's slots.
-    cube_bands: Option<Vec<Band>>,
-    lens: Option<LensRenderer>,
+    /// The route's stages.
+    stages: Stages,
     mesh: MeshBuffers,
     poses: Vec<Pose>,
     /// One per pose: when the frame's last line is read ([`Plan::end_pose`]).
@@ -260,9 +506,6 @@ pub struct PlanRecorder {
     previous_pose: Option<Pose>,
     /// Names of the passes in recording order (for timings).
     names: Vec<&'static str>,
-    /// The warp route's pinhole source camera and warp geometry as built (jittered passes
-    /// shift both).
-    warp_source: Option<(Camera, WarpGeometry)>,
     /// What the plan asks for (which images [`Self::read`] returns).
     outputs: super::scene_file::OutputSpec,
     /// The lens route keeps vignetting (else the accumulated weight is divided out).
@@ -328,21 +571,24 @@ impl PlanRecorder {
                 "a camera moving during a rolling shutter's readout is drawn by the vertex path, or by the warp in bands: the planner routes it there",
             ));
         }
+        let mesh = MeshBuffers::new(gpu, mesh, texture)?;
+        let mut b = Builder {
+            gpu,
+            plan,
+            frames,
+            names: Vec::new(),
+            pipelines: Vec::new(),
+        };
+        let stages = b.stages()?;
         let mut r = PlanRecorder {
-            geometry: None,
-            warp: None,
-            cube: None,
-            bands: None,
-            cube_bands: None,
-            lens: None,
-            mesh: MeshBuffers::new(gpu, mesh, texture)?,
+            stages,
+            mesh,
             poses: plan.poses.clone(),
             end_poses: (0..plan.poses.len())
                 .filter_map(|i| plan.end_pose(i))
                 .collect(),
             previous_pose: plan.previous_pose,
-            names: Vec::new(),
-            warp_source: None,
+            names: b.names,
             outputs: plan.outputs,
             vignetting: matches!(
                 plan.route,
@@ -352,149 +598,11 @@ impl PlanRecorder {
                 }
             ),
             frames_in_flight: frames,
-            pipelines: Vec::new(),
+            pipelines: b.pipelines,
         };
-        let b = Builder { gpu, plan, frames };
-        if let Route::LensModel { .. } = plan.route {
-            let setting = plan
-                .lens()
-                .ok_or_else(|| internal("a lens plan without a lens"))?;
-            r.lens = Some(LensRenderer::new(
-                gpu,
-                &setting.models,
-                LensRenderOptions {
-                    frames_in_flight: frames,
-                    ..Default::default()
-                },
-            )?);
-            r.names.push("image-based lens model (cells + film)");
-            r.pipelines.push(RecordedPipeline {
-                kind: PassKind::LensModel,
-                constants: Vec::new(),
-            });
-        } else {
-            r.build_camera_route(&b)?;
-        }
-        if let Some((pass, _)) = &r.geometry {
-            r.pipelines.push(RecordedPipeline::geometry(pass));
-        }
         // SAFETY: the passes are new: nothing recorded with them exists yet.
         unsafe { r.bind_mesh() };
         Ok(r)
-    }
-
-    /// The passes of a route through a camera (every route but the lens model's).
-    fn build_camera_route(&mut self, b: &Builder) -> Result<()> {
-        let (gpu, plan) = (b.gpu, b.plan);
-        let o = plan.outputs;
-        let outputs = b.outputs();
-        let camera = plan
-            .camera()
-            .ok_or_else(|| internal("a camera plan without a camera"))?;
-        let lens_delta = Projection::Lens { delta: plan.delta };
-        let r = self;
-        match &plan.route {
-            Route::Pinhole => {
-                r.geometry = Some(b.geometry(camera, Projection::Pinhole, outputs)?);
-                r.names.push("pinhole render");
-            }
-            Route::Vertex { .. } => {
-                r.geometry = Some(b.geometry(camera, lens_delta, outputs)?);
-                r.names.push("Alg. 1 (vertex + discard)");
-            }
-            Route::Warp {
-                method,
-                chromatic,
-                map,
-            } => {
-                if o.flow {
-                    return Err(internal(
-                        "flow takes Alg. 1 (Lambers et al. Table 1): no plan routes it through the warp",
-                    ));
-                }
-                let data = DataOutputs {
-                    ids: o.ids,
-                    depth: o.depth,
-                };
-                r.set_warp(b.warp_stage(camera, *method, *chromatic, *map, data)?);
-                r.set_bands(gpu, plan)?;
-            }
-            Route::WarpAndVertex {
-                method,
-                chromatic,
-                map,
-                ..
-            } => {
-                if o.color {
-                    let none = DataOutputs::default();
-                    r.set_warp(b.warp_stage(camera, *method, *chromatic, *map, none)?);
-                    r.set_bands(gpu, plan)?;
-                }
-                r.geometry = Some(b.geometry(
-                    camera,
-                    lens_delta,
-                    Outputs {
-                        color: None,
-                        ..outputs
-                    },
-                )?);
-                r.names.push("Alg. 1 (vertex + discard), data outputs");
-            }
-            Route::Cube { side, chromatic } => r.build_cube(b, camera, *side, *chromatic)?,
-            Route::LensModel { .. } => return Err(internal("the lens route has no camera")),
-        }
-        Ok(())
-    }
-
-    /// The cube route's stage: six faces and the sphere warp, in bands where the camera moves
-    /// during the readout.
-    fn build_cube(
-        &mut self,
-        b: &Builder,
-        camera: &Camera,
-        side: u32,
-        chromatic: Option<[f64; 3]>,
-    ) -> Result<()> {
-        let (gpu, plan, frames) = (b.gpu, b.plan, b.frames);
-        let o = plan.outputs;
-        let format = b.color_format();
-        let r = self;
-        if o.ids || o.flow || o.depth {
-            return Err(internal(
-                "the planner routes only colour through a cube map",
-            ));
-        }
-        // Within this device's limits and the cube budget.
-        let (f, side) = super::limits::device_cube_faces(gpu, format, side);
-        let options = SphereWarpOptions {
-            chromatic,
-            fill: plan.background,
-            write_mask: false,
-        };
-        let mut stage = CubeStage::with_frames(gpu, camera, side, f, &options, frames)?;
-        r.pipelines.extend([
-            RecordedPipeline::geometry(&stage.pass),
-            RecordedPipeline::compute(PassKind::SphereWarp, stage.warp.pipeline()),
-        ]);
-        match (plan.bands, plan.shutter.moving_readout()) {
-            (Some(count), Some(readout)) => {
-                let bands = crate::model::rolling_shutter::bands::bands(
-                    readout,
-                    camera.width,
-                    camera.height,
-                    count,
-                );
-                // SAFETY: the stage is new: nothing recorded with it exists.
-                unsafe { stage.set_bands(bands.len()) }?;
-                r.cube_bands = Some(bands);
-                r.names.push("cube faces + sphere warp per band");
-            }
-            _ => r
-                .names
-                .extend(["cube faces (6 pinhole renders)", "sphere warp"]),
-        }
-        r.cube = Some(stage);
-        Ok(())
     }
 
     /// Points every pass that draws the mesh with a set of its own at it (the cube faces and
@@ -505,13 +613,13 @@ impl PlanRecorder {
     unsafe fn bind_mesh(&mut self) {
         // SAFETY: the caller upholds this function's contract.
         unsafe {
-            if let Some((pass, _)) = &mut self.geometry {
+            if let Some((pass, _)) = self.stages.geometry_mut() {
                 pass.bind_mesh(&self.mesh);
             }
-            if let Some(st) = &mut self.warp {
-                st.pass.bind_mesh(&self.mesh);
-                if let Some(b) = &self.bands {
-                    st.pass.bind_slots_mesh(&b.slots, &self.mesh);
+            if let Some(w) = self.stages.warp_mut() {
+                w.stage.pass.bind_mesh(&self.mesh);
+                if let Some(b) = &w.bands {
+                    w.stage.pass.bind_slots_mesh(&b.slots, &self.mesh);
                 }
             }
         }
@@ -525,64 +633,21 @@ impl PlanRecorder {
     /// Makes frame `frame` (modulo [`Self::frames_in_flight`]) the one [`Self::prepare`]
     /// writes and [`Self::record`] records.
     pub fn select_frame(&mut self, frame: usize) {
-        if let Some((pass, _)) = &mut self.geometry {
+        let frames_in_flight = self.frames_in_flight;
+        if let Some((pass, _)) = self.stages.geometry_mut() {
             pass.select_frame(frame);
         }
-        if let Some(st) = &mut self.warp {
-            st.select_frame(frame);
+        match &mut self.stages {
+            Stages::Warp { warp, .. } => {
+                warp.stage.select_frame(frame);
+                if let Some(b) = &mut warp.bands {
+                    b.frame = frame % frames_in_flight;
+                }
+            }
+            Stages::Cube { cube, .. } => cube.select_frame(frame),
+            Stages::Lens(l) => l.select_frame(frame),
+            Stages::Geometry(_) => {}
         }
-        if let Some(b) = &mut self.bands {
-            b.frame = frame % self.frames_in_flight;
-        }
-        if let Some(c) = &mut self.cube {
-            c.select_frame(frame);
-        }
-        if let Some(l) = &mut self.lens {
-            l.select_frame(frame);
-        }
-    }
-
-    /// The warp's passes' names, and its bands where `plan` draws a moving rolling shutter in
-    /// them: one slot of the source render per band and frame in flight. After
-    /// [`Self::set_warp`].
-    fn set_bands(&mut self, gpu: &Gpu, plan: &Plan) -> Result<()> {
-        let (Some(count), Some(readout)) = (plan.bands, plan.shutter.moving_readout()) else {
-            self.names.extend(["pinhole render (overscanned)", "warp"]);
-            return Ok(());
-        };
-        let (Some(st), Some((source, g))) = (&self.warp, &self.warp_source) else {
-            return Err(internal("bands without a warp"));
-        };
-        let (w, h) = g.output_size;
-        let bands = crate::model::rolling_shutter::bands::bands(readout, w, h, count);
-        let frames = self.frames_in_flight;
-        let slots = st.pass.slots((bands.len() * frames) as u32)?;
-        self.bands = Some(BandedSource {
-            gpu: gpu.clone(),
-            poses: vec![Vec::new(); frames],
-            bands,
-            slots,
-            camera: source.clone(),
-            frame: 0,
-        });
-        self.names
-            .push("pinhole render + warp per band (overscanned)");
-        Ok(())
-    }
-
-    fn set_warp(&mut self, (stage, source, geometry): (WarpStage, Camera, WarpGeometry)) {
-        self.pipelines.extend([
-            RecordedPipeline::geometry(&stage.pass),
-            RecordedPipeline::compute(PassKind::Warp, stage.warp.pipeline()),
-        ]);
-        for d in stage.data_warps() {
-            self.pipelines.push(RecordedPipeline::compute(
-                PassKind::DataWarp,
-                d.warp.pipeline(),
-            ));
-        }
-        self.warp = Some(stage);
-        self.warp_source = Some((source, geometry));
     }
 
     /// Replaces the mesh every pass draws (a tessellation for another pose); the next
@@ -627,34 +692,40 @@ impl PlanRecorder {
     /// # Safety
     /// Host writes to uniforms the recorded frames read: no recorded frame may be pending.
     pub(crate) unsafe fn jitter(&mut self, camera: &Camera, source_shift: DVec2) -> Result<()> {
-        if let Some((pass, _)) = &mut self.geometry {
+        if let Some((pass, _)) = self.stages.geometry_mut() {
             // SAFETY: no submission using it is pending (`submit` waits on its fence).
             unsafe { pass.set_camera(camera) }?;
         }
-        // The faces stay: only the rays the lens casts into them move.
-        if let Some(c) = &mut self.cube {
-            // SAFETY: no submission using it is pending (`submit` waits on its fence).
-            unsafe { c.set_camera(camera) }?;
-        }
-        if let (Some(st), Some((source, built))) = (&mut self.warp, &self.warp_source) {
-            let mut k = source.intrinsics;
-            k.cx -= source_shift.x;
-            k.cy -= source_shift.y;
-            let moved = Camera::new(source.width, source.height, k, OpenCvDistortion::default())?;
-            let mut g = WarpGeometry::distort(camera.clone(), built.method)
-                .with_ideal(k, (source.width, source.height))?;
-            if let Some(scales) = built.chromatic {
-                g = g.with_chromatic(scales)?;
-            }
-            // SAFETY: no submission using it is pending (`submit` waits on its fence).
-            unsafe { st.pass.set_camera(&moved) }?;
-            // SAFETY: no submission using it is pending (`submit` waits on its fence).
-            unsafe { st.warp.retarget(g) }?;
-            if let Some(b) = &mut self.bands {
-                b.camera = moved;
+        match &mut self.stages {
+            // The faces stay: only the rays the lens casts into them move.
+            Stages::Cube { cube, .. } => {
                 // SAFETY: no submission using it is pending (`submit` waits on its fence).
-                unsafe { b.write_slots(&st.pass) }?;
+                unsafe { cube.set_camera(camera) }?;
             }
+            Stages::Warp { warp, .. } => {
+                let (source, built) = (&warp.source, &warp.geometry);
+                let mut k = source.intrinsics;
+                k.cx -= source_shift.x;
+                k.cy -= source_shift.y;
+                let moved =
+                    Camera::new(source.width, source.height, k, OpenCvDistortion::default())?;
+                let mut g = WarpGeometry::distort(camera.clone(), built.method)
+                    .with_ideal(k, (source.width, source.height))?;
+                if let Some(scales) = built.chromatic {
+                    g = g.with_chromatic(scales)?;
+                }
+                let st = &mut warp.stage;
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { st.pass.set_camera(&moved) }?;
+                // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                unsafe { st.warp.retarget(g) }?;
+                if let Some(b) = &mut warp.bands {
+                    b.camera = moved;
+                    // SAFETY: no submission using it is pending (`submit` waits on its fence).
+                    unsafe { b.write_slots(&st.pass) }?;
+                }
+            }
+            Stages::Geometry(_) | Stages::Lens(_) => {}
         }
         Ok(())
     }
@@ -700,23 +771,24 @@ impl PlanRecorder {
         };
         // SAFETY (every block below): this function's contract: no recorded work of the
         // selected frame, whose uniforms and sets these are, is pending.
-        if let Some((pass, _)) = &self.geometry {
+        if let Some((pass, _)) = self.stages.geometry() {
             unsafe { pass.set_moving_frame((&pose, &end), (&previous.0, &previous.1)) }?;
         }
-        if let Some(st) = &self.warp {
-            unsafe { st.pass.set_frame(&pose, &pose) }?;
-        }
-        if let (Some(st), Some(b)) = (&self.warp, &mut self.bands) {
-            b.poses[b.frame] = band_poses(&b.bands);
-            unsafe { b.write_slots(&st.pass) }?;
-        }
-        match (&self.cube, &self.cube_bands) {
-            (Some(c), Some(bands)) => unsafe { c.prepare_bands(&self.mesh, &band_poses(bands)) }?,
-            (Some(c), None) => unsafe { c.prepare(&self.mesh, &pose) }?,
-            _ => {}
-        }
-        if let Some(l) = &mut self.lens {
-            unsafe { l.prepare(&self.mesh, &pose) }?;
+        match &mut self.stages {
+            Stages::Warp { warp, .. } => {
+                unsafe { warp.stage.pass.set_frame(&pose, &pose) }?;
+                if let Some(b) = &mut warp.bands {
+                    b.poses[b.frame] = band_poses(&b.bands);
+                    unsafe { b.write_slots(&warp.stage.pass) }?;
+                }
+            }
+            Stages::Cube {
+                cube,
+                bands: Some(bands),
+            } => unsafe { cube.prepare_bands(&self.mesh, &band_poses(bands)) }?,
+            Stages::Cube { cube, bands: None } => unsafe { cube.prepare(&self.mesh, &pose) }?,
+            Stages::Lens(l) => unsafe { l.prepare(&self.mesh, &pose) }?,
+            Stages::Geometry(_) => {}
         }
         Ok(())
     }
@@ -733,11 +805,10 @@ impl PlanRecorder {
         // that queue, which this contract leaves implicit.
         unsafe {
             self.mesh.record_upload(cmd);
-            if let Some(st) = &self.warp {
-                st.record_prepare(cmd);
-            }
-            if let Some(c) = &self.cube {
-                c.record_prepare(cmd);
+            match &self.stages {
+                Stages::Warp { warp, .. } => warp.stage.record_prepare(cmd),
+                Stages::Cube { cube, .. } => cube.record_prepare(cmd),
+                Stages::Geometry(_) | Stages::Lens(_) => {}
             }
         }
     }
@@ -773,54 +844,72 @@ impl PlanRecorder {
         // were made for it in `new`, and the warp stage's pinhole render precedes its warps.
         // `timestamps`, when given, must hold `timestamp_count` queries, as the doc asks.
         unsafe {
-            if let Some(l) = &self.lens {
-                l.record(cmd, &self.mesh);
-                stamp();
-            }
-            if let (Some(st), Some(b)) = (&self.warp, &self.bands) {
-                let n = b.bands.len();
-                for (k, band) in b.bands.iter().enumerate() {
-                    if k > 0 {
-                        // The bands write disjoint pixels of one output image; ordering the
-                        // dispatches keeps every hazard tracker's view of that image simple.
-                        // The render pass's own dependency already waits for the last
-                        // band's warps to finish reading the source before clearing it.
-                        crate::gpu::global_barrier(
-                            &b.gpu,
-                            cmd,
-                            [crate::gpu::Access::ComputeReadWrite],
-                            [crate::gpu::Access::ComputeReadWrite],
-                        );
-                    }
-                    st.pass
-                        .record_slot(cmd, &st.targets, &self.mesh, &b.slots, b.frame * n + k);
-                    st.warp.record_band(cmd, band.rect);
-                    for d in st.data_warps() {
-                        d.warp.record_band(cmd, band.rect);
-                    }
+            match &self.stages {
+                Stages::Lens(l) => {
+                    l.record(cmd, &self.mesh);
+                    stamp();
                 }
-                stamp();
-            } else if let Some(st) = &self.warp {
-                st.pass.record(cmd, &st.targets, &self.mesh);
-                stamp();
-                st.record_warps(cmd);
-                stamp();
-            }
-            if let (Some(c), Some(bands)) = (&self.cube, &self.cube_bands) {
-                // Each band's faces, then its rows or columns of the output; the next band's
-                // faces discard the cube only after this warp has sampled it.
-                for (k, band) in bands.iter().enumerate() {
-                    c.record_band_faces(cmd, &self.mesh, k);
-                    c.record_warp_band(cmd, band.rect);
+                Stages::Warp { warp, .. } => match &warp.bands {
+                    Some(b) => {
+                        let st = &warp.stage;
+                        let n = b.bands.len();
+                        for (k, band) in b.bands.iter().enumerate() {
+                            if k > 0 {
+                                // The bands write disjoint pixels of one output image; ordering
+                                // the dispatches keeps every hazard tracker's view of that
+                                // image simple. The render pass's own dependency already waits
+                                // for the last band's warps to finish reading the source
+                                // before clearing it.
+                                crate::gpu::global_barrier(
+                                    &b.gpu,
+                                    cmd,
+                                    [crate::gpu::Access::ComputeReadWrite],
+                                    [crate::gpu::Access::ComputeReadWrite],
+                                );
+                            }
+                            st.pass.record_slot(
+                                cmd,
+                                &st.targets,
+                                &self.mesh,
+                                &b.slots,
+                                b.frame * n + k,
+                            );
+                            st.warp.record_band(cmd, band.rect);
+                            for d in st.data_warps() {
+                                d.warp.record_band(cmd, band.rect);
+                            }
+                        }
+                        stamp();
+                    }
+                    None => {
+                        let st = &warp.stage;
+                        st.pass.record(cmd, &st.targets, &self.mesh);
+                        stamp();
+                        st.record_warps(cmd);
+                        stamp();
+                    }
+                },
+                Stages::Cube {
+                    cube,
+                    bands: Some(bands),
+                } => {
+                    // Each band's faces, then its rows or columns of the output; the next
+                    // band's faces discard the cube only after this warp has sampled it.
+                    for (k, band) in bands.iter().enumerate() {
+                        cube.record_band_faces(cmd, &self.mesh, k);
+                        cube.record_warp_band(cmd, band.rect);
+                    }
+                    stamp();
                 }
-                stamp();
-            } else if let Some(c) = &self.cube {
-                c.record_faces(cmd, &self.mesh);
-                stamp();
-                c.record_warp(cmd);
-                stamp();
+                Stages::Cube { cube, bands: None } => {
+                    cube.record_faces(cmd, &self.mesh);
+                    stamp();
+                    cube.record_warp(cmd);
+                    stamp();
+                }
+                Stages::Geometry(_) => {}
             }
-            if let Some((pass, targets)) = &self.geometry {
+            if let Some((pass, targets)) = self.stages.geometry() {
                 pass.record(cmd, targets, &self.mesh);
                 stamp();
             }
@@ -830,44 +919,47 @@ impl PlanRecorder {
     /// The warp route's depth (R32F metres, +inf where nothing was drawn or there is no
     /// source; `GENERAL` after a frame), when the plan asks for depth through the warp.
     pub fn warped_depth(&self) -> Option<&crate::gpu::Image> {
-        self.warp.as_ref()?.depth.as_ref().map(|d| &d.output)
+        self.stages.warp()?.stage.depth.as_ref().map(|d| &d.output)
     }
 
     /// The images a recorded frame leaves: colour (warp output, lens film or geometry
     /// colour) and the geometry pass's targets (IDs, flow, depth) for the caller to read or
     /// sample. The warp route's depth is [`Self::warped_depth`].
     pub fn images(&self) -> (Option<&crate::gpu::Image>, Option<&GeometryTargets>) {
-        let colour = if let Some(st) = &self.warp {
-            Some(&st.output)
-        } else if let Some(c) = &self.cube {
-            Some(&c.output)
-        } else if let Some(l) = &self.lens {
-            Some(&l.film().image)
-        } else {
-            self.geometry.as_ref().and_then(|(_, t)| t.color())
+        let colour = match &self.stages {
+            Stages::Warp { warp, .. } => Some(&warp.stage.output),
+            Stages::Cube { cube, .. } => Some(&cube.output),
+            Stages::Lens(l) => Some(&l.film().image),
+            Stages::Geometry((_, t)) => t.color(),
         };
-        (colour, self.geometry.as_ref().map(|(_, t)| t))
+        (colour, self.geometry_targets())
     }
 
     /// The geometry pass's targets (Alg. 1 or the pinhole render), when the plan has one;
     /// after a frame in `TRANSFER_SRC_OPTIMAL`.
     pub(crate) fn geometry_targets(&self) -> Option<&GeometryTargets> {
-        self.geometry.as_ref().map(|(_, t)| t)
+        self.stages.geometry().map(|(_, t)| t)
     }
 
     /// The warp path's stage (its output and data warps `GENERAL` after a frame).
     pub(crate) fn warp_stage(&self) -> Option<&WarpStage> {
-        self.warp.as_ref()
+        self.stages.warp().map(|w| &w.stage)
     }
 
     /// The cube path's stage (its output `GENERAL` after a frame).
     pub(crate) fn cube_stage(&self) -> Option<&CubeStage> {
-        self.cube.as_ref()
+        match &self.stages {
+            Stages::Cube { cube, .. } => Some(cube),
+            _ => None,
+        }
     }
 
     /// The lens route's renderer (its film `COLOR_ATTACHMENT_OPTIMAL` after a frame).
     pub(crate) fn lens_renderer(&self) -> Option<&LensRenderer> {
-        self.lens.as_ref()
+        match &self.stages {
+            Stages::Lens(l) => Some(l),
+            _ => None,
+        }
     }
 
     /// What the plan asks for.

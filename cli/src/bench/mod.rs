@@ -1,4 +1,4 @@
-//! The measurements behind `vklens bench` and `benches/`: accuracy *and* time for every
+//! The measurements behind `vklens bench` and `cli/benches/`: accuracy *and* time for every
 //! approximation, reported as tables (and JSON lines), never asserted as wall-clock limits.
 
 pub mod inverse;
@@ -7,6 +7,7 @@ pub mod models;
 pub mod plan;
 pub mod report;
 pub mod rolling_shutter;
+pub mod startup;
 pub mod vertex;
 pub mod warp;
 pub mod wide;

@@ -12,9 +12,9 @@ use serde_json::Value;
 use super::{inverse, lens, models, plan, vertex, warp, wide};
 use vklens::{Error, Result};
 
-/// What `vklens bench all` runs, in the order it runs and writes them: the seven benches, then
+/// What `vklens bench all` runs, in the order it runs and writes them: the nine benches, then
 /// the Python package's frame loop beside `cv2.remap` (`python -m vklens.bench`).
-pub const BENCHES: [&str; 9] = [
+pub const BENCHES: [&str; 10] = [
     "inverse",
     "warp",
     "vertex",
@@ -23,6 +23,7 @@ pub const BENCHES: [&str; 9] = [
     "rolling-shutter",
     "models",
     "plan",
+    "startup",
     "python",
 ];
 
@@ -48,6 +49,12 @@ pub const LENS_SPEEDUP: f64 = 100.0;
 pub const ROLLING_X_GLOBAL: f64 = 1.3;
 /// A camera model's inverse over a 1080p frame against the standard model's Newton.
 pub const MODEL_X_STANDARD: f64 = 1.3;
+/// `vklens undistort` of a 64×36 image, process start to exit, cold (ms).
+pub const STARTUP_SMALL_MS: f64 = 120.0;
+/// Python: `import vklens` to a new `Warper`'s first 1080p frame (ms).
+pub const STARTUP_WARPER_MS: f64 = 500.0;
+/// `vklens distort` / `undistort` of a 1080p PNG against the Python + OpenCV script.
+pub const STARTUP_X_OPENCV: f64 = 2.0;
 
 /// Whether a goal held on a run's rows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -86,6 +93,7 @@ pub fn goals(bench: &str, rows: &[Value]) -> Vec<Goal> {
         "rolling-shutter" => rolling_shutter_goals(rows),
         "models" => models_goals(rows),
         "plan" => plan_goals(rows),
+        "startup" => startup_goals(rows),
         _ => Vec::new(),
     }
 }
@@ -367,6 +375,56 @@ fn rolling_shutter_goals(rows: &[Value]) -> Vec<Goal> {
     )]
 }
 
+fn startup_goals(rows: &[Value]) -> Vec<Goal> {
+    let ms = |what: &str, size: &str| -> Vec<(String, f64)> {
+        rows.iter()
+            .filter(|r| r["what"] == what && r["size"] == size)
+            .map(|r| {
+                (
+                    format!("{what} {size}"),
+                    r["ms"].as_f64().unwrap_or(f64::NAN),
+                )
+            })
+            .collect()
+    };
+    let x_opencv: Vec<(String, f64)> = of_kind(rows, "command")
+        .filter(|r| r["size"] == "1920×1080")
+        .map(|r| {
+            (
+                r["what"].as_str().unwrap_or("?").to_string(),
+                r["x_faster"].as_f64().unwrap_or(f64::NAN),
+            )
+        })
+        .collect();
+    let ms_text = |x: f64| format!("{x:.0} ms");
+    vec![
+        bound(
+            format!("`vklens undistort` of a 64×36 image ≤ {STARTUP_SMALL_MS:.0} ms, cold"),
+            &ms("vklens undistort", "64×36"),
+            STARTUP_SMALL_MS,
+            false,
+            ms_text,
+        ),
+        bound(
+            format!("Python: a new `Warper` to its first 1080p frame ≤ {STARTUP_WARPER_MS:.0} ms"),
+            &ms("import vklens → Warper → first frame", "1920×1080"),
+            STARTUP_WARPER_MS,
+            false,
+            ms_text,
+        ),
+        bound(
+            format!(
+                "`vklens distort` and `undistort` at 1080p ≥ {STARTUP_X_OPENCV:.0}× faster end to \
+                 end than the Python + OpenCV script"
+            ),
+            &x_opencv,
+            STARTUP_X_OPENCV,
+            true,
+            ratio,
+        ),
+    ]
+}
+
 fn wide_goals(rows: &[Value]) -> Vec<Goal> {
     // Lenses past a pinhole's reach: those whose warp path was refused for want of a source.
     let beyond = |camera: &Value| {
@@ -524,6 +582,7 @@ pub fn tables(bench: &str, rows: &[Value]) -> Result<String> {
         "rolling-shutter" => super::rolling_shutter::table(rows),
         "models" => models::table(&typed(bench, rows)?),
         "plan" => plan::table(rows),
+        "startup" => super::startup::table(rows),
         "python" => python_table(rows),
         other => return Err(Error::input(format!("no bench `{other}`"))),
     })

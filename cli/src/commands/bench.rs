@@ -258,6 +258,26 @@ pub fn rolling_shutter(args: WideArgs) -> Result<(), CliError> {
 }
 
 #[derive(Args, Debug)]
+pub struct StartupArgs {
+    /// One JSON object per line instead of tables.
+    #[arg(long)]
+    json: bool,
+    /// The Python that runs the OpenCV peers and the `Warper` row (a peer whose imports fail
+    /// is left out of its row).
+    #[arg(long, value_name = "PROGRAM", default_value = "python3")]
+    python: String,
+}
+
+pub fn startup(args: StartupArgs) -> Result<(), CliError> {
+    let scenes = data_folder(None, "examples/scenes", "examples/scenes")?;
+    let rows = crate::bench::startup::run(&args.python, &scenes, &mut |s| super::progress_line(s))
+        .map_err(bench_error)?;
+    super::progress_done(&format!("measured {} rows", rows.len()));
+    print_rows(&rows, args.json, crate::bench::startup::table)?;
+    Ok(())
+}
+
+#[derive(Args, Debug)]
 pub struct ModelsArgs {
     /// One JSON object per line instead of a table.
     #[arg(long)]
@@ -317,7 +337,7 @@ pub struct AllArgs {
     #[arg(long, value_name = "FILE", default_value = "docs/benchmarks.md")]
     out: std::path::PathBuf,
     /// Run only these, comma-separated: inverse, warp, vertex, lens, wide, models, plan,
-    /// rolling-shutter, and python (the Python package's frame loop beside cv2.remap). Default:
+    /// rolling-shutter, startup, and python (the Python package's frame loop beside cv2.remap). Default:
     /// all of them.
     #[arg(long, value_delimiter = ',', value_parser = parse_bench, value_name = "LIST")]
     benches: Vec<String>,
@@ -549,7 +569,7 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
         true => Some(data_folder(None, "lenses", "lenses")?),
         false => None,
     };
-    let scenes = match chosen.contains(&"plan") {
+    let scenes = match chosen.contains(&"plan") || chosen.contains(&"startup") {
         true => Some(data_folder(None, "examples/scenes", "examples/scenes")?),
         false => None,
     };
@@ -616,6 +636,12 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
             "rolling-shutter" => {
                 crate::bench::rolling_shutter::run(&ctx, &mut |s| super::progress_line(s))?
             }
+            "startup" => match &scenes {
+                Some(dir) => {
+                    crate::bench::startup::run(&args.python, dir, &mut |s| super::progress_line(s))?
+                }
+                None => Vec::new(),
+            },
             "models" => to_json(&crate::bench::models::run(
                 Some(&ctx),
                 super::progress_line,

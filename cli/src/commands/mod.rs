@@ -394,6 +394,12 @@ enum BenchCommand {
     /// band's time, geometric error and colour difference against the exact path.
     #[command(name = "rolling-shutter")]
     RollingShutter(bench::WideArgs),
+    /// What a user waits for before the first frame, cold (fresh processes, no pipeline
+    /// cache): `vklens undistort` of a 64×36 image, `vklens undistort` and `distort` at
+    /// 1920×1080 beside the Python + OpenCV scripts a user would write, `vklens render` of the
+    /// rolling-shutter example and its global twin, Python's `Warper` to its first frame; then
+    /// the creation of each warp pipeline for each camera model on a new device.
+    Startup(bench::StartupArgs),
     /// Every camera model of the table (one realistic camera each) beside OpenCV's standard
     /// model: CPU forward and inverse time and round-trip error, the GPU's f32 error and time,
     /// the inverse over a 1080p frame as a ratio to the standard model, and the error of the
@@ -605,6 +611,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Plan(args)) => bench::plan(args),
         Command::Bench(BenchCommand::Wide(args)) => bench::wide(args),
         Command::Bench(BenchCommand::RollingShutter(args)) => bench::rolling_shutter(args),
+        Command::Bench(BenchCommand::Startup(args)) => bench::startup(args),
         Command::Bench(BenchCommand::Models(args)) => bench::models(args),
         Command::Bench(BenchCommand::All(args)) => bench::all(args),
         Command::Demo(args) => demo::run(args),

@@ -3,6 +3,8 @@
 // source position the warp would compute analytically, or NaN where there is none. Later
 // frames sample the map instead of solving the model (the lookup-table approach engines use).
 #extension GL_GOOGLE_include_directive : require
+// One module per model too (VKL_ONLY_MODEL): a camera's map compiles its own model alone.
+// vklens:per-model
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

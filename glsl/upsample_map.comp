@@ -8,6 +8,8 @@
 // executes branch bodies predicated (measured: 103 ms instead of 22 ms at 1080p). Distort
 // direction only (undistort's forward model is cheap enough per pixel).
 #extension GL_GOOGLE_include_directive : require
+// One module per model too (VKL_ONLY_MODEL): a camera's map compiles its own model alone.
+// vklens:per-model
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

@@ -20,6 +20,9 @@
 // inverses out, which the driver would otherwise compile before specialization drops them.
 // vklens:variant forward VKL_WARP_FORWARD
 // vklens:variant rgba8_forward VKL_RGBA8,VKL_WARP_FORWARD
+// Each variant also per model (VKL_ONLY_MODEL): a camera's pipeline compiles its own model
+// alone, not every model's code before specialization drops the others.
+// vklens:per-model
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

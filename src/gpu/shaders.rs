@@ -98,3 +98,6 @@ pub const WARP_RASTER_FRAG: &[u8] =
 /// `glsl/warp_raster.frag`, rgba8 source.
 pub const WARP_RASTER_FRAG_RGBA8: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/warp_raster.frag.rgba8.spv"));
+
+// `<SHADER>_BY_MODEL`: the shaders marked `// vklens:per-model`, once per model of the list.
+include!(concat!(env!("OUT_DIR"), "/per_model.rs"));

@@ -233,14 +233,16 @@ fn warp_pipeline(gpu: &Gpu, desc: &WarpDesc) -> Result<ComputePipeline> {
         .bool(spec::BICUBIC, desc.sampling == Sampling::Bicubic)
         .u32(spec::BORDER, desc.border.gpu_id())
         .bool(spec::WRITE_MASK, desc.write_mask);
-    let spirv = match desc.format {
-        PixelFormat::Rgba8 if mode == 1 => shaders::WARP_COMP_RGBA8_FORWARD,
-        PixelFormat::Rgba8 => shaders::WARP_COMP_RGBA8,
-        PixelFormat::Rgba32F if mode == 1 => shaders::WARP_COMP_FORWARD,
-        PixelFormat::Rgba32F => shaders::WARP_COMP,
-        PixelFormat::R32Uint => shaders::WARP_COMP_R32UI,
-        PixelFormat::R32Float => shaders::WARP_COMP_R32F,
+    // The module of the camera's model alone (the one its `MODEL` constant names).
+    let by_model = match desc.format {
+        PixelFormat::Rgba8 if mode == 1 => &shaders::WARP_COMP_RGBA8_FORWARD_BY_MODEL,
+        PixelFormat::Rgba8 => &shaders::WARP_COMP_RGBA8_BY_MODEL,
+        PixelFormat::Rgba32F if mode == 1 => &shaders::WARP_COMP_FORWARD_BY_MODEL,
+        PixelFormat::Rgba32F => &shaders::WARP_COMP_BY_MODEL,
+        PixelFormat::R32Uint => &shaders::WARP_COMP_R32UI_BY_MODEL,
+        PixelFormat::R32Float => &shaders::WARP_COMP_R32F_BY_MODEL,
     };
+    let spirv = by_model[g.camera.model().gpu_id() as usize];
     let storage = vk::DescriptorType::STORAGE_IMAGE;
     ComputePipeline::new(
         gpu,
@@ -339,9 +341,11 @@ impl MapParts {
             _ => (1, 0, MapInterpolation::Bilinear),
         };
         let uniform = vk::DescriptorType::UNIFORM_BUFFER;
+        // The modules of the channels' model alone (the one the `MODEL` constant names).
+        let model = terms.model.gpu_id() as usize;
         map_pipelines.push(ComputePipeline::new(
             gpu,
-            shaders::INVERSE_MAP_COMP,
+            shaders::INVERSE_MAP_COMP_BY_MODEL[model],
             &[uniform, storage],
             std::mem::size_of::<WarpPush>() as u32,
             base.clone().u32(spec::STRIDE, stride),
@@ -354,7 +358,7 @@ impl MapParts {
                 .is_none_or(|e| e > 0.5 * COARSE_MAX_RESIDUAL_PX as f64);
             map_pipelines.push(ComputePipeline::new(
                 gpu,
-                shaders::UPSAMPLE_MAP_COMP,
+                shaders::UPSAMPLE_MAP_COMP_BY_MODEL[model],
                 &[uniform, storage, storage],
                 std::mem::size_of::<WarpPush>() as u32,
                 base.u32(spec::STRIDE, stride)

@@ -317,7 +317,24 @@ fn warp_push_matches_the_warp_and_map_blocks() {
     check(shaders::WARP_COMP_RGBA8, "WarpPush", warp.clone());
     check(shaders::WARP_RASTER_FRAG, "WarpPush", warp.clone());
     check(shaders::INVERSE_MAP_COMP, "MapPush", map.clone());
-    check(shaders::UPSAMPLE_MAP_COMP, "MapPush", map);
+    check(shaders::UPSAMPLE_MAP_COMP, "MapPush", map.clone());
+    // The per-model modules the passes build from hold the same blocks.
+    for spirv in shaders::WARP_COMP_BY_MODEL
+        .iter()
+        .chain(&shaders::WARP_COMP_RGBA8_BY_MODEL)
+        .chain(&shaders::WARP_COMP_FORWARD_BY_MODEL)
+        .chain(&shaders::WARP_COMP_RGBA8_FORWARD_BY_MODEL)
+        .chain(&shaders::WARP_COMP_R32UI_BY_MODEL)
+        .chain(&shaders::WARP_COMP_R32F_BY_MODEL)
+    {
+        check(spirv, "WarpPush", warp.clone());
+    }
+    for spirv in shaders::INVERSE_MAP_COMP_BY_MODEL
+        .iter()
+        .chain(&shaders::UPSAMPLE_MAP_COMP_BY_MODEL)
+    {
+        check(spirv, "MapPush", map.clone());
+    }
     assert!(
         std::mem::size_of::<WarpPush>() <= 128,
         "past the guaranteed push-constant size"
@@ -510,4 +527,24 @@ fn a_specialization_constant_set_twice_keeps_one_entry() {
         c.entries(),
         &[(spec::DOMAIN_TABLE.id, 0), (spec::NEWTON_ITERATIONS.id, 3)]
     );
+}
+
+/// A per-model module holds its own model's code and no other's (function names survive in
+/// the SPIR-V's debug names): a standard camera's warp compiles no ray model at all.
+#[test]
+fn each_per_model_module_holds_its_model_alone() {
+    use crate::model::ModelKind;
+    let names = |spirv: &[u8], f: &str| spirv.windows(f.len()).any(|w| w == f.as_bytes());
+    let standard = shaders::WARP_COMP_RGBA8_BY_MODEL[ModelKind::Standard.gpu_id() as usize];
+    let ds = shaders::WARP_COMP_RGBA8_BY_MODEL[ModelKind::DoubleSphere.gpu_id() as usize];
+    for f in ["vkl_ds_project", "vkl_omni_project", "vkl_ocam_unproject"] {
+        assert!(!names(standard, f), "the standard model's module holds {f}");
+        assert!(
+            names(shaders::WARP_COMP_RGBA8, f),
+            "the all-models module lacks {f}"
+        );
+    }
+    assert!(names(ds, "vkl_ds_project") && names(ds, "vkl_ds_unproject"));
+    assert!(!names(ds, "vkl_omni_project") && !names(ds, "vkl_tp_unproject"));
+    assert!(standard.len() < shaders::WARP_COMP_RGBA8.len() * 2 / 3);
 }

@@ -17,6 +17,8 @@
 // vklens:variant forward_f64 VKL_F64,VKL_POINTS_FORWARD
 // vklens:variant inverse VKL_POINTS_INVERSE
 // vklens:variant inverse_f64 VKL_F64,VKL_POINTS_INVERSE
+// Each variant also per model (VKL_ONLY_MODEL): a camera's pipeline compiles its model alone.
+// vklens:per-model
 
 layout(local_size_x = 64) in;
 

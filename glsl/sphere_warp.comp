@@ -15,6 +15,8 @@
 #extension GL_GOOGLE_include_directive : require
 // vklens:variant equirect VKL_EQUIRECT
 // vklens:variant rgba8 VKL_RGBA8_TARGET
+// Each variant also per model (VKL_ONLY_MODEL): a camera's pipeline compiles its model alone.
+// vklens:per-model
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

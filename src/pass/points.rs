@@ -115,12 +115,14 @@ impl PointsPass {
             .u32(spec::FIXED_POINT_ITERATIONS, iterations);
         // The module holding this mode's half of glsl/points.comp (which says why).
         let forward = matches!(mode, PointsMode::Distort | PointsMode::Project);
-        let spirv = match (precision, forward) {
-            (Precision::F32, true) => shaders::POINTS_COMP_FORWARD,
-            (Precision::F64, true) => shaders::POINTS_COMP_FORWARD_F64,
-            (Precision::F32, false) => shaders::POINTS_COMP_INVERSE,
-            (Precision::F64, false) => shaders::POINTS_COMP_INVERSE_F64,
+        // ... and of the camera's model alone.
+        let by_model = match (precision, forward) {
+            (Precision::F32, true) => &shaders::POINTS_COMP_FORWARD_BY_MODEL,
+            (Precision::F64, true) => &shaders::POINTS_COMP_FORWARD_F64_BY_MODEL,
+            (Precision::F32, false) => &shaders::POINTS_COMP_INVERSE_BY_MODEL,
+            (Precision::F64, false) => &shaders::POINTS_COMP_INVERSE_F64_BY_MODEL,
         };
+        let spirv = by_model[camera.model().gpu_id() as usize];
         let pipeline = ComputePipeline::new(
             gpu,
             spirv,

@@ -225,12 +225,14 @@ impl SphereWarpPass {
         let constants = CameraParams::spec_constants(camera.terms())
             .bool(spec::CHROMATIC, options.chromatic.is_some())
             .bool(spec::WRITE_MASK, options.write_mask);
-        let spirv = match (equirect, eight_bit) {
-            (true, false) => shaders::SPHERE_WARP_COMP_EQUIRECT,
-            (false, false) => shaders::SPHERE_WARP_COMP,
-            (false, true) => shaders::SPHERE_WARP_COMP_RGBA8,
+        // The module of the camera's model alone.
+        let by_model = match (equirect, eight_bit) {
+            (true, false) => &shaders::SPHERE_WARP_COMP_EQUIRECT_BY_MODEL,
+            (false, false) => &shaders::SPHERE_WARP_COMP_BY_MODEL,
+            (false, true) => &shaders::SPHERE_WARP_COMP_RGBA8_BY_MODEL,
             (true, true) => return Err(Error::internal("the panorama warp writes RGBA32F only")),
         };
+        let spirv = by_model[camera.model().gpu_id() as usize];
         let pipeline = ComputePipeline::new(
             gpu,
             spirv,

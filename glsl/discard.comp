@@ -45,6 +45,8 @@
 // vklens:variant indices VKL_DISCARD_INDICES
 // vklens:variant global VKL_GLOBAL_SHUTTER
 // vklens:variant bounded VKL_RS_BOUNDED_ONLY
+// Each variant also per model (VKL_ONLY_MODEL): a camera's pipeline compiles its model alone.
+// vklens:per-model
 
 layout(local_size_x = 64) in;
 

@@ -26,6 +26,8 @@
 // vklens:variant plain VKL_PLAIN
 // The geometry-shader path of a frame every line sees from one pose: no readout solve.
 // vklens:variant global VKL_GLOBAL_SHUTTER
+// Each variant also per model (VKL_ONLY_MODEL): a camera's pipeline compiles its model alone.
+// vklens:per-model
 #ifdef VKL_PULLED_FLOW
 #define VKL_PULLED
 #endif

@@ -90,9 +90,11 @@ impl DiscardPass {
     /// the frame's own; the mesh's buffers are written by [`GeometryPass::bind_mesh`]).
     /// `rolling`: frames may move during a rolling shutter's readout, so the per-vertex stage
     /// carries the readout solve (glsl/discard.comp says why the modules differ).
+    /// Each stage's module is `model`'s alone (`ModelKind::gpu_id`).
     pub(super) fn new(
         gpu: &Gpu,
         vertex: SpecConstants,
+        model: usize,
         rolling: bool,
         frames: usize,
     ) -> Result<Self> {
@@ -105,10 +107,10 @@ impl DiscardPass {
             ComputePipeline::new(
                 gpu,
                 match (stage, rolling) {
-                    (0, true) => shaders::DISCARD_COMP_BOUNDED,
-                    (0, false) => shaders::DISCARD_COMP_GLOBAL,
-                    (3, _) => shaders::DISCARD_COMP,
-                    _ => shaders::DISCARD_COMP_INDICES,
+                    (0, true) => shaders::DISCARD_COMP_BOUNDED_BY_MODEL[model],
+                    (0, false) => shaders::DISCARD_COMP_GLOBAL_BY_MODEL[model],
+                    (3, _) => shaders::DISCARD_COMP_BY_MODEL[model],
+                    _ => shaders::DISCARD_COMP_INDICES_BY_MODEL[model],
                 },
                 &bindings,
                 std::mem::size_of::<DiscardPush>() as u32,

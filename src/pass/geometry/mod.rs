@@ -269,16 +269,18 @@ impl GeometryPass {
         // The pulled draw of a moving rolling shutter reads each vertex's solved readout time
         // from the motion binding, flow or not.
         let flow = desc.outputs.flow || desc.readout.is_some();
+        // The modules of the camera's model alone (the one its `MODEL` constant names).
+        let model = cam.model().gpu_id() as usize;
         let mut stages = vec![Stage {
             stage: vk::ShaderStageFlags::VERTEX,
             spirv: match (geometry_stage, pulled, flow) {
-                (true, _, _) if desc.readout.is_some() => shaders::GEOMETRY_VERT,
-                (true, _, _) => shaders::GEOMETRY_VERT_GLOBAL,
-                (_, true, true) => shaders::GEOMETRY_VERT_PULLED_FLOW,
-                (_, true, false) => shaders::GEOMETRY_VERT_PULLED,
-                _ if desc.readout.is_none() => shaders::GEOMETRY_VERT_PLAIN,
-                _ => shaders::GEOMETRY_VERT_PINHOLE,
-            },
+                (true, _, _) if desc.readout.is_some() => &shaders::GEOMETRY_VERT_BY_MODEL,
+                (true, _, _) => &shaders::GEOMETRY_VERT_GLOBAL_BY_MODEL,
+                (_, true, true) => &shaders::GEOMETRY_VERT_PULLED_FLOW_BY_MODEL,
+                (_, true, false) => &shaders::GEOMETRY_VERT_PULLED_BY_MODEL,
+                _ if desc.readout.is_none() => &shaders::GEOMETRY_VERT_PLAIN_BY_MODEL,
+                _ => &shaders::GEOMETRY_VERT_PINHOLE_BY_MODEL,
+            }[model],
             constants: vertex_constants.clone(),
         }];
         if geometry_stage {
@@ -316,6 +318,7 @@ impl GeometryPass {
             Some(DiscardPass::new(
                 gpu,
                 constants,
+                model,
                 desc.readout.is_some(),
                 frames,
             )?)

@@ -11,8 +11,9 @@
 //! - `vklens render` of the rolling-shutter example scene and of its global twin;
 //! - Python: `import vklens` to a new `Warper`'s first 1080p frame.
 //!
-//! Then, in this process, the creation of each warp pipeline for each camera model on a new
-//! device (no pipeline of it built before): what each model's shader costs the driver.
+//! Then, in this process, the creation of each warp pipeline and of the vertex path's (still,
+//! and through a moving rolling shutter) for each camera model on a new device (no pipeline
+//! of it built before): what each model's shaders cost the driver.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -21,6 +22,9 @@ use std::time::Instant;
 use serde_json::{json, Value};
 use vklens::host::Context;
 use vklens::model::samples::sample_cameras;
+use vklens::pass::geometry::{
+    ColorFormat, GeometryDesc, GeometryPass, Outputs, Projection, DEFAULT_DELTA,
+};
 use vklens::pass::warp::{Coordinates, PixelFormat, WarpDesc, WarpPass};
 use vklens::{Error, Result};
 
@@ -292,8 +296,9 @@ fn command_rows(
     Ok(rows)
 }
 
-/// Milliseconds to build each warp pipeline (distort and undistort, 8-bit) for each model's
-/// sample camera, on a new device per model so that no pipeline of it was built before.
+/// Milliseconds to build each warp pipeline (distort and undistort, 8-bit) and the vertex
+/// path's (still and rolling shutter) for each model's sample camera, on a new device per
+/// model so that no pipeline of it was built before.
 fn pipeline_rows(progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
     let mut rows = Vec::new();
     let mut seen = Vec::new();
@@ -329,6 +334,29 @@ fn pipeline_rows(progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> {
             rows.push(json!({
                 "kind": "pipeline", "what": format!("warp, {direction}"),
                 "model": kind.name(), "sample": name, "ms": ms,
+            }));
+        }
+        // The vertex path (Alg. 1 with the compute discard), a still frame and a moving
+        // rolling shutter's: the vertex shader and the discard's stages.
+        for readout in [None, Some(vklens::rolling_shutter::Readout::TopToBottom)] {
+            let mut desc = GeometryDesc::new(
+                camera.clone(),
+                Projection::Lens {
+                    delta: DEFAULT_DELTA,
+                },
+                Outputs::color_only(Some(ColorFormat::Rgba8)),
+            );
+            desc.readout = readout;
+            let start = Instant::now();
+            let pass = GeometryPass::new(ctx.gpu(), desc)?;
+            let ms = start.elapsed().as_secs_f64() * 1e3;
+            drop(pass);
+            let what = match readout {
+                None => "vertex path (Alg. 1), still",
+                Some(_) => "vertex path (Alg. 1), rolling shutter",
+            };
+            rows.push(json!({
+                "kind": "pipeline", "what": what, "model": kind.name(), "sample": name, "ms": ms,
             }));
         }
     }

@@ -6,7 +6,9 @@ use glam::{DMat2, DMat3, DVec2, DVec3};
 use super::domain::ValidDomain;
 use super::fisheye::Fisheye;
 use super::lens::{Lens, ModelKind};
-use super::opencv::*;
+use super::opencv::{
+    fixed_point, heikkila, locally_invertible, Intrinsics, OpenCvDistortion, Terms,
+};
 use super::solve::solve_increasing;
 use super::{check_finite, check_size, CameraModel, InverseMethod, ModelError, ABSURD_MAGNITUDE};
 

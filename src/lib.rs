@@ -68,6 +68,15 @@ pub use io::writers::Format as CameraFormat;
 pub use model::new_camera::{fisheye_new_camera, optimal_new_camera, Roi};
 pub use model::stereo::{stereo_rectify, PairRotation, StereoOptions, StereoRectification};
 pub use model::{Camera, Intrinsics, InverseMethod};
+/// The types [`Camera`]'s own methods name, public by design and kept stable with it: the
+/// lens it holds ([`Lens`], whose variants are the model types of [`model`]), which model
+/// that is ([`ModelKind`]), the standard model's coefficients and terms ([`OpenCvDistortion`],
+/// [`Terms`]), OpenCV's fisheye ([`Fisheye`]), a Brown headset lens ([`BrownRadial`]), the
+/// region where its inverse is right ([`ValidDomain`]), and the error its constructors return
+/// ([`ModelError`], which `?` turns into an [`Error`] of kind [`ErrorKind::Input`]).
+pub use model::{
+    BrownRadial, Fisheye, Lens, ModelError, ModelKind, OpenCvDistortion, Terms, ValidDomain,
+};
 pub use pass::warp::PixelFormat;
 
 /// The names of the camera models vklens knows, as camera files spell them (`"model": NAME`), in

@@ -21,6 +21,22 @@ use super::{check_finite, check_size, CameraModel, InverseMethod, ModelError, AB
 /// OpenCV's fisheye among them. Brown's radial model (the Durham radial-correction paper) is
 /// exactly the standard model with `k1 = c1, k2 = c2` in per-axis normalized coordinates, and
 /// the camera remembers that it came from one ([`Camera::brown`]).
+///
+/// Every type its methods name is exported beside it at the crate root, public by design:
+///
+/// ```
+/// use vklens::{Camera, Intrinsics, Lens, ModelError, ModelKind, OpenCvDistortion};
+/// let k = Intrinsics { fx: 400.0, fy: 400.0, cx: 399.5, cy: 299.5 };
+/// let d = OpenCvDistortion::from_coeffs(&[-0.5, 0.0, 0.0, 0.0, 0.0])?;
+/// let camera = Camera::new(800, 600, k, d)?;
+/// assert_eq!(camera.model(), ModelKind::Standard);
+/// assert!(matches!(camera.lens(), Lens::Standard { .. }));
+/// // Barrel distortion this strong folds: the domain bounds where the inverse is right.
+/// assert!(camera.domain().folds());
+/// let bad = Camera::new(0, 600, k, d);
+/// assert!(matches!(bad, Err(ModelError::BadSize { .. })));
+/// # Ok::<(), vklens::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Camera {
     /// Image width in pixels.

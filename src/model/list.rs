@@ -4,7 +4,7 @@
 // This file is included twice: by `src/model/lens.rs`, whose `camera_models!` builds
 // `ModelKind`, `Lens` and their dispatch, the names and the planner's costs; and by `build.rs`,
 // whose `camera_models!` writes the shaders' model ids, includes and dispatch. So it holds this
-// one invocation and nothing else. `docs/how-it-works.md#adding-a-model` says how to add a row.
+// one invocation and nothing else. `docs/how-it-works.md#adding-a-camera-model` says how to add a row.
 //
 // Per row:
 //   Variant = id        ModelKind::Variant, Lens::Variant; the shaders' VKL_MODEL (stable:

@@ -67,7 +67,6 @@ pub use io::catalog::{Found, Listing, LoadOptions};
 pub use io::writers::Format as CameraFormat;
 pub use model::new_camera::{fisheye_new_camera, optimal_new_camera, Roi};
 pub use model::stereo::{stereo_rectify, PairRotation, StereoOptions, StereoRectification};
-pub use model::{Camera, Intrinsics, InverseMethod};
 /// The types [`Camera`]'s own methods name, public by design and kept stable with it: the
 /// lens it holds ([`Lens`], whose variants are the model types of [`model`]), which model
 /// that is ([`ModelKind`]), the standard model's coefficients and terms ([`OpenCvDistortion`],
@@ -77,6 +76,7 @@ pub use model::{Camera, Intrinsics, InverseMethod};
 pub use model::{
     BrownRadial, Fisheye, Lens, ModelError, ModelKind, OpenCvDistortion, Terms, ValidDomain,
 };
+pub use model::{Camera, Intrinsics, InverseMethod};
 pub use pass::warp::PixelFormat;
 
 /// The names of the camera models vklens knows, as camera files spell them (`"model": NAME`), in

@@ -4,10 +4,12 @@
 
 use std::path::Path;
 
+use super::scene_file::{Antialias, Effects, OutputSpec};
+use super::shutter::Shutter;
 use super::{explain, file_plan, LensSetting, Optics, Plan, Route, SceneFile};
-use crate::lens::image_model::{channel_models, ImageModel, ModelOptions};
+use crate::lens::image_model::{self, channel_models, ImageModel, ModelOptions};
 use crate::lens::{frame_scene, Prescription, LAMBDA_D};
-use crate::scene::Scene;
+use crate::scene::{Pose, Scene};
 use crate::{Error, Result};
 
 /// A scene file's lens optics, borrowed.
@@ -169,4 +171,92 @@ pub(super) fn plan_lens(file: &SceneFile, scene: &Scene, spec: LensSpec) -> Resu
         (poses, shutter),
         (cells.max_angle_deg / px_deg, f64::NAN),
     ))
+}
+
+/// A lens prescription rendered as a caller names it (`vklens lens render`): a scene file
+/// leaves the lens samples and the quad-tree's threshold to the planner and its budget, a
+/// request states them, as Heidrich et al.'s model takes them ([`ModelOptions`]).
+#[derive(Debug, Clone)]
+pub struct LensRequest {
+    pub prescription: Prescription,
+    /// The film's pixels and their pitch (mm; square pixels).
+    pub pixels: (u32, u32),
+    pub pitch_mm: f64,
+    /// The aperture (`None`: the prescription's stop wide open).
+    pub f_number: Option<f64>,
+    /// The image-based model's lens samples, grid, quad-tree and vignetting.
+    pub options: ModelOptions,
+    /// R, G and B traced at their own wavelengths (the C, e and F lines).
+    pub chromatic: bool,
+    /// Colour as float (EXR) instead of 8-bit.
+    pub exr: bool,
+}
+
+impl Plan {
+    /// The image-based model's plan for `request`, with the lens focused and the camera
+    /// placed as [`frame_scene`] did it (`optics`, `pose`): the models traced (the slow part),
+    /// the steps that explain them, one frame at `pose`.
+    pub fn from_lens_request(
+        request: &LensRequest,
+        optics: &image_model::Optics,
+        pose: Pose,
+    ) -> Result<Plan> {
+        let options = &request.options;
+        let models = channel_models(optics, options, request.chromatic)?;
+        let cells = Cells::of(&models);
+        let efl = crate::lens::analyse(&request.prescription, LAMBDA_D)
+            .efl
+            .unwrap_or(1.0);
+        let px_deg = (request.pitch_mm / efl).atan().to_degrees();
+        let effects = Effects {
+            distortion: true,
+            chromatic_aberration: request.chromatic,
+            chromatic_scales: [1.0; 3],
+            vignetting: options.vignetting,
+            depth_of_field: options.samples > 1,
+            lens_samples: options.samples,
+        };
+        let budget_px = options.max_angle_deg / px_deg;
+        let steps = explain::lens_steps(
+            &effects,
+            options.samples,
+            options.max_angle_deg,
+            budget_px,
+            &cells,
+        );
+        Ok(Plan {
+            route: Route::LensModel {
+                samples: options.samples,
+                chromatic: request.chromatic,
+                vignetting: options.vignetting,
+                max_angle_deg: options.max_angle_deg,
+            },
+            steps,
+            optics: Optics::Lens(LensSetting {
+                prescription: request.prescription.clone(),
+                pitch_mm: request.pitch_mm,
+                pixels: request.pixels,
+                focus_m: optics.focus_m,
+                f_number: request.f_number,
+                models,
+            }),
+            expected_error_px: cells.max_angle_deg / px_deg,
+            budget_px,
+            poses: vec![pose],
+            end_poses: Vec::new(),
+            previous_pose: None,
+            delta: crate::pass::geometry::DEFAULT_DELTA,
+            density: 1.0,
+            outputs: OutputSpec {
+                color: true,
+                exr: request.exr,
+                ..OutputSpec::default()
+            },
+            background: [0.0; 4],
+            antialias: Antialias::default(),
+            shutter: Shutter::Global,
+            bands: None,
+            estimated_ms: f64::NAN,
+        })
+    }
 }

@@ -1454,3 +1454,64 @@ fn a_lens_no_pinhole_holds_takes_its_bands_through_the_cube_map() {
     assert_ne!(out[0].pixels, out[1].pixels);
     assert_no_validation_messages(ctx);
 }
+
+#[test]
+fn a_lens_request_renders_through_the_recorder_the_film_the_lens_pass_alone_renders() {
+    // `vklens lens render` goes through the planner: its plan must record the image-based
+    // model alone and give, pixel for pixel, what the pass renders when driven directly.
+    use crate::lens::image_model::{channel_models, ModelOptions};
+    use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
+    use crate::plan::{LensRequest, Plan};
+    let ctx = validated_context();
+    let scene = crate::scene::builtin::boxes();
+    let prescription = crate::testing::shipped_lens("biconvex.50mm.dat");
+    let (pixels, pitch_mm) = ((120, 80), 0.3);
+    let (optics, pose) =
+        crate::lens::frame_scene(&prescription, pixels, pitch_mm, None, None, None, &scene)
+            .unwrap();
+    let options = ModelOptions {
+        samples: 4,
+        ..ModelOptions::default()
+    };
+    let request = LensRequest {
+        prescription,
+        pixels,
+        pitch_mm,
+        f_number: None,
+        options,
+        chromatic: true,
+        exr: true,
+    };
+    let p = Plan::from_lens_request(&request, &optics, pose).unwrap();
+    assert!(matches!(
+        p.route,
+        Route::LensModel {
+            samples: 4,
+            chromatic: true,
+            vignetting: true,
+            ..
+        }
+    ));
+    let mut film = None;
+    let recorded = execute(ctx, &p, &scene, [0], &mut |f| {
+        film = f.rendered.color;
+        Ok(())
+    })
+    .unwrap();
+    assert_eq!(recorded.pipelines.len(), 1);
+    assert!(recorded.has(PassKind::LensModel));
+    let film = film.expect("the plan's colour");
+    let models = channel_models(&optics, &options, true).unwrap();
+    let mut renderer = LensRenderer::new(ctx.gpu(), &models, LensRenderOptions::default()).unwrap();
+    let mesh = crate::testing::upload_mesh(ctx, &scene.mesh, scene.texture.as_ref());
+    let direct = renderer.render(ctx, &mesh, &pose).unwrap();
+    let crate::imaging::Pixels::Rgba32F(planned) = &film.pixels else {
+        panic!("an EXR request's film is float: {:?}", film.bit_depth);
+    };
+    assert_eq!(planned.len(), direct.pixels.len());
+    assert!(direct.pixels.iter().any(|p| p[0] > 0.05), "a lit film");
+    for (a, b) in planned.iter().zip(&direct.pixels) {
+        assert_eq!(a[..3], b[..3]);
+    }
+    assert_no_validation_messages(ctx);
+}

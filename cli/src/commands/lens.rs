@@ -8,6 +8,7 @@ use serde_json::json;
 use super::{progress_done, progress_line, CliError};
 use vklens::imaging::{BitDepth, Pixels, Raster};
 use vklens::lens::{analyse, distortion_curve, fit_opencv, Prescription, LAMBDA_D};
+use vklens::plan::{LensRequest, Plan};
 
 #[derive(Subcommand, Debug)]
 pub enum LensCommand {
@@ -292,7 +293,7 @@ fn fit(args: FitArgs) -> Result<(), CliError> {
 }
 
 fn render(args: RenderArgs) -> Result<(), CliError> {
-    use vklens::lens::image_model::{channel_models, ModelOptions, RGB_WAVELENGTHS};
+    use vklens::lens::image_model::{ModelOptions, RGB_WAVELENGTHS};
     use vklens::lens::reference::{render_reference, Channel};
     use vklens::scene::{builtin, Pose};
 
@@ -358,7 +359,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
         args.pixels.1,
         optics.film.z_mm - lens.vertex_positions()[lens.surfaces.len() - 1]
     ));
-    let pixels = if args.reference {
+    let raster = if args.reference {
         let channels: Vec<Channel> = if args.chromatic {
             RGB_WAVELENGTHS
                 .iter()
@@ -379,65 +380,78 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             "reference: {} rays through the lens in {:.2} s",
             frame.rays, frame.seconds
         ));
-        frame.pixels
+        film_raster(args.pixels, &frame.pixels, ext == "exr")
     } else {
         progress_line("tracing the film grids through the lens samples");
-        let models = channel_models(&optics, &options, args.chromatic).map_err(lens_error)?;
-        let ctx = super::context()?;
-        let gpu_error = |e: vklens::Error| match e {
-            vklens::Error::Input(m) => CliError::input(m),
-            other => CliError::from(other),
+        let request = LensRequest {
+            prescription: lens.clone(),
+            pixels: args.pixels,
+            pitch_mm: pitch,
+            f_number: args.fstop,
+            options,
+            chromatic: args.chromatic,
+            exr: ext == "exr",
         };
-        let mut renderer = vklens::pass::lens_render::LensRenderer::new(
-            ctx.gpu(),
-            &models,
-            vklens::pass::lens_render::LensRenderOptions::default(),
-        )
-        .map_err(gpu_error)?;
-        let max_angle = models
-            .iter()
-            .map(|(m, _)| m.max_angle_deg())
-            .fold(0.0, f64::max);
-        progress_line(&format!(
-            "rendering {} perspective projections (largest angle error {max_angle:.4}°) on {}",
-            renderer.projection_count(),
-            ctx.gpu().device_name()
-        ));
-        let mesh = vklens::host::geometry::upload_mesh(&ctx, &scene.mesh, scene.texture.as_ref())
-            .map_err(gpu_error)?;
-        let frame = renderer.render(&ctx, &mesh, &pose).map_err(gpu_error)?;
-        super::finish(&ctx)?;
-        progress_done(&format!(
-            "{} projections in {:.1} ms",
-            frame.projections, frame.frame_ms
-        ));
-        frame.pixels
-    };
-    let (w, h) = args.pixels;
-    let raster = if ext == "exr" {
-        Raster {
-            width: w,
-            height: h,
-            pixels: Pixels::Rgba32F(pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect()),
-            bit_depth: BitDepth::F32,
-        }
-    } else {
-        Raster {
-            width: w,
-            height: h,
-            pixels: Pixels::Rgba8(
-                pixels
-                    .iter()
-                    .map(|p| {
-                        let c = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-                        [c(p[0]), c(p[1]), c(p[2]), 255]
-                    })
-                    .collect(),
-            ),
-            bit_depth: BitDepth::U8,
-        }
+        let plan =
+            Plan::from_lens_request(&request, &optics, pose).map_err(|e| lens_error(e.into()))?;
+        render_planned(&plan, &scene)?
     };
     vklens::imaging::file::save(&raster, &args.output)?;
     eprintln!("wrote {}", args.output.display());
     Ok(())
+}
+
+/// The image-based model's plan rendered once through the planner's recorder, as a scene
+/// file's lens is: the film's colour, its accumulated weight kept (vignetting).
+fn render_planned(plan: &Plan, scene: &vklens::scene::Scene) -> Result<Raster, CliError> {
+    let ctx = super::context()?;
+    let gpu_error = |e: vklens::Error| match e {
+        vklens::Error::Input(m) => CliError::input(m),
+        other => CliError::from(other),
+    };
+    let (projections, max_angle) = plan.lens().map_or((0, 0.0), |l| {
+        l.models.iter().fold((0, 0.0f64), |(n, a), (m, _)| {
+            (n + m.projection_count(), a.max(m.max_angle_deg()))
+        })
+    });
+    progress_line(&format!(
+        "rendering {projections} perspective projections (largest angle error {max_angle:.4}°) on {}",
+        ctx.gpu().device_name()
+    ));
+    let mut rendered = None;
+    vklens::host::plan::execute_untimed(&ctx, plan, scene, [0], &mut |frame| {
+        rendered = Some((frame.rendered, frame.ms));
+        Ok(())
+    })
+    .map_err(gpu_error)?;
+    super::finish(&ctx)?;
+    let (colour, ms) = rendered
+        .and_then(|(r, ms)| Some((r.color?, ms)))
+        .ok_or_else(|| CliError::from(vklens::Error::internal("the lens plan rendered no film")))?;
+    progress_done(&format!("{projections} projections in {ms:.1} ms"));
+    Ok(colour)
+}
+
+/// The reference ray tracer's film as an image: float for EXR, else 8-bit; opaque.
+fn film_raster((width, height): (u32, u32), pixels: &[[f32; 4]], float: bool) -> Raster {
+    let opaque = pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]);
+    if float {
+        Raster {
+            width,
+            height,
+            pixels: Pixels::Rgba32F(opaque.collect()),
+            bit_depth: BitDepth::F32,
+        }
+    } else {
+        Raster {
+            width,
+            height,
+            pixels: Pixels::Rgba8(
+                opaque
+                    .map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+                    .collect(),
+            ),
+            bit_depth: BitDepth::U8,
+        }
+    }
 }

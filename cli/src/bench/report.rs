@@ -55,6 +55,9 @@ pub const STARTUP_SMALL_MS: f64 = 120.0;
 pub const STARTUP_WARPER_MS: f64 = 500.0;
 /// `vklens distort` / `undistort` of a 1080p PNG against the Python + OpenCV script.
 pub const STARTUP_X_OPENCV: f64 = 2.0;
+/// A pipeline's build time against the previous table's for the same pipeline and model (the
+/// device's last `docs/benchmarks.md` section): at most this many times it.
+pub const PIPELINE_X_PREVIOUS: f64 = 1.5;
 
 /// Whether a goal held on a run's rows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -397,6 +400,29 @@ fn startup_goals(rows: &[Value]) -> Vec<Goal> {
         })
         .collect();
     let ms_text = |x: f64| format!("{x:.0} ms");
+    let pipeline_goal = format!(
+        "no pipeline builds more than {:.0} % slower than in the previous table",
+        (PIPELINE_X_PREVIOUS - 1.0) * 100.0
+    );
+    let growth: Vec<(String, f64)> = of_kind(rows, "pipeline")
+        .filter_map(|r| {
+            let before = super::startup::previous_ms(rows, r)?;
+            let now = r["ms"].as_f64().unwrap_or(f64::NAN);
+            Some((
+                format!(
+                    "{}, {}",
+                    r["what"].as_str().unwrap_or("?"),
+                    r["model"].as_str().unwrap_or("?")
+                ),
+                now / before,
+            ))
+        })
+        .collect();
+    let pipelines = if growth.is_empty() {
+        not_measured(pipeline_goal, "no previous table of this device to compare with")
+    } else {
+        bound(pipeline_goal, &growth, PIPELINE_X_PREVIOUS, false, ratio)
+    };
     vec![
         bound(
             format!("`vklens undistort` of a 64×36 image ≤ {STARTUP_SMALL_MS:.0} ms, cold"),
@@ -422,6 +448,7 @@ fn startup_goals(rows: &[Value]) -> Vec<Goal> {
             true,
             ratio,
         ),
+        pipelines,
     ]
 }
 
@@ -982,5 +1009,68 @@ mod tests {
         let appended = write_section("# B\n", "new", &[]);
         assert!(appended.starts_with("# B\n\n<!-- bench all: new -->\n## new\n"));
         assert!(appended.ends_with("<!-- end bench all: new -->\n"));
+    }
+}
+
+#[cfg(test)]
+mod pipeline_guard_tests {
+    use super::*;
+    use serde_json::json;
+
+    fn pipeline(what: &str, model: &str, ms: f64) -> Value {
+        json!({"bench": "startup", "kind": "pipeline", "what": what, "model": model, "ms": ms,
+               "device": "dev", "driver": "drv", "date": "2026-12-07"})
+    }
+
+    fn guard(rows: &[Value]) -> Goal {
+        startup_goals(rows)
+            .into_iter()
+            .find(|g| g.goal.starts_with("no pipeline builds"))
+            .expect("the pipeline guard")
+    }
+
+    #[test]
+    fn the_guard_reads_the_previous_section_back_and_flags_a_build_half_again_slower() {
+        // The section a first run writes, read back as the previous table by the next run.
+        let first = vec![
+            pipeline("warp, distort", "opencv", 40.0),
+            pipeline("warp, undistort", "opencv", 12.0),
+        ];
+        assert_eq!(guard(&first).verdict, Verdict::NotMeasured, "no previous table");
+        let section = subsection("startup", &first).unwrap().unwrap();
+        let file = write_section("# Benchmarks\n", "dev", &[("startup", section)]);
+        let previous = super::super::startup::previous_rows(&file, "dev");
+        assert_eq!(previous.len(), 2, "{file}");
+        assert!(super::super::startup::previous_rows(&file, "another device").is_empty());
+
+        // Distort builds 10 % slower (noise), undistort 60 % slower: flagged, by name.
+        let mut second = vec![
+            pipeline("warp, distort", "opencv", 44.0),
+            pipeline("warp, undistort", "opencv", 19.2),
+            // A pipeline the previous table lacks is not judged.
+            pipeline("warp, distort", "ucm", 400.0),
+        ];
+        second.extend(previous);
+        let g = guard(&second);
+        assert_eq!(g.verdict, Verdict::NotMet, "{g:?}");
+        assert!(g.measured.contains("not at warp, undistort, opencv"), "{g:?}");
+        assert!(!g.measured.contains("ucm"), "{g:?}");
+        // The table shows the previous figure and the ratio beside each pipeline.
+        let table = super::super::startup::table(&second);
+        assert!(table.contains("| warp, undistort | opencv | 19.2 | 12.0 | 1.60 |"), "{table}");
+        assert!(table.contains("| warp, distort | ucm | 400.0 | — | — |"), "{table}");
+
+        // Its own run's table read back: the ratios are 1.
+        let section = subsection("startup", &second).unwrap().unwrap();
+        let file = write_section(&file, "dev", &[("startup", section)]);
+        let again = super::super::startup::previous_rows(&file, "dev");
+        assert_eq!(again.len(), 3);
+        let mut third = second
+            .iter()
+            .filter(|r| r["kind"] == "pipeline")
+            .cloned()
+            .collect::<Vec<_>>();
+        third.extend(again);
+        assert_eq!(guard(&third).verdict, Verdict::Met);
     }
 }

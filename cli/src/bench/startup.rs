@@ -383,14 +383,82 @@ pub fn table(rows: &[Value]) -> String {
             cell(&r["x_faster"], 2),
         ));
     }
-    out.push_str("\n| pipeline | model | ms to build (new device) |\n|---|---|---|\n");
+    out.push_str(&format!(
+        "\n| pipeline | model | {PIPELINE_MS} | previous table's ms | × previous |\n|---|---|---|---|---|\n"
+    ));
     for r in rows.iter().filter(|r| r["kind"] == "pipeline") {
+        let before = previous_ms(rows, r);
+        let grown = match (r["ms"].as_f64(), before) {
+            (Some(now), Some(then)) if then > 0.0 => Value::from(now / then),
+            _ => Value::Null,
+        };
         out.push_str(&format!(
-            "| {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} |\n",
             r["what"].as_str().unwrap_or("?"),
             r["model"].as_str().unwrap_or("?"),
             cell(&r["ms"], 1),
+            cell(&before.map_or(Value::Null, Value::from), 1),
+            cell(&grown, 2),
         ));
     }
     out
+}
+
+/// The column of the pipeline table that holds each pipeline's build time.
+const PIPELINE_MS: &str = "ms to build (new device)";
+
+/// The build time the previous table gave the pipeline of row `r` (a `previous` row of the
+/// same pipeline and model), if it had one.
+pub fn previous_ms(rows: &[Value], r: &Value) -> Option<f64> {
+    rows.iter()
+        .find(|p| p["kind"] == "previous" && p["what"] == r["what"] && p["model"] == r["model"])
+        .and_then(|p| p["ms"].as_f64())
+}
+
+/// The pipeline build times of the previous `bench startup` table of `device` in `markdown`
+/// (a `docs/benchmarks.md` that `bench all` wrote), as rows of kind `previous`: what the
+/// guard against slower pipeline builds compares a run with. None where the file has no such
+/// table for the device.
+pub fn previous_rows(markdown: &str, device: &str) -> Vec<Value> {
+    let (begin, end) = super::report::markers(device);
+    let Some(section) = markdown
+        .split_once(begin.as_str())
+        .and_then(|(_, rest)| rest.split_once(end.as_str()))
+        .map(|(inner, _)| inner)
+    else {
+        return Vec::new();
+    };
+    let Some((_, startup)) = section.split_once("### `vklens bench startup`") else {
+        return Vec::new();
+    };
+    let startup = startup.split("\n### ").next().unwrap_or("");
+    let cells = |line: &str| -> Vec<String> {
+        line.trim()
+            .trim_matches('|')
+            .split('|')
+            .map(|c| c.trim().to_string())
+            .collect()
+    };
+    let mut lines = startup.lines().skip_while(|l| !l.starts_with("| pipeline |"));
+    let Some(header) = lines.next().map(cells) else {
+        return Vec::new();
+    };
+    let (Some(what), Some(model), Some(ms)) = (
+        header.iter().position(|c| c == "pipeline"),
+        header.iter().position(|c| c == "model"),
+        header.iter().position(|c| c == PIPELINE_MS),
+    ) else {
+        return Vec::new();
+    };
+    lines
+        .skip(1)
+        .take_while(|l| l.starts_with('|'))
+        .map(cells)
+        .filter_map(|c| {
+            let ms: f64 = c.get(ms)?.parse().ok()?;
+            Some(json!({
+                "kind": "previous", "what": c.get(what)?, "model": c.get(model)?, "ms": ms,
+            }))
+        })
+        .collect()
 }

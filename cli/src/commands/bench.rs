@@ -638,7 +638,17 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
             }
             "startup" => match &scenes {
                 Some(dir) => {
-                    crate::bench::startup::run(&args.python, dir, &mut |s| super::progress_line(s))?
+                    let mut r = crate::bench::startup::run(&args.python, dir, &mut |s| {
+                        super::progress_line(s)
+                    })?;
+                    // The guard against slower pipeline builds compares with the table this
+                    // run replaces (none on a first run, or where --json writes no file).
+                    if !args.json {
+                        if let Ok(previous) = std::fs::read_to_string(&args.out) {
+                            r.extend(crate::bench::startup::previous_rows(&previous, &device));
+                        }
+                    }
+                    r
                 }
                 None => Vec::new(),
             },

@@ -40,9 +40,10 @@ pub enum Error {
     /// `message` never names a flag.
     #[error("{message} (`{argument}`)")]
     Argument {
-        /// The argument, as the library's options name it: `method`, `source_camera`,
-        /// `chromatic`, `channel_cameras`, `size`, `camera_name`, `camera_index`, `format`,
-        /// `density`, `path`, `fstop`.
+        /// The argument, as the library's options and a render request's fields name it:
+        /// `method`, `source_camera`, `chromatic`, `channel_cameras`, `size`, `camera_name`,
+        /// `camera_index`, `format`, `density`, `path`, `pose`, `fstop`, `rolling_shutter`,
+        /// `max_error_px`, `ids`, `flow`, `depth`, ….
         argument: &'static str,
         /// What is wrong with it.
         message: String,

@@ -171,14 +171,13 @@ impl<'a> FrameRunner<'a> {
         let lens = matches!(plan.route, Route::LensModel { .. });
         let antialias = plan.antialias.is_on() && o.color && !lens;
         let mesh = plan_mesh_at(plan, scene, first)?;
-        let texture = scene.texture.as_ref();
         let mut main_plan = plan.clone();
         if antialias {
             main_plan.outputs.color = false;
         }
         let data = main_plan.outputs;
         let main = if data.color || data.ids || data.flow || data.depth {
-            Some(PlanRecorder::build(gpu, &main_plan, &mesh, texture, 1)?)
+            Some(PlanRecorder::build(gpu, &main_plan, scene, &mesh, 1)?)
         } else {
             None
         };
@@ -216,7 +215,7 @@ impl<'a> FrameRunner<'a> {
                     }
                     _ => {}
                 }
-                Some(PlanRecorder::build(gpu, &p, &mesh, texture, 1)?)
+                Some(PlanRecorder::build(gpu, &p, scene, &mesh, 1)?)
             }
             _ => None,
         };
@@ -410,6 +409,10 @@ enum Output {
     Colour,
     /// The lens film (its alpha the accumulated weight).
     Film,
+    /// A 360° source's colour (RGBA32F, 8-bit unless the plan asks for float).
+    Environment,
+    /// Where a 360° source's pixels have a source.
+    Mask,
     Ids,
     Depth,
 }
@@ -423,6 +426,10 @@ fn route_images(recorder: &PlanRecorder) -> Vec<(Output, &crate::gpu::Image, Lef
     }
     if let Some(c) = recorder.cube_stage() {
         images.push((Output::Colour, &c.output, Left::ComputeGeneral));
+    }
+    if let Some(e) = recorder.environment_stage() {
+        images.push((Output::Environment, &e.output, Left::ComputeGeneral));
+        images.push((Output::Mask, &e.mask, Left::ComputeGeneral));
     }
     if let Some(st) = recorder.warp_stage() {
         if recorder.outputs().color {
@@ -505,6 +512,15 @@ impl PlanReadback {
                     };
                     out.color = Some(colour);
                 }
+                Output::Environment => {
+                    let colour = d.read_rgba()?;
+                    out.color = Some(if o.exr {
+                        colour
+                    } else {
+                        colour.to_rgba8_rounded()
+                    });
+                }
+                Output::Mask => out.mask = Some(d.read()?),
                 Output::Ids => out.ids = Some(d.read()?),
                 Output::Depth => out.depth = Some(d.read()?),
             }

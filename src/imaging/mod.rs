@@ -36,6 +36,22 @@ pub struct Raster {
 }
 
 impl Raster {
+    /// The image as 8-bit RGBA: each channel clamped to [0, 1], scaled by 255 and rounded
+    /// to the nearest (what a UNORM store would give, computed on the host).
+    pub fn to_rgba8_rounded(&self) -> Raster {
+        let byte = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+        Raster {
+            width: self.width,
+            height: self.height,
+            pixels: Pixels::Rgba8(
+                (0..self.len())
+                    .map(|i| self.rgba_f32(i).map(byte))
+                    .collect(),
+            ),
+            bit_depth: BitDepth::U8,
+        }
+    }
+
     /// Number of pixels.
     pub fn len(&self) -> usize {
         self.width as usize * self.height as usize
@@ -113,4 +129,7 @@ pub struct Rendered {
     pub flow: Option<Vec<[f32; 2]>>,
     /// Camera-frame z in metres; +inf where nothing was drawn.
     pub depth: Option<Vec<f32>>,
+    /// 255 where the pixel has a source, 0 where it was filled (outside the lens's valid
+    /// domain): a 360° source's sphere warp gives it.
+    pub mask: Option<Vec<u8>>,
 }

@@ -5,6 +5,7 @@
 pub mod camera_params;
 pub mod copy;
 pub mod cube_stage;
+pub mod environment;
 pub mod film;
 pub mod geometry;
 pub mod grid_demo;

@@ -65,6 +65,14 @@ impl Plan {
                 Route::LensModel { samples, .. } => {
                     format!("image-based lens model, {samples} lens sample(s)")
                 }
+                Route::Environment { chromatic } => format!(
+                    "360° source + sphere warp{}",
+                    if chromatic.is_some() {
+                        " (chromatic)"
+                    } else {
+                        ""
+                    }
+                ),
             }
         );
         out.push_str(&format!("  shutter: {}\n", p.shutter.explain(p.bands)));

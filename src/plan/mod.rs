@@ -90,6 +90,10 @@ pub enum Route {
         side: u32,
         chromatic: Option<[f64; 3]>,
     },
+    /// A scene that is a 360° image (a user's cube map or panorama,
+    /// [`crate::scene::Environment`]): the sphere warp sampling it along each output pixel's
+    /// ray, colour alone.
+    Environment { chromatic: Option<[f64; 3]> },
     /// Heidrich et al.'s image-based model through a lens prescription.
     LensModel {
         samples: u32,

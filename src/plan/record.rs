@@ -18,6 +18,7 @@ use crate::model::rolling_shutter::FrameMotion;
 use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::cube_stage::CubeStage;
+use crate::pass::environment::EnvironmentStage;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
     Projection,
@@ -26,7 +27,7 @@ use crate::pass::lens_render::{LensRenderOptions, LensRenderer};
 use crate::pass::sphere_warp::SphereWarpOptions;
 use crate::pass::warp::Coordinates;
 use crate::pass::warp_stage::{DataOutputs, WarpStage};
-use crate::scene::{Mesh, Pose, Scene};
+use crate::scene::{Environment, Mesh, Pose, Scene};
 
 /// A bug: a plan the planner cannot have made.
 fn internal(e: impl ToString) -> Error {
@@ -190,6 +191,8 @@ enum Stages {
     },
     /// [`Route::LensModel`]: Heidrich et al.'s image-based model.
     Lens(LensRenderer),
+    /// [`Route::Environment`]: the scene's 360° image and the sphere warp.
+    Environment(EnvironmentStage),
 }
 
 impl Stages {
@@ -198,7 +201,7 @@ impl Stages {
         match self {
             Stages::Geometry(g) => Some(g),
             Stages::Warp { data, .. } => data.as_ref(),
-            Stages::Cube { .. } | Stages::Lens(_) => None,
+            Stages::Cube { .. } | Stages::Lens(_) | Stages::Environment(_) => None,
         }
     }
 
@@ -206,7 +209,7 @@ impl Stages {
         match self {
             Stages::Geometry(g) => Some(g),
             Stages::Warp { data, .. } => data.as_mut(),
-            Stages::Cube { .. } | Stages::Lens(_) => None,
+            Stages::Cube { .. } | Stages::Lens(_) | Stages::Environment(_) => None,
         }
     }
 
@@ -391,6 +394,9 @@ impl Builder<'_> {
             }
             Route::Cube { side, chromatic } => self.cube(camera, *side, *chromatic)?,
             Route::LensModel { .. } => return Err(internal("the lens route has no camera")),
+            Route::Environment { .. } => {
+                return Err(internal("the environment route is built from its scene"))
+            }
         };
         if let Some((pass, _)) = stages.geometry() {
             self.pipelines.push(RecordedPipeline::geometry(pass));
@@ -449,6 +455,30 @@ impl Builder<'_> {
         }))
     }
 
+    /// The environment route's stage: the scene's 360° image uploaded, the sphere warp.
+    fn environment(
+        &mut self,
+        environment: &Environment,
+        chromatic: Option<[f64; 3]>,
+    ) -> Result<Stages> {
+        let camera = self
+            .plan
+            .camera()
+            .ok_or_else(|| internal("an environment plan without a camera"))?;
+        let options = SphereWarpOptions {
+            chromatic,
+            fill: self.plan.background,
+            write_mask: true,
+        };
+        let stage = EnvironmentStage::new(self.gpu, camera, environment, &options)?;
+        self.pipelines.push(RecordedPipeline::compute(
+            PassKind::SphereWarp,
+            stage.warp.pipeline(),
+        ));
+        self.names.push("sphere warp");
+        Ok(Stages::Environment(stage))
+    }
+
     /// The cube route's stage: six faces and the sphere warp, in bands where the camera moves
     /// during the readout.
     fn cube(&mut self, camera: &Camera, side: u32, chromatic: Option<[f64; 3]>) -> Result<Stages> {
@@ -498,7 +528,8 @@ impl Builder<'_> {
 pub struct PlanRecorder {
     /// The route's stages.
     stages: Stages,
-    mesh: MeshBuffers,
+    /// The scene's mesh (none where the scene is a 360° image).
+    mesh: Option<MeshBuffers>,
     poses: Vec<Pose>,
     /// One per pose: when the frame's last line is read ([`Plan::end_pose`]).
     end_poses: Vec<Pose>,
@@ -536,21 +567,16 @@ impl PlanRecorder {
                 "the recorder draws one sample per pixel: the scene's [render] supersample / jitter are averaged on the host by execute(); an engine anti-aliases its own way (MSAA, TAA)",
             ));
         }
-        Self::build(
-            gpu,
-            plan,
-            &plan_mesh_at(plan, scene, 0)?,
-            scene.texture.as_ref(),
-            frames,
-        )
+        Self::build(gpu, plan, scene, &plan_mesh_at(plan, scene, 0)?, frames)
     }
 
-    /// Builds the passes of `plan` (anti-aliasing ignored) drawing `mesh` as it is.
+    /// Builds the passes of `plan` (anti-aliasing ignored) for `scene`, drawing `mesh` (the
+    /// scene's, tessellated where the plan says so) as it is.
     pub(crate) fn build(
         gpu: &Gpu,
         plan: &Plan,
+        scene: &Scene,
         mesh: &Mesh,
-        texture: Option<&Raster>,
         frames: usize,
     ) -> Result<Self> {
         if !(1..=crate::pass::geometry::MAX_FRAMES_IN_FLIGHT).contains(&frames) {
@@ -571,7 +597,6 @@ impl PlanRecorder {
                 "a camera moving during a rolling shutter's readout is drawn by the vertex path, or by the warp in bands: the planner routes it there",
             ));
         }
-        let mesh = MeshBuffers::new(gpu, mesh, texture)?;
         let mut b = Builder {
             gpu,
             plan,
@@ -579,7 +604,19 @@ impl PlanRecorder {
             names: Vec::new(),
             pipelines: Vec::new(),
         };
-        let stages = b.stages()?;
+        // A 360° image is the whole scene: no mesh to draw.
+        let (stages, mesh) = match (&plan.route, &scene.environment) {
+            (Route::Environment { chromatic }, Some(environment)) => {
+                (b.environment(environment, *chromatic)?, None)
+            }
+            (Route::Environment { .. }, None) => {
+                return Err(internal("an environment plan for a scene without one"))
+            }
+            _ => (
+                b.stages()?,
+                Some(MeshBuffers::new(gpu, mesh, scene.texture.as_ref())?),
+            ),
+        };
         let mut r = PlanRecorder {
             stages,
             mesh,
@@ -611,15 +648,18 @@ impl PlanRecorder {
     /// # Safety
     /// Rewrites every frame's descriptor sets: no recorded frame may be pending.
     unsafe fn bind_mesh(&mut self) {
+        let Some(mesh) = &self.mesh else {
+            return;
+        };
         // SAFETY: the caller upholds this function's contract.
         unsafe {
             if let Some((pass, _)) = self.stages.geometry_mut() {
-                pass.bind_mesh(&self.mesh);
+                pass.bind_mesh(mesh);
             }
             if let Some(w) = self.stages.warp_mut() {
-                w.stage.pass.bind_mesh(&self.mesh);
+                w.stage.pass.bind_mesh(mesh);
                 if let Some(b) = &w.bands {
-                    w.stage.pass.bind_slots_mesh(&b.slots, &self.mesh);
+                    w.stage.pass.bind_slots_mesh(&b.slots, mesh);
                 }
             }
         }
@@ -646,7 +686,7 @@ impl PlanRecorder {
             }
             Stages::Cube { cube, .. } => cube.select_frame(frame),
             Stages::Lens(l) => l.select_frame(frame),
-            Stages::Geometry(_) => {}
+            Stages::Geometry(_) | Stages::Environment(_) => {}
         }
     }
 
@@ -662,7 +702,7 @@ impl PlanRecorder {
         mesh: &Mesh,
         texture: Option<&Raster>,
     ) -> Result<()> {
-        self.mesh = MeshBuffers::new(gpu, mesh, texture)?;
+        self.mesh = Some(MeshBuffers::new(gpu, mesh, texture)?);
         // SAFETY: the caller upholds this function's contract: no frame is pending.
         unsafe { self.bind_mesh() };
         Ok(())
@@ -676,7 +716,9 @@ impl PlanRecorder {
     pub(crate) unsafe fn record_mesh_upload(&self, cmd: vk::CommandBuffer) {
         // SAFETY: the caller upholds the contract above; the mesh's buffers live in `self`
         // until the next `set_mesh`, which requires no pending frame.
-        unsafe { self.mesh.record_upload(cmd) };
+        if let Some(mesh) = &self.mesh {
+            unsafe { mesh.record_upload(cmd) };
+        }
     }
 
     /// Every pipeline this recorder records, with its specialization constants: what a plan
@@ -725,7 +767,7 @@ impl PlanRecorder {
                     unsafe { b.write_slots(&st.pass) }?;
                 }
             }
-            Stages::Geometry(_) | Stages::Lens(_) => {}
+            Stages::Geometry(_) | Stages::Lens(_) | Stages::Environment(_) => {}
         }
         Ok(())
     }
@@ -774,6 +816,11 @@ impl PlanRecorder {
         if let Some((pass, _)) = self.stages.geometry() {
             unsafe { pass.set_moving_frame((&pose, &end), (&previous.0, &previous.1)) }?;
         }
+        let mesh = || {
+            self.mesh
+                .as_ref()
+                .ok_or_else(|| internal("a route that draws the mesh without one"))
+        };
         match &mut self.stages {
             Stages::Warp { warp, .. } => {
                 unsafe { warp.stage.pass.set_frame(&pose, &pose) }?;
@@ -785,10 +832,11 @@ impl PlanRecorder {
             Stages::Cube {
                 cube,
                 bands: Some(bands),
-            } => unsafe { cube.prepare_bands(&self.mesh, &band_poses(bands)) }?,
-            Stages::Cube { cube, bands: None } => unsafe { cube.prepare(&self.mesh, &pose) }?,
-            Stages::Lens(l) => unsafe { l.prepare(&self.mesh, &pose) }?,
-            Stages::Geometry(_) => {}
+            } => unsafe { cube.prepare_bands(mesh()?, &band_poses(bands)) }?,
+            Stages::Cube { cube, bands: None } => unsafe { cube.prepare(mesh()?, &pose) }?,
+            Stages::Lens(l) => unsafe { l.prepare(mesh()?, &pose) }?,
+            // The 360° image is at infinity: no pose moves it (the plan turns none).
+            Stages::Geometry(_) | Stages::Environment(_) => {}
         }
         Ok(())
     }
@@ -804,10 +852,13 @@ impl PlanRecorder {
         // using these images is pending. The warp's `record_prepare` also needs compute on
         // that queue, which this contract leaves implicit.
         unsafe {
-            self.mesh.record_upload(cmd);
+            if let Some(mesh) = &self.mesh {
+                mesh.record_upload(cmd);
+            }
             match &self.stages {
                 Stages::Warp { warp, .. } => warp.stage.record_prepare(cmd),
                 Stages::Cube { cube, .. } => cube.record_prepare(cmd),
+                Stages::Environment(e) => e.record_setup(cmd),
                 Stages::Geometry(_) | Stages::Lens(_) => {}
             }
         }
@@ -838,15 +889,27 @@ impl PlanRecorder {
             unsafe { q.cmd_reset(cmd) };
         }
         stamp();
+        let mesh = match (&self.stages, &self.mesh) {
+            (Stages::Environment(e), _) => {
+                // SAFETY: the caller upholds `record`'s contract: after `record_setup`, which
+                // uploaded the 360° image and put the output and mask in GENERAL.
+                unsafe { e.record(cmd) };
+                stamp();
+                return;
+            }
+            (_, Some(mesh)) => mesh,
+            // `build` made a mesh for every route that draws one.
+            (_, None) => return,
+        };
         // SAFETY: the caller upholds `record`'s contract: `cmd` is recording (outside a render
         // pass on a graphics queue, as for `record_setup`) after `record_setup` and `prepare`,
-        // which bound `self.mesh` to every pass and uploaded its texture; each pass's targets
+        // which bound `mesh` to every pass and uploaded its texture; each pass's targets
         // were made for it in `new`, and the warp stage's pinhole render precedes its warps.
         // `timestamps`, when given, must hold `timestamp_count` queries, as the doc asks.
         unsafe {
             match &self.stages {
                 Stages::Lens(l) => {
-                    l.record(cmd, &self.mesh);
+                    l.record(cmd, mesh);
                     stamp();
                 }
                 Stages::Warp { warp, .. } => match &warp.bands {
@@ -867,13 +930,8 @@ impl PlanRecorder {
                                     [crate::gpu::Access::ComputeReadWrite],
                                 );
                             }
-                            st.pass.record_slot(
-                                cmd,
-                                &st.targets,
-                                &self.mesh,
-                                &b.slots,
-                                b.frame * n + k,
-                            );
+                            st.pass
+                                .record_slot(cmd, &st.targets, mesh, &b.slots, b.frame * n + k);
                             st.warp.record_band(cmd, band.rect);
                             for d in st.data_warps() {
                                 d.warp.record_band(cmd, band.rect);
@@ -883,7 +941,7 @@ impl PlanRecorder {
                     }
                     None => {
                         let st = &warp.stage;
-                        st.pass.record(cmd, &st.targets, &self.mesh);
+                        st.pass.record(cmd, &st.targets, mesh);
                         stamp();
                         st.record_warps(cmd);
                         stamp();
@@ -896,21 +954,21 @@ impl PlanRecorder {
                     // Each band's faces, then its rows or columns of the output; the next
                     // band's faces discard the cube only after this warp has sampled it.
                     for (k, band) in bands.iter().enumerate() {
-                        cube.record_band_faces(cmd, &self.mesh, k);
+                        cube.record_band_faces(cmd, mesh, k);
                         cube.record_warp_band(cmd, band.rect);
                     }
                     stamp();
                 }
                 Stages::Cube { cube, bands: None } => {
-                    cube.record_faces(cmd, &self.mesh);
+                    cube.record_faces(cmd, mesh);
                     stamp();
                     cube.record_warp(cmd);
                     stamp();
                 }
-                Stages::Geometry(_) => {}
+                Stages::Geometry(_) | Stages::Environment(_) => {}
             }
             if let Some((pass, targets)) = self.stages.geometry() {
-                pass.record(cmd, targets, &self.mesh);
+                pass.record(cmd, targets, mesh);
                 stamp();
             }
         }
@@ -930,6 +988,7 @@ impl PlanRecorder {
             Stages::Warp { warp, .. } => Some(&warp.stage.output),
             Stages::Cube { cube, .. } => Some(&cube.output),
             Stages::Lens(l) => Some(&l.film().image),
+            Stages::Environment(e) => Some(&e.output),
             Stages::Geometry((_, t)) => t.color(),
         };
         (colour, self.geometry_targets())
@@ -950,6 +1009,14 @@ impl PlanRecorder {
     pub(crate) fn cube_stage(&self) -> Option<&CubeStage> {
         match &self.stages {
             Stages::Cube { cube, .. } => Some(cube),
+            _ => None,
+        }
+    }
+
+    /// The environment route's stage (its output and mask `GENERAL` after a frame).
+    pub(crate) fn environment_stage(&self) -> Option<&EnvironmentStage> {
+        match &self.stages {
+            Stages::Environment(e) => Some(e),
             _ => None,
         }
     }

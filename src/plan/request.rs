@@ -8,7 +8,7 @@ use crate::model::overscan::{beyond_a_pinhole, cube_face_side};
 use crate::model::rolling_shutter::{FrameMotion, Readout};
 use crate::model::{Camera, InverseMethod};
 use crate::pass::geometry::DEFAULT_DELTA;
-use crate::scene::{Pose, Scene};
+use crate::scene::{Environment, Pose, Scene};
 use crate::{Error, Result};
 
 use super::antialias::{scaled_camera, MAX_JITTER, MAX_SUPERSAMPLE};
@@ -122,6 +122,9 @@ impl Plan {
         max_image_side: u32,
     ) -> Result<Plan> {
         check_request(request)?;
+        if let Some(environment) = scene.and_then(|s| s.environment.as_ref()) {
+            return environment_plan(request, environment);
+        }
         let aa = request.antialias;
         let camera = &request.camera;
         let o = request.outputs;
@@ -514,4 +517,88 @@ fn push_cube_steps(steps: &mut Vec<Step>, why: String, chromatic: bool) {
         stage: Stage::SphereWarp { chromatic },
         why: "each output pixel samples the cube along its ray, bilinear across faces".into(),
     });
+}
+
+/// The plan of a request whose scene is a 360° image: the sphere warp sampling it, colour
+/// alone, the camera at the image's centre looking along its axes. Refuses, naming the
+/// request's field, what a 360° image cannot give.
+fn environment_plan(request: &RenderRequest, environment: &Environment) -> Result<Plan> {
+    let o = request.outputs;
+    for (asked, field) in [(o.ids, "ids"), (o.flow, "flow"), (o.depth, "depth")] {
+        if asked {
+            return Err(Error::argument(
+                field,
+                format!(
+                    "{} holds colour alone: no {field} to warp",
+                    environment.describe()
+                ),
+            ));
+        }
+    }
+    if !o.color {
+        return Err(Error::argument(
+            "outputs",
+            "a 360° source gives colour: ask for it",
+        ));
+    }
+    if request.antialias.is_on() {
+        return Err(Error::argument(
+            "antialias",
+            "a 360° source is sampled bilinearly along each pixel's ray: nothing to supersample",
+        ));
+    }
+    if matches!(
+        request.path,
+        PathChoice::Vertex { .. } | PathChoice::Pinhole
+    ) {
+        return Err(Error::argument(
+            "path",
+            format!(
+                "{} has no mesh to draw: it is sampled by the sphere warp (the warp or cube path)",
+                environment.describe()
+            ),
+        ));
+    }
+    if request.pose.rotation != glam::DMat3::IDENTITY {
+        return Err(Error::argument(
+            "pose",
+            "a 360° source is seen along its own axes from its centre: the pose must not turn the camera",
+        ));
+    }
+    if request
+        .rolling_shutter
+        .is_some_and(|(_, end)| end.rotation != request.pose.rotation)
+    {
+        return Err(Error::argument(
+            "rolling_shutter",
+            "a 360° source is one instant: a camera turning during the readout cannot be drawn from it",
+        ));
+    }
+    let chromatic = request.chromatic;
+    Ok(Plan {
+        route: Route::Environment { chromatic },
+        steps: vec![Step {
+            stage: Stage::SphereWarp {
+                chromatic: chromatic.is_some(),
+            },
+            why: format!(
+                "the scene is {}, at infinity: each output pixel samples it along the ray its lens sees (Newton inverse per pixel)",
+                environment.describe()
+            ),
+        }],
+        optics: super::Optics::Camera(request.camera.clone()),
+        expected_error_px: 0.0,
+        budget_px: f64::INFINITY,
+        poses: vec![request.pose],
+        end_poses: Vec::new(),
+        previous_pose: None,
+        delta: DEFAULT_DELTA,
+        density: 1.0,
+        outputs: o,
+        background: request.background,
+        antialias: request.antialias,
+        shutter: super::Shutter::Global,
+        bands: None,
+        estimated_ms: f64::NAN,
+    })
 }

@@ -103,6 +103,7 @@ pub fn checkerboard(board: Board, subdivisions: u32) -> Scene {
         view_from: -DVec3::Z,
         view_down: DVec3::Y,
         board: Some(board),
+        environment: None,
     }
 }
 
@@ -158,6 +159,7 @@ pub fn grid(n: u32) -> Scene {
         view_from: -DVec3::Z,
         view_down: DVec3::Y,
         board: None,
+        environment: None,
     }
 }
 
@@ -196,6 +198,7 @@ pub fn room() -> Scene {
         view_from: DVec3::ZERO,
         view_down: DVec3::Y,
         board: None,
+        environment: None,
     }
 }
 
@@ -252,6 +255,7 @@ pub fn boxes() -> Scene {
         view_from: DVec3::new(0.0, -0.6, -1.0),
         view_down: DVec3::Y,
         board: None,
+        environment: None,
     }
 }
 

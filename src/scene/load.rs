@@ -47,6 +47,7 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
         view_from: DVec3::Z,
         view_down: -DVec3::Y,
         board: None,
+        environment: None,
     })
 }
 

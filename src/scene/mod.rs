@@ -182,9 +182,59 @@ pub struct Scene {
     pub view_down: DVec3,
     /// For a calibration board: its inner corners (columns, rows) and square size (metres).
     pub board: Option<builtin::Board>,
+    /// A 360° image of the world at infinity, seen from the camera's centre (a cube map or a
+    /// panorama a user's own renderer made): what the scene is, instead of a mesh.
+    pub environment: Option<Environment>,
+}
+
+/// The world as a 360° image at infinity, seen from the camera's centre: each output pixel
+/// samples it along the ray its lens sees (the sphere warp).
+#[derive(Debug, Clone)]
+pub enum Environment {
+    /// Six square faces of one size, +x -x +y -y +z -z (OpenCV's camera axes: x right, y
+    /// down, z forward).
+    Cube(Box<[Raster; 6]>),
+    /// An equirectangular panorama, 360° × 180°, twice as wide as high.
+    Panorama(Raster),
+}
+
+impl Environment {
+    /// The images, in order.
+    pub fn rasters(&self) -> Vec<&Raster> {
+        match self {
+            Environment::Cube(faces) => faces.iter().collect(),
+            Environment::Panorama(p) => vec![p],
+        }
+    }
+
+    /// What it is, in words: "a cube map of six 512×512 faces", "a 2048×1024 panorama".
+    pub fn describe(&self) -> String {
+        match self {
+            Environment::Cube(faces) => {
+                format!("a cube map of six {0}×{0} faces", faces[0].width)
+            }
+            Environment::Panorama(p) => format!("a {}×{} panorama", p.width, p.height),
+        }
+    }
 }
 
 impl Scene {
+    /// A scene that is only `environment`: no mesh, seen from its centre.
+    pub fn from_environment(name: impl Into<String>, environment: Environment) -> Scene {
+        Scene {
+            name: name.into(),
+            mesh: Mesh {
+                vertices: Vec::new(),
+                indices: Vec::new(),
+            },
+            texture: None,
+            view_from: DVec3::ZERO,
+            view_down: DVec3::Y,
+            board: None,
+            environment: Some(environment),
+        }
+    }
+
     /// A pose that shows the whole scene, centred, filling about 80 % of the smaller field of
     /// view of `camera` (its Sec. 3.1 frustum).
     pub fn default_pose(&self, camera: &Camera) -> Pose {

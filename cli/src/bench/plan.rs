@@ -88,6 +88,14 @@ fn route_name(r: &Route) -> String {
             "lens model, {samples} sample(s){}",
             if *chromatic { ", chromatic" } else { "" }
         ),
+        Route::Environment { chromatic } => format!(
+            "360° source{}",
+            if chromatic.is_some() {
+                ", chromatic"
+            } else {
+                ""
+            }
+        ),
     }
 }
 

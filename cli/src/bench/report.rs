@@ -419,7 +419,10 @@ fn startup_goals(rows: &[Value]) -> Vec<Goal> {
         })
         .collect();
     let pipelines = if growth.is_empty() {
-        not_measured(pipeline_goal, "no previous table of this device to compare with")
+        not_measured(
+            pipeline_goal,
+            "no previous table of this device to compare with",
+        )
     } else {
         bound(pipeline_goal, &growth, PIPELINE_X_PREVIOUS, false, ratio)
     };
@@ -1036,7 +1039,11 @@ mod pipeline_guard_tests {
             pipeline("warp, distort", "opencv", 40.0),
             pipeline("warp, undistort", "opencv", 12.0),
         ];
-        assert_eq!(guard(&first).verdict, Verdict::NotMeasured, "no previous table");
+        assert_eq!(
+            guard(&first).verdict,
+            Verdict::NotMeasured,
+            "no previous table"
+        );
         let section = subsection("startup", &first).unwrap().unwrap();
         let file = write_section("# Benchmarks\n", "dev", &[("startup", section)]);
         let previous = super::super::startup::previous_rows(&file, "dev");
@@ -1053,12 +1060,21 @@ mod pipeline_guard_tests {
         second.extend(previous);
         let g = guard(&second);
         assert_eq!(g.verdict, Verdict::NotMet, "{g:?}");
-        assert!(g.measured.contains("not at warp, undistort, opencv"), "{g:?}");
+        assert!(
+            g.measured.contains("not at warp, undistort, opencv"),
+            "{g:?}"
+        );
         assert!(!g.measured.contains("ucm"), "{g:?}");
         // The table shows the previous figure and the ratio beside each pipeline.
         let table = super::super::startup::table(&second);
-        assert!(table.contains("| warp, undistort | opencv | 19.2 | 12.0 | 1.60 |"), "{table}");
-        assert!(table.contains("| warp, distort | ucm | 400.0 | — | — |"), "{table}");
+        assert!(
+            table.contains("| warp, undistort | opencv | 19.2 | 12.0 | 1.60 |"),
+            "{table}"
+        );
+        assert!(
+            table.contains("| warp, distort | ucm | 400.0 | — | — |"),
+            "{table}"
+        );
 
         // Its own run's table read back: the ratios are 1.
         let section = subsection("startup", &second).unwrap().unwrap();

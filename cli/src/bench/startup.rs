@@ -439,7 +439,9 @@ pub fn previous_rows(markdown: &str, device: &str) -> Vec<Value> {
             .map(|c| c.trim().to_string())
             .collect()
     };
-    let mut lines = startup.lines().skip_while(|l| !l.starts_with("| pipeline |"));
+    let mut lines = startup
+        .lines()
+        .skip_while(|l| !l.starts_with("| pipeline |"));
     let Some(header) = lines.next().map(cells) else {
         return Vec::new();
     };

@@ -415,8 +415,9 @@ fn save_outputs(
 
 /// `distort` from a cube map or a panorama: each output pixel's ray samples it.
 fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result<(), CliError> {
-    use vklens::host::sphere_warp::run_sphere_warp;
-    use vklens::pass::sphere_warp::{SphereSource, SphereWarpOptions};
+    use vklens::host::sphere_warp::run_environment;
+    use vklens::pass::sphere_warp::SphereWarpOptions;
+    use vklens::scene::{Environment, Scene};
     let flag = if args.input_equirect.is_some() {
         "--input-equirect"
     } else {
@@ -454,8 +455,7 @@ fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result
         // The report counts filled pixels from the mask: always written.
         write_mask: true,
     };
-    let ctx = context()?;
-    let ((out, mask), channels) = if let Some(pano) = &args.input_equirect {
+    let (environment, channels) = if let Some(pano) = &args.input_equirect {
         let (source, channels) = image_io::load_with_channels(pano)?;
         if source.width != 2 * source.height {
             return Err(CliError::input(format!(
@@ -471,21 +471,19 @@ fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result
             source.height,
             360.0 / source.width as f64
         );
-        (
-            run_sphere_warp(&ctx, cam, SphereSource::Equirect(&source), &options)?,
-            channels,
-        )
+        (Environment::Panorama(source), channels)
     } else {
         let (faces, layout, channels) = load_cube_faces(&args.input_cubemap)?;
         eprintln!(
             "360° source: cube map of six {}×{} faces ({layout})",
             faces[0].width, faces[0].width
         );
-        (
-            run_sphere_warp(&ctx, cam, SphereSource::Cube(&faces), &options)?,
-            channels,
-        )
+        (Environment::Cube(Box::new(faces)), channels)
     };
+    // The 360° image is the scene: planned and recorded as any scene is.
+    let ctx = context()?;
+    let scene = Scene::from_environment(flag, environment);
+    let (out, mask) = run_environment(&ctx, cam, &scene, &options)?;
     super::finish(&ctx)?;
     let mask: Vec<bool> = mask.iter().map(|&m| m > 127).collect();
     save_outputs(args, &out, &mask, channels)

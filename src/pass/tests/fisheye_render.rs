@@ -80,6 +80,7 @@ fn checker_room() -> Scene {
         view_from: DVec3::ZERO,
         view_down: DVec3::Y,
         board: None,
+        environment: None,
     }
 }
 

@@ -212,6 +212,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             view_from: -DVec3::Z,
             view_down: DVec3::Y,
             board: None,
+            environment: None,
         };
         let request = RenderRequest {
             camera: camera.clone(),

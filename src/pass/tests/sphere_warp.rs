@@ -217,3 +217,68 @@ fn mismatched_faces_are_refused_naming_the_face() {
         .to_string();
     assert!(e.contains("-y") && e.contains("32×16"), "{e}");
 }
+
+#[test]
+fn a_360_source_is_a_scene_the_planner_routes_to_the_sphere_warp_alone() {
+    use crate::host::plan::execute;
+    use crate::plan::{PassKind, PathChoice, Plan, RenderRequest, Route};
+    use crate::scene::{Environment, Pose, Scene};
+    let ctx = crate::testing::validated_context();
+    let camera = fisheye_200();
+    let scene = Scene::from_environment(
+        "direction cube",
+        Environment::Cube(Box::new(direction_cube(64))),
+    );
+    let warp = PathChoice::Warp {
+        method: crate::model::InverseMethod::Newton,
+        density: 1.0,
+    };
+    let mut request = RenderRequest::color(&camera, warp);
+    request.outputs.exr = true;
+    let max_side = ctx.gpu().max_image_side();
+    let plan = Plan::from_request_with_scene(&request, &scene, max_side).unwrap();
+    assert_eq!(plan.route, Route::Environment { chromatic: None });
+    assert!(plan
+        .explain(None, &[])
+        .contains("a cube map of six 64×64 faces"));
+
+    // The sphere warp's pipeline and nothing of the mesh paths; colour and mask read back,
+    // the same pixels as the warp run on its own.
+    let mut frame = None;
+    let recorded = execute(ctx, &plan, &scene, [0], &mut |f| {
+        frame = Some(f.rendered);
+        Ok(())
+    })
+    .unwrap();
+    let kinds: Vec<PassKind> = recorded.pipelines.iter().map(|p| p.kind).collect();
+    assert_eq!(kinds, [PassKind::SphereWarp]);
+    let frame = frame.unwrap();
+    let (colour, mask) = (frame.color.unwrap(), frame.mask.unwrap());
+    assert!(worst_error(&camera, &colour, &mask) < 0.02);
+    let cube = direction_cube(64);
+    let (alone, alone_mask) =
+        run_sphere_warp(ctx, &camera, SphereSource::Cube(&cube), &options()).unwrap();
+    assert_eq!((colour.pixels, mask), (alone.pixels, alone_mask));
+
+    // What a 360° image cannot give is refused, naming the request's field.
+    let refused = |request: &RenderRequest| {
+        Plan::from_request_with_scene(request, &scene, max_side)
+            .unwrap_err()
+            .argument_name()
+    };
+    let mut ids = request.clone();
+    ids.outputs.ids = true;
+    assert_eq!(refused(&ids), Some("ids"));
+    let vertex = RenderRequest::color(
+        &camera,
+        PathChoice::Vertex {
+            delta: 0.0,
+            tessellate: None,
+        },
+    );
+    assert_eq!(refused(&vertex), Some("path"));
+    let mut turned = request.clone();
+    turned.pose = Pose::look_at(glam::DVec3::ZERO, glam::DVec3::X, glam::DVec3::Y);
+    assert_eq!(refused(&turned), Some("pose"));
+    crate::testing::assert_no_validation_messages(ctx);
+}

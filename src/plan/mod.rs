@@ -48,7 +48,7 @@ pub use antialias::{
     downsample, jitter_offsets, scaled_camera, DEFAULT_BACKGROUND, MAX_JITTER, MAX_SUPERSAMPLE,
 };
 pub use record::{PassKind, PlanRecorder, RecordedPipeline};
-pub use request::{PathChoice, RenderRequest};
+pub use request::{PathChoice, PathKind, RenderRequest};
 pub use scene_file::{SceneFile, SceneFileError};
 pub use shutter::{ReadoutSource, Shutter};
 

@@ -33,7 +33,81 @@ pub enum PathChoice {
     Cube { side: u32 },
 }
 
+/// The paths a caller can name, spelled one way wherever they are named: `vklens render
+/// --path`, `vklens calibration-set --path` and a scene file's `[render] path`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PathKind {
+    /// Lambers et al.'s Alg. 1 per vertex.
+    Vertex,
+    /// A pinhole render of the overscanned frustum and the compute warp.
+    Warp,
+    /// Six pinhole faces of a cube map and the sphere warp.
+    Cube,
+}
+
+impl PathKind {
+    /// Every path, in the order the help lists them.
+    pub const ALL: [PathKind; 3] = [PathKind::Vertex, PathKind::Warp, PathKind::Cube];
+
+    /// How it is spelled: `vertex`, `warp`, `cube`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PathKind::Vertex => "vertex",
+            PathKind::Warp => "warp",
+            PathKind::Cube => "cube",
+        }
+    }
+
+    /// The path spelled `name`, if any.
+    pub fn from_name(name: &str) -> Option<PathKind> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// What the path gives and costs, as `--help` says it.
+    pub fn help(self) -> &'static str {
+        match self {
+            PathKind::Vertex => "Alg. 1 per vertex, triangles outside the frustum ± (δ + D) dropped: exact colour, IDs, flow and depth, as long as the mesh is fine (see --tessellate)",
+            PathKind::Warp => "A pinhole render of the overscanned frustum, then the compute warp (inverse model per pixel): colour bilinear, IDs and depth nearest, no flow. Where no pinhole source can hold the lens (180° and more, or beyond the device's image limit) it renders a cube map instead, and says so",
+            PathKind::Cube => "Six 90° pinhole faces of a cube map, then the warp by each pixel's ray (colour only): any lens, fisheyes past 180° included. Face size from --density",
+        }
+    }
+
+    /// The path for `camera` with its parameters: Alg. 1's δ and tessellation, the warp's
+    /// method and density (source pixels per output pixel, or face pixels per output pixel
+    /// for the cube).
+    pub fn choice(
+        self,
+        camera: &Camera,
+        delta: f64,
+        tessellate: Option<f64>,
+        method: InverseMethod,
+        density: f64,
+    ) -> PathChoice {
+        match self {
+            PathKind::Vertex => PathChoice::Vertex { delta, tessellate },
+            PathKind::Warp => PathChoice::Warp { method, density },
+            PathKind::Cube => PathChoice::cube(camera, density),
+        }
+    }
+}
+
+impl std::fmt::Display for PathKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl PathChoice {
+    /// The path it names (`None`: the pinhole projection, which no caller names by a path).
+    pub fn kind(&self) -> Option<PathKind> {
+        match self {
+            PathChoice::Vertex { .. } => Some(PathKind::Vertex),
+            PathChoice::Warp { .. } => Some(PathKind::Warp),
+            PathChoice::Cube { .. } => Some(PathKind::Cube),
+            PathChoice::Pinhole => None,
+        }
+    }
+
     /// The cube path with faces of `density` face pixels per output pixel at the centre.
     pub fn cube(camera: &Camera, density: f64) -> Self {
         PathChoice::Cube {

@@ -5,12 +5,13 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::render::PathArg;
+use super::render::path_parser;
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
 use vklens::host::plan::execute_untimed;
 use vklens::imaging::file as image_io;
 use vklens::pass::geometry::DEFAULT_DELTA;
 use vklens::plan::scene_file::{Antialias, OutputSpec};
+use vklens::plan::PathKind;
 use vklens::plan::{Plan, RenderRequest};
 use vklens::scene::builtin::{self, parse_board_size, Board};
 use vklens::scene::calibration::board_poses;
@@ -31,8 +32,8 @@ pub struct CalibrationSetArgs {
     /// Number of views (Lambers et al. used 17).
     #[arg(long, default_value_t = 17, value_parser = clap::value_parser!(u32).range(3..=100))]
     count: u32,
-    #[arg(long, value_enum, default_value_t = PathArg::Vertex)]
-    path: PathArg,
+    #[arg(long, value_parser = path_parser(), default_value = "vertex")]
+    path: PathKind,
     /// Inner corners per row × per column (OpenCV's patternSize).
     #[arg(long, default_value = "9x6")]
     board: String,
@@ -125,7 +126,7 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     let mut plan = Plan::from_request(&request, ctx.gpu().max_image_side())?;
     plan.poses = poses.clone();
     // A path the set did not ask for (a cube map where no pinhole source fits) is said.
-    if let (PathArg::Warp, vklens::plan::Route::Cube { .. }) = (args.path, &plan.route) {
+    if let (PathKind::Warp, vklens::plan::Route::Cube { .. }) = (args.path, &plan.route) {
         if let Some(step) = plan.steps.first() {
             progress_done(&step.why);
         }
@@ -159,7 +160,7 @@ pub fn run(args: CalibrationSetArgs) -> Result<(), CliError> {
     let json = serde_json::json!({
         "board": {"columns": columns, "rows": rows, "square_m": args.square},
         "image_size": [camera.width, camera.height],
-        "path": match args.path { PathArg::Vertex => "vertex", PathArg::Warp => "warp", PathArg::Cube => "cube" },
+        "path": args.path.name(),
         // The camera as a camera file reads it (its model included: tests/calibrate.py picks
         // cv2.fisheye for a fisheye).
         "camera": camera.to_json(),

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use super::output::{check_output, write_outputs, Targets};
 use super::{context, finish, load_camera, progress_done, progress_line, CliError};
@@ -11,42 +11,16 @@ use vklens::model::rolling_shutter::Readout;
 use vklens::model::InverseMethod;
 use vklens::pass::geometry::DEFAULT_DELTA;
 use vklens::plan::scene_file::{Antialias, OutputSpec, DEFAULT_MAX_ERROR_PX};
-use vklens::plan::{PathChoice, RenderRequest};
+use vklens::plan::{PathKind, RenderRequest};
 use vklens::scene::{builtin, Pose, Scene};
 
-/// Which of Lambers et al.'s two paths renders the lens.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum PathArg {
-    /// Alg. 1 per vertex, triangles outside the frustum ± (δ + D) dropped: exact colour, IDs,
-    /// flow and depth, as long as the mesh is fine (see --tessellate).
-    Vertex,
-    /// A pinhole render of the overscanned frustum, then the compute warp (inverse model per
-    /// pixel): colour bilinear, IDs and depth nearest, no flow. Where no pinhole source can
-    /// hold the lens (180° and more, or beyond the device's image limit) it renders a cube map
-    /// instead, and says so.
-    Warp,
-    /// Six 90° pinhole faces of a cube map, then the warp by each pixel's ray (colour only):
-    /// any lens, fisheyes past 180° included. Face size from --density.
-    Cube,
-}
-
-impl PathArg {
-    /// The path for the camera: Alg. 1's δ and tessellation, the warp's method and density
-    /// (source pixels per output pixel, or face pixels per output pixel for the cube).
-    pub fn choice(
-        self,
-        camera: &vklens::model::Camera,
-        delta: f64,
-        tessellate: Option<f64>,
-        method: vklens::model::InverseMethod,
-        density: f64,
-    ) -> PathChoice {
-        match self {
-            PathArg::Vertex => PathChoice::Vertex { delta, tessellate },
-            PathArg::Warp => PathChoice::Warp { method, density },
-            PathArg::Cube => PathChoice::cube(camera, density),
-        }
-    }
+/// `--path`: the library's path names, each with its help (one spelling for the command
+/// line and the scene file's `[render] path`).
+pub fn path_parser() -> impl clap::builder::TypedValueParser<Value = PathKind> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(PathKind::ALL.map(|k| PossibleValue::new(k.name()).help(k.help())))
+        // The possible values admit only the names `from_name` knows.
+        .map(|name| PathKind::from_name(&name).unwrap_or(PathKind::Vertex))
 }
 
 #[derive(Args, Debug)]
@@ -94,8 +68,8 @@ pub struct RenderArgs {
     /// Camera depth (.exr): z in metres in R, G, B; +inf where nothing was drawn.
     #[arg(long, value_name = "D.exr")]
     depth: Option<PathBuf>,
-    #[arg(long, value_enum, default_value_t = PathArg::Vertex)]
-    path: PathArg,
+    #[arg(long, value_parser = path_parser(), default_value = "vertex")]
+    path: PathKind,
     /// Split mesh edges longer than L pixels (pinhole image) before the vertex path: Alg. 1
     /// moves vertices only, so straight edges between them stay straight (Lambers et al.'s first
     /// limitation). `vklens bench vertex` shows what L costs in error and time.
@@ -237,7 +211,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     if let Some(p) = &args.depth {
         check_output(p, "depth", &["exr"])?;
     }
-    if args.flow.is_some() && args.path == PathArg::Warp {
+    if args.flow.is_some() && args.path == PathKind::Warp {
         return Err(CliError::input(
             "--flow needs --path vertex: flow vectors live in the pinhole image and a warp cannot carry them (Lambers et al. Table 1)",
         ));

@@ -68,7 +68,15 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
         }
         _ => None,
     };
-    let candidates = search_candidates(file, scene, &camera, &poses, moving)?;
+    let all = search_candidates(file, scene, &camera, &poses, moving)?;
+    // A path the file asks for: the others dropped before the bands are searched too.
+    let candidates = match file.path {
+        Some(path) => {
+            super::choice::refuse_asked(file, path)?;
+            super::choice::asked_candidates(file, &all, path)
+        }
+        None => all.clone(),
+    };
     let choice = match shutter {
         Shutter::Moving { readout, frame, .. } => {
             // Every frame that moves: the bands must meet the budget on each.
@@ -79,16 +87,21 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
                 .map(|(p, e)| (readout, FrameMotion::new(p.into(), e.into())))
                 .collect();
             let bands = search_bands(scene, &camera, &candidates, &motions, file.max_error_px);
-            super::choice::choose_moving_rolling_shutter(
+            let choice = super::choice::choose_moving_rolling_shutter(
                 file,
                 &candidates,
                 &bands,
                 (readout, frame),
-            )?
+            )?;
+            match file.path {
+                Some(_) => super::choice::asked_reason(choice, &all),
+                None => choice,
+            }
         }
-        _ => choose(file, &candidates)?,
+        _ => choose(file, &all)?,
     };
-    let mut steps = explain::camera_steps(&choice, &candidates, terms);
+    // The steps weigh the route against every candidate, the dropped ones included.
+    let mut steps = explain::camera_steps(&choice, &all, terms);
     steps.extend(explain::antialias_step(file.antialias, file.outputs.color));
     let mut plan = file_plan(
         file,

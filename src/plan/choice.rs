@@ -5,7 +5,7 @@ use super::cost::CUBE_RAY_ERROR_PX;
 use super::search::{
     BandsCandidate, BandsSearch, BandsVia, Candidates, CubeCandidate, VertexCandidate, WarpChoice,
 };
-use super::{chromatic_scales, Route, SceneFile};
+use super::{chromatic_scales, PathKind, Route, SceneFile};
 use crate::{Error, Result};
 
 /// The route chosen for a lens (a camera without distortion or chromatic aberration takes
@@ -52,6 +52,8 @@ pub(super) enum BandsReason {
     /// Cheaper than the exact vertex path (`vertex_ms`), or that path cannot meet the budget
     /// (`None`).
     Cheaper { vertex_ms: Option<f64> },
+    /// `[render] path` asks for the warp or the cube map (the exact vertex path: `vertex_ms`).
+    Asked { vertex_ms: Option<f64> },
 }
 
 /// Why the bands did not carry a moving rolling shutter, where the vertex path does.
@@ -79,6 +81,12 @@ pub(super) enum VertexReason {
     /// The camera moves during a frame read out by a rolling shutter: the vertex path draws
     /// each line from its own pose, exactly, and the bands lost (`bands`).
     MovingRollingShutter { bands: BandsLoss },
+    /// `[render] path` asks for it (the pinhole warp and the cube map: their estimates, `None`
+    /// where they cannot meet the budget or carry the outputs).
+    Asked {
+        warp_ms: Option<f64>,
+        cube_ms: Option<f64>,
+    },
 }
 
 /// Why the cube map did not carry a lens no pinhole source holds.
@@ -99,6 +107,11 @@ pub(super) enum CubeReason {
     NoPinholeWarp(String),
     /// Cheaper than the pinhole warp (`warp_ms`; `None`: no warp meets the budget).
     Cheaper { warp_ms: Option<f64> },
+    /// `[render] path` asks for it (the pinhole warp and Alg. 1: their estimates).
+    Asked {
+        warp_ms: Option<f64>,
+        vertex_ms: Option<f64>,
+    },
 }
 
 impl Choice {
@@ -209,6 +222,9 @@ pub(super) fn choose(file: &SceneFile, candidates: &Candidates) -> Result<Choice
             "{src}: [effects] chromatic_aberration: {why}, and a chromatic warp needs a pinhole source, or a cube map, which carries colour alone (no IDs, flow or depth): not planned (drop chromatic_aberration or the data outputs, or use a camera whose frame a pinhole holds)"
         )));
     }
+    if let Some(path) = file.path {
+        return choose_asked(file, c, path);
+    }
     let warp_ms = c.warp.map(|w| w.ms);
     let vertex_ms = c.vertex.map(|v| v.ms);
     // Alg. 1 cannot give each channel its own lens: with chromatic aberration only the
@@ -235,6 +251,139 @@ pub(super) fn choose(file: &SceneFile, candidates: &Candidates) -> Result<Choice
     } else {
         choose_vertex(file, c)
     }
+}
+
+/// What the path `[render] path` asks for cannot deliver, whatever the budget: chromatic
+/// aberration on the vertex path, IDs, flow or depth from a cube map.
+pub(super) fn refuse_asked(file: &SceneFile, path: PathKind) -> Result<()> {
+    let asked = format!("{}: [render] path = \"{path}\"", file.source.display());
+    let o = &file.outputs;
+    match path {
+        PathKind::Vertex if file.effects.chromatic_aberration => Err(Error::input(format!(
+            "{asked}: [effects] chromatic_aberration needs the warp (Alg. 1 cannot give each channel its own lens); ask for path = \"warp\" or drop the key"
+        ))),
+        PathKind::Cube if o.ids || o.flow || o.depth => Err(Error::input(format!(
+            "{asked}: a cube map carries colour alone, and [outputs] asks for IDs, flow or depth; ask for path = \"vertex\" or \"warp\", or drop the key"
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// The candidates the path `[render] path` asks for may take: the others dropped, except a
+/// cube map standing in for the warp where no pinhole source holds the lens (colour alone,
+/// as on the command line), and Alg. 1 beside the warp for IDs and flow.
+pub(super) fn asked_candidates(
+    file: &SceneFile,
+    candidates: &Candidates,
+    path: PathKind,
+) -> Candidates {
+    let mut c = candidates.clone();
+    let data = file.outputs.ids || file.outputs.flow;
+    match path {
+        PathKind::Vertex => {
+            (c.warp, c.per_pixel, c.from_map, c.cube) = (None, None, None, None);
+        }
+        PathKind::Warp => {
+            if !data {
+                c.vertex = None;
+            }
+            if c.no_pinhole_warp.is_none() {
+                c.cube = None;
+            }
+        }
+        PathKind::Cube => {
+            (c.warp, c.per_pixel, c.from_map, c.vertex) = (None, None, None, None);
+        }
+    }
+    c
+}
+
+/// `choice`, made among [`asked_candidates`] of `candidates`, with its reason saying the path
+/// was asked for (and what the others would have cost) where the reason it was given weighed
+/// candidates the path had dropped.
+pub(super) fn asked_reason(choice: Choice, candidates: &Candidates) -> Choice {
+    let (warp_ms, vertex_ms) = (
+        candidates.warp.map(|w| w.ms),
+        candidates.vertex.map(|v| v.ms),
+    );
+    let cube_ms = candidates.cube.map(|c| c.ms);
+    match choice {
+        Choice::Vertex { vertex, why } if !matches!(why, VertexReason::DataOutputs { .. }) => {
+            Choice::Vertex {
+                vertex,
+                why: VertexReason::Asked { warp_ms, cube_ms },
+            }
+        }
+        Choice::Cube {
+            cube,
+            chromatic,
+            why: CubeReason::Cheaper { .. },
+        } => Choice::Cube {
+            cube,
+            chromatic,
+            why: CubeReason::Asked { warp_ms, vertex_ms },
+        },
+        Choice::Bands {
+            bands,
+            vertex,
+            chromatic,
+            why: BandsReason::Cheaper { .. },
+        } => Choice::Bands {
+            bands,
+            vertex,
+            chromatic,
+            why: BandsReason::Asked { vertex_ms },
+        },
+        other => other,
+    }
+}
+
+/// The route of the path `[render] path` asks for, or why that path cannot deliver what the
+/// file asks for within its budget.
+fn choose_asked(file: &SceneFile, candidates: &Candidates, path: PathKind) -> Result<Choice> {
+    refuse_asked(file, path)?;
+    let src = file.source.display();
+    let budget = file.max_error_px;
+    let chromatic = chromatic_scales(file);
+    let c = asked_candidates(file, candidates, path);
+    let choice = match path {
+        PathKind::Vertex => {
+            if c.vertex.is_none() {
+                return Err(Error::input(format!(
+                    "{src}: [render] path = \"vertex\", [accuracy] max_error_px = {budget}: even 1 px edges do not meet it"
+                )));
+            }
+            choose_vertex(file, &c)?
+        }
+        PathKind::Warp => match (&c.warp, &c.no_pinhole_warp, c.cube) {
+            (None, Some(why), Some(cube)) if !(file.outputs.ids || file.outputs.flow || file.outputs.depth) => {
+                Choice::Cube {
+                    cube,
+                    chromatic,
+                    why: CubeReason::NoPinholeWarp(why.clone()),
+                }
+            }
+            (None, Some(why), _) => {
+                return Err(Error::input(format!(
+                    "{src}: [render] path = \"warp\": {why}, and a cube map, which stands in for it, carries colour alone and must meet the budget; ask for path = \"vertex\""
+                )))
+            }
+            _ => choose_warp(file, &c, chromatic)?,
+        },
+        PathKind::Cube => match c.cube {
+            Some(cube) => Choice::Cube {
+                cube,
+                chromatic,
+                why: CubeReason::Cheaper { warp_ms: None },
+            },
+            None => {
+                return Err(Error::input(format!(
+                    "{src}: [render] path = \"cube\", [accuracy] max_error_px = {budget}: the cube map's rays ({CUBE_RAY_ERROR_PX:.1e} px) miss it"
+                )))
+            }
+        },
+    };
+    Ok(asked_reason(choice, candidates))
 }
 
 /// The warp route, with Alg. 1 beside it for IDs and flow.

@@ -75,6 +75,11 @@ impl Plan {
                 ),
             }
         );
+        if let Some(path) = p.path_asked {
+            out.push_str(&format!(
+                "  path: {path}, as [render] path asks, in place of the cheapest route\n"
+            ));
+        }
         out.push_str(&format!("  shutter: {}\n", p.shutter.explain(p.bands)));
         for (i, s) in p.steps.iter().enumerate() {
             out.push_str(&format!("  {}. {}: {}\n", i + 1, s.stage.name(), s.why));
@@ -312,6 +317,11 @@ fn cube_steps(
                 .map(|m| format!("{m:.1} ms"))
                 .unwrap_or_else(|| "none".into())
         ),
+        CubeReason::Asked { warp_ms, vertex_ms } => format!(
+            "[render] path asks for it (pinhole + warp: {}; Alg. 1: {})",
+            estimate(*warp_ms),
+            estimate(*vertex_ms)
+        ),
     };
     let alg1 = match candidates.vertex {
         _ if chromatic => "cannot give each channel its own lens".into(),
@@ -373,6 +383,10 @@ fn bands_step(bands: &BandsCandidate, why: &BandsReason) -> Step {
         BandsReason::Cheaper { vertex_ms: None } => {
             "no tessellation meets the budget on the exact vertex path".into()
         }
+        BandsReason::Asked { vertex_ms } => format!(
+            "[render] path asks for it (the exact vertex path: {})",
+            estimate(*vertex_ms)
+        ),
     };
     let (stage, sources) = match bands.via {
         BandsVia::Warp(_) => (Stage::BandRenders, "the pinhole source is"),
@@ -391,6 +405,12 @@ fn bands_step(bands: &BandsCandidate, why: &BandsReason) -> Step {
             bands.ms
         ),
     }
+}
+
+/// A route's estimated frame time, or that it cannot meet the budget or carry the outputs.
+fn estimate(ms: Option<f64>) -> String {
+    ms.map(|m| format!("est. {m:.1} ms"))
+        .unwrap_or_else(|| "none meeting the budget and the outputs".into())
 }
 
 /// Why Alg. 1 (estimated `vertex_ms`) carries every output.
@@ -428,6 +448,11 @@ fn vertex_reason(why: &VertexReason, vertex_ms: f64) -> String {
                     "and {count} bands of lines, each from its middle line's pose, would leave {error_px:.2} px but cost est. {ms:.1} ms"
                 ),
             }
+        ),
+        VertexReason::Asked { warp_ms, cube_ms } => format!(
+            "[render] path asks for it (estimated {vertex_ms:.1} ms; pinhole + warp: {}; cube map: {})",
+            estimate(*warp_ms),
+            estimate(*cube_ms)
         ),
         VertexReason::Cheaper { warp_ms } => format!(
             "estimated {vertex_ms:.1} ms against {} for pinhole + warp",

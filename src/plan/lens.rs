@@ -68,6 +68,11 @@ fn check_lens(file: &SceneFile, spec: &LensSpec) -> Result<CheckedLens> {
             )));
         }
     }
+    if let Some(path) = file.path {
+        return Err(Error::input(format!(
+            "{src}: [render] path = \"{path}\": a lens prescription renders by Heidrich et al.'s image-based model; the paths are for camera files"
+        )));
+    }
     if !e.distortion {
         return Err(Error::input(format!(
             "{src}: [effects] distortion = false: a real lens always distorts; use a camera file with the distortion switched off for a pinhole"
@@ -257,6 +262,7 @@ impl Plan {
             shutter: Shutter::Global,
             bands: None,
             estimated_ms: f64::NAN,
+            path_asked: None,
         })
     }
 }

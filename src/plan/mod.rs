@@ -234,6 +234,9 @@ pub struct Plan {
     pub bands: Option<u32>,
     /// Estimated frame time from the measured tables (ms, lavapipe), for comparison.
     pub estimated_ms: f64,
+    /// The path the scene file asked for (`[render] path`), which the route follows instead
+    /// of the planner's own choice; `None`: the planner chose.
+    pub path_asked: Option<PathKind>,
 }
 
 impl Plan {
@@ -337,5 +340,6 @@ fn file_plan(
         shutter,
         bands: None,
         estimated_ms,
+        path_asked: file.path,
     }
 }

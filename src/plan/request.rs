@@ -286,6 +286,7 @@ impl Plan {
             shutter,
             bands,
             estimated_ms: f64::NAN,
+            path_asked: None,
         })
     }
 }
@@ -674,5 +675,6 @@ fn environment_plan(request: &RenderRequest, environment: &Environment) -> Resul
         shutter: super::Shutter::Global,
         bands: None,
         estimated_ms: f64::NAN,
+        path_asked: None,
     })
 }

@@ -105,6 +105,9 @@ pub struct SceneFile {
     pub background: [f32; 4],
     /// Anti-aliasing of colour (`[render]`): the same meaning as `vklens render`'s flags.
     pub antialias: Antialias,
+    /// `[render] path`: the path the scene asks for, as `vklens render --path` spells it;
+    /// `None`: the planner's choice.
+    pub path: Option<super::PathKind>,
 }
 
 /// Colour anti-aliasing: `supersample`× the resolution box-filtered down, `jitter` sub-sample
@@ -373,7 +376,7 @@ impl SceneFile {
         let effects = r.effects(&root, &optics)?;
         let outputs = r.outputs(&root)?;
         let max_error_px = r.accuracy(&root)?;
-        let (background, antialias) = r.render(&root)?;
+        let (background, antialias, asked_path) = r.render(&root)?;
         let sensor = r.sensor(&root)?;
         let (poses, end_poses) = r.poses(&root)?;
         Ok(SceneFile {
@@ -388,6 +391,7 @@ impl SceneFile {
             sensor,
             background,
             antialias,
+            path: asked_path,
         })
     }
 }
@@ -594,9 +598,28 @@ impl Reader<'_> {
         Ok(max_error_px)
     }
 
-    /// `[render]`: the background and the antialiasing.
-    fn render(&self, root: &Table) -> Result<([f32; 4], Antialias), SceneFileError> {
-        let render = self.table(root, "render", &["background", "supersample", "jitter"])?;
+    /// `[render]`: the background, the antialiasing and the path asked for.
+    fn render(
+        &self,
+        root: &Table,
+    ) -> Result<([f32; 4], Antialias, Option<super::PathKind>), SceneFileError> {
+        let render = self.table(
+            root,
+            "render",
+            &["background", "supersample", "jitter", "path"],
+        )?;
+        let path = match self.string(render, "render", "path")? {
+            None => None,
+            Some(name) => Some(super::PathKind::from_name(name).ok_or_else(|| {
+                self.err(
+                    "[render] path",
+                    format!(
+                        "expected one of {}, found {name:?}",
+                        super::PathKind::ALL.map(|k| k.name()).join(", ")
+                    ),
+                )
+            })?),
+        };
         let background = match render.and_then(|t| t.get("background")) {
             Some(v) => self
                 .numbers::<4>(v, "[render] background")?
@@ -611,7 +634,7 @@ impl Reader<'_> {
                 .opt_whole(render, "render", "jitter", 1..=super::MAX_JITTER)?
                 .unwrap_or(1),
         };
-        Ok((background, antialias))
+        Ok((background, antialias, path))
     }
 
     /// `[sensor]`: the rolling shutter's readout.

@@ -1515,3 +1515,113 @@ fn a_lens_request_renders_through_the_recorder_the_film_the_lens_pass_alone_rend
     }
     assert_no_validation_messages(ctx);
 }
+
+/// The k1 k2 grid of `distortion.toml` with `[render] path = path` and `extra` tables.
+fn asked(path: &str, extra: &str) -> SceneFile {
+    scene_file(&format!(
+        "[geometry]\nscene = \"grid:8\"\n[optics]\ncamera = \"../cameras/barrel_k1k2.json\"\n\
+         [accuracy]\nmax_error_px = 0.01\n[render]\npath = \"{path}\"\n{extra}"
+    ))
+}
+
+#[test]
+fn render_path_spells_the_paths_as_the_command_line_does_and_the_plan_takes_it() {
+    use crate::plan::PathKind;
+    for kind in PathKind::ALL {
+        let file = asked(kind.name(), "");
+        assert_eq!(file.path, Some(kind));
+        let scene = load_geometry(&file).unwrap();
+        let p = plan(&file, &scene).unwrap();
+        let taken = match p.route {
+            Route::Vertex { .. } => PathKind::Vertex,
+            Route::Warp { .. } => PathKind::Warp,
+            Route::Cube { .. } => PathKind::Cube,
+            ref other => panic!("{kind}: {other:?}"),
+        };
+        assert_eq!(taken, kind);
+        assert_eq!(p.path_asked, Some(kind));
+        let text = p.explain(None, &[]);
+        assert!(
+            text.contains(&format!("path: {kind}, as [render] path asks")),
+            "{text}"
+        );
+        // The reason names the request and what the others would have cost, not a
+        // comparison the planner did not make.
+        if kind != PathKind::Warp {
+            assert!(text.contains("[render] path asks for it ("), "{text}");
+        }
+    }
+    // Without the key, the planner's own choice and no path line.
+    let own = SceneFile::load(&examples().join("distortion.toml")).unwrap();
+    assert_eq!(own.path, None);
+    let scene = load_geometry(&own).unwrap();
+    let p = plan(&own, &scene).unwrap();
+    assert!(!p.explain(None, &[]).contains("[render] path"));
+
+    let e = error(
+        "[geometry]\nscene = \"boxes\"\n[optics]\ncamera = \"c.json\"\n[render]\npath = \"fast\"\n",
+    );
+    assert!(
+        e.contains("[render] path: expected one of vertex, warp, cube, found \"fast\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn render_path_refuses_what_the_path_cannot_deliver_naming_both_keys() {
+    let scene_of = |f: &SceneFile| load_geometry(f).unwrap();
+    let chromatic = asked("vertex", BANDS_CHROMATIC);
+    let e = plan(&chromatic, &scene_of(&chromatic))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("[render] path = \"vertex\": [effects] chromatic_aberration needs the warp"),
+        "{e}"
+    );
+    let ids = asked("cube", "[outputs]\ncolor = true\nids = true\n");
+    let e = plan(&ids, &scene_of(&ids)).unwrap_err().to_string();
+    assert!(
+        e.contains("[render] path = \"cube\": a cube map carries colour alone"),
+        "{e}"
+    );
+    // IDs beside the warp's colour: Alg. 1 carries them, as the warp path does on the
+    // command line.
+    let warp_ids = asked("warp", "[outputs]\ncolor = true\nids = true\n");
+    let p = plan(&warp_ids, &scene_of(&warp_ids)).unwrap();
+    assert!(
+        matches!(p.route, Route::WarpAndVertex { .. }),
+        "{:?}",
+        p.route
+    );
+}
+
+#[test]
+fn render_path_is_recorded_as_asked() {
+    // The cube map on a lens a pinhole warp holds, where the planner takes Alg. 1 or the warp:
+    // what is recorded is the cube's faces and the sphere warp, nothing of the others.
+    let (p, recorded) = run(&asked("cube", ""));
+    assert!(matches!(p.route, Route::Cube { .. }), "{:?}", p.route);
+    assert!(recorded.has(PassKind::SphereWarp));
+    assert!(!recorded.has(PassKind::Warp) && !recorded.has(PassKind::VertexRender));
+}
+
+#[test]
+fn render_path_holds_for_a_camera_moving_during_its_readout() {
+    // The warp asked for: the bands of lines draw the moving frame, and say they were asked.
+    let file = banded_grid(&format!("{}[render]\npath = \"warp\"\n", budget(0.5)));
+    let scene = load_geometry(&file).unwrap();
+    let p = plan(&file, &scene).unwrap();
+    assert!(matches!(p.route, Route::Warp { .. }), "{:?}", p.route);
+    assert!(p.bands.is_some());
+    assert!(
+        p.explain(None, &[])
+            .contains("[render] path asks for it (the exact vertex path"),
+        "{}",
+        p.explain(None, &[])
+    );
+    // The vertex path asked for: each vertex at its own line's pose.
+    let file = banded_grid(&format!("{}[render]\npath = \"vertex\"\n", budget(0.5)));
+    let p = plan(&file, &scene).unwrap();
+    assert!(matches!(p.route, Route::Vertex { .. }), "{:?}", p.route);
+    assert_eq!(p.bands, None);
+}

@@ -39,7 +39,7 @@ pub fn parse_frames(s: &str, count: usize) -> Result<std::ops::Range<usize>, Str
 }
 
 fn plan_json(p: &Plan, frames: &[(usize, f64)]) -> serde_json::Value {
-    json!({
+    let mut v = json!({
         "route": format!("{:?}", p.route),
         "steps": p.steps.iter().map(|s| json!({"pass": s.stage.name(), "why": s.why})).collect::<Vec<_>>(),
         "expected_error_px": p.expected_error_px,
@@ -49,7 +49,12 @@ fn plan_json(p: &Plan, frames: &[(usize, f64)]) -> serde_json::Value {
         "antialias": {"supersample": p.antialias.supersample, "jitter": p.antialias.jitter},
         "estimated_ms": if p.estimated_ms.is_finite() { json!(p.estimated_ms) } else { json!(null) },
         "frames": frames.iter().map(|(i, ms)| json!({"frame": i, "ms": ms})).collect::<Vec<_>>(),
-    })
+    });
+    // Only where the scene file asks for a path: the planner chose every other plan.
+    if let (Some(path), Some(o)) = (p.path_asked, v.as_object_mut()) {
+        o.insert("path".into(), path.name().into());
+    }
+    v
 }
 
 /// What `render --scene FILE.toml` was asked for besides the file.

@@ -1075,6 +1075,8 @@ mod pipeline_guard_tests {
             table.contains("| warp, distort | ucm | 400.0 | — | — |"),
             "{table}"
         );
+        // The previous figures are read, not rows of the run's own command table.
+        assert!(!table.contains("| ? |"), "{table}");
 
         // Its own run's table read back: the ratios are 1.
         let section = subsection("startup", &second).unwrap().unwrap();

@@ -372,7 +372,10 @@ pub fn table(rows: &[Value]) -> String {
     let mut out = String::from(
         "| what | size | ms (median, cold) | peer | peer ms | × faster |\n|---|---|---|---|---|---|\n",
     );
-    for r in rows.iter().filter(|r| r["kind"] != "pipeline") {
+    for r in rows
+        .iter()
+        .filter(|r| r["kind"] == "command" || r["kind"] == "python")
+    {
         out.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} |\n",
             r["what"].as_str().unwrap_or("?"),

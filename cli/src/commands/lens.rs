@@ -392,8 +392,7 @@ fn render(args: RenderArgs) -> Result<(), CliError> {
             chromatic: args.chromatic,
             exr: ext == "exr",
         };
-        let plan =
-            Plan::from_lens_request(&request, &optics, pose).map_err(|e| lens_error(e.into()))?;
+        let plan = Plan::from_lens_request(&request, &optics, pose).map_err(lens_error)?;
         render_planned(&plan, &scene)?
     };
     vklens::imaging::file::save(&raster, &args.output)?;

@@ -280,6 +280,36 @@ pub unsafe fn host_read_barrier(gpu: &Gpu, cmd: vk::CommandBuffer) {
     unsafe { global_barrier(gpu, cmd, Access::ComputeWrite, Access::HostRead) };
 }
 
+/// Fills `image` whole from `buffer` (its old contents discarded), then hands it to `next`
+/// (its layout, its writes visible to that access): the mirror of [`record_download`].
+///
+/// # Safety
+/// As [`global_barrier`]; `buffer` must hold the whole image tightly packed in its format,
+/// `image` must have TRANSFER_DST usage and `buffer` TRANSFER_SRC, and no earlier work may
+/// still use the image.
+pub unsafe fn record_upload(
+    gpu: &Gpu,
+    cmd: vk::CommandBuffer,
+    buffer: &super::Buffer,
+    image: &super::Image,
+    next: Access,
+) {
+    // SAFETY: the caller upholds `record_upload`'s contract: nothing uses the image, so
+    // UNDEFINED (Nothing) is a valid old layout for contents overwritten whole; the buffer
+    // holds them tightly packed; the usages allow the copy.
+    unsafe {
+        image_transition(gpu, cmd, image.raw, Access::Nothing, Access::TransferWrite);
+        gpu.device().cmd_copy_buffer_to_image(
+            cmd,
+            buffer.raw,
+            image.raw,
+            Access::TransferWrite.layout(),
+            &[image.whole_copy()],
+        );
+        image_transition(gpu, cmd, image.raw, Access::TransferWrite, next);
+    }
+}
+
 /// Copies `image` (in `TRANSFER_SRC_OPTIMAL`, its writes visible to transfers) whole into the
 /// host-visible `buffer`, and makes the copy visible to host reads after the fence.
 ///

@@ -24,7 +24,8 @@ use gpu_allocator::vulkan::Allocator;
 
 pub use barriers::{
     global_barrier, host_read_barrier, image_discard, image_transition, record_compute_download,
-    record_compute_readback, record_discard_for_compute_write, record_download, Access,
+    record_compute_readback, record_discard_for_compute_write, record_download, record_upload,
+    Access,
 };
 pub use graphics::{
     Attribute, Framebuffer, GraphicsDesc, GraphicsPipeline, RenderPass, Sampler, Stage,

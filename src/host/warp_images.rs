@@ -111,7 +111,6 @@ impl WarpImages {
     /// # Safety
     /// `cmd` must be recording outside a render pass.
     pub unsafe fn record_upload(&self, cmd: vk::CommandBuffer) {
-        let d = self.gpu.device();
         // SAFETY: the caller upholds `record_upload`'s contract: `cmd` is recording outside a
         // render pass. The images are this struct's, made in `new` with TRANSFER_DST and
         // STORAGE usage; `upload` holds the source tightly packed in the pass's format, which
@@ -119,25 +118,11 @@ impl WarpImages {
         // size but not the pixel count).
         unsafe {
             // Source: fill it by copy, then hand it to the shader for reading.
-            image_transition(
+            crate::gpu::record_upload(
                 &self.gpu,
                 cmd,
-                self.source.raw,
-                Access::Nothing,
-                Access::TransferWrite,
-            );
-            d.cmd_copy_buffer_to_image(
-                cmd,
-                self.upload.raw,
-                self.source.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[self.source.whole_copy()],
-            );
-            image_transition(
-                &self.gpu,
-                cmd,
-                self.source.raw,
-                Access::TransferWrite,
+                &self.upload,
+                &self.source,
                 Access::ComputeRead,
             );
             // Output and mask: the shader writes every pixel, old contents are irrelevant.

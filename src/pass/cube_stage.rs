@@ -7,7 +7,7 @@
 
 use ash::vk;
 
-use crate::gpu::{global_barrier, image_discard, image_transition, Access, Image};
+use crate::gpu::{image_discard, image_transition, Access, Image};
 use crate::model::Camera;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
@@ -368,15 +368,7 @@ impl CubeStage {
         // SAFETY: the caller upholds this function's contract: the cube is in
         // SHADER_READ_ONLY_OPTIMAL with its writes visible to compute, and `record_prepare` put
         // the output and mask, which the warp was bound to with the cube in `new`, in GENERAL.
-        unsafe {
-            self.warp.record(cmd);
-            global_barrier(
-                &self.gpu,
-                cmd,
-                Access::ComputeWrite,
-                [Access::TransferRead, Access::ComputeRead],
-            );
-        }
+        unsafe { self.warp.record_for_readers(cmd, None) };
     }
 
     /// As [`Self::record_warp`], for the output pixels in `band` alone (`[x0, y0, x1, y1]`).
@@ -385,14 +377,6 @@ impl CubeStage {
     /// As [`Self::record_warp`].
     pub unsafe fn record_warp_band(&self, cmd: vk::CommandBuffer, band: [u32; 4]) {
         // SAFETY: as in `record_warp`.
-        unsafe {
-            self.warp.record_band(cmd, band);
-            global_barrier(
-                &self.gpu,
-                cmd,
-                Access::ComputeWrite,
-                [Access::TransferRead, Access::ComputeRead],
-            );
-        }
+        unsafe { self.warp.record_for_readers(cmd, Some(band)) };
     }
 }

@@ -6,7 +6,7 @@
 
 use ash::vk;
 
-use crate::gpu::{global_barrier, image_transition, Access, Buffer, Gpu, Image};
+use crate::gpu::{record_upload, Access, Buffer, Gpu, Image};
 use crate::imaging::{Pixels, Raster};
 use crate::model::Camera;
 use crate::pass::sphere_warp::{CubeFace, SphereWarpOptions, SphereWarpPass};
@@ -177,32 +177,11 @@ impl EnvironmentStage {
     /// the first frame, with nothing using these images pending.
     pub unsafe fn record_setup(&self, cmd: vk::CommandBuffer) {
         let gpu = &self.gpu;
-        // SAFETY: the caller upholds this function's contract. The source was made with
-        // TRANSFER_DST and the upload holds every layer tightly packed in its format
-        // (`check_environment` checked the sizes); each barrier puts an image in the layout
-        // its next command expects.
+        // SAFETY: the caller upholds this function's contract (nothing uses the images yet).
+        // The source was made with TRANSFER_DST and the upload, with TRANSFER_SRC, holds every
+        // layer tightly packed in its format (`check_environment` checked the sizes).
         unsafe {
-            image_transition(
-                gpu,
-                cmd,
-                self.source.raw,
-                Access::Nothing,
-                Access::TransferWrite,
-            );
-            gpu.device().cmd_copy_buffer_to_image(
-                cmd,
-                self.upload.raw,
-                self.source.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[self.source.whole_copy()],
-            );
-            image_transition(
-                gpu,
-                cmd,
-                self.source.raw,
-                Access::TransferWrite,
-                Access::ComputeSampled,
-            );
+            record_upload(gpu, cmd, &self.upload, &self.source, Access::ComputeSampled);
             crate::gpu::record_discard_for_compute_write(gpu, cmd, [&self.output, &self.mask]);
         }
     }
@@ -216,14 +195,6 @@ impl EnvironmentStage {
     pub unsafe fn record(&self, cmd: vk::CommandBuffer) {
         // SAFETY: the caller upholds this function's contract: the source is in
         // SHADER_READ_ONLY_OPTIMAL and the output and mask in GENERAL, as `bind` asked.
-        unsafe {
-            self.warp.record(cmd);
-            global_barrier(
-                &self.gpu,
-                cmd,
-                Access::ComputeWrite,
-                [Access::TransferRead, Access::ComputeRead],
-            );
-        }
+        unsafe { self.warp.record_for_readers(cmd, None) };
     }
 }

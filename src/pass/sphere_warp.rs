@@ -365,6 +365,31 @@ impl SphereWarpPass {
         };
     }
 
+    /// [`Self::record`] (or, with `band`, [`Self::record_band`]), then its writes made visible
+    /// to transfers and compute: what a stage whose output is read back or warped again
+    /// records.
+    ///
+    /// # Safety
+    /// As [`Self::record`].
+    pub unsafe fn record_for_readers(&self, cmd: vk::CommandBuffer, band: Option<[u32; 4]>) {
+        // SAFETY: the caller upholds `record`'s contract, which `record_band`'s is.
+        unsafe {
+            match band {
+                Some(band) => self.record_band(cmd, band),
+                None => self.record(cmd),
+            }
+            crate::gpu::global_barrier(
+                &self.gpu,
+                cmd,
+                crate::gpu::Access::ComputeWrite,
+                [
+                    crate::gpu::Access::TransferRead,
+                    crate::gpu::Access::ComputeRead,
+                ],
+            );
+        }
+    }
+
     /// As [`Self::record`], for the output pixels in `band` alone (`[x0, y0, x1, y1]`, x1
     /// and y1 excluded, clamped to the output). An empty band records nothing.
     ///

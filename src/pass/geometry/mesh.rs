@@ -85,28 +85,14 @@ impl Texture {
         // old layout as it is overwritten whole; `staging` holds it as tightly packed RGBA8,
         // which relies on an RGBA8 raster having width × height pixels (`new` does not check).
         unsafe {
-            image_transition(
+            crate::gpu::record_upload(
                 &self.gpu,
                 cmd,
-                self.image.raw,
-                Access::Nothing,
-                Access::TransferWrite,
-            );
-            self.gpu.device().cmd_copy_buffer_to_image(
-                cmd,
-                self.staging.raw,
-                self.image.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[self.image.whole_copy()],
-            );
-            image_transition(
-                &self.gpu,
-                cmd,
-                self.image.raw,
-                Access::TransferWrite,
+                &self.staging,
+                &self.image,
                 Access::FragmentSampled,
-            );
-        }
+            )
+        };
     }
 }
 

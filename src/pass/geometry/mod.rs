@@ -20,9 +20,9 @@ use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
 use crate::gpu::{
-    image_transition, shaders, Access, Attribute, Buffer, ComputePipeline, DescriptorPool, Error,
-    Framebuffer, Gpu, GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler,
-    SpecConstants, Stage, VertexBinding,
+    shaders, Access, Attribute, Buffer, ComputePipeline, DescriptorPool, Error, Framebuffer, Gpu,
+    GraphicsDesc, GraphicsPipeline, Image, RenderPass, Result, Sampler, SpecConstants, Stage,
+    VertexBinding,
 };
 pub use crate::imaging::Rendered;
 use crate::imaging::{BitDepth, Pixels, Raster};

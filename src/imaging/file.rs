@@ -59,6 +59,26 @@ pub fn load(path: &Path) -> Result<Raster> {
 }
 
 /// Reads an image and says which channels the file held.
+/// Whether [`load_with_channels`] would give `path` 8-bit RGBA pixels, from its header alone
+/// (nothing decoded); `None` where the header cannot say (not an image, unreadable). Lets a
+/// caller build what depends on the pixel format while the pixels decode.
+pub fn is_eight_bit(path: &Path) -> Option<bool> {
+    use image::ImageDecoder;
+    let decoder = image::ImageReader::open(path)
+        .ok()?
+        .with_guessed_format()
+        .ok()?
+        .into_decoder()
+        .ok()?;
+    Some(matches!(
+        decoder.color_type(),
+        image::ColorType::L8
+            | image::ColorType::La8
+            | image::ColorType::Rgb8
+            | image::ColorType::Rgba8
+    ))
+}
+
 pub fn load_with_channels(path: &Path) -> Result<(Raster, Channels)> {
     let shown = path.display();
     let reader = image::ImageReader::open(path)
@@ -107,10 +127,20 @@ pub fn load_with_channels(path: &Path) -> Result<(Raster, Channels)> {
     let (width, height) = (img.width(), img.height());
     let channels = Channels(img.color().channel_count());
     let raster = match img {
-        DynamicImage::ImageLuma8(_)
-        | DynamicImage::ImageLumaA8(_)
-        | DynamicImage::ImageRgb8(_)
-        | DynamicImage::ImageRgba8(_) => {
+        // A photo's common layouts straight into RGBA8: one pass, no intermediate image.
+        DynamicImage::ImageRgb8(rgb) => Raster {
+            width,
+            height,
+            pixels: Pixels::Rgba8(rgb.pixels().map(|p| [p[0], p[1], p[2], 255]).collect()),
+            bit_depth: BitDepth::U8,
+        },
+        DynamicImage::ImageRgba8(rgba) => Raster {
+            width,
+            height,
+            pixels: Pixels::Rgba8(rgba.pixels().map(|p| p.0).collect()),
+            bit_depth: BitDepth::U8,
+        },
+        DynamicImage::ImageLuma8(_) | DynamicImage::ImageLumaA8(_) => {
             let rgba = img.to_rgba8();
             Raster {
                 width,
@@ -162,6 +192,17 @@ pub fn save_as(raster: &Raster, path: &Path, channels: Channels) -> Result<()> {
 
 /// [`save_as`] without putting the file in place ([`Staged::commit`]).
 pub fn save_staged(raster: &Raster, path: &Path, channels: Channels) -> Result<Staged> {
+    // 8-bit RGBA written as RGB (a photo warped): straight to RGB, no RGBA copy first.
+    let png = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if let (3, Pixels::Rgba8(p), true) = (channels.0, &raster.pixels, png) {
+        let rgb: Vec<u8> = p.iter().flat_map(|c| [c[0], c[1], c[2]]).collect();
+        let image =
+            ImageBuffer::from_raw(raster.width, raster.height, rgb).ok_or_else(size_mismatch)?;
+        return write_image(&DynamicImage::ImageRgb8(image), path);
+    }
     let image = encode(raster, path)?;
     let image = match (channels.0, &raster.pixels) {
         (_, Pixels::R32Uint(_)) | (4, _) => image,
@@ -185,11 +226,15 @@ pub fn save_staged(raster: &Raster, path: &Path, channels: Channels) -> Result<S
     write_image(&image, path)
 }
 
-fn write_image(image: &DynamicImage, path: &Path) -> Result<Staged> {
-    let exr = path
-        .extension()
+/// Whether `path` names an OpenEXR file (else PNG).
+fn is_exr(path: &Path) -> bool {
+    path.extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
+fn write_image(image: &DynamicImage, path: &Path) -> Result<Staged> {
+    let exr = is_exr(path);
     stage(path, |tmp| {
         let format = if exr {
             image::ImageFormat::OpenExr

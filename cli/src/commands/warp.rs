@@ -223,9 +223,40 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
             "--alpha, --balance, --new-size and --center-principal-point choose the output camera of `vklens undistort`; distort and precorrect take --source-camera",
         ));
     }
+    // The device opens on a second thread while the camera and the image load: the driver's
+    // start-up (about 25 ms on lavapipe) then hides behind the camera's valid domain and the
+    // image's decoding instead of following them. An input error still comes first; the
+    // scope waits for the device, which is dropped unused.
+    std::thread::scope(|scope| {
+        let opening = (args.backend == super::Backend::Gpu).then(|| scope.spawn(context));
+        run_opening(scope, &args, direction, opening)
+    })
+}
+
+/// A device opening on another thread, or none yet (the CPU backend).
+type Opening<'scope> =
+    Option<std::thread::ScopedJoinHandle<'scope, Result<vklens::host::Context, CliError>>>;
+
+/// The device `opening` opened, or one opened now.
+fn opened(opening: Opening) -> Result<vklens::host::Context, CliError> {
+    match opening {
+        Some(handle) => handle
+            .join()
+            .map_err(|_| CliError::from(vklens::Error::internal("opening the device failed")))?,
+        None => context(),
+    }
+}
+
+/// [`run`] once the device is opening (on a thread of `scope`).
+fn run_opening<'scope>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
+    args: &WarpArgs,
+    direction: WarpDirection,
+    opening: Opening<'scope>,
+) -> Result<(), CliError> {
     let cam = super::load_camera(&args.camera)?;
     if !args.input_cubemap.is_empty() || args.input_equirect.is_some() {
-        return run_sphere(&args, direction, &cam);
+        return run_sphere(args, direction, &cam, opening);
     }
     let input = args
         .input
@@ -292,6 +323,21 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
         options.channel_cameras = Some(Box::new(cams));
     }
     let geometry = options.geometry(&cam)?;
+    // Once the device is open, the warper's pipeline builds on its thread too, in the format
+    // the image's header promises, while the pixels decode here.
+    let header_format = match image_io::is_eight_bit(&input) {
+        Some(false) => PixelFormat::Rgba32F,
+        _ => PixelFormat::Rgba8,
+    };
+    let building = opening.map(|handle| {
+        let (cam, mut early) = (cam.clone(), options.clone());
+        early.format = header_format;
+        scope.spawn(move || -> Result<(Device, Warper), CliError> {
+            let device = Device::from_context(opened(Some(handle))?);
+            let warper = Warper::new(device.gpu(), &cam, &early)?;
+            Ok((device, warper))
+        })
+    });
     let (source, channels) = image_io::load_with_channels(&input)?;
     if (source.width, source.height) != geometry.source_size {
         let whose = match (direction, &args.source_camera) {
@@ -333,9 +379,21 @@ pub fn run(args: WarpArgs, direction: WarpDirection) -> Result<(), CliError> {
             (out, mask.iter().map(|&m| m > 127).collect::<Vec<_>>())
         }
         super::Backend::Gpu => {
-            let device = Device::from_context(context()?);
             options.format = PixelFormat::of(&source);
-            let mut warper = Warper::new(device.gpu(), &cam, &options)?;
+            let (device, mut warper) = match building {
+                Some(handle) => handle.join().map_err(|_| {
+                    CliError::from(vklens::Error::internal("building the warper failed"))
+                })??,
+                None => {
+                    let device = Device::from_context(context()?);
+                    let warper = Warper::new(device.gpu(), &cam, &options)?;
+                    (device, warper)
+                }
+            };
+            if options.format != header_format {
+                // The header promised another format than the pixels have: built again.
+                warper = Warper::new(device.gpu(), &cam, &options)?;
+            }
             let warped = warper.run(&device, &source)?;
             device.check_validation()?;
             (warped.image, warped.mask)
@@ -414,7 +472,12 @@ fn save_outputs(
 }
 
 /// `distort` from a cube map or a panorama: each output pixel's ray samples it.
-fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result<(), CliError> {
+fn run_sphere(
+    args: &WarpArgs,
+    direction: WarpDirection,
+    cam: &Camera,
+    opening: Opening,
+) -> Result<(), CliError> {
     use vklens::host::sphere_warp::run_environment;
     use vklens::pass::sphere_warp::SphereWarpOptions;
     use vklens::scene::{Environment, Scene};
@@ -481,7 +544,7 @@ fn run_sphere(args: &WarpArgs, direction: WarpDirection, cam: &Camera) -> Result
         (Environment::Cube(Box::new(faces)), channels)
     };
     // The 360° image is the scene: planned and recorded as any scene is.
-    let ctx = context()?;
+    let ctx = opened(opening)?;
     let scene = Scene::from_environment(flag, environment);
     let (out, mask) = run_environment(&ctx, cam, &scene, &options)?;
     super::finish(&ctx)?;

@@ -283,7 +283,7 @@ fn run_opening<'scope>(
         options.source_camera = Some(new);
     }
     if direction == WarpDirection::Undistort {
-        rectify_as_image_proc(&args, &cam, &mut options)?;
+        rectify_as_image_proc(args, &cam, &mut options)?;
         if output_camera.is_none() {
             let out = options.source_camera.as_ref().unwrap_or(&cam);
             let (k, w, h) = (out.intrinsics, out.width, out.height);
@@ -399,7 +399,7 @@ fn run_opening<'scope>(
             (warped.image, warped.mask)
         }
     };
-    save_outputs(&args, &out, &mask, channels)?;
+    save_outputs(args, &out, &mask, channels)?;
     if let Some(line) = output_camera {
         eprintln!("{line}");
     }

@@ -203,7 +203,8 @@ fn check_desc(gpu: &Gpu, desc: &WarpDesc) -> Result<()> {
 }
 
 /// The spec constants the warp and map shaders share for a camera's (or the channels'
-/// union of) terms: direction, inverse method, rectification.
+/// union of) terms: direction, inverse method, rectification, and whether the domain's
+/// table is read.
 fn model_constants(g: &WarpGeometry, terms: Terms) -> crate::gpu::SpecConstants {
     let (method, iterations) = method_constants(g.method);
     CameraParams::spec_constants(terms)
@@ -211,6 +212,40 @@ fn model_constants(g: &WarpGeometry, terms: Terms) -> crate::gpu::SpecConstants 
         .u32(spec::METHOD, method)
         .u32(spec::FIXED_POINT_ITERATIONS, iterations)
         .bool(spec::RECTIFY, g.output_to_ray().is_some())
+        .bool(spec::DOMAIN_TABLE, reads_domain_table(g))
+}
+
+/// Whether an undistort warp's ideal points can reach past the valid domain's smallest
+/// boundary radius, where only the domain's table decides. Where every output pixel's ideal
+/// point lies inside it (the corners bound them: the output is a pinhole image, or a
+/// rectified one whose homography keeps every corner in front of the lens), the shader's
+/// table lookup could never change an answer and is compiled out: lavapipe runs both sides
+/// of a branch, so an atan and two indexed reads per pixel cost it whether taken or not.
+/// The margin keeps f32's rounding of the radius from ever turning an answer. The distort
+/// direction's inverse reads the table for its Newton start: always.
+fn reads_domain_table(g: &WarpGeometry) -> bool {
+    if g.direction != Direction::Undistort || g.channel_cameras.is_some() {
+        return true;
+    }
+    let inner = g.camera.shader_domain().min_ideal_radius();
+    let (w, h) = (g.output_size.0 as f64 - 1.0, g.output_size.1 as f64 - 1.0);
+    let to_ray = g.output_to_ray();
+    let i = &g.ideal;
+    let mut largest: f64 = 0.0;
+    for (u, v) in [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)] {
+        let x = match to_ray {
+            Some(m) => {
+                let ray = m * glam::DVec3::new(u, v, 1.0);
+                if !(ray.z > 0.0) {
+                    return true;
+                }
+                glam::DVec2::new(ray.x / ray.z, ray.y / ray.z)
+            }
+            None => glam::DVec2::new((u - i.cx) / i.fx, (v - i.cy) / i.fy),
+        };
+        largest = largest.max(x.length());
+    }
+    !(largest <= inner * (1.0 - 1e-4))
 }
 
 /// The shaders' `MODE`: 0 distort (the inverse per pixel), 1 undistort (the forward model).

@@ -559,3 +559,90 @@ fn rgba(r: &Raster) -> Vec<[f32; 4]> {
         Pixels::R32Uint(_) => panic!("colour expected"),
     }
 }
+
+#[test]
+fn the_undistort_warp_reads_the_domain_table_only_where_a_pixel_can_pass_the_inner_radius() {
+    use crate::pass::warp::WarpPass;
+    let ctx = crate::testing::validated_context();
+    let mut seen = [false; 2];
+    // A mild lens (`vklens bench startup`'s), whose whole frame lies inside its domain's
+    // inner radius, and the shared cameras, whose corners pass it.
+    let mild = crate::model::Camera::from_coeffs(
+        640,
+        360,
+        crate::model::Intrinsics {
+            fx: 333.3,
+            fy: 333.3,
+            cx: 319.5,
+            cy: 179.5,
+        },
+        &[-0.12, 0.03, 0.001, -0.0005],
+    )
+    .unwrap();
+    let mut cases: Vec<(&str, WarpGeometry)> = [("mild", mild)]
+        .into_iter()
+        .chain(
+            ["seed_fig2", "prism_tilt", "rational_wide"]
+                .map(|n| (n, crate::testing::reference_camera(n))),
+        )
+        .map(|(n, cam)| (n, WarpGeometry::undistort(cam)))
+        .collect();
+    // rational_wide undistorted into a pinhole of a third of its focal length: the output's
+    // corners reach past the fold, where the table decides.
+    let wide = crate::testing::reference_camera("rational_wide");
+    let mut k = wide.intrinsics;
+    (k.fx, k.fy) = (k.fx / 3.0, k.fy / 3.0);
+    let size = (wide.width, wide.height);
+    cases.push((
+        "rational_wide, wider output",
+        WarpGeometry::undistort(wide).with_ideal(k, size).unwrap(),
+    ));
+    for (name, g) in cases {
+        let inner = g.camera.shader_domain().min_ideal_radius();
+        let k = g.ideal;
+        let cam = &g.camera;
+        let (w, h) = ((cam.width - 1) as f64, (cam.height - 1) as f64);
+        let corner = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+            .map(|(u, v)| ((u - k.cx) / k.fx).hypot((v - k.cy) / k.fy))
+            .into_iter()
+            .fold(0.0, f64::max);
+        let reads = corner > inner * (1.0 - 1e-4);
+        seen[usize::from(reads)] = true;
+        let desc = WarpDesc {
+            geometry: g.clone(),
+            coordinates: Coordinates::Analytic,
+            sampling: Sampling::Bilinear,
+            border: Border::Constant,
+            format: PixelFormat::Rgba32F,
+            fill: [0.0; 4],
+            write_mask: true,
+        };
+        let pass = WarpPass::new(ctx.gpu(), desc).unwrap();
+        let table = pass
+            .pipeline()
+            .constants
+            .get(crate::pass::spec::DOMAIN_TABLE);
+        assert_eq!(
+            table,
+            Some(u32::from(reads)),
+            "{name}: corner {corner}, inner {inner}"
+        );
+        // Either way, every pixel as the f64 reference warp has it.
+        let d = check(
+            &format!("{name} undistort"),
+            g,
+            Coordinates::Analytic,
+            PixelFormat::Rgba32F,
+            ctx,
+        );
+        assert!(
+            d.mean < 5e-6 && d.max < 2e-3,
+            "{name}: mean {} max {}",
+            d.mean,
+            d.max
+        );
+        assert_eq!(d.mask_mismatch, 0, "{name}");
+    }
+    assert_eq!(seen, [true, true], "a camera of each kind");
+    crate::testing::assert_no_validation_messages(ctx);
+}

@@ -156,6 +156,13 @@ impl ValidDomain {
         self.min_ideal
     }
 
+    /// Whether the ideal boundary is the same radius in every direction (a lens that never
+    /// folds before the radius cap, or a radially symmetric one): then the smallest radius
+    /// alone says what the table would.
+    pub fn is_round(&self) -> bool {
+        self.ideal.iter().all(|&r| r == self.min_ideal)
+    }
+
     /// Whether an ideal normalized point (principal point at 0) lies in the domain.
     pub fn contains_ideal(&self, x: DVec2) -> bool {
         let r2 = x.length_squared();

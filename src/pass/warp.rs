@@ -215,19 +215,32 @@ fn model_constants(g: &WarpGeometry, terms: Terms) -> crate::gpu::SpecConstants 
         .bool(spec::DOMAIN_TABLE, reads_domain_table(g))
 }
 
-/// Whether an undistort warp's ideal points can reach past the valid domain's smallest
-/// boundary radius, where only the domain's table decides. Where every output pixel's ideal
-/// point lies inside it (the corners bound them: the output is a pinhole image, or a
-/// rectified one whose homography keeps every corner in front of the lens), the shader's
-/// table lookup could never change an answer and is compiled out: lavapipe runs both sides
-/// of a branch, so an atan and two indexed reads per pixel cost it whether taken or not.
-/// The margin keeps f32's rounding of the radius from ever turning an answer. The distort
-/// direction's inverse reads the table for its Newton start: always.
+/// Whether the shaders' test of an ideal point against the valid domain needs the domain's
+/// table, or its smallest boundary radius alone gives every answer the table would; then the
+/// lookup is compiled out (lavapipe runs both sides of a branch, so an atan and two indexed
+/// reads cost it per test whether taken or not). Two cases:
+/// - a round domain (a lens that never folds before the radius cap, or a radially symmetric
+///   one): every entry of its table is that radius; both directions, the inverse testing each
+///   Newton iterate;
+/// - an undistort warp whose output pixels all lie inside the radius (the corners bound them:
+///   the output is a pinhole image, or a rectified one whose homography keeps every corner in
+///   front of the lens), with a margin that keeps f32's rounding from turning an answer.
+///
+/// The inverse's radial start reads the table for its bracket either way.
 fn reads_domain_table(g: &WarpGeometry) -> bool {
-    if g.direction != Direction::Undistort || g.channel_cameras.is_some() {
+    if g.channel_cameras.is_some() {
         return true;
     }
-    let inner = g.camera.shader_domain().min_ideal_radius();
+    let domain = g.camera.shader_domain();
+    // A round domain's table holds its smallest radius in every entry: the lookup would
+    // only repeat the inner test (both directions; the inverse tests every Newton iterate).
+    if domain.is_round() {
+        return false;
+    }
+    if g.direction != Direction::Undistort {
+        return true;
+    }
+    let inner = domain.min_ideal_radius();
     let (w, h) = (g.output_size.0 as f64 - 1.0, g.output_size.1 as f64 - 1.0);
     let to_ray = g.output_to_ray();
     let i = &g.ideal;

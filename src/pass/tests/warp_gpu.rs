@@ -561,10 +561,10 @@ fn rgba(r: &Raster) -> Vec<[f32; 4]> {
 }
 
 #[test]
-fn the_undistort_warp_reads_the_domain_table_only_where_a_pixel_can_pass_the_inner_radius() {
+fn the_warp_reads_the_domain_table_only_where_it_can_say_more_than_the_inner_radius() {
     use crate::pass::warp::WarpPass;
     let ctx = crate::testing::validated_context();
-    let mut seen = [false; 2];
+    let (mut seen, mut rounds) = ([false; 2], [false; 2]);
     // A mild lens (`vklens bench startup`'s), whose whole frame lies inside its domain's
     // inner radius, and the shared cameras, whose corners pass it.
     let mild = crate::model::Camera::from_coeffs(
@@ -606,8 +606,41 @@ fn the_undistort_warp_reads_the_domain_table_only_where_a_pixel_can_pass_the_inn
             .map(|(u, v)| ((u - k.cx) / k.fx).hypot((v - k.cy) / k.fy))
             .into_iter()
             .fold(0.0, f64::max);
-        let reads = corner > inner * (1.0 - 1e-4);
+        let round = g.camera.shader_domain().is_round();
+        rounds[usize::from(round)] = true;
+        let reads = !round && corner > inner * (1.0 - 1e-4);
         seen[usize::from(reads)] = true;
+        // The distort direction tests every Newton iterate: the table goes only with a round
+        // domain, and the image is still the f64 reference's.
+        let distort = WarpGeometry::distort(g.camera.clone(), InverseMethod::Newton);
+        let desc = WarpDesc {
+            geometry: distort.clone(),
+            coordinates: Coordinates::Analytic,
+            sampling: Sampling::Bilinear,
+            border: Border::Constant,
+            format: PixelFormat::Rgba32F,
+            fill: [0.0; 4],
+            write_mask: true,
+        };
+        let pass = WarpPass::new(ctx.gpu(), desc).unwrap();
+        let table = pass
+            .pipeline()
+            .constants
+            .get(crate::pass::spec::DOMAIN_TABLE);
+        assert_eq!(table, Some(u32::from(!round)), "{name} distort");
+        let d = check(
+            &format!("{name} distort"),
+            distort,
+            Coordinates::Analytic,
+            PixelFormat::Rgba32F,
+            ctx,
+        );
+        assert!(
+            d.mean < 5e-6 && d.max < 2e-3,
+            "{name} distort: mean {} max {}",
+            d.mean,
+            d.max
+        );
         let desc = WarpDesc {
             geometry: g.clone(),
             coordinates: Coordinates::Analytic,
@@ -643,6 +676,7 @@ fn the_undistort_warp_reads_the_domain_table_only_where_a_pixel_can_pass_the_inn
         );
         assert_eq!(d.mask_mismatch, 0, "{name}");
     }
-    assert_eq!(seen, [true, true], "a camera of each kind");
+    assert_eq!(seen, [true, true], "an undistort warp of each kind");
+    assert_eq!(rounds, [true, true], "a round domain and one that is not");
     crate::testing::assert_no_validation_messages(ctx);
 }

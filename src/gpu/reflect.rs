@@ -43,6 +43,16 @@ fn instructions(spirv: &[u8]) -> Vec<(u32, Vec<u32>)> {
     out
 }
 
+/// The workgroup size a compute module declares (`layout(local_size_x = …)`, the
+/// `LocalSize` execution mode), if it declares one.
+pub fn local_size(spirv: &[u8]) -> Option<[u32; 3]> {
+    const OP_EXECUTION_MODE: u32 = 16;
+    const LOCAL_SIZE: u32 = 17;
+    instructions(spirv).into_iter().find_map(|(op, a)| {
+        (op == OP_EXECUTION_MODE && a.len() == 5 && a[1] == LOCAL_SIZE).then(|| [a[2], a[3], a[4]])
+    })
+}
+
 /// `(member name, byte offset)` of the struct (block) type named `type_name`, in member order.
 /// A struct that a block holds and a shader also copies into a private variable is two types
 /// of one name, one of them without offsets: the one with offsets is the block's.

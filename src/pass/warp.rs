@@ -202,6 +202,9 @@ fn check_desc(gpu: &Gpu, desc: &WarpDesc) -> Result<()> {
     check_sizes(gpu, g)
 }
 
+/// The upsampler's workgroup in coarse cells (`local_size` of `glsl/upsample_map.comp`).
+pub const UPSAMPLE_GROUP: [u32; 2] = [32, 2];
+
 /// The spec constants the warp and map shaders share for a camera's (or the channels'
 /// union of) terms: direction, inverse method, rectification, and whether the domain's
 /// table is read.
@@ -459,7 +462,10 @@ impl MapParts {
                     set: up,
                     push: p,
                     // One invocation per coarse cell (glsl/upsample_map.comp).
-                    groups: (cells_x.div_ceil(8), cells_y.div_ceil(8)),
+                    groups: (
+                        cells_x.div_ceil(UPSAMPLE_GROUP[0]),
+                        cells_y.div_ceil(UPSAMPLE_GROUP[1]),
+                    ),
                     barrier_after: false,
                 });
                 parts.coarse.push(coarse);

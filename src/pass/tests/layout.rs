@@ -548,3 +548,15 @@ fn each_per_model_module_holds_its_model_alone() {
     assert!(!names(ds, "vkl_omni_project") && !names(ds, "vkl_tp_unproject"));
     assert!(standard.len() < shaders::WARP_COMP_RGBA8.len() * 2 / 3);
 }
+
+#[test]
+fn the_upsampler_is_dispatched_by_the_workgroup_it_declares() {
+    let [x, y] = crate::pass::warp::UPSAMPLE_GROUP;
+    for module in shaders::UPSAMPLE_MAP_COMP_BY_MODEL {
+        assert_eq!(reflect::local_size(module), Some([x, y, 1]));
+    }
+    assert_eq!(
+        reflect::local_size(shaders::UPSAMPLE_MAP_COMP),
+        Some([x, y, 1])
+    );
+}

@@ -548,25 +548,13 @@ fn film_colour(film: &Download, vignetting: bool, float: bool) -> Result<Raster>
             }
         })
         .collect::<Vec<_>>();
-    let (pixels, bit_depth) = if float {
-        (Pixels::Rgba32F(pixels), BitDepth::F32)
-    } else {
-        (
-            Pixels::Rgba8(
-                pixels
-                    .iter()
-                    .map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
-                    .collect(),
-            ),
-            BitDepth::U8,
-        )
-    };
-    Ok(Raster {
+    let film = Raster {
         width: e.width,
         height: e.height,
-        pixels,
-        bit_depth,
-    })
+        pixels: Pixels::Rgba32F(pixels),
+        bit_depth: BitDepth::F32,
+    };
+    Ok(if float { film } else { film.to_rgba8_rounded() })
 }
 
 #[cfg(test)]

@@ -5,35 +5,15 @@ use crate::host::Context;
 use crate::imaging::Raster;
 use crate::model::Camera;
 use crate::pass::environment::{check_environment, is_eight_bit};
-use crate::pass::sphere_warp::{SphereSource, SphereWarpOptions};
+use crate::pass::sphere_warp::SphereWarpOptions;
 use crate::plan::{PathChoice, RenderRequest};
-use crate::scene::{Environment, Scene};
+use crate::scene::Scene;
 use crate::{Error, Result};
 
-/// Runs a sphere warp once through a headless context: upload, warp, download. The output
-/// has the camera's size, and the bit depth of the source (8-bit stays 8-bit); the mask is
-/// 255 where a pixel has a source. The source is copied into a scene: [`run_environment`]
-/// takes one the caller owns.
-pub fn run_sphere_warp(
-    ctx: &Context,
-    camera: &Camera,
-    source: SphereSource,
-    options: &SphereWarpOptions,
-) -> Result<(Raster, Vec<u8>)> {
-    let environment = match source {
-        SphereSource::Cube(faces) => Environment::Cube(Box::new(faces.clone())),
-        SphereSource::Equirect(panorama) => Environment::Panorama(panorama.clone()),
-    };
-    run_environment(
-        ctx,
-        camera,
-        &Scene::from_environment("360° source", environment),
-        options,
-    )
-}
-
-/// As [`run_sphere_warp`], for a scene that is a 360° image ([`Scene::from_environment`]):
-/// its plan ([`crate::plan::Plan::from_request_with_scene`]) executed once.
+/// Runs the sphere warp of a scene that is a 360° image ([`Scene::from_environment`]) once
+/// through a headless context: its plan ([`crate::plan::Plan::from_request_with_scene`])
+/// executed, read back. The output has the camera's size, and the bit depth of the source
+/// (8-bit stays 8-bit); the mask is 255 where a pixel has a source.
 pub fn run_environment(
     ctx: &Context,
     camera: &Camera,

@@ -58,7 +58,6 @@ pub fn load(path: &Path) -> Result<Raster> {
     load_with_channels(path).map(|(r, _)| r)
 }
 
-/// Reads an image and says which channels the file held.
 /// Whether [`load_with_channels`] would give `path` 8-bit RGBA pixels, from its header alone
 /// (nothing decoded); `None` where the header cannot say (not an image, unreadable). Lets a
 /// caller build what depends on the pixel format while the pixels decode.
@@ -79,6 +78,7 @@ pub fn is_eight_bit(path: &Path) -> Option<bool> {
     ))
 }
 
+/// Reads an image and says which channels the file held.
 pub fn load_with_channels(path: &Path) -> Result<(Raster, Channels)> {
     let shown = path.display();
     let reader = image::ImageReader::open(path)
@@ -193,11 +193,7 @@ pub fn save_as(raster: &Raster, path: &Path, channels: Channels) -> Result<()> {
 /// [`save_as`] without putting the file in place ([`Staged::commit`]).
 pub fn save_staged(raster: &Raster, path: &Path, channels: Channels) -> Result<Staged> {
     // 8-bit RGBA written as RGB (a photo warped): straight to RGB, no RGBA copy first.
-    let png = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    if let (3, Pixels::Rgba8(p), true) = (channels.0, &raster.pixels, png) {
+    if let (3, Pixels::Rgba8(p), true) = (channels.0, &raster.pixels, has_extension(path, "png")) {
         let rgb: Vec<u8> = p.iter().flat_map(|c| [c[0], c[1], c[2]]).collect();
         let image =
             ImageBuffer::from_raw(raster.width, raster.height, rgb).ok_or_else(size_mismatch)?;
@@ -226,15 +222,15 @@ pub fn save_staged(raster: &Raster, path: &Path, channels: Channels) -> Result<S
     write_image(&image, path)
 }
 
-/// Whether `path` names an OpenEXR file (else PNG).
-fn is_exr(path: &Path) -> bool {
+/// Whether `path`'s extension is `ext`, in any case.
+fn has_extension(path: &Path, ext: &str) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+        .is_some_and(|e| e.eq_ignore_ascii_case(ext))
 }
 
 fn write_image(image: &DynamicImage, path: &Path) -> Result<Staged> {
-    let exr = is_exr(path);
+    let exr = has_extension(path, "exr");
     stage(path, |tmp| {
         let format = if exr {
             image::ImageFormat::OpenExr

@@ -42,7 +42,6 @@ use crate::gpu::{
     shaders, write_storage_image_descriptors, Buffer, ComputePipeline, DescriptorPool, Error, Gpu,
     Result, Sampler,
 };
-use crate::imaging::Raster;
 use crate::model::{Camera, Intrinsics};
 
 /// A cube face, by the direction it looks along in the camera frame.
@@ -142,24 +141,6 @@ pub fn equirect_direction(u: f64, v: f64, (w, h): (u32, u32)) -> DVec3 {
     let lon = ((u + 0.5) / w as f64 - 0.5) * std::f64::consts::TAU;
     let lat = ((v + 0.5) / h as f64 - 0.5) * std::f64::consts::PI;
     DVec3::new(lat.cos() * lon.sin(), lat.sin(), lat.cos() * lon.cos())
-}
-
-/// What the warp samples.
-pub enum SphereSource<'a> {
-    /// Six square faces of one size, in [`CubeFace::ALL`] order.
-    Cube(&'a [Raster; 6]),
-    /// An equirectangular panorama.
-    Equirect(&'a Raster),
-}
-
-impl SphereSource<'_> {
-    /// The rasters, in order.
-    pub fn rasters(&self) -> Vec<&Raster> {
-        match self {
-            SphereSource::Cube(faces) => faces.iter().collect(),
-            SphereSource::Equirect(p) => vec![p],
-        }
-    }
 }
 
 /// `layout(push_constant) uniform SpherePush` of `glsl/sphere_warp.comp`.

@@ -69,14 +69,16 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
         _ => None,
     };
     let all = search_candidates(file, scene, &camera, &poses, moving)?;
-    // A path the file asks for: the others dropped before the bands are searched too.
-    let candidates = match file.path {
+    // A path the file asks for: the others dropped before the route (and the bands) are
+    // chosen among what is left.
+    let asked = match file.path {
         Some(path) => {
             super::choice::refuse_asked(file, path)?;
-            super::choice::asked_candidates(file, &all, path)
+            Some(super::choice::asked_candidates(file, &all, path))
         }
-        None => all.clone(),
+        None => None,
     };
+    let candidates = asked.as_ref().unwrap_or(&all);
     let choice = match shutter {
         Shutter::Moving { readout, frame, .. } => {
             // Every frame that moves: the bands must meet the budget on each.
@@ -86,19 +88,20 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
                 .filter_map(|(p, e)| e.filter(|e| e != p).map(|e| (*p, e)))
                 .map(|(p, e)| (readout, FrameMotion::new(p.into(), e.into())))
                 .collect();
-            let bands = search_bands(scene, &camera, &candidates, &motions, file.max_error_px);
-            let choice = super::choice::choose_moving_rolling_shutter(
+            let bands = search_bands(scene, &camera, candidates, &motions, file.max_error_px);
+            super::choice::choose_moving_rolling_shutter(
                 file,
-                &candidates,
+                candidates,
                 &bands,
                 (readout, frame),
-            )?;
-            match file.path {
-                Some(_) => super::choice::asked_reason(choice, &all),
-                None => choice,
-            }
+            )?
         }
-        _ => choose(file, &all)?,
+        _ => choose(file, candidates)?,
+    };
+    // The reason says the path was asked for where it weighed candidates the path dropped.
+    let choice = match asked {
+        Some(_) => super::choice::asked_reason(choice, &all),
+        None => choice,
     };
     // The steps weigh the route against every candidate, the dropped ones included.
     let mut steps = explain::camera_steps(&choice, &all, terms);

@@ -212,7 +212,8 @@ fn cheaper(a: Option<f64>, b: Option<f64>) -> bool {
     }
 }
 
-/// The cheapest of `candidates` that delivers what `file` asks for, or why none does.
+/// The cheapest of `candidates` that delivers what `file` asks for, or why none does; where
+/// the file asks for a path (`[render] path`), `candidates` are its [`asked_candidates`].
 pub(super) fn choose(file: &SceneFile, candidates: &Candidates) -> Result<Choice> {
     let src = file.source.display();
     let chromatic = chromatic_scales(file);
@@ -338,22 +339,21 @@ pub(super) fn asked_reason(choice: Choice, candidates: &Candidates) -> Choice {
     }
 }
 
-/// The route of the path `[render] path` asks for, or why that path cannot deliver what the
-/// file asks for within its budget.
-fn choose_asked(file: &SceneFile, candidates: &Candidates, path: PathKind) -> Result<Choice> {
-    refuse_asked(file, path)?;
+/// The route of the path `[render] path` asks for among `c`, its [`asked_candidates`] (the
+/// caller checked [`refuse_asked`] and gives the reason with [`asked_reason`]), or why that
+/// path cannot deliver what the file asks for within its budget.
+fn choose_asked(file: &SceneFile, c: &Candidates, path: PathKind) -> Result<Choice> {
     let src = file.source.display();
     let budget = file.max_error_px;
     let chromatic = chromatic_scales(file);
-    let c = asked_candidates(file, candidates, path);
-    let choice = match path {
+    Ok(match path {
         PathKind::Vertex => {
             if c.vertex.is_none() {
                 return Err(Error::input(format!(
                     "{src}: [render] path = \"vertex\", [accuracy] max_error_px = {budget}: even 1 px edges do not meet it"
                 )));
             }
-            choose_vertex(file, &c)?
+            choose_vertex(file, c)?
         }
         PathKind::Warp => match (&c.warp, &c.no_pinhole_warp, c.cube) {
             (None, Some(why), Some(cube)) if !(file.outputs.ids || file.outputs.flow || file.outputs.depth) => {
@@ -368,7 +368,7 @@ fn choose_asked(file: &SceneFile, candidates: &Candidates, path: PathKind) -> Re
                     "{src}: [render] path = \"warp\": {why}, and a cube map, which stands in for it, carries colour alone and must meet the budget; ask for path = \"vertex\""
                 )))
             }
-            _ => choose_warp(file, &c, chromatic)?,
+            _ => choose_warp(file, c, chromatic)?,
         },
         PathKind::Cube => match c.cube {
             Some(cube) => Choice::Cube {
@@ -382,8 +382,7 @@ fn choose_asked(file: &SceneFile, candidates: &Candidates, path: PathKind) -> Re
                 )))
             }
         },
-    };
-    Ok(asked_reason(choice, candidates))
+    })
 }
 
 /// The warp route, with Alg. 1 beside it for IDs and flow.

@@ -433,24 +433,15 @@ fn render_planned(plan: &Plan, scene: &vklens::scene::Scene) -> Result<Raster, C
 
 /// The reference ray tracer's film as an image: float for EXR, else 8-bit; opaque.
 fn film_raster((width, height): (u32, u32), pixels: &[[f32; 4]], float: bool) -> Raster {
-    let opaque = pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]);
+    let film = Raster {
+        width,
+        height,
+        pixels: Pixels::Rgba32F(pixels.iter().map(|p| [p[0], p[1], p[2], 1.0]).collect()),
+        bit_depth: BitDepth::F32,
+    };
     if float {
-        Raster {
-            width,
-            height,
-            pixels: Pixels::Rgba32F(opaque.collect()),
-            bit_depth: BitDepth::F32,
-        }
+        film
     } else {
-        Raster {
-            width,
-            height,
-            pixels: Pixels::Rgba8(
-                opaque
-                    .map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
-                    .collect(),
-            ),
-            bit_depth: BitDepth::U8,
-        }
+        film.to_rgba8_rounded()
     }
 }

@@ -1,10 +1,11 @@
 //! The warp from a 360° source (cube map or panorama): faces follow the documented convention,
 //! no seam at face edges, every lens sees the direction its inverse model says.
 
-use crate::host::sphere_warp::run_sphere_warp;
+use crate::host::sphere_warp::run_environment;
 use crate::imaging::{BitDepth, Pixels, Raster};
 use crate::model::{Camera, Fisheye, Intrinsics};
-use crate::pass::sphere_warp::{equirect_direction, CubeFace, SphereSource, SphereWarpOptions};
+use crate::pass::sphere_warp::{equirect_direction, CubeFace, SphereWarpOptions};
+use crate::scene::{Environment, Scene};
 use glam::{DVec2, DVec3};
 
 /// A 200° fisheye (what no pinhole source can hold).
@@ -68,6 +69,21 @@ fn direction_cube(side: u32) -> [Raster; 6] {
     })
 }
 
+/// The sphere warp of `environment` through `camera`, as a scene of it renders.
+fn run_sphere_warp(
+    ctx: &crate::host::Context,
+    camera: &Camera,
+    environment: Environment,
+    options: &SphereWarpOptions,
+) -> crate::Result<(Raster, Vec<u8>)> {
+    run_environment(
+        ctx,
+        camera,
+        &Scene::from_environment("test", environment),
+        options,
+    )
+}
+
 fn options() -> SphereWarpOptions {
     SphereWarpOptions {
         chromatic: None,
@@ -121,8 +137,13 @@ fn a_cube_of_direction_colours_gives_every_pixel_its_direction() {
     let ctx = crate::testing::validated_context();
     let faces = direction_cube(256);
     for camera in [fisheye_200(), gopro()] {
-        let (out, mask) =
-            run_sphere_warp(ctx, &camera, SphereSource::Cube(&faces), &options()).expect("warp");
+        let (out, mask) = run_sphere_warp(
+            ctx,
+            &camera,
+            Environment::Cube(Box::new(faces.clone())),
+            &options(),
+        )
+        .expect("warp");
         let worst = worst_error(&camera, &out, &mask);
         println!("{}: worst colour error {worst:.2e}", camera.model_name());
         // Bilinear interpolation of a smooth function over 256² faces: well under 1e-3.
@@ -137,8 +158,13 @@ fn a_panorama_of_direction_colours_gives_every_pixel_its_direction() {
     let (w, h) = (1024, 512);
     let pano = float_raster(w, h, |u, v| colour_of(equirect_direction(u, v, (w, h))));
     for camera in [fisheye_200(), gopro()] {
-        let (out, mask) =
-            run_sphere_warp(ctx, &camera, SphereSource::Equirect(&pano), &options()).expect("warp");
+        let (out, mask) = run_sphere_warp(
+            ctx,
+            &camera,
+            Environment::Panorama(pano.clone()),
+            &options(),
+        )
+        .expect("warp");
         let worst = worst_error(&camera, &out, &mask);
         println!("{}: worst colour error {worst:.2e}", camera.model_name());
         // Coarser than the cube near the poles; the seam at ±180° wraps.
@@ -159,8 +185,13 @@ fn a_constant_cube_gives_a_constant_image_without_seams() {
     };
     let faces = [0; 6].map(|_| face.clone());
     let camera = fisheye_200();
-    let (out, mask) =
-        run_sphere_warp(ctx, &camera, SphereSource::Cube(&faces), &options()).expect("warp");
+    let (out, mask) = run_sphere_warp(
+        ctx,
+        &camera,
+        Environment::Cube(Box::new(faces.clone())),
+        &options(),
+    )
+    .expect("warp");
     let Pixels::Rgba8(px) = &out.pixels else {
         panic!("an 8-bit source gives an 8-bit output")
     };
@@ -180,8 +211,13 @@ fn chromatic_channels_see_their_own_magnified_directions() {
         chromatic: Some(scales),
         ..options()
     };
-    let (out, mask) =
-        run_sphere_warp(ctx, &camera, SphereSource::Cube(&faces), &opts).expect("warp");
+    let (out, mask) = run_sphere_warp(
+        ctx,
+        &camera,
+        Environment::Cube(Box::new(faces.clone())),
+        &opts,
+    )
+    .expect("warp");
     let Pixels::Rgba32F(px) = &out.pixels else {
         panic!()
     };
@@ -212,9 +248,14 @@ fn mismatched_faces_are_refused_naming_the_face() {
     let ctx = crate::testing::validated_context();
     let mut faces = direction_cube(32);
     faces[3] = float_raster(32, 16, |_, _| [0.0; 4]);
-    let e = run_sphere_warp(ctx, &fisheye_200(), SphereSource::Cube(&faces), &options())
-        .unwrap_err()
-        .to_string();
+    let e = run_sphere_warp(
+        ctx,
+        &fisheye_200(),
+        Environment::Cube(Box::new(faces.clone())),
+        &options(),
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("-y") && e.contains("32×16"), "{e}");
 }
 
@@ -222,7 +263,7 @@ fn mismatched_faces_are_refused_naming_the_face() {
 fn a_360_source_is_a_scene_the_planner_routes_to_the_sphere_warp_alone() {
     use crate::host::plan::execute;
     use crate::plan::{PassKind, PathChoice, Plan, RenderRequest, Route};
-    use crate::scene::{Environment, Pose, Scene};
+    use crate::scene::Pose;
     let ctx = crate::testing::validated_context();
     let camera = fisheye_200();
     let scene = Scene::from_environment(
@@ -256,8 +297,13 @@ fn a_360_source_is_a_scene_the_planner_routes_to_the_sphere_warp_alone() {
     let (colour, mask) = (frame.color.unwrap(), frame.mask.unwrap());
     assert!(worst_error(&camera, &colour, &mask) < 0.02);
     let cube = direction_cube(64);
-    let (alone, alone_mask) =
-        run_sphere_warp(ctx, &camera, SphereSource::Cube(&cube), &options()).unwrap();
+    let (alone, alone_mask) = run_sphere_warp(
+        ctx,
+        &camera,
+        Environment::Cube(Box::new(cube.clone())),
+        &options(),
+    )
+    .unwrap();
     assert_eq!((colour.pixels, mask), (alone.pixels, alone_mask));
 
     // What a 360° image cannot give is refused, naming the request's field.

@@ -564,6 +564,22 @@ fn rgba(r: &Raster) -> Vec<[f32; 4]> {
 fn the_warp_reads_the_domain_table_only_where_it_can_say_more_than_the_inner_radius() {
     use crate::pass::warp::WarpPass;
     let ctx = crate::testing::validated_context();
+    // The DOMAIN_TABLE constant the analytic warp of `geometry` is built with.
+    let table = |geometry: &WarpGeometry| {
+        let desc = WarpDesc {
+            geometry: geometry.clone(),
+            coordinates: Coordinates::Analytic,
+            sampling: Sampling::Bilinear,
+            border: Border::Constant,
+            format: PixelFormat::Rgba32F,
+            fill: [0.0; 4],
+            write_mask: true,
+        };
+        let pass = WarpPass::new(ctx.gpu(), desc).unwrap();
+        pass.pipeline()
+            .constants
+            .get(crate::pass::spec::DOMAIN_TABLE)
+    };
     let (mut seen, mut rounds) = ([false; 2], [false; 2]);
     // A mild lens (`vklens bench startup`'s), whose whole frame lies inside its domain's
     // inner radius, and the shared cameras, whose corners pass it.
@@ -613,21 +629,7 @@ fn the_warp_reads_the_domain_table_only_where_it_can_say_more_than_the_inner_rad
         // The distort direction tests every Newton iterate: the table goes only with a round
         // domain, and the image is still the f64 reference's.
         let distort = WarpGeometry::distort(g.camera.clone(), InverseMethod::Newton);
-        let desc = WarpDesc {
-            geometry: distort.clone(),
-            coordinates: Coordinates::Analytic,
-            sampling: Sampling::Bilinear,
-            border: Border::Constant,
-            format: PixelFormat::Rgba32F,
-            fill: [0.0; 4],
-            write_mask: true,
-        };
-        let pass = WarpPass::new(ctx.gpu(), desc).unwrap();
-        let table = pass
-            .pipeline()
-            .constants
-            .get(crate::pass::spec::DOMAIN_TABLE);
-        assert_eq!(table, Some(u32::from(!round)), "{name} distort");
+        assert_eq!(table(&distort), Some(u32::from(!round)), "{name} distort");
         let d = check(
             &format!("{name} distort"),
             distort,
@@ -641,22 +643,8 @@ fn the_warp_reads_the_domain_table_only_where_it_can_say_more_than_the_inner_rad
             d.mean,
             d.max
         );
-        let desc = WarpDesc {
-            geometry: g.clone(),
-            coordinates: Coordinates::Analytic,
-            sampling: Sampling::Bilinear,
-            border: Border::Constant,
-            format: PixelFormat::Rgba32F,
-            fill: [0.0; 4],
-            write_mask: true,
-        };
-        let pass = WarpPass::new(ctx.gpu(), desc).unwrap();
-        let table = pass
-            .pipeline()
-            .constants
-            .get(crate::pass::spec::DOMAIN_TABLE);
         assert_eq!(
-            table,
+            table(&g),
             Some(u32::from(reads)),
             "{name}: corner {corner}, inner {inner}"
         );

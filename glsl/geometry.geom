@@ -15,7 +15,7 @@ layout(location = 0) in vec4 v_color[];
 layout(location = 1) in vec2 v_uv[];
 layout(location = 2) flat in uint v_id[];
 layout(location = 3) in vec3 v_flow[];
-layout(location = 4) in float v_depth[];
+layout(location = 4) in vec3 v_position[];
 layout(location = 5) in vec3 v_undistorted[];
 layout(location = 6) in vec3 v_camera[];
 
@@ -23,7 +23,7 @@ layout(location = 0) out vec4 g_color;
 layout(location = 1) out vec2 g_uv;
 layout(location = 2) flat out uint g_id;
 layout(location = 3) out vec3 g_flow;
-layout(location = 4) out float g_depth;
+layout(location = 4) out vec3 g_position;
 
 void main() {
     vkl_load_frame();
@@ -42,7 +42,7 @@ void main() {
         g_uv = v_uv[i];
         g_id = v_id[i];
         g_flow = v_flow[i];
-        g_depth = v_depth[i];
+        g_position = v_position[i];
         EmitVertex();
     }
     EndPrimitive();

@@ -53,7 +53,7 @@ layout(location = 0) out vec4 v_color;
 layout(location = 1) out vec2 v_uv;
 layout(location = 2) flat out uint v_id;
 layout(location = 3) out vec3 v_flow;       // xy: pixel motion since the previous pose; z: valid
-layout(location = 4) out float v_depth;     // camera-frame z (metres)
+layout(location = 4) out vec3 v_position;   // camera-frame position (metres): depth is its z
 #if !defined(VKL_PINHOLE) && !defined(VKL_PULLED)
 layout(location = 5) out vec3 v_undistorted; // xy: undistorted NDC; z: 1 if the model applies
 layout(location = 6) out vec3 v_camera;      // camera-frame position (the wrap-behind test)
@@ -79,7 +79,7 @@ void main() {
     v_color = in_color;
     v_uv = in_uv;
     v_id = in_id;
-    v_depth = (frame.view * world).z;
+    v_position = (frame.view * world).xyz;
 #ifdef VKL_PULLED
 #ifdef VKL_PULLED_FLOW
     if (VKL_READOUT != 0u && vkl_rs_moving()) {
@@ -87,11 +87,14 @@ void main() {
             // The discard pass solved the vertex's readout time (in_motion.w): its
             // camera-frame point then is one rotation away, the lens is not evaluated again.
             vec3 p = vkl_rs_camera_point(vkl_motion_current(), in_position, in_motion.w);
-            v_depth = p.z;
+            v_position = p;
             gl_Position = alg1_clip(frame.projection * vec4(p, 1.0), in_distorted_ndc);
         } else {
             // Without flow, the discard pass left the point's depth and distance.
-            v_depth = in_motion.x;
+            // A point with that depth and distance stands in for it (depth and range are
+            // interpolated from the vertices under a moving rolling shutter).
+            v_position = vec3(sqrt(max(in_motion.y * in_motion.y - in_motion.x * in_motion.x,
+                                        0.0)), 0.0, in_motion.x);
             gl_Position = alg1_clip_at(in_motion.x, in_motion.y, in_distorted_ndc);
         }
     } else {
@@ -112,7 +115,7 @@ void main() {
         VklRsSample q;
         vkl_rs_frames(in_position, r, q);
         gl_Position = r.ok ? alg1_clip(r.clip, r.distorted_ndc) : r.clip;
-        v_depth = r.camera.z;
+        v_position = r.camera;
         bool previous_ok = r.ok;
         vec2 previous_pixel = r.pixel;
         if (WRITE_FLOW) {

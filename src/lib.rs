@@ -122,8 +122,8 @@ pub mod rolling_shutter {
     };
 }
 
-// The layers beneath the surface above, bottom first: `model`, `lens`, `io`, `imaging` and
-// `scene` (no Vulkan), `gpu` (one owning type per Vulkan object), `pass` (record-only GPU
+// The layers beneath the surface above, bottom first: `model`, `lens`, `io`, `imaging`,
+// `scene` and `labels` (no Vulkan), `gpu` (one owning type per Vulkan object), `pass` (record-only GPU
 // passes), `host` (the headless submit path) and `plan` (what to record for a scene, and its
 // recorder). See `docs/architecture.md`. They are public for the command line (`vklens-cli`)
 // and for callers who need a layer itself; unlike the items above, they are not kept stable
@@ -136,6 +136,8 @@ pub mod host;
 pub mod imaging;
 #[allow(missing_docs)]
 pub mod io;
+#[allow(missing_docs)]
+pub mod labels;
 #[allow(missing_docs)]
 pub mod lens;
 #[allow(missing_docs)]

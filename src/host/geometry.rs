@@ -57,8 +57,8 @@ pub fn render_moving(
 /// Host buffers for every output of a [`GeometryTargets`], and their reading into a
 /// [`Rendered`].
 pub struct TargetsReadback {
-    /// By location: colour, IDs, flow, depth.
-    slots: [Option<Download>; 4],
+    /// By location: colour, IDs, flow, depth, range.
+    slots: [Option<Download>; 5],
     extent: ash::vk::Extent2D,
 }
 
@@ -70,9 +70,10 @@ impl TargetsReadback {
             "geometry.ids.download",
             "geometry.flow.download",
             "geometry.depth.download",
+            "geometry.range.download",
         ];
         let images = targets.images();
-        let mut slots: [Option<Download>; 4] = Default::default();
+        let mut slots: [Option<Download>; 5] = Default::default();
         for (i, image) in images.iter().enumerate() {
             if let Some(image) = image {
                 slots[i] = Some(Download::new(gpu, image, names[i])?);
@@ -136,6 +137,9 @@ impl TargetsReadback {
         }
         if let Some(d) = &self.slots[3] {
             out.depth = Some(d.read::<f32>()?);
+        }
+        if let Some(d) = &self.slots[4] {
+            out.range = Some(d.read::<f32>()?);
         }
         Ok(out)
     }

@@ -11,7 +11,6 @@ use crate::model::Camera;
 use crate::pass::geometry::Rendered;
 use crate::plan::antialias::{average, shifted};
 use crate::plan::record::{plan_mesh_at, tessellation};
-use crate::plan::scene_file::OutputSpec;
 use crate::plan::{
     downsample, jitter_offsets, scaled_camera, Optics, PassKind, Plan, PlanRecorder,
     RecordedPipeline, RenderRequest, Route,
@@ -176,7 +175,7 @@ impl<'a> FrameRunner<'a> {
             main_plan.outputs.color = false;
         }
         let data = main_plan.outputs;
-        let main = if data.color || data.ids || data.flow || data.depth {
+        let main = if data.color || data.renders_data() {
             Some(PlanRecorder::build(gpu, &main_plan, scene, &mesh, 1)?)
         } else {
             None
@@ -187,12 +186,7 @@ impl<'a> FrameRunner<'a> {
             (Some(cam), true) => {
                 let mut p = plan.clone();
                 p.optics = Optics::Camera(scaled_camera(cam, s)?);
-                p.outputs = OutputSpec {
-                    ids: false,
-                    flow: false,
-                    depth: false,
-                    ..o
-                };
+                p.outputs = o.color_only();
                 match plan.route {
                     Route::WarpAndVertex {
                         method,
@@ -415,6 +409,7 @@ enum Output {
     Mask,
     Ids,
     Depth,
+    Range,
 }
 
 /// The images of `recorder`'s outputs that its geometry targets do not hold, each with the
@@ -440,6 +435,9 @@ fn route_images(recorder: &PlanRecorder) -> Vec<(Output, &crate::gpu::Image, Lef
         }
         if let Some(d) = &st.depth {
             images.push((Output::Depth, &d.output, Left::ComputeGeneral));
+        }
+        if let Some(d) = &st.range {
+            images.push((Output::Range, &d.output, Left::ComputeGeneral));
         }
     }
     images
@@ -523,6 +521,7 @@ impl PlanReadback {
                 Output::Mask => out.mask = Some(d.read()?),
                 Output::Ids => out.ids = Some(d.read()?),
                 Output::Depth => out.depth = Some(d.read()?),
+                Output::Range => out.range = Some(d.read()?),
             }
         }
         if !o.color {

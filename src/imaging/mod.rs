@@ -129,6 +129,9 @@ pub struct Rendered {
     pub flow: Option<Vec<[f32; 2]>>,
     /// Camera-frame z in metres; +inf where nothing was drawn.
     pub depth: Option<Vec<f32>>,
+    /// Distance from the projection centre along the pixel's ray, in metres; +inf where
+    /// nothing was drawn.
+    pub range: Option<Vec<f32>>,
     /// 255 where the pixel has a source, 0 where it was filled (outside the lens's valid
     /// domain): a 360° source's sphere warp gives it.
     pub mask: Option<Vec<u8>>,

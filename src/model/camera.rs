@@ -227,6 +227,23 @@ impl Camera {
         self.lens.kind()
     }
 
+    /// Whether the image is cut along the half-plane x = 0 behind the camera (an
+    /// equirectangular panorama: longitude jumps from +180° to −180° there), so that a straight
+    /// segment through it has no connected image ([`Camera::crosses_seam`]).
+    pub fn has_seam(&self) -> bool {
+        self.model() == ModelKind::Equirectangular
+    }
+
+    /// Whether the camera-frame segment `a`–`b` passes through the camera's seam (never for a
+    /// camera without one; NaN does).
+    pub fn crosses_seam(&self, a: DVec3, b: DVec3) -> bool {
+        if !self.has_seam() || (a.x < 0.0) == (b.x < 0.0) && a.x.is_finite() && b.x.is_finite() {
+            return false;
+        }
+        let t = a.x / (a.x - b.x);
+        !(a.z + (b.z - a.z) * t >= 0.0)
+    }
+
     /// The standard model's 14 coefficients (all zero for a camera of another model).
     pub fn distortion(&self) -> OpenCvDistortion {
         match &self.lens {

@@ -83,6 +83,13 @@ pub const WRITE_IDS: SpecId = SpecId::new("WRITE_IDS", 21);
 pub const WRITE_FLOW: SpecId = SpecId::new("WRITE_FLOW", 22);
 /// Camera depth.
 pub const WRITE_DEPTH: SpecId = SpecId::new("WRITE_DEPTH", 23);
+/// Range: the distance along the pixel's ray.
+pub const WRITE_RANGE: SpecId = SpecId::new("WRITE_RANGE", 25);
+
+// glsl/include/wraps_behind.glsl (glsl/geometry.geom, glsl/discard.comp through alg1.glsl).
+/// The camera's image is cut along the half-plane x = 0 behind it (a panorama,
+/// `Camera::has_seam`): triangles through it are dropped.
+pub const SEAM_BEHIND: SpecId = SpecId::new("VKL_SEAM_BEHIND", 27);
 
 // glsl/include/rolling_shutter.glsl (glsl/geometry.vert, glsl/discard.comp).
 /// A moving rolling shutter's readout, `Readout::gpu_id` (0: a global shutter or a still

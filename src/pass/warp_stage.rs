@@ -29,6 +29,8 @@ pub struct WarpStage {
     pub ids: Option<DataWarp>,
     /// The depth through the same lens (nearest, +inf fill), when asked for.
     pub depth: Option<DataWarp>,
+    /// The range through the same lens (nearest, +inf fill), when asked for.
+    pub range: Option<DataWarp>,
 }
 
 /// Which data outputs a [`WarpStage`] carries beside its colour.
@@ -38,6 +40,8 @@ pub struct DataOutputs {
     pub ids: bool,
     /// Camera depth (R32F metres, +inf where there is no source).
     pub depth: bool,
+    /// Range along the ray (R32F metres, +inf where there is no source).
+    pub range: bool,
 }
 
 /// A nearest warp of a [`WarpStage`] that carries one of the pinhole render's data images
@@ -99,6 +103,7 @@ impl WarpStage {
             Outputs {
                 ids: data.ids,
                 depth: data.depth,
+                range: data.range,
                 ..Outputs::color_only(Some(format))
             },
         );
@@ -186,6 +191,12 @@ impl WarpStage {
             [f32::INFINITY; 4],
             "warp_path.depth",
         )?;
+        let range = data_warp(
+            targets.range(),
+            PixelFormat::R32Float,
+            [f32::INFINITY; 4],
+            "warp_path.range",
+        )?;
         Ok(WarpStage {
             gpu: gpu.clone(),
             pass,
@@ -195,6 +206,7 @@ impl WarpStage {
             mask,
             ids,
             depth,
+            range,
         })
     }
 
@@ -210,7 +222,10 @@ impl WarpStage {
 
     /// The nearest warps of the data outputs (IDs, then depth), those asked for.
     pub fn data_warps(&self) -> impl Iterator<Item = &DataWarp> {
-        self.ids.iter().chain(self.depth.iter())
+        self.ids
+            .iter()
+            .chain(self.depth.iter())
+            .chain(self.range.iter())
     }
 
     /// Records the one-off work: output and mask to `GENERAL`, the warp's map builds.

@@ -244,7 +244,7 @@ pub(super) fn choose(file: &SceneFile, candidates: &Candidates) -> Result<Choice
             why,
         });
     }
-    let data_needs_vertex = file.outputs.ids || file.outputs.flow;
+    let data_needs_vertex = file.outputs.renders_ids() || file.outputs.flow;
     if chromatic.is_some()
         || (!data_needs_vertex && c.warp.is_some() && (c.vertex.is_none() || warp_ms < vertex_ms))
     {
@@ -263,8 +263,8 @@ pub(super) fn refuse_asked(file: &SceneFile, path: PathKind) -> Result<()> {
         PathKind::Vertex if file.effects.chromatic_aberration => Err(Error::input(format!(
             "{asked}: [effects] chromatic_aberration needs the warp (Alg. 1 cannot give each channel its own lens); ask for path = \"warp\" or drop the key"
         ))),
-        PathKind::Cube if o.ids || o.flow || o.depth => Err(Error::input(format!(
-            "{asked}: a cube map carries colour alone, and [outputs] asks for IDs, flow or depth; ask for path = \"vertex\" or \"warp\", or drop the key"
+        PathKind::Cube if o.renders_data() => Err(Error::input(format!(
+            "{asked}: a cube map carries colour alone, and [outputs] asks for IDs, flow, depth or range; ask for path = \"vertex\" or \"warp\", or drop the key"
         ))),
         _ => Ok(()),
     }
@@ -279,7 +279,7 @@ pub(super) fn asked_candidates(
     path: PathKind,
 ) -> Candidates {
     let mut c = candidates.clone();
-    let data = file.outputs.ids || file.outputs.flow;
+    let data = file.outputs.renders_ids() || file.outputs.flow;
     match path {
         PathKind::Vertex => {
             (c.warp, c.per_pixel, c.from_map, c.cube) = (None, None, None, None);
@@ -356,7 +356,7 @@ fn choose_asked(file: &SceneFile, c: &Candidates, path: PathKind) -> Result<Choi
             choose_vertex(file, c)?
         }
         PathKind::Warp => match (&c.warp, &c.no_pinhole_warp, c.cube) {
-            (None, Some(why), Some(cube)) if !(file.outputs.ids || file.outputs.flow || file.outputs.depth) => {
+            (None, Some(why), Some(cube)) if !file.outputs.renders_data() => {
                 Choice::Cube {
                     cube,
                     chromatic,
@@ -398,7 +398,7 @@ fn choose_warp(
             "{src}: [accuracy] max_error_px = {budget}: no inverse method meets it on this camera"
         )));
     };
-    if !(file.outputs.ids || file.outputs.flow) {
+    if !(file.outputs.renders_ids() || file.outputs.flow) {
         return Ok(Choice::Warp { warp, chromatic });
     }
     let Some(vertex) = candidates.vertex else {
@@ -427,7 +427,7 @@ pub(super) fn choose_moving_rolling_shutter(
     let src = file.source.display();
     let budget = file.max_error_px;
     let chromatic = chromatic_scales(file);
-    let data = file.outputs.ids || file.outputs.flow;
+    let data = file.outputs.renders_ids() || file.outputs.flow;
     let moving = format!(
         "{src}: [sensor] rolling_shutter, [accuracy] max_error_px = {budget}: [[poses]] #{} moves during its {readout} readout",
         frame + 1
@@ -524,9 +524,9 @@ fn choose_vertex(file: &SceneFile, candidates: &Candidates) -> Result<Choice> {
             file.source.display()
         )));
     };
-    let why = if o.ids || o.flow {
+    let why = if o.renders_ids() || o.flow {
         VertexReason::DataOutputs {
-            ids: o.ids,
+            ids: o.renders_ids(),
             flow: o.flow,
         }
     } else if let Some(why) = &candidates.no_pinhole_warp {

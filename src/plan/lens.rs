@@ -61,10 +61,19 @@ fn check_lens(file: &SceneFile, spec: &LensSpec) -> Result<CheckedLens> {
             "{src}: [render] supersample / jitter: the image-based lens model renders one sample per pixel per lens sample; anti-aliasing is for camera-file scenes"
         )));
     }
-    for (asked, key) in [(o.ids, "ids"), (o.flow, "flow"), (o.depth, "depth")] {
+    let asked = [
+        (o.ids, "[outputs] ids"),
+        (o.flow, "[outputs] flow"),
+        (o.depth, "[outputs] depth"),
+        (o.range, "[outputs] range"),
+        (o.classes, "[outputs] classes"),
+        (o.boxes, "[outputs] boxes"),
+        (o.keypoints, "[[keypoints]]"),
+    ];
+    for (asked, key) in asked {
         if asked {
             return Err(Error::input(format!(
-                "{src}: [outputs] {key}: the image-based lens model blends many views, so it has no exact {key}; give a calibrated camera (optics.camera; `vklens lens fit-opencv` makes one from the lens) for {key}"
+                "{src}: {key}: the image-based lens model blends many views, so it has no exact {key}; give a calibrated camera (optics.camera; `vklens lens fit-opencv` makes one from the lens) for {key}"
             )));
         }
     }

@@ -255,6 +255,27 @@ impl Plan {
         Some(self.end_poses.get(index).copied().unwrap_or(pose))
     }
 
+    /// How frame `index` sees the world, for its labels: the camera, the pose, and the
+    /// readout and motion where the camera moves during a rolling shutter's readout. `None`
+    /// for a lens prescription or a frame past the pose list.
+    pub fn view(&self, index: usize) -> Option<crate::labels::View<'_>> {
+        let pose = *self.poses.get(index)?;
+        let end = self.end_pose(index)?;
+        Some(crate::labels::View {
+            camera: self.camera()?,
+            pose,
+            moving: self
+                .shutter
+                .moving_readout()
+                .filter(|_| end != pose)
+                .map(|r| {
+                    let motion =
+                        crate::model::rolling_shutter::FrameMotion::new(pose.into(), end.into());
+                    (r, motion)
+                }),
+        })
+    }
+
     /// The lens prescription and its setting, if the optics are one.
     pub fn lens(&self) -> Option<&LensSetting> {
         match &self.optics {

@@ -19,6 +19,7 @@ use crate::model::warp::WarpGeometry;
 use crate::model::{Camera, InverseMethod, OpenCvDistortion};
 use crate::pass::cube_stage::CubeStage;
 use crate::pass::environment::EnvironmentStage;
+use crate::pass::geometry::DEFAULT_NEAR;
 use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
     Projection,
@@ -42,12 +43,29 @@ pub(crate) fn plan_mesh_at(plan: &Plan, scene: &Scene, index: usize) -> Result<M
         .poses
         .get(index)
         .ok_or_else(|| internal(format!("no pose {index} in the plan")))?;
-    match (tessellation(plan), plan.camera()) {
-        (Some(l), Some(camera)) => {
-            crate::scene::tessellate::tessellate(&scene.mesh, pose, camera, l)
-        }
-        _ => Ok(scene.mesh.clone()),
+    let Some(camera) = plan.camera() else {
+        return Ok(scene.mesh.clone());
+    };
+    let mesh = match tessellation(plan) {
+        Some(l) => crate::scene::tessellate::tessellate(&scene.mesh, pose, camera, l)?,
+        None => scene.mesh.clone(),
+    };
+    if !matches!(
+        plan.route,
+        Route::Vertex { .. } | Route::WarpAndVertex { .. }
+    ) {
+        return Ok(mesh);
     }
+    // Alg. 1 drops a triangle with one vertex it does not keep whole: where an object crosses
+    // the edge of what the lens sees, split down to the budget instead of losing a strip.
+    // A plan held to no budget (a path taken as named) follows it to the default one.
+    let budget = if plan.budget_px.is_finite() {
+        plan.budget_px
+    } else {
+        super::scene_file::DEFAULT_MAX_ERROR_PX
+    };
+    let kept = crate::pass::geometry::vertex_kept(camera, plan.delta, DEFAULT_NEAR)?;
+    crate::scene::tessellate::refine_rim(&mesh, pose, camera, kept, budget, tessellation(plan))
 }
 
 /// The edge length (px) the plan tessellates to, if it does.
@@ -253,9 +271,10 @@ impl Builder<'_> {
         let o = self.plan.outputs;
         Outputs {
             color: o.color.then_some(self.color_format()),
-            ids: o.ids,
+            ids: o.renders_ids(),
             flow: o.flow,
             depth: o.depth,
+            range: o.renders_range(),
         }
     }
 
@@ -360,8 +379,9 @@ impl Builder<'_> {
                     ));
                 }
                 let data = DataOutputs {
-                    ids: o.ids,
+                    ids: o.renders_ids(),
                     depth: o.depth,
+                    range: o.renders_range(),
                 };
                 let warp = self.warp_route(camera, *method, *chromatic, *map, data)?;
                 Stages::Warp { warp, data: None }
@@ -484,7 +504,7 @@ impl Builder<'_> {
     fn cube(&mut self, camera: &Camera, side: u32, chromatic: Option<[f64; 3]>) -> Result<Stages> {
         let (gpu, plan) = (self.gpu, self.plan);
         let o = plan.outputs;
-        if o.ids || o.flow || o.depth {
+        if o.renders_data() {
             return Err(internal(
                 "the planner routes only colour through a cube map",
             ));
@@ -978,6 +998,12 @@ impl PlanRecorder {
     /// source; `GENERAL` after a frame), when the plan asks for depth through the warp.
     pub fn warped_depth(&self) -> Option<&crate::gpu::Image> {
         self.stages.warp()?.stage.depth.as_ref().map(|d| &d.output)
+    }
+
+    /// The warp route's range (R32F metres, as [`Self::warped_depth`]), when the plan asks
+    /// for range through the warp.
+    pub fn warped_range(&self) -> Option<&crate::gpu::Image> {
+        self.stages.warp()?.stage.range.as_ref().map(|d| &d.output)
     }
 
     /// The images a recorded frame leaves: colour (warp output, lens film or geometry

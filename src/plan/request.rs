@@ -67,7 +67,7 @@ impl PathKind {
     pub fn help(self) -> &'static str {
         match self {
             PathKind::Vertex => "Alg. 1 per vertex, triangles outside the frustum ± (δ + D) dropped: exact colour, IDs, flow and depth, as long as the mesh is fine (see --tessellate)",
-            PathKind::Warp => "A pinhole render of the overscanned frustum, then the compute warp (inverse model per pixel): colour bilinear, IDs and depth nearest, no flow. Where no pinhole source can hold the lens (180° and more, or beyond the device's image limit) it renders a cube map instead, and says so",
+            PathKind::Warp => "A pinhole render of the overscanned frustum, then the compute warp (inverse model per pixel): colour bilinear, IDs, depth and range nearest, no flow. Where no pinhole source can hold the lens (180° and more, or beyond the device's image limit) it renders a cube map instead, and says so",
             PathKind::Cube => "Six 90° pinhole faces of a cube map, then the warp by each pixel's ray (colour only): any lens, fisheyes past 180° included. Face size from --density",
         }
     }
@@ -413,10 +413,10 @@ fn warp_route(
     let big = scaled_camera(camera, s)?;
     Ok(match pinhole_source_refusal(&big, q, max_image_side) {
         Some(why) => {
-            if o.ids || o.depth {
+            if o.renders_data() {
                 return Err(Error::argument(
                     "path",
-                    format!("{why}: the warp path would need a cube map, which carries colour only; the vertex path renders IDs and depth"),
+                    format!("{why}: the warp path would need a cube map, which carries colour only; the vertex path renders IDs, depth and range"),
                 ));
             }
             let side = cube_face_side(camera, q);
@@ -447,8 +447,8 @@ fn warp_route(
                 },
                 format!(
                     "the warp path was asked for: {method} per pixel, colour bilinear{}",
-                    if o.ids || o.depth {
-                        ", IDs and depth nearest"
+                    if o.renders_data() {
+                        ", IDs, depth and range nearest"
                     } else {
                         ""
                     }
@@ -470,10 +470,10 @@ fn warp_route(
 /// The cube path as asked for.
 fn cube_route(request: &RenderRequest, side: u32, steps: &mut Vec<Step>) -> Result<(Route, f64)> {
     let (camera, o, chromatic) = (&request.camera, request.outputs, request.chromatic);
-    if o.ids || o.flow || o.depth {
+    if o.renders_data() {
         return Err(Error::argument(
             "path",
-            "IDs, flow and depth through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); the vertex path renders them",
+            "IDs, flow, depth and range through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); the vertex path renders them",
         ));
     }
     if side < 2 {
@@ -599,7 +599,13 @@ fn push_cube_steps(steps: &mut Vec<Step>, why: String, chromatic: bool) {
 /// request's field, what a 360° image cannot give.
 fn environment_plan(request: &RenderRequest, environment: &Environment) -> Result<Plan> {
     let o = request.outputs;
-    for (asked, field) in [(o.ids, "ids"), (o.flow, "flow"), (o.depth, "depth")] {
+    let asked = [
+        (o.renders_ids(), "ids"),
+        (o.flow, "flow"),
+        (o.depth, "depth"),
+        (o.renders_range(), "range"),
+    ];
+    for (asked, field) in asked {
         if asked {
             return Err(Error::argument(
                 field,

@@ -70,9 +70,47 @@ pub struct OutputSpec {
     pub color: bool,
     pub ids: bool,
     pub flow: bool,
+    /// Camera-frame z (metres).
     pub depth: bool,
+    /// Distance from the projection centre along each pixel's ray (metres).
+    pub range: bool,
+    /// Class IDs (16-bit PNG): each object's class by the scene's `[classes]` patterns.
+    pub classes: bool,
+    /// Each visible object's boxes and 3D box corners through the lens (JSON).
+    pub boxes: bool,
+    /// The scene names keypoints (`[[keypoints]]`): their pixels and visibility (JSON).
+    pub keypoints: bool,
     /// Colour as float EXR instead of 8-bit PNG.
     pub exr: bool,
+}
+
+impl OutputSpec {
+    /// Whether the object ID image is rendered: asked for, or what classes and boxes are
+    /// read from.
+    pub fn renders_ids(&self) -> bool {
+        self.ids || self.classes || self.boxes
+    }
+
+    /// Whether the range image is rendered: asked for, or what boxes' corners and keypoints
+    /// are tested against for occlusion.
+    pub fn renders_range(&self) -> bool {
+        self.range || self.boxes || self.keypoints
+    }
+
+    /// Whether any per-pixel data beside colour is rendered (IDs, flow, depth or range):
+    /// none of it may be filtered, and a cube map carries colour alone.
+    pub fn renders_data(&self) -> bool {
+        self.renders_ids() || self.flow || self.depth || self.renders_range()
+    }
+
+    /// The colour output alone, as asked (the anti-aliased pass renders nothing else).
+    pub fn color_only(&self) -> OutputSpec {
+        OutputSpec {
+            color: self.color,
+            exr: self.exr,
+            ..OutputSpec::default()
+        }
+    }
 }
 
 /// The sensor (`[sensor]`): how it reads its lines.
@@ -108,6 +146,11 @@ pub struct SceneFile {
     /// `[render] path`: the path the scene asks for, as `vklens render --path` spells it;
     /// `None`: the planner's choice.
     pub path: Option<super::PathKind>,
+    /// `[classes]`: object name patterns and their class IDs, in the file's order (the
+    /// first match wins).
+    pub classes: Vec<crate::labels::ClassRule>,
+    /// `[[keypoints]]`: named world points whose pixels and visibility each frame labels.
+    pub keypoints: Vec<crate::labels::Keypoint>,
 }
 
 /// Colour anti-aliasing: `supersample`× the resolution box-filtered down, `jitter` sub-sample
@@ -349,7 +392,7 @@ impl SceneFile {
         let root: Table = text
             .parse()
             .map_err(|e: toml::de::Error| r.err("", format!("not valid TOML: {}", e.message())))?;
-        const TABLES: [&str; 9] = [
+        const TABLES: [&str; 11] = [
             "geometry",
             "optics",
             "sensor",
@@ -359,6 +402,8 @@ impl SceneFile {
             "poses",
             "pose_sequence",
             "render",
+            "classes",
+            "keypoints",
         ];
         for k in root.keys() {
             if !TABLES.contains(&k.as_str()) {
@@ -374,7 +419,10 @@ impl SceneFile {
         let geometry = r.geometry(&root, dir)?;
         let optics = r.optics(&root, dir)?;
         let effects = r.effects(&root, &optics)?;
-        let outputs = r.outputs(&root)?;
+        let mut outputs = r.outputs(&root)?;
+        let classes = r.classes(&root)?;
+        let keypoints = r.keypoints(&root)?;
+        outputs.keypoints = !keypoints.is_empty();
         let max_error_px = r.accuracy(&root)?;
         let (background, antialias, asked_path) = r.render(&root)?;
         let sensor = r.sensor(&root)?;
@@ -392,6 +440,8 @@ impl SceneFile {
             background,
             antialias,
             path: asked_path,
+            classes,
+            keypoints,
         })
     }
 }
@@ -555,7 +605,9 @@ impl Reader<'_> {
         let o = self.table(
             root,
             "outputs",
-            &["color", "ids", "flow", "depth", "format"],
+            &[
+                "color", "ids", "flow", "depth", "range", "classes", "boxes", "format",
+            ],
         )?;
         let exr = match self.string(o, "outputs", "format")? {
             None | Some("png") => false,
@@ -572,15 +624,106 @@ impl Reader<'_> {
             ids: self.bool(o, "outputs", "ids", false)?,
             flow: self.bool(o, "outputs", "flow", false)?,
             depth: self.bool(o, "outputs", "depth", false)?,
+            range: self.bool(o, "outputs", "range", false)?,
+            classes: self.bool(o, "outputs", "classes", false)?,
+            boxes: self.bool(o, "outputs", "boxes", false)?,
+            keypoints: false,
             exr,
         };
-        if !(outputs.color || outputs.ids || outputs.flow || outputs.depth) {
+        if !(outputs.color || outputs.renders_data()) {
             return Err(self.err(
                 "[outputs]",
-                "every output is off: ask for color, ids, flow or depth",
+                "every output is off: ask for color, ids, flow, depth, range, classes or boxes",
             ));
         }
         Ok(outputs)
+    }
+
+    /// `[classes]`: `"pattern" = class`, in the file's order.
+    fn classes(&self, root: &Table) -> Result<Vec<crate::labels::ClassRule>, SceneFileError> {
+        let Some(v) = root.get("classes") else {
+            return Ok(Vec::new());
+        };
+        let Value::Table(t) = v else {
+            return Err(self.err(
+                "[classes]",
+                format!(
+                    "expected a table of \"name pattern\" = class ID, found {}",
+                    v.type_str()
+                ),
+            ));
+        };
+        t.iter()
+            .map(|(pattern, class)| {
+                let key = format!("[classes] {pattern:?}");
+                match class {
+                    Value::Integer(c) if (0..=u16::MAX as i64).contains(c) => {
+                        Ok(crate::labels::ClassRule {
+                            pattern: pattern.clone(),
+                            class: *c as u16,
+                        })
+                    }
+                    other => Err(self.err(
+                        &key,
+                        format!(
+                            "expected a class ID, a whole number 0..=65535 (classes_NNNN.png is 16-bit), found {other}"
+                        ),
+                    )),
+                }
+            })
+            .collect()
+    }
+
+    /// `[[keypoints]]`: `name` and `xyz` (world metres) each.
+    fn keypoints(&self, root: &Table) -> Result<Vec<crate::labels::Keypoint>, SceneFileError> {
+        let Some(v) = root.get("keypoints") else {
+            return Ok(Vec::new());
+        };
+        let Value::Array(a) = v else {
+            return Err(self.err(
+                "keypoints",
+                "expected [[keypoints]] tables, each with name and xyz",
+            ));
+        };
+        let mut names = std::collections::HashSet::new();
+        a.iter()
+            .enumerate()
+            .map(|(i, k)| {
+                let key = format!("[[keypoints]] {}", i + 1);
+                let Value::Table(t) = k else {
+                    return Err(self.err(&key, "expected a table with name and xyz"));
+                };
+                if let Some(other) = t.keys().find(|k| *k != "name" && *k != "xyz") {
+                    return Err(
+                        self.err(&format!("{key} {other}"), "unknown key; expected name, xyz")
+                    );
+                }
+                let name = match t.get("name") {
+                    Some(Value::String(s)) if !s.is_empty() => s.clone(),
+                    Some(other) => {
+                        return Err(self.err(
+                            &format!("{key} name"),
+                            format!("expected a non-empty string, found {other}"),
+                        ))
+                    }
+                    None => return Err(self.err(&format!("{key} name"), "missing")),
+                };
+                if !names.insert(name.clone()) {
+                    return Err(self.err(
+                        &format!("{key} name"),
+                        format!("{name:?} names an earlier keypoint too; give each its own"),
+                    ));
+                }
+                let xyz = t
+                    .get("xyz")
+                    .ok_or_else(|| self.err(&format!("{key} xyz"), "missing (3 numbers)"))?;
+                let xyz = self.numbers::<3>(xyz, &format!("{key} xyz"))?;
+                Ok(crate::labels::Keypoint {
+                    name,
+                    xyz: DVec3::from(xyz),
+                })
+            })
+            .collect()
     }
 
     /// `[accuracy] max_error_px`.

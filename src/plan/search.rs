@@ -234,7 +234,7 @@ pub(super) fn search_candidates(
     let chromatic = chromatic_scales(file);
     let pixels = camera.width as f64 * camera.height as f64;
     let triangles = scene.mesh.triangle_count() as f64;
-    let data_needs_vertex = o.ids || o.flow;
+    let data_needs_vertex = o.renders_ids() || o.flow;
     // A frame that moves during its readout is measured through its motion.
     let (first, motion) = match moving {
         Some((readout, start, end)) => (Some(start), Some((readout, end))),
@@ -315,16 +315,15 @@ pub(super) fn search_candidates(
     // The cube map carries colour alone: a face's depth is not the lens camera's, and IDs
     // are never filtered across faces. Faces of one face pixel per output pixel at the
     // centre (density 1, as the warp's source).
-    let cube =
-        (o.color && !data_needs_vertex && !o.depth && CUBE_RAY_ERROR_PX <= budget).then(|| {
-            let texel = if o.exr { 16 } else { 4 };
-            let wanted = crate::model::overscan::cube_face_side(camera, 1.0);
-            let side = limits::cube_side(wanted, texel, PLANNED_CUBE_MAX_SIDE);
-            CubeCandidate {
-                side,
-                ms: estimate_ms(pixels, triangles, Cost::Cube { side, fetches }),
-            }
-        });
+    let cube = (o.color && !o.renders_data() && CUBE_RAY_ERROR_PX <= budget).then(|| {
+        let texel = if o.exr { 16 } else { 4 };
+        let wanted = crate::model::overscan::cube_face_side(camera, 1.0);
+        let side = limits::cube_side(wanted, texel, PLANNED_CUBE_MAX_SIDE);
+        CubeCandidate {
+            side,
+            ms: estimate_ms(pixels, triangles, Cost::Cube { side, fetches }),
+        }
+    });
     Ok(Candidates {
         vertex,
         per_pixel,

@@ -104,6 +104,9 @@ pub fn checkerboard(board: Board, subdivisions: u32) -> Scene {
         view_down: DVec3::Y,
         board: Some(board),
         environment: None,
+        objects: (0..ny)
+            .flat_map(|b| (0..nx).map(move |a| format!("square_{a}_{b}")))
+            .collect(),
     }
 }
 
@@ -160,6 +163,9 @@ pub fn grid(n: u32) -> Scene {
         view_down: DVec3::Y,
         board: None,
         environment: None,
+        objects: (0..n)
+            .flat_map(|b| (0..n).map(move |a| format!("quad_{a}_{b}")))
+            .collect(),
     }
 }
 
@@ -199,6 +205,16 @@ pub fn room() -> Scene {
         view_down: DVec3::Y,
         board: None,
         environment: None,
+        objects: [
+            "wall_right",
+            "wall_left",
+            "floor",
+            "ceiling",
+            "wall_front",
+            "wall_back",
+        ]
+        .map(String::from)
+        .to_vec(),
     }
 }
 
@@ -256,6 +272,9 @@ pub fn boxes() -> Scene {
         view_down: DVec3::Y,
         board: None,
         environment: None,
+        objects: ["floor", "box_red", "box_green", "box_blue"]
+            .map(String::from)
+            .to_vec(),
     }
 }
 

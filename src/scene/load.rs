@@ -30,7 +30,7 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
             "no such file (a scene is checkerboard[:COLSxROWS[:SQUARE_M]], grid[:N], boxes, room, or an .obj/.gltf/.glb file)".into(),
         ));
     }
-    let mesh = match ext.as_deref() {
+    let (mesh, objects) = match ext.as_deref() {
         Some("obj") => load_obj(path).map_err(|e| err(e.to_string()))?,
         Some("gltf") | Some("glb") => load_gltf(path).map_err(|e| err(e.to_string()))?,
         _ => {
@@ -48,10 +48,12 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
         view_down: -DVec3::Y,
         board: None,
         environment: None,
+        objects,
     })
 }
 
-fn load_obj(path: &Path) -> Result<Mesh> {
+/// The mesh, and its objects' names by ID (each `o`/`g` group is one object).
+fn load_obj(path: &Path) -> Result<(Mesh, Vec<String>)> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -101,12 +103,13 @@ fn load_obj(path: &Path) -> Result<Mesh> {
         }
         mesh.append(&part);
     }
-    Ok(mesh)
+    let names = models.iter().map(|m| m.name.clone()).collect();
+    Ok((mesh, names))
 }
 
 /// Reads a glTF file. The glTF crate indexes accessors it has not validated and panics on a
 /// malformed file; that panic is caught here and reported as the file's error.
-fn load_gltf(path: &Path) -> Result<Mesh> {
+fn load_gltf(path: &Path) -> Result<(Mesh, Vec<String>)> {
     crate::error::catch_quietly(|| read_gltf(path)).unwrap_or_else(|_| {
         Err(Error::input(
             "malformed glTF: an index points past its array (the glTF reader gave up)",
@@ -114,7 +117,9 @@ fn load_gltf(path: &Path) -> Result<Mesh> {
     })
 }
 
-fn read_gltf(path: &Path) -> Result<Mesh> {
+/// The mesh, and its objects' names by ID (each node with a mesh is one object, named by the
+/// node, else by its mesh, else `node_<index>`).
+fn read_gltf(path: &Path) -> Result<(Mesh, Vec<String>)> {
     let gltf =
         gltf::Gltf::open(path).map_err(|e| Error::input(format!("cannot read the glTF: {e}")))?;
     let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
@@ -125,6 +130,7 @@ fn read_gltf(path: &Path) -> Result<Mesh> {
         .or_else(|| gltf.document.scenes().next())
         .ok_or_else(|| Error::input("the glTF has no scene"))?;
     let mut mesh = Mesh::default();
+    let mut names = Vec::new();
     let mut next_id = 1u32;
     // Depth-first over the node tree, composing transforms.
     let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
@@ -185,12 +191,18 @@ fn read_gltf(path: &Path) -> Result<Mesh> {
                 mesh.append(&part);
             }
             next_id += 1;
+            names.push(
+                node.name()
+                    .or(m.name())
+                    .map(String::from)
+                    .unwrap_or_else(|| format!("node_{}", node.index())),
+            );
         }
         for child in node.children() {
             stack.push((child, world));
         }
     }
-    Ok(mesh)
+    Ok((mesh, names))
 }
 
 #[cfg(test)]

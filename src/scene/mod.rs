@@ -185,6 +185,10 @@ pub struct Scene {
     /// A 360° image of the world at infinity, seen from the camera's centre (a cube map or a
     /// panorama a user's own renderer made): what the scene is, instead of a mesh.
     pub environment: Option<Environment>,
+    /// Object names by ID: `objects[i]` names the vertices with `object_id` i + 1 (OBJ `o`/`g`
+    /// names, glTF node names, a built-in scene's own). An ID past the list is
+    /// `object_<id>` ([`Scene::object_name`]).
+    pub objects: Vec<String>,
 }
 
 /// The world as a 360° image at infinity, seen from the camera's centre: each output pixel
@@ -232,7 +236,27 @@ impl Scene {
             view_down: DVec3::Y,
             board: None,
             environment: Some(environment),
+            objects: Vec::new(),
         }
+    }
+
+    /// The name of object `id` (1 and up; 0 is the background): its scene's name for it, or
+    /// `object_<id>`.
+    pub fn object_name(&self, id: u32) -> String {
+        id.checked_sub(1)
+            .and_then(|i| self.objects.get(i as usize))
+            .filter(|n| !n.is_empty())
+            .cloned()
+            .unwrap_or_else(|| format!("object_{id}"))
+    }
+
+    /// The IDs the mesh's vertices carry, ascending, each once.
+    pub fn object_ids(&self) -> Vec<u32> {
+        let mut ids: Vec<u32> = self.mesh.vertices.iter().map(|v| v.object_id).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        ids.retain(|&id| id != 0);
+        ids
     }
 
     /// A pose that shows the whole scene, centred, filling about 80 % of the smaller field of

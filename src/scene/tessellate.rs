@@ -67,67 +67,206 @@ pub fn tessellate(mesh: &Mesh, pose: &Pose, camera: &Camera, max_edge_px: f64) -
         // straight behind a fisheye, splitting it would never end.
         let dropped = |a: u32, b: u32| {
             let (p, q) = (points[a as usize], points[b as usize]);
+            if camera.has_seam() {
+                // A panorama drops what crosses its seam instead (and [`refine_rim`] follows
+                // the seam).
+                return camera.crosses_seam(p, q);
+            }
             (p.z <= 0.0 || q.z <= 0.0) && !(p.truncate().dot(q.truncate()) > 0.0)
         };
         let long = |a: u32, b: u32| match (pixels[a as usize], pixels[b as usize]) {
             (Some(p), Some(q)) => near_image(p, q) && p.distance(q) > max_edge_px && !dropped(a, b),
             _ => false,
         };
-        let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut indices = Vec::with_capacity(out.indices.len());
+        let what = format!("tessellating to {max_edge_px} px edges");
         let mut vertices = out.vertices.clone();
-        let mut mid = |a: u32, b: u32, vertices: &mut Vec<Vertex>| -> u32 {
-            let key = (a.min(b), a.max(b));
-            *midpoints.entry(key).or_insert_with(|| {
-                vertices.push(vertices[key.0 as usize].midpoint(&vertices[key.1 as usize]));
-                vertices.len() as u32 - 1
-            })
-        };
-        let mut changed = false;
-        for t in out.indices.chunks_exact(3) {
-            let split = [long(t[0], t[1]), long(t[1], t[2]), long(t[2], t[0])];
-            let count = split.iter().filter(|&&s| s).count();
-            // Rotate so that the pattern is canonical: 1 split → edge 0; 2 splits → edges
-            // 0 and 1 (edge 2 unsplit).
-            let r = match count {
-                1 => split.iter().position(|&s| s).unwrap_or(0),
-                2 => (split.iter().position(|&s| !s).unwrap_or(2) + 1) % 3,
-                _ => 0,
-            };
-            let v = [t[r], t[(r + 1) % 3], t[(r + 2) % 3]];
-            match count {
-                0 => indices.extend_from_slice(&v),
-                1 => {
-                    let m = mid(v[0], v[1], &mut vertices);
-                    indices.extend_from_slice(&[v[0], m, v[2], m, v[1], v[2]]);
-                }
-                2 => {
-                    let m01 = mid(v[0], v[1], &mut vertices);
-                    let m12 = mid(v[1], v[2], &mut vertices);
-                    indices.extend_from_slice(&[m01, v[1], m12, v[0], m01, m12, v[0], m12, v[2]]);
-                }
-                _ => {
-                    let m01 = mid(v[0], v[1], &mut vertices);
-                    let m12 = mid(v[1], v[2], &mut vertices);
-                    let m20 = mid(v[2], v[0], &mut vertices);
-                    indices.extend_from_slice(&[
-                        v[0], m01, m20, m01, v[1], m12, m20, m12, v[2], m01, m12, m20,
-                    ]);
-                }
-            }
-            changed |= count > 0;
-            if indices.len() / 3 > MAX_TRIANGLES {
-                return Err(Error::input(format!(
-                    "tessellating to {max_edge_px} px edges needs more than {MAX_TRIANGLES} triangles: choose a longer edge"
-                )));
-            }
-        }
-        out = Mesh { vertices, indices };
+        let (indices, changed) = split_edges(&mut vertices, &out.indices, long, None, &what)?;
         if !changed {
             return Ok(out);
         }
+        out = Mesh { vertices, indices };
     }
     Ok(out)
+}
+
+/// One round of red-green refinement of `triangles` (indices into `vertices`): every edge
+/// `split_edge` names is halved (its midpoint appended to `vertices` once), each triangle
+/// becoming 2, 3 or 4 with its winding kept. Returns the new triangles, and whether any edge
+/// was split. A triangle left whole goes to `finished` where given (its edges are final: the
+/// caller's rule depends on their ends alone), else with the rest. `what` says what the
+/// refinement is for, in the error a mesh too large for the GPU gets.
+fn split_edges(
+    vertices: &mut Vec<Vertex>,
+    triangles: &[u32],
+    split_edge: impl Fn(u32, u32) -> bool,
+    mut finished: Option<&mut Vec<u32>>,
+    what: &str,
+) -> Result<(Vec<u32>, bool)> {
+    let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut indices = Vec::with_capacity(triangles.len());
+    let mut mid = |a: u32, b: u32, vertices: &mut Vec<Vertex>| -> u32 {
+        let key = (a.min(b), a.max(b));
+        *midpoints.entry(key).or_insert_with(|| {
+            vertices.push(vertices[key.0 as usize].midpoint(&vertices[key.1 as usize]));
+            vertices.len() as u32 - 1
+        })
+    };
+    let mut changed = false;
+    for t in triangles.chunks_exact(3) {
+        let split = [
+            split_edge(t[0], t[1]),
+            split_edge(t[1], t[2]),
+            split_edge(t[2], t[0]),
+        ];
+        let count = split.iter().filter(|&&s| s).count();
+        // Rotate so that the pattern is canonical: 1 split → edge 0; 2 splits → edges
+        // 0 and 1 (edge 2 unsplit).
+        let r = match count {
+            1 => split.iter().position(|&s| s).unwrap_or(0),
+            2 => (split.iter().position(|&s| !s).unwrap_or(2) + 1) % 3,
+            _ => 0,
+        };
+        let v = [t[r], t[(r + 1) % 3], t[(r + 2) % 3]];
+        match count {
+            0 => match finished.as_deref_mut() {
+                Some(f) => f.extend_from_slice(&v),
+                None => indices.extend_from_slice(&v),
+            },
+            1 => {
+                let m = mid(v[0], v[1], vertices);
+                indices.extend_from_slice(&[v[0], m, v[2], m, v[1], v[2]]);
+            }
+            2 => {
+                let m01 = mid(v[0], v[1], vertices);
+                let m12 = mid(v[1], v[2], vertices);
+                indices.extend_from_slice(&[m01, v[1], m12, v[0], m01, m12, v[0], m12, v[2]]);
+            }
+            _ => {
+                let m01 = mid(v[0], v[1], vertices);
+                let m12 = mid(v[1], v[2], vertices);
+                let m20 = mid(v[2], v[0], vertices);
+                indices.extend_from_slice(&[
+                    v[0], m01, m20, m01, v[1], m12, m20, m12, v[2], m01, m12, m20,
+                ]);
+            }
+        }
+        changed |= count > 0;
+        let total = indices.len() + finished.as_deref().map_or(0, |f| f.len());
+        if total / 3 > MAX_TRIANGLES {
+            return Err(Error::input(format!(
+                "{what} needs more than {MAX_TRIANGLES} triangles: choose a longer edge or a larger error budget"
+            )));
+        }
+    }
+    Ok((indices, changed))
+}
+
+/// Follows the edge of what the vertex path keeps (`kept`, on camera-frame points: the lens's
+/// domain, the discard's bound) to `max_error_px`: Alg. 1 drops a triangle with one vertex it
+/// does not keep whole, so an object crossing that edge would lose a strip of itself up to a
+/// triangle wide. Each edge with one end kept is halved until the part of it that is kept
+/// (from the kept end to where the edge leaves, found by bisection) is at most `max_error_px`
+/// long in the image, or lies outside the image; an edge with neither end kept is
+/// halved while its midpoint is kept (a large triangle over the view). Through a panorama's
+/// seam ([`Camera::crosses_seam`]), where Alg. 1 drops the triangle too, an edge is halved while
+/// it spans more than `max_error_px` at the camera. Red-green, like
+/// [`tessellate`]: the mesh stays watertight.
+///
+/// With `max_edge_px`, an edge with both ends kept is halved too while its image through the
+/// lens is longer than that and meets the image: the triangles the rim's splits make keep the
+/// tessellation's bound (splitting one rim edge makes new edges a tessellation before it never
+/// saw).
+pub fn refine_rim(
+    mesh: &Mesh,
+    pose: &Pose,
+    camera: &Camera,
+    kept: impl Fn(DVec3) -> bool,
+    max_error_px: f64,
+    max_edge_px: Option<f64>,
+) -> Result<Mesh> {
+    if !(max_error_px.is_finite() && max_error_px > 0.0) {
+        return Err(Error::input(format!(
+            "rim error {max_error_px} px: expected a number of pixels > 0"
+        )));
+    }
+    let (w, h) = (camera.width as f64, camera.height as f64);
+    // Whether the box of two image points meets the image: what is lost outside it is not
+    // drawn anyway (a standard lens's discard bound lies past the image's border).
+    let in_image = |p: DVec2, q: DVec2| {
+        let (lo, hi) = (p.min(q), p.max(q));
+        hi.x >= -0.5 && lo.x <= w - 0.5 && hi.y >= -0.5 && lo.y <= h - 0.5
+    };
+    let mut vertices = mesh.vertices.clone();
+    // Triangles whose edges are all final (the rule reads only their ends), and the rest.
+    let mut finished = Vec::with_capacity(mesh.indices.len());
+    let mut active = mesh.indices.clone();
+    // Per vertex, extended as the rounds add vertices: camera-frame point, kept, pixel.
+    let (mut points, mut keeps, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..40 {
+        for v in &vertices[points.len()..] {
+            let p = pose.apply(v.position());
+            points.push(p);
+            keeps.push(kept(p));
+            pixels.push(camera.project(p));
+        }
+        let split = |a: u32, b: u32| {
+            let (pa, pb) = (points[a as usize], points[b as usize]);
+            if camera.crosses_seam(pa, pb) {
+                // A triangle through a panorama's seam is dropped: halve the edge while it
+                // spans more than the budget (its angle at the camera, in pixels).
+                let f = camera.intrinsics.fx.abs().max(camera.intrinsics.fy.abs());
+                return keeps[a as usize]
+                    && keeps[b as usize]
+                    && pa.angle_between(pb) * f > max_error_px;
+            }
+            match (keeps[a as usize], keeps[b as usize]) {
+                (true, true) => {
+                    max_edge_px.is_some_and(|l| match (pixels[a as usize], pixels[b as usize]) {
+                        (Some(p), Some(q)) => in_image(p, q) && p.distance(q) > l,
+                        _ => false,
+                    })
+                }
+                (false, false) => {
+                    let m = 0.5 * (pa + pb);
+                    kept(m) && camera.project(m).is_some_and(|p| in_image(p, p))
+                }
+                (ka, _) => {
+                    let (inside, outside, from) = if ka {
+                        (pa, pb, pixels[a as usize])
+                    } else {
+                        (pb, pa, pixels[b as usize])
+                    };
+                    // The last kept point towards `outside`, to 2^-30 of the edge.
+                    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+                    for _ in 0..30 {
+                        let m = 0.5 * (lo + hi);
+                        if kept(inside + (outside - inside) * m) {
+                            lo = m;
+                        } else {
+                            hi = m;
+                        }
+                    }
+                    let edge = inside + (outside - inside) * lo;
+                    match (from, camera.project(edge)) {
+                        (Some(p), Some(q)) => in_image(p, q) && p.distance(q) > max_error_px,
+                        _ => false,
+                    }
+                }
+            }
+        };
+        let what = format!("following the lens's rim to {max_error_px} px");
+        let (next, changed) =
+            split_edges(&mut vertices, &active, split, Some(&mut finished), &what)?;
+        active = next;
+        if !changed {
+            break;
+        }
+    }
+    finished.extend_from_slice(&active);
+    Ok(Mesh {
+        vertices,
+        indices: finished,
+    })
 }
 
 /// The longest pinhole-image edge of the triangles in front of the camera (pixels).

@@ -62,11 +62,25 @@ pub(crate) fn distinct_outputs(outputs: &[(&str, &Path)]) -> Result<(), CliError
 }
 
 /// Where each output of a frame goes.
+#[derive(Default)]
 pub(crate) struct Targets<'a> {
     pub color: Option<&'a Path>,
     pub ids: Option<&'a Path>,
     pub flow: Option<&'a Path>,
     pub depth: Option<&'a Path>,
+    pub range: Option<&'a Path>,
+    pub classes: Option<&'a Path>,
+    pub boxes: Option<&'a Path>,
+    pub keypoints: Option<&'a Path>,
+    /// The object list (`objects.json`), with the frame's outputs.
+    pub objects: Option<(&'a Path, &'a [vklens::labels::ObjectLabel])>,
+}
+
+/// `value` as indented JSON with a final newline.
+pub(crate) fn json_text(value: &impl serde::Serialize) -> Result<String, CliError> {
+    serde_json::to_string_pretty(value)
+        .map(|s| s + "\n")
+        .map_err(|e| CliError::internal(format!("cannot write JSON: {e}")))
 }
 
 /// Writes every output of a frame, or none: each is staged (written to its temporary file),
@@ -77,6 +91,7 @@ pub(crate) struct Targets<'a> {
 pub(crate) fn write_outputs(
     args: &Targets,
     r: &Rendered,
+    labels: &vklens::labels::FrameLabels,
     ids_ext: Option<&str>,
     mut written: Option<&mut image_io::RunOutputs>,
 ) -> Result<(), CliError> {
@@ -96,6 +111,12 @@ pub(crate) fn write_outputs(
     if let (Some(path), Some(c)) = (args.color, &r.color) {
         save(c, path)?;
     }
+    let sixteen_bit = |values: &[u32]| Raster {
+        width: r.width,
+        height: r.height,
+        pixels: Pixels::R32Uint(values.to_vec()),
+        bit_depth: BitDepth::U16,
+    };
     if let (Some(path), Some(ids)) = (args.ids, &r.ids) {
         if ids_ext == Some("png") {
             if let Some(&big) = ids.iter().find(|&&i| i > u16::MAX as u32) {
@@ -104,15 +125,7 @@ pub(crate) fn write_outputs(
                     path.display()
                 )));
             }
-            save(
-                &Raster {
-                    width: r.width,
-                    height: r.height,
-                    pixels: Pixels::R32Uint(ids.clone()),
-                    bit_depth: BitDepth::U16,
-                },
-                path,
-            )?;
+            save(&sixteen_bit(ids), path)?;
         } else {
             save(
                 &float_image(
@@ -134,11 +147,31 @@ pub(crate) fn write_outputs(
             .collect();
         save(&float_image(pixels), path)?;
     }
-    if let (Some(path), Some(depth)) = (args.depth, &r.depth) {
-        save(
-            &float_image(depth.iter().map(|&z| [z, z, z, 1.0]).collect()),
-            path,
-        )?;
+    for (path, values) in [(args.depth, &r.depth), (args.range, &r.range)] {
+        if let (Some(path), Some(values)) = (path, values) {
+            save(
+                &float_image(values.iter().map(|&z| [z, z, z, 1.0]).collect()),
+                path,
+            )?;
+        }
+    }
+    if let (Some(path), Some(classes)) = (args.classes, &labels.classes) {
+        save(&sixteen_bit(classes), path)?;
+    }
+    let json = |path: &Path, text: String| -> Result<(), CliError> {
+        staged
+            .borrow_mut()
+            .push(image_io::stage(path, |tmp| std::fs::write(tmp, &text))?);
+        Ok(())
+    };
+    if let (Some(path), Some(boxes)) = (args.boxes, &labels.boxes) {
+        json(path, json_text(boxes)?)?;
+    }
+    if let (Some(path), Some(keypoints)) = (args.keypoints, &labels.keypoints) {
+        json(path, json_text(keypoints)?)?;
+    }
+    if let Some((path, objects)) = args.objects {
+        json(path, json_text(&objects)?)?;
     }
     for s in staged.into_inner() {
         match written.as_deref_mut() {

@@ -91,6 +91,7 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     }
     let ctx = context()?;
     let o = plan.outputs;
+    let objects = vklens::labels::object_labels(&scene, &file.classes);
     let color_ext = if o.exr { "exr" } else { "png" };
     let total = frames.len();
     let done: std::cell::RefCell<Vec<(usize, f64)>> = Default::default();
@@ -105,15 +106,43 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
             name("flow", "exr"),
             name("depth", "exr"),
         );
+        let (r, cl, b, k) = (
+            name("range", "exr"),
+            name("classes", "png"),
+            name("boxes", "json"),
+            name("keypoints", "json"),
+        );
         let targets = Targets {
             color: o.color.then_some(c.as_path()),
             ids: o.ids.then_some(i.as_path()),
             flow: o.flow.then_some(fl.as_path()),
             depth: o.depth.then_some(d.as_path()),
+            range: o.range.then_some(r.as_path()),
+            classes: o.classes.then_some(cl.as_path()),
+            boxes: o.boxes.then_some(b.as_path()),
+            keypoints: o.keypoints.then_some(k.as_path()),
+            objects: None,
+        };
+        let labels = match plan.view(f.index) {
+            Some(view) => vklens::labels::frame_labels(
+                &view,
+                &scene,
+                &f.rendered,
+                &vklens::labels::LabelRequest {
+                    objects: &objects,
+                    classes: o.classes,
+                    boxes: o.boxes,
+                    keypoints: &file.keypoints,
+                    max_error_px: file.max_error_px,
+                },
+            )
+            .map_err(vklens::Error::internal)?,
+            None => Default::default(),
         };
         write_outputs(
             &targets,
             &f.rendered,
+            &labels,
             Some("png"),
             Some(&mut written.borrow_mut()),
         )?;
@@ -138,6 +167,13 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     let plan_path = out.join("plan.json");
     vklens::imaging::file::stage(&plan_path, |tmp| std::fs::write(tmp, &json))?
         .commit_into(&mut written)?;
+    // Every object's name and class, for the ID, class and box outputs.
+    if o.renders_ids() {
+        let text = super::output::json_text(&objects)?;
+        let objects_path = out.join("objects.json");
+        vklens::imaging::file::stage(&objects_path, |tmp| std::fs::write(tmp, &text))?
+            .commit_into(&mut written)?;
+    }
     // The camera the frames were rendered through, for the user's own pipeline.
     if let Some(camera) = plan.camera() {
         let json_path = out.join("camera.json");

@@ -65,9 +65,40 @@ pub struct RenderArgs {
     /// NaN where the surface was not visible to the lens in both poses. Vertex path only.
     #[arg(long, value_name = "F.exr")]
     flow: Option<PathBuf>,
-    /// Camera depth (.exr): z in metres in R, G, B; +inf where nothing was drawn.
+    /// Camera depth (.exr): z in metres in R, G, B; +inf where nothing was drawn. Negative
+    /// past 90° off the axis of a fisheye; --range is what such a lens wants.
     #[arg(long, value_name = "D.exr")]
     depth: Option<PathBuf>,
+    /// Range (.exr): the distance in metres from the projection centre along each pixel's
+    /// ray, in R, G, B; +inf where nothing was drawn. The vertex path recomputes depth and
+    /// range on each pixel's own ray (exact, f32), the warp path samples them nearest.
+    #[arg(long, value_name = "R.exr")]
+    range: Option<PathBuf>,
+    /// Class IDs (.png, 16-bit grey): each object's class by --class, 0 where none matches
+    /// and for the background. Never blended.
+    #[arg(long, value_name = "C.png")]
+    classes: Option<PathBuf>,
+    /// PATTERN=CLASS: objects whose name matches the shell glob PATTERN are class CLASS
+    /// (0..=65535); repeat it, the first match wins. Names: OBJ o/g names, glTF node names,
+    /// the built-in scenes' own (boxes: floor, box_red, box_green, box_blue); --objects lists
+    /// them.
+    #[arg(long = "class", value_name = "PATTERN=CLASS", value_parser = parse_class)]
+    class: Vec<vklens::labels::ClassRule>,
+    /// Boxes (.json): per object with a visible pixel, its visible box, its whole (amodal)
+    /// box through the lens and its 3D box's corners (examples/scenes/README.md has the shape).
+    #[arg(long, value_name = "B.json")]
+    boxes: Option<PathBuf>,
+    /// NAME=X,Y,Z: a world point to label (metres); repeat it. Its pixel and visibility go to
+    /// --keypoints.
+    #[arg(long = "keypoint", value_name = "NAME=X,Y,Z", value_parser = parse_keypoint, allow_hyphen_values = true)]
+    keypoint: Vec<vklens::labels::Keypoint>,
+    /// Keypoints (.json): each --keypoint's pixel (null where the lens does not see it) and
+    /// whether it is visible.
+    #[arg(long, value_name = "K.json")]
+    keypoints: Option<PathBuf>,
+    /// The scene's objects (.json): [{"id", "name", "class"}, …].
+    #[arg(long, value_name = "O.json")]
+    objects: Option<PathBuf>,
     #[arg(long, value_parser = path_parser(), default_value = "vertex")]
     path: PathKind,
     /// Split mesh edges longer than L pixels (pinhole image) before the vertex path: Alg. 1
@@ -127,6 +158,43 @@ pub struct RenderArgs {
 
 #[derive(Debug, Clone, Copy)]
 pub struct Background(pub [f32; 4]);
+
+/// `--class PATTERN=CLASS`.
+fn parse_class(s: &str) -> Result<vklens::labels::ClassRule, String> {
+    let (pattern, class) = s
+        .rsplit_once('=')
+        .ok_or_else(|| format!("{s:?}: expected PATTERN=CLASS, e.g. \"car*=2\""))?;
+    let class = class.trim().parse::<u16>().map_err(|_| {
+        format!("{s:?}: the class must be a whole number 0..=65535 (classes are 16-bit)")
+    })?;
+    if pattern.is_empty() {
+        return Err(format!("{s:?}: the pattern is empty"));
+    }
+    Ok(vklens::labels::ClassRule {
+        pattern: pattern.to_string(),
+        class,
+    })
+}
+
+/// `--keypoint NAME=X,Y,Z`.
+fn parse_keypoint(s: &str) -> Result<vklens::labels::Keypoint, String> {
+    let bad = || format!("{s:?}: expected NAME=X,Y,Z (world metres)");
+    let (name, xyz) = s.rsplit_once('=').ok_or_else(bad)?;
+    let v: Vec<f64> = xyz
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    match <[f64; 3]>::try_from(v) {
+        Ok(a) if a.iter().all(|c| c.is_finite()) && !name.is_empty() => {
+            Ok(vklens::labels::Keypoint {
+                name: name.to_string(),
+                xyz: glam::DVec3::from(a),
+            })
+        }
+        _ => Err(bad()),
+    }
+}
 
 fn parse_readout(s: &str) -> Result<Readout, String> {
     s.parse::<Readout>().map_err(|e| e.to_string())
@@ -195,6 +263,11 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         ("--ids", args.ids.as_ref()),
         ("--flow", args.flow.as_ref()),
         ("--depth", args.depth.as_ref()),
+        ("--range", args.range.as_ref()),
+        ("--classes", args.classes.as_ref()),
+        ("--boxes", args.boxes.as_ref()),
+        ("--keypoints", args.keypoints.as_ref()),
+        ("--objects", args.objects.as_ref()),
     ]
     .into_iter()
     .filter_map(|(flag, p)| p.map(|p| (flag, p.as_path())))
@@ -208,8 +281,33 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
     if let Some(p) = &args.flow {
         check_output(p, "flow", &["exr"])?;
     }
-    if let Some(p) = &args.depth {
-        check_output(p, "depth", &["exr"])?;
+    for (p, what, ext) in [
+        (&args.depth, "depth", "exr"),
+        (&args.range, "range", "exr"),
+        (&args.classes, "class", "png"),
+        (&args.boxes, "box", "json"),
+        (&args.keypoints, "keypoint", "json"),
+        (&args.objects, "object list", "json"),
+    ] {
+        if let Some(p) = p {
+            check_output(p, what, &[ext])?;
+        }
+    }
+    if !args.class.is_empty()
+        && args.classes.is_none()
+        && args.objects.is_none()
+        && args.boxes.is_none()
+    {
+        return Err(CliError::input(
+            "--class maps object names to classes: give --classes C.png (or --objects O.json, --boxes B.json) for them to go to",
+        ));
+    }
+    if args.keypoint.is_empty() != args.keypoints.is_none() {
+        return Err(CliError::input(if args.keypoint.is_empty() {
+            "--keypoints names where keypoints go: give the points with --keypoint NAME=X,Y,Z"
+        } else {
+            "--keypoint names a point to label: give --keypoints K.json for the labels to go to"
+        }));
     }
     if args.flow.is_some() && args.path == PathKind::Warp {
         return Err(CliError::input(
@@ -262,8 +360,21 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         ids: args.ids.is_some(),
         flow: args.flow.is_some(),
         depth: args.depth.is_some(),
+        range: args.range.is_some(),
+        classes: args.classes.is_some(),
+        boxes: args.boxes.is_some(),
+        keypoints: !args.keypoint.is_empty(),
         exr: color_ext == "exr",
     };
+    let objects = vklens::labels::object_labels(&scene, &args.class);
+    let view_moving = rolling_shutter
+        .filter(|(_, end)| *end != pose)
+        .map(|(r, end)| {
+            (
+                r,
+                vklens::rolling_shutter::FrameMotion::new(pose.into(), end.into()),
+            )
+        });
     let path = args.path.choice(
         &camera,
         args.delta,
@@ -306,14 +417,38 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             }
         })?;
     finish(&ctx)?;
+    let view = vklens::labels::View {
+        camera: &request.camera,
+        pose,
+        moving: view_moving,
+    };
+    let labels = vklens::labels::frame_labels(
+        &view,
+        &scene,
+        &rendered,
+        &vklens::labels::LabelRequest {
+            objects: &objects,
+            classes: outputs.classes,
+            boxes: outputs.boxes,
+            keypoints: &args.keypoint,
+            max_error_px,
+        },
+    )
+    .map_err(CliError::internal)?;
     write_outputs(
         &Targets {
             color: Some(output),
             ids: args.ids.as_deref(),
             flow: args.flow.as_deref(),
             depth: args.depth.as_deref(),
+            range: args.range.as_deref(),
+            classes: args.classes.as_deref(),
+            boxes: args.boxes.as_deref(),
+            keypoints: args.keypoints.as_deref(),
+            objects: args.objects.as_deref().map(|p| (p, objects.as_slice())),
         },
         &rendered,
+        &labels,
         ids_ext.as_deref(),
         None,
     )?;
@@ -327,8 +462,19 @@ impl RenderArgs {
             Some("--camera")
         } else if self.output.is_some() {
             Some("--output")
-        } else if self.ids.is_some() || self.flow.is_some() || self.depth.is_some() {
-            Some("--ids/--flow/--depth (the scene file's [outputs] asks for them)")
+        } else if self.ids.is_some()
+            || self.flow.is_some()
+            || self.depth.is_some()
+            || self.range.is_some()
+            || self.classes.is_some()
+            || self.boxes.is_some()
+            || self.objects.is_some()
+        {
+            Some("--ids/--flow/--depth/--range/--classes/--boxes/--objects (the scene file's [outputs] asks for them)")
+        } else if !self.class.is_empty() {
+            Some("--class (the scene file's [classes] table)")
+        } else if !self.keypoint.is_empty() || self.keypoints.is_some() {
+            Some("--keypoint/--keypoints (the scene file's [[keypoints]] tables)")
         } else if self.pose.is_some() || self.previous_pose.is_some() || self.end_pose.is_some() {
             Some("--pose (the scene file's [[poses]] gives them)")
         } else if self.rolling_shutter.is_some() {

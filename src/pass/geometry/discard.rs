@@ -43,6 +43,36 @@ pub(super) fn discard_bound(projection: &Projection, camera: &Camera) -> Result<
     }
 }
 
+/// Alg. 1's per-vertex test (`alg1_ndc_jacobian` and `vkl_vertex_kept` in
+/// glsl/include/alg1.glsl) on a camera-frame point, in f64: whether the vertex path keeps a
+/// vertex there (a triangle with one vertex it does not keep is dropped whole). For a ray
+/// model: nearer than `near` or past the fisheye's vertex limit or outside its domain drops it;
+/// for the standard model: at or behind the camera, outside the domain, or undistorted NDC past
+/// 1 + `delta` + D.
+pub fn vertex_kept(camera: &Camera, delta: f64, near: f64) -> Result<impl Fn(DVec3) -> bool + '_> {
+    let bound = discard_bound(&Projection::Lens { delta }, camera)?;
+    let limit = camera.fisheye_vertex_limit().map_or(-2.0, f64::cos);
+    let f = Frustum::from_intrinsics(&camera.intrinsics, camera.width, camera.height);
+    Ok(move |p: DVec3| {
+        if !p.is_finite() {
+            return false;
+        }
+        if camera.model().is_ray_model() {
+            let r = p.length();
+            return r >= near && p.z >= r * limit && camera.project(p).is_some();
+        }
+        if !(p.z > 0.0) {
+            return false;
+        }
+        let (x, y) = (p.x / p.z, p.y / p.z);
+        let ndc = DVec2::new(
+            2.0 * (x - f.left) / (f.right - f.left) - 1.0,
+            2.0 * (y - f.top) / (f.bottom - f.top) - 1.0,
+        );
+        ndc.x.abs() <= bound && ndc.y.abs() <= bound && camera.project(p).is_some()
+    })
+}
+
 /// Whether the compute discard's per-vertex pass needs the valid domain's table: not when
 /// every vertex inside `bound` (1 + δ + D on undistorted NDC) lies inside the domain's smallest
 /// boundary radius, for then a vertex beyond that radius is dropped by the bound whatever the

@@ -15,7 +15,7 @@
 use crate::pass::spec;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
-use glam::{DMat4, DVec2};
+use glam::{DMat4, DVec2, DVec3};
 use gpu_allocator::MemoryLocation;
 
 use super::camera_params::CameraParams;
@@ -37,7 +37,7 @@ mod mesh;
 mod targets;
 
 use discard::{discard_bound, DiscardPass};
-pub use discard::{discard_margin, discard_needs_domain_table, DiscardPush};
+pub use discard::{discard_margin, discard_needs_domain_table, vertex_kept, DiscardPush};
 use frame::Motion;
 pub use frame::{GeometryFrame, MotionGpu};
 use mesh::vertex_bindings;
@@ -70,7 +70,10 @@ pub struct Outputs {
     pub color: Option<ColorFormat>,
     pub ids: bool,
     pub flow: bool,
+    /// Camera-frame z (metres).
     pub depth: bool,
+    /// Distance from the projection centre along the pixel's ray (metres).
+    pub range: bool,
 }
 
 impl Outputs {
@@ -79,6 +82,7 @@ impl Outputs {
         ids: false,
         flow: false,
         depth: false,
+        range: false,
     };
 
     /// Colour in `format` only (no output when `None`).
@@ -88,11 +92,13 @@ impl Outputs {
             ids: false,
             flow: false,
             depth: false,
+            range: false,
         }
     }
 
-    /// Attachment formats by fragment-output location (0 colour, 1 ID, 2 flow, 3 depth).
-    fn formats(&self) -> [Option<vk::Format>; 4] {
+    /// Attachment formats by fragment-output location (0 colour, 1 ID, 2 flow, 3 depth,
+    /// 4 range).
+    fn formats(&self) -> [Option<vk::Format>; 5] {
         [
             self.color.map(|c| match c {
                 ColorFormat::Rgba8 => vk::Format::R8G8B8A8_UNORM,
@@ -102,6 +108,7 @@ impl Outputs {
             self.ids.then_some(vk::Format::R32_UINT),
             self.flow.then_some(vk::Format::R32G32_SFLOAT),
             self.depth.then_some(vk::Format::R32_SFLOAT),
+            self.range.then_some(vk::Format::R32_SFLOAT),
         ]
     }
 }
@@ -150,6 +157,9 @@ impl Discard {
     }
 }
 
+/// The near clipping depth of a [`GeometryDesc`] (metres).
+pub const DEFAULT_NEAR: f64 = 0.01;
+
 /// What a [`GeometryPass`] renders.
 #[derive(Debug, Clone)]
 pub struct GeometryDesc {
@@ -179,7 +189,7 @@ impl GeometryDesc {
             camera,
             projection,
             outputs,
-            near: 0.01,
+            near: DEFAULT_NEAR,
             far: 1000.0,
             background: [0.0; 4],
             final_layout: vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
@@ -255,13 +265,21 @@ impl GeometryPass {
         let vertex_constants = CameraParams::spec_constants(cam.terms())
             .bool(spec::DISTORT, lens)
             .bool(spec::WRITE_FLOW, desc.outputs.flow)
-            .u32(spec::READOUT, desc.readout.map_or(0, Readout::gpu_id));
+            .u32(spec::READOUT, desc.readout.map_or(0, Readout::gpu_id))
+            .bool(spec::SEAM_BEHIND, cam.has_seam());
         let o = desc.outputs;
-        let fragment_constants = SpecConstants::new()
-            .bool(spec::WRITE_COLOR, o.color.is_some())
-            .bool(spec::WRITE_IDS, o.ids)
-            .bool(spec::WRITE_FLOW, o.flow)
-            .bool(spec::WRITE_DEPTH, o.depth);
+        let outputs_constants = |c: SpecConstants| {
+            c.bool(spec::WRITE_COLOR, o.color.is_some())
+                .bool(spec::WRITE_IDS, o.ids)
+                .bool(spec::WRITE_FLOW, o.flow)
+                .bool(spec::WRITE_DEPTH, o.depth)
+                .bool(spec::WRITE_RANGE, o.range)
+        };
+        // Through a lens, depth and range are recomputed on each pixel's own ray, which needs
+        // the camera's inverse model in the fragment stage: only where they are asked for.
+        // Under a moving rolling shutter each vertex is drawn from its own readout time, no
+        // one pose's ray reaches the triangle, and they stay interpolated.
+        let exact_depth = lens && (o.depth || o.range) && desc.readout.is_none();
         let geometry_stage = lens && desc.discard.resolve_for(gpu) == Discard::GeometryShader;
         // With the compute discard, Alg. 1 runs there once per vertex and pose, and the draw
         // reads its positions and flow as vertex attributes.
@@ -287,13 +305,21 @@ impl GeometryPass {
             stages.push(Stage {
                 stage: vk::ShaderStageFlags::GEOMETRY,
                 spirv: shaders::GEOMETRY_GEOM,
-                constants: SpecConstants::new(),
+                constants: SpecConstants::new().bool(spec::SEAM_BEHIND, cam.has_seam()),
             });
         }
-        stages.push(Stage {
-            stage: vk::ShaderStageFlags::FRAGMENT,
-            spirv: shaders::GEOMETRY_FRAG,
-            constants: fragment_constants,
+        stages.push(if exact_depth {
+            Stage {
+                stage: vk::ShaderStageFlags::FRAGMENT,
+                spirv: shaders::GEOMETRY_EXACT_FRAG_BY_MODEL[model],
+                constants: outputs_constants(CameraParams::spec_constants(cam.terms())),
+            }
+        } else {
+            Stage {
+                stage: vk::ShaderStageFlags::FRAGMENT,
+                spirv: shaders::GEOMETRY_FRAG,
+                constants: outputs_constants(SpecConstants::new()),
+            }
         });
         let bindings = [
             vk::DescriptorType::UNIFORM_BUFFER,
@@ -767,7 +793,8 @@ impl GeometryPass {
                 },
             });
         }
-        if o.depth {
+        // Depth and range: +inf where nothing is drawn.
+        for _ in 0..(o.depth as usize + o.range as usize) {
             clears.push(vk::ClearValue {
                 color: vk::ClearColorValue {
                     float32: [f32::INFINITY; 4],

@@ -29,8 +29,8 @@ pub(super) struct Slot {
 /// `host::geometry::TargetsReadback`).
 pub struct GeometryTargets {
     pub(super) outputs: Outputs,
-    /// By location: colour, ID, flow, depth.
-    pub(super) targets: [Option<Image>; 4],
+    /// By location: colour, ID, flow, depth, range.
+    pub(super) targets: [Option<Image>; 5],
     pub(super) _depth_buffer: Image,
     pub framebuffer: Framebuffer,
     pub(super) extent: vk::Extent2D,
@@ -53,8 +53,9 @@ impl GeometryTargets {
             "geometry.ids",
             "geometry.flow",
             "geometry.depth",
+            "geometry.range",
         ];
-        let mut targets: [Option<Image>; 4] = Default::default();
+        let mut targets: [Option<Image>; 5] = Default::default();
         for (i, f) in formats.iter().enumerate() {
             if let Some(format) = *f {
                 // RGBA16F is not a required storage format; it need not be one.
@@ -110,10 +111,16 @@ impl GeometryTargets {
         self.targets[3].as_ref()
     }
 
-    /// Every output by location (colour, IDs, flow, depth), those rendered. After
+    /// The range image (when rendered; R32F metres along the pixel's ray, +inf where nothing
+    /// was drawn).
+    pub fn range(&self) -> Option<&Image> {
+        self.targets[4].as_ref()
+    }
+
+    /// Every output by location (colour, IDs, flow, depth, range), those rendered. After
     /// [`GeometryPass::record`] they are in the pass's final layout (`TRANSFER_SRC_OPTIMAL` by
     /// default).
-    pub fn images(&self) -> [Option<&Image>; 4] {
+    pub fn images(&self) -> [Option<&Image>; 5] {
         self.targets.each_ref().map(Option::as_ref)
     }
 

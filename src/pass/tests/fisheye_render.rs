@@ -81,6 +81,7 @@ fn checker_room() -> Scene {
         view_down: DVec3::Y,
         board: None,
         environment: None,
+        objects: Vec::new(),
     }
 }
 

@@ -17,6 +17,10 @@ const COLOR: OutputSpec = OutputSpec {
     ids: false,
     flow: false,
     depth: false,
+    range: false,
+    classes: false,
+    boxes: false,
+    keypoints: false,
     exr: false,
 };
 use crate::host::plan::render_request as render_scene;
@@ -30,6 +34,7 @@ const DATA: Outputs = Outputs {
     ids: true,
     flow: true,
     depth: true,
+    range: true,
 };
 
 fn lens(camera: &Camera, delta: f64) -> GeometryDesc {
@@ -213,6 +218,7 @@ fn a_vertex_lands_at_opencv_projectpoints_pixel() {
             view_down: DVec3::Y,
             board: None,
             environment: None,
+            objects: Vec::new(),
         };
         let request = RenderRequest {
             camera: camera.clone(),
@@ -385,6 +391,7 @@ fn vertex_ids_are_never_blended_but_a_bilinear_warp_mixes_them() {
                 ids: true,
                 flow: false,
                 depth: false,
+                range: false,
             },
         ),
         &scene.mesh,
@@ -633,16 +640,26 @@ fn same_with_both_discards(
         "{what}: background against an ID: {differ:?}"
     );
     let ulps = |a: f32, b: f32| (a.to_bits() as i64 - b.to_bits() as i64).unsigned_abs();
-    if let (Some(a), Some(b)) = (&gs.depth, &cs.depth) {
-        // +inf where nothing was drawn in both, since the IDs agree.
+    for (name, a, b) in [
+        ("depth", &gs.depth, &cs.depth),
+        ("range", &gs.range, &cs.range),
+    ] {
+        let (Some(a), Some(b)) = (a, b) else {
+            continue;
+        };
+        // +inf where nothing was drawn in both, since the IDs agree. Both recompute the point
+        // on the pixel's ray from the plane the interpolated positions' derivatives span;
+        // seen at a grazing angle, 1 / (n · ray) magnifies the last bits of those
+        // derivatives, which the two pipelines round differently: 128 ulps is 7.6e-6
+        // relative, inside the 1e-5 the ray caster holds both to.
         let worst = a
             .iter()
             .zip(b)
             .map(|(&x, &y)| ulps(x, y))
             .max()
             .unwrap_or(0);
-        eprintln!("{what}: depth up to {worst} ulps apart");
-        assert!(worst <= 32, "{what}: depth {worst} ulps apart");
+        eprintln!("{what}: {name} up to {worst} ulps apart");
+        assert!(worst <= 128, "{what}: {name} {worst} ulps apart");
     }
     if let (Some(a), Some(b)) = (&gs.flow, &cs.flow) {
         for (x, y) in a.iter().zip(b) {
@@ -679,6 +696,7 @@ fn the_compute_discard_renders_what_the_geometry_shader_does() {
         ids: true,
         flow: true,
         depth: true,
+        range: true,
     };
     // Flow between two poses through all 14 coefficients.
     let camera = reference_camera("prism_tilt");

@@ -180,6 +180,7 @@ fn chromatic_aberration_comes_out_of_the_glass() {
         view_down: glam::DVec3::Y,
         board: None,
         environment: None,
+        objects: Vec::new(),
     };
     let mut spread_difference = Vec::new();
     for lens in ["achromat.50mm.dat", "biconvex.50mm.dat"] {

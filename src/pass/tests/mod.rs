@@ -8,6 +8,7 @@ mod embedding;
 mod fisheye_gpu;
 mod fisheye_render;
 mod geometry;
+mod ground_truth;
 mod layout;
 mod lens_render;
 mod mesh_warp;

@@ -23,6 +23,7 @@ const DATA: Outputs = Outputs {
     ids: true,
     flow: true,
     depth: true,
+    range: true,
 };
 
 /// A 512² lens with barrel distortion: Alg. 1 bends every edge.

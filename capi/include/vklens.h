@@ -15,9 +15,9 @@
  *     records into the caller's command buffers and never submits or waits. The one
  *     exception is vkl_device, vklens's own headless device, which scene rendering
  *     (vkl_scene_render) submits to and waits on; it never touches the caller's Vulkan.
- *   - Strings this library allocates for the caller (vkl_scene_explain's) are freed with
- *     vkl_string_free; every other string it returns is static or belongs to a handle, and
- *     is never freed by the caller.
+ *   - Strings this library allocates for the caller (vkl_scene_explain's,
+ *     vkl_frame_labels_json's) are freed with vkl_string_free; every other string it returns
+ *     is static or belongs to a handle, and is never freed by the caller.
  *
  * Threads
  *   - vkl_camera: immutable; every camera function may be called from any thread, also on
@@ -146,6 +146,16 @@ typedef enum {
    (`[outputs] flow`).
    */
   VKL_OUTPUT_FLOW,
+  /*
+   Distance in metres from the projection centre along each pixel's ray, +infinity where
+   nothing was drawn (`[outputs] range`).
+   */
+  VKL_OUTPUT_RANGE,
+  /*
+   Each pixel's class by the scene's `[classes]` patterns, 0 for the background and for
+   objects no pattern matches (`[outputs] classes`).
+   */
+  VKL_OUTPUT_CLASSES,
 } vkl_output;
 
 /*
@@ -766,6 +776,17 @@ vkl_error vkl_frame_output(vkl_frame f, uint32_t which, vkl_pixel_format *format
  not overlap the frame.
  */
 vkl_error vkl_frame_copy(vkl_frame f, uint32_t which, void *dst, size_t dst_bytes);
+
+/*
+ The frame's labels as JSON: a new UTF-8, NUL-terminated string written to `*out`, which the
+ caller frees with vkl_string_free. One object: `"objects"` (every object's `id`, `name`
+ and `class`), and where the scene asks for them `"boxes"` and `"keypoints"`, in the shapes
+ of `vklens render`'s boxes_NNNN.json and keypoints_NNNN.json (examples/scenes/README.md).
+
+ # Safety
+ `f` is NULL or a live frame; `out` is NULL or writable.
+ */
+vkl_error vkl_frame_labels_json(vkl_frame f, char **out);
 
 /*
  Frees a frame and sets `*f` to NULL.

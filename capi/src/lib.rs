@@ -1358,6 +1358,8 @@ const _: fn() = || {
 /// One rendered frame: the outputs its scene asks for, in host memory.
 pub struct vkl_frame_s {
     frame: Frame,
+    /// The scene's objects with their names and classes.
+    objects: Vec<vklens_core::labels::ObjectLabel>,
 }
 
 /// A frame handle, made by vkl_scene_render. Immutable: safe to read from any thread.
@@ -1399,7 +1401,8 @@ pub unsafe extern "C" fn vkl_scene_render(
         let frame = rendered.ok_or_else(|| {
             Error::internal(format!("frame {frame_index}: the renderer returned none"))
         })?;
-        let handle = Box::into_raw(Box::new(vkl_frame_s { frame }));
+        let objects = s.scene.objects().to_vec();
+        let handle = Box::into_raw(Box::new(vkl_frame_s { frame, objects }));
         // SAFETY: non-null (checked) and writable (the caller's contract).
         unsafe { out.write(handle) };
         Ok(())
@@ -1462,6 +1465,12 @@ pub enum vkl_output {
     /// Pixel motion (dx, dy) since the previous pose, NaN where unknown or background
     /// (`[outputs] flow`).
     VKL_OUTPUT_FLOW,
+    /// Distance in metres from the projection centre along each pixel's ray, +infinity where
+    /// nothing was drawn (`[outputs] range`).
+    VKL_OUTPUT_RANGE,
+    /// Each pixel's class by the scene's `[classes]` patterns, 0 for the background and for
+    /// objects no pattern matches (`[outputs] classes`).
+    VKL_OUTPUT_CLASSES,
 }
 
 /// How an output's pixels are stored: row-major from the top row, rows tightly packed
@@ -1505,9 +1514,15 @@ fn output_bytes(frame: &Frame, which: u32) -> Result<Option<(vkl_pixel_format, &
         1 => r.ids.as_deref().map(|p| (VKL_PIXELS_R32_UINT, bytes(p))),
         2 => r.depth.as_deref().map(|p| (VKL_PIXELS_R32F, bytes(p))),
         3 => r.flow.as_deref().map(|p| (VKL_PIXELS_RG32F, bytes(p))),
+        4 => r.range.as_deref().map(|p| (VKL_PIXELS_R32F, bytes(p))),
+        5 => frame
+            .labels
+            .classes
+            .as_deref()
+            .map(|p| (VKL_PIXELS_R32_UINT, bytes(p))),
         w => {
             return Err(input(format!(
-                "which: {w} (expected VKL_OUTPUT_COLOR, VKL_OUTPUT_IDS, VKL_OUTPUT_DEPTH or VKL_OUTPUT_FLOW)"
+                "which: {w} (expected VKL_OUTPUT_COLOR, VKL_OUTPUT_IDS, VKL_OUTPUT_DEPTH, VKL_OUTPUT_FLOW, VKL_OUTPUT_RANGE or VKL_OUTPUT_CLASSES)"
             )))
         }
     })
@@ -1562,7 +1577,7 @@ pub unsafe extern "C" fn vkl_frame_copy(
     guard(|| {
         // SAFETY: NULL or a live frame (the caller's contract).
         let f = &unsafe { arg(f, "frame")? }.frame;
-        let name = ["color", "ids", "depth", "flow"]
+        let name = ["color", "ids", "depth", "flow", "range", "classes"]
             .get(which as usize)
             .copied();
         let Some((_, src)) = output_bytes(f, which)? else {
@@ -1583,6 +1598,36 @@ pub unsafe extern "C" fn vkl_frame_copy(
         // SAFETY: `dst` is non-null (checked), has `dst_bytes` ≥ `src.len()` writable bytes
         // and does not overlap the frame (the caller's contract).
         unsafe { ptr::copy_nonoverlapping(src.as_ptr(), dst.cast::<u8>(), src.len()) };
+        Ok(())
+    })
+}
+
+/// The frame's labels as JSON: a new UTF-8, NUL-terminated string written to `*out`, which the
+/// caller frees with vkl_string_free. One object: `"objects"` (every object's `id`, `name`
+/// and `class`), and where the scene asks for them `"boxes"` and `"keypoints"`, in the shapes
+/// of `vklens render`'s boxes_NNNN.json and keypoints_NNNN.json (examples/scenes/README.md).
+///
+/// # Safety
+/// `f` is NULL or a live frame; `out` is NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn vkl_frame_labels_json(f: vkl_frame, out: *mut *mut c_char) -> vkl_error {
+    guard(|| {
+        if out.is_null() {
+            return Err(input("out: NULL pointer"));
+        }
+        // SAFETY: NULL or a live frame (the caller's contract).
+        let f = unsafe { arg(f, "frame")? };
+        let mut json = serde_json::json!({ "objects": f.objects });
+        if let Some(b) = &f.frame.labels.boxes {
+            json["boxes"] = serde_json::to_value(b).map_err(|e| Error::internal(e.to_string()))?;
+        }
+        if let Some(k) = &f.frame.labels.keypoints {
+            json["keypoints"] =
+                serde_json::to_value(k).map_err(|e| Error::internal(e.to_string()))?;
+        }
+        let text = CString::new(json.to_string().replace('\0', " ")).unwrap_or_default();
+        // SAFETY: non-null (checked) and writable (the caller's contract).
+        unsafe { out.write(text.into_raw()) };
         Ok(())
     })
 }

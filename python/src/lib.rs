@@ -11,8 +11,7 @@ use numpy::{
     Element, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple, PyType};
-use serde::Deserialize;
+use pyo3::types::{PyDict, PyList, PyTuple, PyType};
 
 use vklens::rolling_shutter::{Readout, WorldToCamera};
 use vklens::{
@@ -1558,21 +1557,64 @@ fn stereo_rectify(
 // ---------------------------------------------------------------------------------------------
 // Scenes
 
+/// A Python value of a scene dict as TOML, keys in the dict's order (a `[classes]` table's
+/// first matching pattern wins). `key` names it in errors.
+fn toml_value(py: Python<'_>, v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+    if let Ok(d) = v.cast::<PyDict>() {
+        let mut table = toml::Table::new();
+        for (k, item) in d.iter() {
+            let k: String = k
+                .extract()
+                .map_err(|_| input(py, format!("scene: {key}: keys must be strings")))?;
+            let inner = if key.is_empty() {
+                k.clone()
+            } else {
+                format!("{key}.{k}")
+            };
+            table.insert(k, toml_value(py, &item, &inner)?);
+        }
+        return Ok(toml::Value::Table(table));
+    }
+    if let Ok(b) = v.cast::<pyo3::types::PyBool>() {
+        return Ok(toml::Value::Boolean(b.is_true()));
+    }
+    if let Ok(i) = v.cast::<pyo3::types::PyInt>() {
+        let i: i64 = i
+            .extract()
+            .map_err(|_| input(py, format!("scene: {key}: {i} does not fit 64 bits")))?;
+        return Ok(toml::Value::Integer(i));
+    }
+    if let Ok(f) = v.cast::<pyo3::types::PyFloat>() {
+        return Ok(toml::Value::Float(f.value()));
+    }
+    if let Ok(s) = v.cast::<pyo3::types::PyString>() {
+        return Ok(toml::Value::String(s.extract::<String>()?));
+    }
+    if v.is_none() {
+        return Err(input(
+            py,
+            format!("scene: {key}: TOML has no null: leave the key out"),
+        ));
+    }
+    if let Ok(items) = v.try_iter() {
+        let mut array = Vec::new();
+        for (i, item) in items.enumerate() {
+            array.push(toml_value(py, &item?, &format!("{key}[{i}]"))?);
+        }
+        return Ok(toml::Value::Array(array));
+    }
+    Err(input(
+        py,
+        format!(
+            "scene: {key}: the dict must hold only tables, lists, strings, numbers and booleans, found {}",
+            v.get_type().name()?
+        ),
+    ))
+}
+
 /// A dict of the scene file's tables as TOML text (the scene parser reads TOML).
 fn scene_toml(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<String> {
-    let json: String = py
-        .import("json")?
-        .call_method1("dumps", (scene,))
-        .map_err(|e| input(py, format!("scene: the dict must hold only tables, lists, strings, numbers and booleans ({e})")))?
-        .extract()?;
-    let value: serde_json::Value =
-        serde_json::from_str(&json).map_err(|e| input(py, format!("scene: {e}")))?;
-    let table = toml::Value::deserialize(value).map_err(|e| {
-        input(
-            py,
-            format!("scene: {e} (TOML has no null: leave the key out)"),
-        )
-    })?;
+    let table = toml_value(py, scene, "")?;
     toml::to_string(&table).map_err(|e| input(py, format!("scene: {e}")))
 }
 
@@ -1605,6 +1647,16 @@ fn render_scene<'py>(
     };
     let device = device_or_default(py, device)?;
     let frames = py.detach(|| renderer.render_all(&device)).py(py)?;
+    // One list of the scene's objects, shared by every frame's dict.
+    let objects = PyList::empty(py);
+    for o in renderer.objects() {
+        let e = PyDict::new(py);
+        e.set_item("id", o.id)?;
+        e.set_item("name", &o.name)?;
+        e.set_item("class", o.class)?;
+        objects.append(e)?;
+    }
+    let objects = objects.unbind();
     let mut out = Vec::with_capacity(frames.len());
     for f in frames {
         let r = f.rendered;
@@ -1637,6 +1689,44 @@ fn render_scene<'py>(
         if let Some(depth) = r.depth {
             d.set_item("depth", PyArray1::from_vec(py, depth).reshape([h, w])?)?;
         }
+        if let Some(range) = r.range {
+            d.set_item("range", PyArray1::from_vec(py, range).reshape([h, w])?)?;
+        }
+        let l = f.labels;
+        if let Some(classes) = l.classes {
+            let classes: Vec<u16> = classes.into_iter().map(|c| c as u16).collect();
+            d.set_item("classes", PyArray1::from_vec(py, classes).reshape([h, w])?)?;
+        }
+        if let Some(boxes) = l.boxes {
+            let list = PyList::empty(py);
+            for b in boxes {
+                let e = PyDict::new(py);
+                e.set_item("id", b.id)?;
+                e.set_item("name", b.name)?;
+                e.set_item("class", b.class)?;
+                e.set_item("visible_px", b.visible_px)?;
+                e.set_item("bbox_visible", b.bbox_visible.to_vec())?;
+                e.set_item("bbox_full", b.bbox_full.to_vec())?;
+                let corners: Vec<Option<Vec<f64>>> =
+                    b.corners_3d.iter().map(|c| c.map(|p| p.to_vec())).collect();
+                e.set_item("corners_3d", corners)?;
+                e.set_item("corners_visible", b.corners_visible.to_vec())?;
+                list.append(e)?;
+            }
+            d.set_item("boxes", list)?;
+        }
+        if let Some(keypoints) = l.keypoints {
+            let list = PyList::empty(py);
+            for k in keypoints {
+                let e = PyDict::new(py);
+                e.set_item("name", k.name)?;
+                e.set_item("pixel", k.pixel.map(|p| p.to_vec()))?;
+                e.set_item("visible", k.visible)?;
+                list.append(e)?;
+            }
+            d.set_item("keypoints", list)?;
+        }
+        d.set_item("objects", objects.clone_ref(py))?;
         out.push(d);
     }
     Ok(out)

@@ -30,7 +30,7 @@ def test_render_scene_dict_equals_the_file(device):
     tables["outputs"] = {"color": False, "ids": True, "depth": True}
     frames = vklens.render_scene(tables, device=device, base=SCENE.parent)
     from_file = vklens.render_scene(SCENE, device=device)
-    assert set(frames[0]) == {"index", "ms", "ids", "depth"}
+    assert set(frames[0]) == {"index", "ms", "ids", "depth", "objects"}
     for a, b in zip(frames, from_file):
         assert (a["ids"] == b["ids"]).all()
         assert np.array_equal(a["depth"], b["depth"])

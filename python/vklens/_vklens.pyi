@@ -292,4 +292,10 @@ def render_scene(scene: Union[PathLike, dict], device: Optional[Device] = None,
     """Renders a scene file, or the same tables as a dict (relative paths resolved against
     ``base``, default the working folder): one dict per pose with ``"index"``, ``"ms"`` and the
     outputs the scene asks for: ``"color"`` (H, W, 4) uint8 or float32, ``"ids"`` (H, W)
-    uint32, ``"flow"`` (H, W, 2) float32, ``"depth"`` (H, W) float32."""
+    uint32, ``"flow"`` (H, W, 2) float32, ``"depth"`` (H, W) float32 (camera z),
+    ``"range"`` (H, W) float32 (metres along each pixel's ray), ``"classes"`` (H, W) uint16,
+    ``"boxes"`` (a list of dicts: ``id``, ``name``, ``class``, ``visible_px``,
+    ``bbox_visible``, ``bbox_full``, ``corners_3d``, ``corners_visible``) and ``"keypoints"``
+    (a list of dicts: ``name``, ``pixel`` or None, ``visible``); and ``"objects"``, every
+    object's ``id``, ``name`` and ``class``. A dict's ``classes`` table keeps its order (the
+    first matching pattern wins)."""

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use crate::plan::{load_geometry, plan, Plan, SceneFile};
+use crate::labels::{FrameLabels, ObjectLabel};
+use crate::plan::{load_geometry, plan, Plan, SceneFile, SceneLabels};
 use crate::scene::Scene;
 use crate::{Device, Error, Result};
 
@@ -14,8 +15,10 @@ pub use crate::imaging::Rendered;
 pub struct Frame {
     /// Index of the pose in the scene file's poses.
     pub index: usize,
-    /// The outputs the scene asked for (colour, IDs, flow, depth).
+    /// The outputs the scene asked for (colour, IDs, flow, depth, range).
     pub rendered: Rendered,
+    /// The labels the scene asked for (classes, boxes, keypoints).
+    pub labels: FrameLabels,
     /// Wall time of the frame's GPU work (ms).
     pub ms: f64,
 }
@@ -34,6 +37,7 @@ pub struct Frame {
 pub struct SceneRenderer {
     scene: Scene,
     plan: Plan,
+    labels: SceneLabels,
 }
 
 impl SceneRenderer {
@@ -51,7 +55,17 @@ impl SceneRenderer {
     pub(crate) fn new(file: SceneFile) -> Result<Self> {
         let scene = load_geometry(&file)?;
         let plan = plan(&file, &scene)?;
-        Ok(SceneRenderer { scene, plan })
+        let labels = SceneLabels::new(&file, &scene);
+        Ok(SceneRenderer {
+            scene,
+            plan,
+            labels,
+        })
+    }
+
+    /// Every object of the scene with its name and class (what `objects.json` lists).
+    pub fn objects(&self) -> &[ObjectLabel] {
+        &self.labels.objects
     }
 
     /// The plan as `vklens render --explain` prints it: the route, each step with the
@@ -92,9 +106,22 @@ impl SceneRenderer {
             &self.scene,
             frames,
             &mut |f: crate::host::plan::Frame| {
+                let labels = self
+                    .labels
+                    .frame(&self.plan, &self.scene, f.index, &f.rendered)?;
+                // The ID and range images the labels were read from, where the scene asked
+                // for the labels alone.
+                let (o, mut rendered) = (self.plan.outputs, f.rendered);
+                if !o.ids {
+                    rendered.ids = None;
+                }
+                if !o.range {
+                    rendered.range = None;
+                }
                 each(Frame {
                     index: f.index,
-                    rendered: f.rendered,
+                    rendered,
+                    labels,
                     ms: f.ms,
                 })
             },

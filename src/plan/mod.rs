@@ -28,6 +28,7 @@ mod camera;
 mod choice;
 mod cost;
 mod explain;
+mod labels;
 mod lens;
 pub mod limits;
 pub mod record;
@@ -56,6 +57,7 @@ use camera::plan_camera;
 // `request` weighs the cube path's error as the planner does.
 use cost::CUBE_RAY_ERROR_PX;
 pub use cost::{inverse_candidates, inverse_candidates_for, ray_model_inverse_ns};
+pub use labels::SceneLabels;
 pub use lens::LensRequest;
 use lens::{plan_lens, LensSpec};
 pub use search::inverse_error_px;

@@ -262,6 +262,49 @@ int main(int argc, char **argv) {
         }
         vkl_frame_free(&hf);
         vkl_scene_free(&scene);
+
+        /* Labels: examples/scenes/ground_truth.toml (a 200° fisheye over the named boxes). */
+        char gt_path[4096];
+        snprintf(gt_path, sizeof gt_path, "%s/examples/scenes/ground_truth.toml", repo);
+        vkl_frame lf = NULL;
+        if (expect_ok("load ground_truth.toml", vkl_scene_load(gt_path, &scene)) &&
+            expect_ok("render the labels", vkl_scene_render(d, scene, 0, &lf))) {
+            uint32_t w = 0, h = 0;
+            expect_ok("labels: frame size", vkl_frame_size(lf, &w, &h));
+            size_t pixels = (size_t)w * h, bytes = 0;
+            vkl_pixel_format fmt;
+            uint32_t *ids = copy_output(lf, VKL_OUTPUT_IDS, &fmt, &bytes);
+            uint32_t *classes = copy_output(lf, VKL_OUTPUT_CLASSES, &fmt, &bytes);
+            expect("classes are uint32 of the frame's size", classes && fmt == VKL_PIXELS_R32_UINT && bytes == 4 * pixels);
+            float *range = copy_output(lf, VKL_OUTPUT_RANGE, &fmt, &bytes);
+            float *depth = copy_output(lf, VKL_OUTPUT_DEPTH, &fmt, &bytes);
+            expect("range is float of the frame's size", range && fmt == VKL_PIXELS_R32F && bytes == 4 * pixels);
+            if (ids && classes && range && depth) {
+                size_t bad = 0;
+                for (size_t i = 0; i < pixels; i++) {
+                    /* [classes]: box_red (ID 2) is 2, the other boxes 1, the floor 0. */
+                    uint32_t want = ids[i] == 2 ? 2 : ids[i] >= 3 ? 1 : 0;
+                    bad += classes[i] != want;
+                    if (ids[i] != 0) bad += !(range[i] >= fabsf(depth[i]) * (1.0f - 1e-6f));
+                    else bad += !isinf(range[i]);
+                }
+                expect("classes follow the IDs and range the rays", bad == 0);
+            }
+            free(ids);
+            free(classes);
+            free(range);
+            free(depth);
+            char *json = NULL;
+            expect_ok("labels as JSON", vkl_frame_labels_json(lf, &json));
+            expect("the JSON lists the objects, boxes and keypoints",
+                   json && strstr(json, "\"box_red\"") && strstr(json, "\"bbox_full\"") &&
+                       strstr(json, "\"under_green\""));
+            vkl_string_free(&json);
+            expect_error("labels of a NULL frame", vkl_frame_labels_json(NULL, &json), VKL_ERROR_INPUT, "frame");
+            expect_error("labels into NULL", vkl_frame_labels_json(lf, NULL), VKL_ERROR_INPUT, "out");
+        }
+        vkl_frame_free(&lf);
+        vkl_scene_free(&scene);
     }
     free_rendered(&r);
     free_rendered(&g);

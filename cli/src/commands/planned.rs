@@ -91,7 +91,7 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
     }
     let ctx = context()?;
     let o = plan.outputs;
-    let objects = vklens::labels::object_labels(&scene, &file.classes);
+    let labels = vklens::plan::SceneLabels::new(&file, &scene);
     let color_ext = if o.exr { "exr" } else { "png" };
     let total = frames.len();
     let done: std::cell::RefCell<Vec<(usize, f64)>> = Default::default();
@@ -123,26 +123,11 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
             keypoints: o.keypoints.then_some(k.as_path()),
             objects: None,
         };
-        let labels = match plan.view(f.index) {
-            Some(view) => vklens::labels::frame_labels(
-                &view,
-                &scene,
-                &f.rendered,
-                &vklens::labels::LabelRequest {
-                    objects: &objects,
-                    classes: o.classes,
-                    boxes: o.boxes,
-                    keypoints: &file.keypoints,
-                    max_error_px: file.max_error_px,
-                },
-            )
-            .map_err(vklens::Error::internal)?,
-            None => Default::default(),
-        };
+        let frame_labels = labels.frame(&plan, &scene, f.index, &f.rendered)?;
         write_outputs(
             &targets,
             &f.rendered,
-            &labels,
+            &frame_labels,
             Some("png"),
             Some(&mut written.borrow_mut()),
         )?;
@@ -169,7 +154,7 @@ pub fn run(scene_path: &str, args: SceneRun) -> Result<(), CliError> {
         .commit_into(&mut written)?;
     // Every object's name and class, for the ID, class and box outputs.
     if o.renders_ids() {
-        let text = super::output::json_text(&objects)?;
+        let text = super::output::json_text(&labels.objects)?;
         let objects_path = out.join("objects.json");
         vklens::imaging::file::stage(&objects_path, |tmp| std::fs::write(tmp, &text))?
             .commit_into(&mut written)?;

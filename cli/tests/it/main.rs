@@ -9,6 +9,7 @@ mod calibration;
 mod camera_files;
 mod cli;
 mod cli_cameras;
+mod cli_labels;
 mod cli_lens;
 mod cli_new_camera;
 mod cli_points;

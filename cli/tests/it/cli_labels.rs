@@ -1,0 +1,249 @@
+//! `vklens render`'s labels as a training-data script uses them: range, classes, boxes,
+//! keypoints and the object list, from flags and from a scene file; bad input is one line,
+//! exit 2, and nothing written.
+
+use std::path::PathBuf;
+
+use crate::common::{root, scratch, stderr, vklens};
+
+fn tmp(name: &str) -> PathBuf {
+    scratch("clilabels", name)
+}
+
+fn fisheye() -> String {
+    root()
+        .join("examples/cameras/fisheye_200.json")
+        .display()
+        .to_string()
+}
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The boxes scene from 1.5 m above, looking down, through the 200° fisheye.
+const POSE: &str = "1.5707963,0,0,0,0.6,1.0";
+
+#[test]
+fn flags_write_every_label_and_they_agree_with_each_other() {
+    let (c, ids, range, depth, classes) = (
+        tmp("c.png"),
+        tmp("ids.png"),
+        tmp("r.exr"),
+        tmp("d.exr"),
+        tmp("cl.png"),
+    );
+    let (boxes, keypoints, objects) = (tmp("b.json"), tmp("k.json"), tmp("o.json"));
+    let cam = fisheye();
+    let o = vklens(&[
+        "render",
+        "--camera",
+        &cam,
+        "--scene",
+        "boxes",
+        "--pose",
+        POSE,
+        "--output",
+        c.to_str().unwrap(),
+        "--ids",
+        ids.to_str().unwrap(),
+        "--range",
+        range.to_str().unwrap(),
+        "--depth",
+        depth.to_str().unwrap(),
+        "--classes",
+        classes.to_str().unwrap(),
+        "--class",
+        "box_r*=7",
+        "--class",
+        "box_*=3",
+        "--boxes",
+        boxes.to_str().unwrap(),
+        "--keypoint",
+        "green_top=0,-0.4,1.2",
+        "--keypoint",
+        "under_green=0,0.5,1.2",
+        "--keypoints",
+        keypoints.to_str().unwrap(),
+        "--objects",
+        objects.to_str().unwrap(),
+        "--tessellate",
+        "8",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let objects = json(&objects);
+    let classes_of: Vec<(String, u64)> = objects
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| {
+            (
+                o["name"].as_str().unwrap().to_string(),
+                o["class"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        classes_of,
+        [
+            ("floor".to_string(), 0),
+            ("box_red".to_string(), 7),
+            ("box_green".to_string(), 3),
+            ("box_blue".to_string(), 3)
+        ]
+    );
+    // The class image is the ID image through the object list, pixel by pixel.
+    let ids = image::open(&ids).unwrap().to_luma16();
+    let cl = image::open(&classes).unwrap().to_luma16();
+    for (i, c) in ids.pixels().zip(cl.pixels()) {
+        let want = [0, 0, 7, 3, 3][i[0] as usize];
+        assert_eq!(c[0], want);
+    }
+    // Range against depth: never shorter, +inf where nothing is drawn.
+    let r = image::open(&range).unwrap().to_rgba32f();
+    let d = image::open(&depth).unwrap().to_rgba32f();
+    for ((rp, dp), i) in r.pixels().zip(d.pixels()).zip(ids.pixels()) {
+        if i[0] == 0 {
+            assert!(rp[0].is_infinite());
+        } else {
+            assert!(
+                rp[0] >= dp[0].abs() * (1.0 - 1e-6),
+                "{} vs {}",
+                rp[0],
+                dp[0]
+            );
+        }
+    }
+    // Boxes: one per object with pixels, the visible box the ID image's tight box.
+    let boxes = json(&boxes);
+    let boxes = boxes.as_array().unwrap();
+    assert_eq!(boxes.len(), 4);
+    for b in boxes {
+        let id = b["id"].as_u64().unwrap() as u16;
+        let (mut x0, mut y0, mut x1, mut y1, mut n) = (u32::MAX, u32::MAX, 0, 0, 0u64);
+        for (x, y, p) in ids.enumerate_pixels() {
+            if p[0] == id {
+                (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
+                n += 1;
+            }
+        }
+        assert_eq!(b["visible_px"].as_u64().unwrap(), n);
+        let got: Vec<u64> = b["bbox_visible"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect();
+        assert_eq!(got, [x0 as u64, y0 as u64, x1 as u64, y1 as u64]);
+        assert_eq!(b["corners_3d"].as_array().unwrap().len(), 8);
+    }
+    // Keypoints: the f64 projection, and the floor under the green box hidden by it.
+    let camera = vklens::Camera::load(&cam).unwrap();
+    let (s, co) = 1.5707963f64.sin_cos();
+    let keypoints = json(&keypoints);
+    let k = keypoints.as_array().unwrap();
+    for (entry, [x, y, z]) in k.iter().zip([[0.0, -0.4, 1.2], [0.0, 0.5, 1.2]]) {
+        // rvec (1.5707963, 0, 0) turns about x; then tvec.
+        let p = [x, co * y - s * z + 0.6, s * y + co * z + 1.0];
+        let want = camera.project_points(&[p])[0].unwrap();
+        let got = entry["pixel"].as_array().unwrap();
+        assert!((got[0].as_f64().unwrap() - want[0]).abs() < 1e-6);
+        assert!((got[1].as_f64().unwrap() - want[1]).abs() < 1e-6);
+    }
+    assert_eq!(k[0]["visible"], true);
+    assert_eq!(k[1]["visible"], false);
+}
+
+#[test]
+fn the_ground_truth_example_writes_every_label_beside_its_frames() {
+    let out = tmp("gt_out");
+    let _ = std::fs::remove_dir_all(&out);
+    let scene = root().join("examples/scenes/ground_truth.toml");
+    let o = vklens(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "color_0000.png",
+        "ids_0000.png",
+        "depth_0000.exr",
+        "range_0000.exr",
+        "classes_0000.png",
+        "boxes_0000.json",
+        "keypoints_0000.json",
+        "objects.json",
+        "plan.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let k = json(&out.join("keypoints_0000.json"));
+    let visible: Vec<bool> = k
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|k| k["visible"].as_bool().unwrap())
+        .collect();
+    assert_eq!(visible, [true, true, true, false]);
+}
+
+#[test]
+fn bad_label_input_is_one_line_exit_2_and_nothing_written() {
+    let cam = fisheye();
+    let c = tmp("bad_c.png");
+    let k = tmp("bad_k.json");
+    let _ = std::fs::remove_file(&c);
+    let base = [
+        "render",
+        "--camera",
+        cam.as_str(),
+        "--scene",
+        "boxes",
+        "--output",
+        c.to_str().unwrap(),
+    ];
+    let cases: [(&[&str], &str); 5] = [
+        (&["--class", "box_*=car"], "--class"),
+        (&["--class", "box_*=2"], "--classes"),
+        (
+            &["--keypoint", "a=1,2", "--keypoints", k.to_str().unwrap()],
+            "--keypoint",
+        ),
+        (&["--keypoints", k.to_str().unwrap()], "--keypoint"),
+        (&["--range", "r.png"], ".exr"),
+    ];
+    for (extra, named) in cases {
+        let args: Vec<&str> = base.iter().chain(extra.iter()).copied().collect();
+        let o = vklens(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(named), "{args:?}: {err}");
+        assert!(!c.exists() && !k.exists(), "{args:?} wrote a file");
+    }
+    // A scene file's [classes] with a class that is not a whole number names its key.
+    let scene = tmp("bad_classes.toml");
+    let text = std::fs::read_to_string(root().join("examples/scenes/ground_truth.toml"))
+        .unwrap()
+        .replace("\"box_*\" = 1", "\"box_*\" = \"car\"")
+        .replace(
+            "../cameras/",
+            &format!("{}/", root().join("examples/cameras").display()),
+        );
+    std::fs::write(&scene, text).unwrap();
+    let out = tmp("bad_classes_out");
+    let _ = std::fs::remove_dir_all(&out);
+    let o = vklens(&[
+        "render",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("[classes] \"box_*\""), "{err}");
+    assert!(!out.exists(), "the output folder was made");
+}

@@ -184,15 +184,37 @@ impl View<'_> {
     }
 
     /// Whether a point seen at `p` with range `range` is visible: inside the image, and not
-    /// farther than what the range image holds at its pixel (by [`OCCLUSION_TOLERANCE`]).
+    /// farther than the surface the range image holds along its own ray (by
+    /// [`OCCLUSION_TOLERANCE`]): interpolated bilinearly at `p` where the four pixels around
+    /// it see one surface (a surface seen at a slant changes range by far more than the
+    /// tolerance across half a pixel), else the nearest pixel's.
     fn visible(&self, p: DVec2, range: f64, range_image: &[f32]) -> bool {
         if !self.inside(p) {
             return false;
         }
-        let (x, y) = ((p.x + 0.5) as usize, (p.y + 0.5) as usize);
-        let seen = range_image
-            .get(y * self.camera.width as usize + x)
-            .map_or(f64::INFINITY, |&r| r as f64);
+        let (w, h) = (self.camera.width as usize, self.camera.height as usize);
+        let at = |x: usize, y: usize| {
+            range_image
+                .get(y.min(h - 1) * w + x.min(w - 1))
+                .map_or(f64::INFINITY, |&r| r as f64)
+        };
+        let nearest = at((p.x + 0.5) as usize, (p.y + 0.5) as usize);
+        let (x0, y0) = (p.x.max(0.0).floor(), p.y.max(0.0).floor());
+        let (fx, fy) = (p.x.max(0.0) - x0, p.y.max(0.0) - y0);
+        let (x0, y0) = (x0 as usize, y0 as usize);
+        let four = [at(x0, y0), at(x0 + 1, y0), at(x0, y0 + 1), at(x0 + 1, y0 + 1)];
+        let (lo, hi) = four
+            .iter()
+            .fold((f64::INFINITY, 0f64), |(lo, hi), &r| (lo.min(r), hi.max(r)));
+        // One surface: finite and within 5 % of each other (an edge between two objects, or
+        // an object and the background, differs by more).
+        let seen = if hi.is_finite() && hi <= lo * 1.05 {
+            let top = four[0] + (four[1] - four[0]) * fx;
+            let bottom = four[2] + (four[3] - four[2]) * fx;
+            top + (bottom - top) * fy
+        } else {
+            nearest
+        };
         !(range > seen * (1.0 + OCCLUSION_TOLERANCE))
     }
 }

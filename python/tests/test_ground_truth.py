@@ -58,7 +58,7 @@ def test_keypoints_land_where_opencv_projects_them_and_the_hidden_one_is_hidden(
     K = np.array([[cam["fx"], 0, cam["cx"]], [0, cam["fy"], cam["cy"]], [0, 0, 1.0]])
     D = np.array(cam["dist_coeffs"], np.float64)
     points = np.array([[-0.9, -0.1, 0.4], [0.0, -0.4, 1.2], [0.9, 0.05, 0.2], [0.0, 0.5, 1.2]])
-    rvec, tvec = np.array([1.5707963, 0.0, 0.0]), np.array([0.0, 0.6, 1.0])
+    rvec, tvec = np.array([1.1, 0.0, 0.0]), np.array([-0.1, 0.4, 0.55])
     want, _ = cv2.fisheye.projectPoints(points.reshape(-1, 1, 3), rvec, tvec, K, D)
     got = np.array([k["pixel"] for k in frame["keypoints"]])
     assert np.abs(got - want.reshape(-1, 2)).max() < 1e-6

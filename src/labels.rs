@@ -202,7 +202,12 @@ impl View<'_> {
         let (x0, y0) = (p.x.max(0.0).floor(), p.y.max(0.0).floor());
         let (fx, fy) = (p.x.max(0.0) - x0, p.y.max(0.0) - y0);
         let (x0, y0) = (x0 as usize, y0 as usize);
-        let four = [at(x0, y0), at(x0 + 1, y0), at(x0, y0 + 1), at(x0 + 1, y0 + 1)];
+        let four = [
+            at(x0, y0),
+            at(x0 + 1, y0),
+            at(x0, y0 + 1),
+            at(x0 + 1, y0 + 1),
+        ];
         let (lo, hi) = four
             .iter()
             .fold((f64::INFINITY, 0f64), |(lo, hi), &r| (lo.min(r), hi.max(r)));

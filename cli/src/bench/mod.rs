@@ -2,6 +2,7 @@
 //! approximation, reported as tables (and JSON lines), never asserted as wall-clock limits.
 
 pub mod inverse;
+pub mod labels;
 pub mod lens;
 pub mod models;
 pub mod plan;

@@ -12,14 +12,15 @@ use serde_json::Value;
 use super::{inverse, lens, models, plan, vertex, warp, wide};
 use vklens::{Error, Result};
 
-/// What `vklens bench all` runs, in the order it runs and writes them: the nine benches, then
+/// What `vklens bench all` runs, in the order it runs and writes them: the ten benches, then
 /// the Python package's frame loop beside `cv2.remap` (`python -m vklens.bench`).
-pub const BENCHES: [&str; 10] = [
+pub const BENCHES: [&str; 11] = [
     "inverse",
     "warp",
     "vertex",
     "lens",
     "wide",
+    "labels",
     "rolling-shutter",
     "models",
     "plan",
@@ -609,6 +610,7 @@ pub fn tables(bench: &str, rows: &[Value]) -> Result<String> {
         "vertex" => vertex::table(rows),
         "lens" => lens::table(rows),
         "wide" => wide::table(rows),
+        "labels" => super::labels::table(rows),
         "rolling-shutter" => super::rolling_shutter::table(rows),
         "models" => models::table(&typed(bench, rows)?),
         "plan" => plan::table(rows),

@@ -246,6 +246,17 @@ pub fn wide(args: WideArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+pub fn labels(args: WideArgs) -> Result<(), CliError> {
+    let ctx = context()?;
+    eprintln!("device: {}", ctx.gpu().device_name());
+    let rows =
+        crate::bench::labels::run(&ctx, &mut |s| super::progress_line(s)).map_err(bench_error)?;
+    super::progress_done(&format!("measured {} rows", rows.len()));
+    finish(&ctx)?;
+    print_rows(&rows, args.json, crate::bench::labels::table)?;
+    Ok(())
+}
+
 pub fn rolling_shutter(args: WideArgs) -> Result<(), CliError> {
     let ctx = context()?;
     eprintln!("device: {}", ctx.gpu().device_name());
@@ -633,6 +644,7 @@ pub fn all(args: AllArgs) -> Result<(), CliError> {
                 None => Vec::new(),
             },
             "wide" => crate::bench::wide::run(&ctx, &mut |s| super::progress_line(s))?,
+            "labels" => crate::bench::labels::run(&ctx, &mut |s| super::progress_line(s))?,
             "rolling-shutter" => {
                 crate::bench::rolling_shutter::run(&ctx, &mut |s| super::progress_line(s))?
             }

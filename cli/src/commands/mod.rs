@@ -388,6 +388,11 @@ enum BenchCommand {
     /// each with its coordinate error against the f64 model and its frame time × a plain
     /// pinhole render, and the cube face size each needs.
     Wide(bench::WideArgs),
+    /// What each label costs beside colour alone (boxes scene, 1920×1080, the GoPro-like lens
+    /// and the 200° fisheye): the vertex path with IDs, depth, range, IDs and range, each as ×
+    /// the colour-alone frame; the CPU time of classes, boxes and keypoints; the cube route's
+    /// colour alone (it carries no labels).
+    Labels(bench::WideArgs),
     /// A camera panning during a rolling shutter's readout, drawn exactly (each vertex's
     /// readout time solved on the GPU) beside the global shutter's vertex path: frame time and
     /// ratio, on grids of 128² and 512² quads; then the warp in 4 to 64 bands of lines, each
@@ -610,6 +615,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Bench(BenchCommand::Lens(args)) => bench::lens(args),
         Command::Bench(BenchCommand::Plan(args)) => bench::plan(args),
         Command::Bench(BenchCommand::Wide(args)) => bench::wide(args),
+        Command::Bench(BenchCommand::Labels(args)) => bench::labels(args),
         Command::Bench(BenchCommand::RollingShutter(args)) => bench::rolling_shutter(args),
         Command::Bench(BenchCommand::Startup(args)) => bench::startup(args),
         Command::Bench(BenchCommand::Models(args)) => bench::models(args),

@@ -22,7 +22,7 @@ fn json(path: &std::path::Path) -> serde_json::Value {
 }
 
 /// The boxes scene from 1.5 m above, looking down, through the 200° fisheye.
-const POSE: &str = "1.5707963,0,0,0,0.6,1.0";
+const POSE: &str = "1.5707963267948966,0,0,0,0.6,1.0";
 
 #[test]
 fn flags_write_every_label_and_they_agree_with_each_other() {
@@ -139,11 +139,11 @@ fn flags_write_every_label_and_they_agree_with_each_other() {
     }
     // Keypoints: the f64 projection, and the floor under the green box hidden by it.
     let camera = vklens::Camera::load(&cam).unwrap();
-    let (s, co) = 1.5707963f64.sin_cos();
+    let (s, co) = std::f64::consts::FRAC_PI_2.sin_cos();
     let keypoints = json(&keypoints);
     let k = keypoints.as_array().unwrap();
     for (entry, [x, y, z]) in k.iter().zip([[0.0, -0.4, 1.2], [0.0, 0.5, 1.2]]) {
-        // rvec (1.5707963, 0, 0) turns about x; then tvec.
+        // rvec (π/2, 0, 0) turns about x; then tvec.
         let p = [x, co * y - s * z + 0.6, s * y + co * z + 1.0];
         let want = camera.project_points(&[p])[0].unwrap();
         let got = entry["pixel"].as_array().unwrap();

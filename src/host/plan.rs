@@ -420,7 +420,21 @@ fn route_images(recorder: &PlanRecorder) -> Vec<(Output, &crate::gpu::Image, Lef
         images.push((Output::Film, &l.film().image, Left::ColorAttachment));
     }
     if let Some(c) = recorder.cube_stage() {
-        images.push((Output::Colour, &c.output, Left::ComputeGeneral));
+        if recorder.outputs().color {
+            images.push((Output::Colour, &c.output, Left::ComputeGeneral));
+        }
+        if let Some(d) = &c.data {
+            let asked = [
+                (d.asked.ids, Output::Ids, &d.ids),
+                (d.asked.depth, Output::Depth, &d.depth),
+                (d.asked.range, Output::Range, &d.range),
+            ];
+            for (asked, output, image) in asked {
+                if asked {
+                    images.push((output, image, Left::ComputeGeneral));
+                }
+            }
+        }
     }
     if let Some(e) = recorder.environment_stage() {
         images.push((Output::Environment, &e.output, Left::ComputeGeneral));

@@ -13,7 +13,8 @@ use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
     Projection,
 };
-use crate::pass::sphere_warp::{CubeFace, SphereWarpOptions, SphereWarpPass};
+use crate::pass::sphere_warp::{CubeFace, SphereDataPass, SphereWarpOptions, SphereWarpPass};
+use crate::pass::warp_stage::DataOutputs;
 use crate::scene::Pose;
 use crate::{Error, Result};
 
@@ -41,6 +42,24 @@ pub struct CubeStage {
     options: SphereWarpOptions,
     /// The lens camera's size and terms (a jittered pass keeps both).
     lens: ((u32, u32), crate::model::Terms),
+    /// IDs, depth and range through the lens, where asked for.
+    pub data: Option<CubeData>,
+}
+
+/// The cube route's data outputs: the faces' IDs and depths in cubes of their own, and the
+/// nearest-sample pass that carries them through the lens ([`SphereDataPass`]).
+pub struct CubeData {
+    /// What was asked for (every output is rendered; the readback reads these).
+    pub asked: DataOutputs,
+    ids_cube: Image,
+    depth_cube: Image,
+    pub pass: SphereDataPass,
+    /// Object IDs (R32_UINT, 0 where nothing is seen), `GENERAL` after a frame.
+    pub ids: Image,
+    /// Camera-frame z (R32F metres, +inf where nothing is seen), `GENERAL` after a frame.
+    pub depth: Image,
+    /// Range along each pixel's ray (R32F metres, +inf where nothing is seen).
+    pub range: Image,
 }
 
 impl CubeStage {
@@ -66,6 +85,29 @@ impl CubeStage {
         format: ColorFormat,
         options: &SphereWarpOptions,
         frames: usize,
+    ) -> Result<Self> {
+        Self::with_data(
+            gpu,
+            camera,
+            side,
+            format,
+            options,
+            frames,
+            DataOutputs::default(),
+        )
+    }
+
+    /// As [`Self::with_frames`]; the faces also render object IDs and depth where `data` asks
+    /// for any of IDs, depth or range, and a nearest pass carries them through the lens
+    /// ([`Self::data`]).
+    pub fn with_data(
+        gpu: &crate::gpu::Gpu,
+        camera: &Camera,
+        side: u32,
+        format: ColorFormat,
+        options: &SphereWarpOptions,
+        frames: usize,
+        data: DataOutputs,
     ) -> Result<Self> {
         if !(1..=crate::pass::geometry::MAX_FRAMES_IN_FLIGHT).contains(&frames) {
             return Err(Error::input(format!(
@@ -95,10 +137,15 @@ impl CubeStage {
             }
         };
         let face_camera = CubeFace::camera(side)?;
+        let with_data = data.ids || data.depth || data.range;
         let mut desc = GeometryDesc::new(
             face_camera.clone(),
             Projection::Pinhole,
-            Outputs::color_only(Some(format)),
+            Outputs {
+                ids: with_data,
+                depth: with_data,
+                ..Outputs::color_only(Some(format))
+            },
         );
         desc.background = options.fill;
         let pass = GeometryPass::new(gpu, desc)?;
@@ -132,6 +179,44 @@ impl CubeStage {
         // SAFETY: the pass is new, so no recorded work uses it; the views are a cube view and
         // two 2D storage views of this device, in the layouts `record` leaves them in.
         unsafe { warp.bind(cube.view, output.view, mask.view) };
+        let data = if with_data {
+            let cube_of = |name: &str, format| {
+                Image::new_cube(
+                    gpu,
+                    name,
+                    format,
+                    side,
+                    vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+                )
+            };
+            let ids_cube = cube_of("cube_stage.ids_cube", vk::Format::R32_UINT)?;
+            let depth_cube = cube_of("cube_stage.depth_cube", vk::Format::R32_SFLOAT)?;
+            let out = |name: &str, format| Image::new_2d(gpu, name, format, ow, oh, usage);
+            let ids = out("cube_stage.ids", vk::Format::R32_UINT)?;
+            let depth = out("cube_stage.depth", vk::Format::R32_SFLOAT)?;
+            let range = out("cube_stage.range", vk::Format::R32_SFLOAT)?;
+            let mut pass = SphereDataPass::new(gpu, camera)?;
+            // SAFETY: the pass is new, so no recorded work uses it; the views are two cube
+            // views and three 2D storage views of this device, in the layouts `record` leaves
+            // them in.
+            unsafe {
+                pass.bind(
+                    [ids_cube.view, depth_cube.view],
+                    [ids.view, depth.view, range.view],
+                )
+            };
+            Some(CubeData {
+                asked: data,
+                ids_cube,
+                depth_cube,
+                pass,
+                ids,
+                depth,
+                range,
+            })
+        } else {
+            None
+        };
         Ok(CubeStage {
             gpu: gpu.clone(),
             pass,
@@ -147,6 +232,7 @@ impl CubeStage {
             format,
             options,
             lens,
+            data,
         })
     }
 
@@ -164,6 +250,7 @@ impl CubeStage {
             && self.options.chromatic == options.chromatic
             && self.options.fill == options.fill
             && self.lens == ((camera.width, camera.height), camera.terms())
+            && self.data.is_none()
     }
 
     /// Makes frame `frame` (modulo the frames in flight it was made with) the one
@@ -245,7 +332,12 @@ impl CubeStage {
     /// pending on the GPU.
     pub unsafe fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         // SAFETY: the caller upholds this function's contract.
-        unsafe { self.warp.set_camera(camera) }
+        unsafe {
+            if let Some(d) = &mut self.data {
+                d.pass.set_camera(camera)?;
+            }
+            self.warp.set_camera(camera)
+        }
     }
 
     /// Records the one-off work: output and mask to `GENERAL`.
@@ -256,7 +348,12 @@ impl CubeStage {
         // SAFETY: the caller upholds this function's contract: nothing using the images is
         // pending, so UNDEFINED is a valid old layout for the stage's own output and mask.
         unsafe {
-            crate::gpu::record_discard_for_compute_write(&self.gpu, cmd, [&self.output, &self.mask])
+            let data = self.data.iter().flat_map(|d| [&d.ids, &d.depth, &d.range]);
+            crate::gpu::record_discard_for_compute_write(
+                &self.gpu,
+                cmd,
+                [&self.output, &self.mask].into_iter().chain(data),
+            )
         };
     }
 
@@ -317,14 +414,32 @@ impl CubeStage {
         // target is left in TRANSFER_SRC_OPTIMAL by the geometry pass (its desc's default final
         // layout), whose render pass orders its clear after the copy's read; copies are
         // within both images (same side, one layer each).
+        let cubes: Vec<&Image> = std::iter::once(&self.cube)
+            .chain(self.data.iter().flat_map(|d| [&d.ids_cube, &d.depth_cube]))
+            .collect();
+        // The faces' data images, each copied into its cube beside the colour.
+        let data_copies: Vec<(&Image, &Image)> = match &self.data {
+            Some(d) => [
+                (self.targets.ids(), &d.ids_cube),
+                (self.targets.depth(), &d.depth_cube),
+            ]
+            .into_iter()
+            .filter_map(|(face, cube)| face.map(|f| (f, cube)))
+            .collect(),
+            None => Vec::new(),
+        };
+        // SAFETY: as above; the data cubes are written whole each frame like the colour cube,
+        // and the face's ID and depth targets are left in TRANSFER_SRC_OPTIMAL like its colour.
         unsafe {
-            image_discard(
-                &self.gpu,
-                cmd,
-                self.cube.raw,
-                Access::ComputeSampled,
-                Access::TransferWrite,
-            );
+            for cube in &cubes {
+                image_discard(
+                    &self.gpu,
+                    cmd,
+                    cube.raw,
+                    Access::ComputeSampled,
+                    Access::TransferWrite,
+                );
+            }
             for face in CubeFace::ALL {
                 let layer = face.layer();
                 self.pass.record_slot(
@@ -348,14 +463,32 @@ impl CubeStage {
                         extent,
                     }],
                 );
+                for (src, dst) in &data_copies {
+                    d.cmd_copy_image(
+                        cmd,
+                        src.raw,
+                        L::TRANSFER_SRC_OPTIMAL,
+                        dst.raw,
+                        L::TRANSFER_DST_OPTIMAL,
+                        &[vk::ImageCopy {
+                            src_subresource: whole(0),
+                            src_offset: vk::Offset3D::default(),
+                            dst_subresource: whole(layer),
+                            dst_offset: vk::Offset3D::default(),
+                            extent,
+                        }],
+                    );
+                }
             }
-            image_transition(
-                &self.gpu,
-                cmd,
-                self.cube.raw,
-                Access::TransferWrite,
-                Access::ComputeSampled,
-            );
+            for cube in &cubes {
+                image_transition(
+                    &self.gpu,
+                    cmd,
+                    cube.raw,
+                    Access::TransferWrite,
+                    Access::ComputeSampled,
+                );
+            }
         }
     }
 
@@ -368,7 +501,12 @@ impl CubeStage {
         // SAFETY: the caller upholds this function's contract: the cube is in
         // SHADER_READ_ONLY_OPTIMAL with its writes visible to compute, and `record_prepare` put
         // the output and mask, which the warp was bound to with the cube in `new`, in GENERAL.
-        unsafe { self.warp.record_for_readers(cmd, None) };
+        unsafe {
+            self.warp.record_for_readers(cmd, None);
+            if let Some(d) = &self.data {
+                d.pass.record_for_readers(cmd, None);
+            }
+        }
     }
 
     /// As [`Self::record_warp`], for the output pixels in `band` alone (`[x0, y0, x1, y1]`).
@@ -377,6 +515,11 @@ impl CubeStage {
     /// As [`Self::record_warp`].
     pub unsafe fn record_warp_band(&self, cmd: vk::CommandBuffer, band: [u32; 4]) {
         // SAFETY: as in `record_warp`.
-        unsafe { self.warp.record_for_readers(cmd, Some(band)) };
+        unsafe {
+            self.warp.record_for_readers(cmd, Some(band));
+            if let Some(d) = &self.data {
+                d.pass.record_for_readers(cmd, Some(band));
+            }
+        }
     }
 }

@@ -398,3 +398,163 @@ impl SphereWarpPass {
         };
     }
 }
+
+/// The cube route's data outputs (`glsl/sphere_data.comp`): object IDs, depth and range
+/// through the lens from a cube of face IDs and a cube of face depths, each sampled at the
+/// nearest texel, the depth converted on each output pixel's own ray.
+pub struct SphereDataPass {
+    gpu: Gpu,
+    pipeline: ComputePipeline,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    sampler: Sampler,
+    camera: Buffer,
+    push: SpherePush,
+    output_size: (u32, u32),
+}
+
+impl SphereDataPass {
+    /// The pass for `camera`'s lens (its model alone compiled in).
+    pub fn new(gpu: &Gpu, camera: &Camera) -> Result<Self> {
+        let spirv = shaders::SPHERE_DATA_COMP_BY_MODEL[camera.model().gpu_id() as usize];
+        let pipeline = ComputePipeline::new(
+            gpu,
+            spirv,
+            &[
+                vk::DescriptorType::UNIFORM_BUFFER,
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                vk::DescriptorType::STORAGE_IMAGE,
+                vk::DescriptorType::STORAGE_IMAGE,
+                vk::DescriptorType::STORAGE_IMAGE,
+            ],
+            std::mem::size_of::<SpherePush>() as u32,
+            CameraParams::spec_constants(camera.terms()),
+        )?;
+        let pool = DescriptorPool::for_pipeline(gpu, &pipeline, 1)?;
+        let set = pool.allocate(&pipeline)?;
+        // Nearest: an ID must never be a mix, nor a depth one across an edge.
+        let sampler = Sampler::with_modes(
+            gpu,
+            vk::Filter::NEAREST,
+            [vk::SamplerAddressMode::CLAMP_TO_EDGE; 3],
+        )?;
+        let camera_buf = Buffer::from_pod(
+            gpu,
+            "sphere_data.camera",
+            &[CameraParams::from_camera(camera)],
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+        )?;
+        let (w, h) = (camera.width, camera.height);
+        Ok(SphereDataPass {
+            gpu: gpu.clone(),
+            pipeline,
+            _pool: pool,
+            set,
+            sampler,
+            camera: camera_buf,
+            push: SpherePush {
+                chromatic: [1.0; 4],
+                fill: [0.0; 4],
+                sizes: [0, 0, w, h],
+                band: [0, 0, w, h],
+            },
+            output_size: (w, h),
+        })
+    }
+
+    /// The pipeline (its specialization constants show what was compiled in).
+    pub fn pipeline(&self) -> &ComputePipeline {
+        &self.pipeline
+    }
+
+    /// Moves the pass to another lens camera of the same size and terms.
+    ///
+    /// # Safety
+    /// A host write to the camera uniform: no recorded work using this pass may be pending.
+    pub unsafe fn set_camera(&mut self, camera: &Camera) -> Result<()> {
+        self.camera
+            .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))
+    }
+
+    /// Points the pass at the faces' ID and depth cubes (R32_UINT and R32F cube views in
+    /// `SHADER_READ_ONLY_OPTIMAL`) and its outputs (R32_UINT, R32F, R32F storage images of the
+    /// lens camera's size in `GENERAL`).
+    ///
+    /// # Safety
+    /// No recorded work using this pass may be pending; the views must be live views of this
+    /// device of the kinds above.
+    pub unsafe fn bind(
+        &mut self,
+        [ids_cube, depth_cube]: [vk::ImageView; 2],
+        [ids, depth, range]: [vk::ImageView; 3],
+    ) {
+        // SAFETY (all three): the caller upholds this function's contract (no pending work
+        // uses the set); the set is this pass's own, of its pipeline's layout, and the views
+        // and the buffer are live.
+        unsafe {
+            crate::gpu::write_buffer_descriptors(
+                &self.gpu,
+                self.set,
+                &[(0, vk::DescriptorType::UNIFORM_BUFFER, &self.camera)],
+            );
+            crate::gpu::write_sampled_image_descriptor(
+                &self.gpu,
+                self.set,
+                1,
+                &self.sampler,
+                ids_cube,
+            );
+            crate::gpu::write_sampled_image_descriptor(
+                &self.gpu,
+                self.set,
+                2,
+                &self.sampler,
+                depth_cube,
+            );
+            write_storage_image_descriptors(
+                &self.gpu,
+                self.set,
+                &[(3, ids), (4, depth), (5, range)],
+            );
+        }
+    }
+
+    /// Records the pass over the output pixels in `band` (`[x0, y0, x1, y1]`, clamped; `None`:
+    /// all), then its writes made visible to transfers and compute.
+    ///
+    /// # Safety
+    /// `cmd` must be recording outside a render pass on a compute queue; the bound images in
+    /// the layouts [`Self::bind`] names, the cubes' writes visible to compute reads, all alive
+    /// until the work completes.
+    pub unsafe fn record_for_readers(&self, cmd: vk::CommandBuffer, band: Option<[u32; 4]>) {
+        let (w, h) = self.output_size;
+        let [x0, y0, x1, y1] = band.unwrap_or([0, 0, w, h]);
+        let (x1, y1) = (x1.min(w), y1.min(h));
+        if x0 >= x1 || y0 >= y1 {
+            return;
+        }
+        let push = SpherePush {
+            band: [x0, y0, x1, y1],
+            ..self.push
+        };
+        // SAFETY: the caller upholds this function's contract; the push is the block.
+        unsafe {
+            self.pipeline.record_dispatch(
+                cmd,
+                self.set,
+                bytemuck::bytes_of(&push),
+                ((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8)),
+            );
+            crate::gpu::global_barrier(
+                &self.gpu,
+                cmd,
+                crate::gpu::Access::ComputeWrite,
+                [
+                    crate::gpu::Access::TransferRead,
+                    crate::gpu::Access::ComputeRead,
+                ],
+            );
+        }
+    }
+}

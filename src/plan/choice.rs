@@ -263,8 +263,8 @@ pub(super) fn refuse_asked(file: &SceneFile, path: PathKind) -> Result<()> {
         PathKind::Vertex if file.effects.chromatic_aberration => Err(Error::input(format!(
             "{asked}: [effects] chromatic_aberration needs the warp (Alg. 1 cannot give each channel its own lens); ask for path = \"warp\" or drop the key"
         ))),
-        PathKind::Cube if o.renders_data() => Err(Error::input(format!(
-            "{asked}: a cube map carries colour alone, and [outputs] asks for IDs, flow, depth or range; ask for path = \"vertex\" or \"warp\", or drop the key"
+        PathKind::Cube if o.flow => Err(Error::input(format!(
+            "{asked}: a cube map carries no flow (its vectors live in one pinhole image), and [outputs] asks for it; ask for path = \"vertex\", or drop the key"
         ))),
         _ => Ok(()),
     }

@@ -431,7 +431,7 @@ fn vertex_reason(why: &VertexReason, vertex_ms: f64) -> String {
                     format!("estimated {vertex_ms:.1} ms against {ms:.1} ms for a cube map"),
                 CubeLoss::RaysMissBudget =>
                     format!("a cube map's rays ({CUBE_RAY_ERROR_PX:.1e} px) miss the budget"),
-                CubeLoss::ColourAlone => "a cube map carries colour alone".into(),
+                CubeLoss::ColourAlone => "a cube map is planned for colour alone (path = \"cube\" carries IDs, depth and range)".into(),
             }
         ),
         VertexReason::MovingRollingShutter { bands } => format!(

@@ -504,11 +504,14 @@ impl Builder<'_> {
     fn cube(&mut self, camera: &Camera, side: u32, chromatic: Option<[f64; 3]>) -> Result<Stages> {
         let (gpu, plan) = (self.gpu, self.plan);
         let o = plan.outputs;
-        if o.renders_data() {
-            return Err(internal(
-                "the planner routes only colour through a cube map",
-            ));
+        if o.flow {
+            return Err(internal("the planner routes no flow through a cube map"));
         }
+        let data = DataOutputs {
+            ids: o.renders_ids(),
+            depth: o.depth,
+            range: o.renders_range(),
+        };
         // Within this device's limits and the cube budget.
         let (f, side) = super::limits::device_cube_faces(gpu, self.color_format(), side);
         let options = SphereWarpOptions {
@@ -516,11 +519,17 @@ impl Builder<'_> {
             fill: plan.background,
             write_mask: false,
         };
-        let mut cube = CubeStage::with_frames(gpu, camera, side, f, &options, self.frames)?;
+        let mut cube = CubeStage::with_data(gpu, camera, side, f, &options, self.frames, data)?;
         self.pipelines.extend([
             RecordedPipeline::geometry(&cube.pass),
             RecordedPipeline::compute(PassKind::SphereWarp, cube.warp.pipeline()),
         ]);
+        if let Some(d) = &cube.data {
+            self.pipelines.push(RecordedPipeline::compute(
+                PassKind::DataWarp,
+                d.pass.pipeline(),
+            ));
+        }
         let bands = match (plan.bands, plan.shutter.moving_readout()) {
             (Some(count), Some(readout)) => {
                 let bands = crate::model::rolling_shutter::bands::bands(

@@ -413,12 +413,6 @@ fn warp_route(
     let big = scaled_camera(camera, s)?;
     Ok(match pinhole_source_refusal(&big, q, max_image_side) {
         Some(why) => {
-            if o.renders_data() {
-                return Err(Error::argument(
-                    "path",
-                    format!("{why}: the warp path would need a cube map, which carries colour only; the vertex path renders IDs, depth and range"),
-                ));
-            }
             let side = cube_face_side(camera, q);
             push_cube_steps(
                 steps,
@@ -431,6 +425,7 @@ fn warp_route(
                     }
                 ),
                 chromatic.is_some(),
+                o.renders_data(),
             );
             (Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX)
         }
@@ -470,10 +465,10 @@ fn warp_route(
 /// The cube path as asked for.
 fn cube_route(request: &RenderRequest, side: u32, steps: &mut Vec<Step>) -> Result<(Route, f64)> {
     let (camera, o, chromatic) = (&request.camera, request.outputs, request.chromatic);
-    if o.renders_data() {
+    if o.flow {
         return Err(Error::argument(
             "path",
-            "IDs, flow, depth and range through a cube map are not rendered (a face's depth is not the lens camera's, IDs must not be filtered across faces); the vertex path renders them",
+            "flow through a cube map is not rendered (its vectors live in one pinhole image); the vertex path renders it",
         ));
     }
     if side < 2 {
@@ -492,6 +487,7 @@ fn cube_route(request: &RenderRequest, side: u32, steps: &mut Vec<Step>) -> Resu
             "the cube path was asked for".into()
         },
         chromatic.is_some(),
+        o.renders_data(),
     );
     Ok((Route::Cube { side, chromatic }, CUBE_RAY_ERROR_PX))
 }
@@ -583,14 +579,19 @@ fn request_bands(
     Ok(b)
 }
 
-fn push_cube_steps(steps: &mut Vec<Step>, why: String, chromatic: bool) {
+fn push_cube_steps(steps: &mut Vec<Step>, why: String, chromatic: bool, data: bool) {
     steps.push(Step {
         stage: Stage::CubeFaces,
         why,
     });
     steps.push(Step {
         stage: Stage::SphereWarp { chromatic },
-        why: "each output pixel samples the cube along its ray, bilinear across faces".into(),
+        why: if data {
+            "each output pixel samples the cube along its ray: colour bilinear across faces; IDs and the faces' depth at the nearest texel, the depth converted to z and range on the pixel's own ray"
+        } else {
+            "each output pixel samples the cube along its ray, bilinear across faces"
+        }
+        .into(),
     });
 }
 

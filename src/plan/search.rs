@@ -312,10 +312,17 @@ pub(super) fn search_candidates(
         (Some(a), Some(b)) => Some(if b.ms < a.ms { b } else { a }),
         (a, b) => a.or(b),
     };
-    // The cube map carries colour alone: a face's depth is not the lens camera's, and IDs
-    // are never filtered across faces. Faces of one face pixel per output pixel at the
-    // centre (density 1, as the warp's source).
-    let cube = (o.color && !o.renders_data() && CUBE_RAY_ERROR_PX <= budget).then(|| {
+    // The planner weighs the cube map for colour alone; IDs, depth and range go through it
+    // (nearest, the depth carried onto each pixel's ray) only where the file asks for the
+    // cube path, and flow never. Faces of one face pixel per output pixel at the centre
+    // (density 1, as the warp's source).
+    let asked_cube = file.path == Some(super::PathKind::Cube);
+    let carried = if asked_cube {
+        (o.color || o.renders_data()) && !o.flow
+    } else {
+        o.color && !o.renders_data()
+    };
+    let cube = (carried && CUBE_RAY_ERROR_PX <= budget).then(|| {
         let texel = if o.exr { 16 } else { 4 };
         let wanted = crate::model::overscan::cube_face_side(camera, 1.0);
         let side = limits::cube_side(wanted, texel, PLANNED_CUBE_MAX_SIDE);

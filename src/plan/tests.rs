@@ -1578,10 +1578,14 @@ fn render_path_refuses_what_the_path_cannot_deliver_naming_both_keys() {
         e.contains("[render] path = \"vertex\": [effects] chromatic_aberration needs the warp"),
         "{e}"
     );
+    // IDs through the cube as asked (nearest); flow it cannot carry.
     let ids = asked("cube", "[outputs]\ncolor = true\nids = true\n");
-    let e = plan(&ids, &scene_of(&ids)).unwrap_err().to_string();
+    let p = plan(&ids, &scene_of(&ids)).unwrap();
+    assert!(matches!(p.route, Route::Cube { .. }), "{:?}", p.route);
+    let flow = asked("cube", "[outputs]\ncolor = true\nflow = true\n");
+    let e = plan(&flow, &scene_of(&flow)).unwrap_err().to_string();
     assert!(
-        e.contains("[render] path = \"cube\": a cube map carries colour alone"),
+        e.contains("[render] path = \"cube\": a cube map carries no flow"),
         "{e}"
     );
     // IDs beside the warp's colour: Alg. 1 carries them, as the warp path does on the

@@ -7,8 +7,8 @@
 //!   and with IDs and range together (what classes, boxes and keypoints are read from);
 //! * the CPU labels of that last frame: the class image, every object's boxes (the amodal box
 //!   traced to the default 0.01 px) and four keypoints;
-//! * the cube route's colour alone, for comparison: it carries no labels, and the planner
-//!   takes the vertex path when labels are asked for.
+//! * the cube route (six faces and the sphere warp) with colour alone, and with IDs and range
+//!   (the faces' IDs and depths sampled nearest, the depth carried onto each pixel's ray).
 //!
 //! Frame time: wall clock of one whole render, readback included, median of 3 after a warm-up,
 //! as × the colour-alone vertex frame of the same camera in the same run.
@@ -157,17 +157,16 @@ pub fn run(ctx: &Context, progress: &mut dyn FnMut(&str)) -> Result<Vec<Value>> 
             rows.push(row);
         }
         let side = cube_face_side(&camera, 1.0);
-        progress(&format!("{name}: cube route, colour"));
-        let colour = outputs()[0].1;
-        let ms = super::wide::request_frame_ms(
-            ctx,
-            &scene,
-            &request(colour, PathChoice::Cube { side }),
-        )?;
-        rows.push(
-            json!({"camera": name, "route": "cube", "outputs": "colour (carries no labels)",
-            "frame_ms": ms, "x_colour": ms / peer}),
-        );
+        let cube = PathChoice::Cube { side };
+        for (what, outputs) in [outputs()[0], outputs()[4]] {
+            progress(&format!("{name}: cube route, {what}"));
+            let ms = super::wide::request_frame_ms(ctx, &scene, &request(outputs, cube))?;
+            let what = what.replace(" (peer)", "");
+            rows.push(
+                json!({"camera": name, "route": format!("cube ({side}² faces)"),
+                "outputs": what, "frame_ms": ms, "x_colour": ms / peer}),
+            );
+        }
     }
     Ok(rows)
 }

@@ -390,8 +390,8 @@ enum BenchCommand {
     Wide(bench::WideArgs),
     /// What each label costs beside colour alone (boxes scene, 1920×1080, the GoPro-like lens
     /// and the 200° fisheye): the vertex path with IDs, depth, range, IDs and range, each as ×
-    /// the colour-alone frame; the CPU time of classes, boxes and keypoints; the cube route's
-    /// colour alone (it carries no labels).
+    /// the colour-alone frame; the CPU time of classes, boxes and keypoints; the cube route
+    /// with colour alone and with IDs and range.
     Labels(bench::WideArgs),
     /// A camera panning during a rolling shutter's readout, drawn exactly (each vertex's
     /// readout time solved on the GPU) beside the global shutter's vertex path: frame time and

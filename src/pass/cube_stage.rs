@@ -409,29 +409,25 @@ impl CubeStage {
             height: self.side,
             depth: 1,
         };
-        // SAFETY: the caller upholds this function's contract. The cube is written whole each
+        // Each face image copied into its cube: the colour, and the IDs and depth where asked.
+        let mut copies: Vec<(&Image, &Image)> = vec![(face_image, &self.cube)];
+        if let Some(data) = &self.data {
+            for (face, cube) in [
+                (self.targets.ids(), &data.ids_cube),
+                (self.targets.depth(), &data.depth_cube),
+            ] {
+                if let Some(face) = face {
+                    copies.push((face, cube));
+                }
+            }
+        }
+        // SAFETY: the caller upholds this function's contract. Each cube is written whole each
         // frame, so it starts from UNDEFINED (after the last frame's warp read it); the face
-        // target is left in TRANSFER_SRC_OPTIMAL by the geometry pass (its desc's default final
-        // layout), whose render pass orders its clear after the copy's read; copies are
+        // targets are left in TRANSFER_SRC_OPTIMAL by the geometry pass (its desc's default
+        // final layout), whose render pass orders its clear after the copy's read; copies are
         // within both images (same side, one layer each).
-        let cubes: Vec<&Image> = std::iter::once(&self.cube)
-            .chain(self.data.iter().flat_map(|d| [&d.ids_cube, &d.depth_cube]))
-            .collect();
-        // The faces' data images, each copied into its cube beside the colour.
-        let data_copies: Vec<(&Image, &Image)> = match &self.data {
-            Some(d) => [
-                (self.targets.ids(), &d.ids_cube),
-                (self.targets.depth(), &d.depth_cube),
-            ]
-            .into_iter()
-            .filter_map(|(face, cube)| face.map(|f| (f, cube)))
-            .collect(),
-            None => Vec::new(),
-        };
-        // SAFETY: as above; the data cubes are written whole each frame like the colour cube,
-        // and the face's ID and depth targets are left in TRANSFER_SRC_OPTIMAL like its colour.
         unsafe {
-            for cube in &cubes {
+            for (_, cube) in &copies {
                 image_discard(
                     &self.gpu,
                     cmd,
@@ -449,21 +445,7 @@ impl CubeStage {
                     &self.slots[self.current],
                     6 * band + layer as usize,
                 );
-                d.cmd_copy_image(
-                    cmd,
-                    face_image.raw,
-                    L::TRANSFER_SRC_OPTIMAL,
-                    self.cube.raw,
-                    L::TRANSFER_DST_OPTIMAL,
-                    &[vk::ImageCopy {
-                        src_subresource: whole(0),
-                        src_offset: vk::Offset3D::default(),
-                        dst_subresource: whole(layer),
-                        dst_offset: vk::Offset3D::default(),
-                        extent,
-                    }],
-                );
-                for (src, dst) in &data_copies {
+                for (src, dst) in &copies {
                     d.cmd_copy_image(
                         cmd,
                         src.raw,
@@ -480,7 +462,7 @@ impl CubeStage {
                     );
                 }
             }
-            for cube in &cubes {
+            for (_, cube) in &copies {
                 image_transition(
                     &self.gpu,
                     cmd,

@@ -377,26 +377,52 @@ impl SphereWarpPass {
     /// # Safety
     /// As [`Self::record`].
     pub unsafe fn record_band(&self, cmd: vk::CommandBuffer, band: [u32; 4]) {
-        let (w, h) = self.output_size;
-        let [x0, y0, x1, y1] = band;
-        let (x1, y1) = (x1.min(w), y1.min(h));
-        if x0 >= x1 || y0 >= y1 {
-            return;
-        }
-        let push = SpherePush {
-            band: [x0, y0, x1, y1],
-            ..self.push
-        };
         // SAFETY: as in `record`: the caller upholds its contract; the push is the block.
         unsafe {
-            self.pipeline.record_dispatch(
-                cmd,
+            record_band_dispatch(
+                &self.pipeline,
                 self.set,
-                bytemuck::bytes_of(&push),
-                ((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8)),
+                self.push,
+                self.output_size,
+                band,
+                cmd,
             )
         };
     }
+}
+
+/// Dispatches `pipeline` (8 × 8 workgroups, `SpherePush` as its push block) over the pixels of
+/// `band` (`[x0, y0, x1, y1]`, x1 and y1 excluded) clamped to `size`; an empty band records
+/// nothing.
+///
+/// # Safety
+/// `cmd` must be recording outside a render pass on a compute queue; `set` is of `pipeline`'s
+/// layout and what it binds is ready for the dispatch and alive until the work completes.
+unsafe fn record_band_dispatch(
+    pipeline: &ComputePipeline,
+    set: vk::DescriptorSet,
+    push: SpherePush,
+    (w, h): (u32, u32),
+    [x0, y0, x1, y1]: [u32; 4],
+    cmd: vk::CommandBuffer,
+) {
+    let (x1, y1) = (x1.min(w), y1.min(h));
+    if x0 >= x1 || y0 >= y1 {
+        return;
+    }
+    let push = SpherePush {
+        band: [x0, y0, x1, y1],
+        ..push
+    };
+    // SAFETY: the caller upholds this function's contract; the push is the block.
+    unsafe {
+        pipeline.record_dispatch(
+            cmd,
+            set,
+            bytemuck::bytes_of(&push),
+            ((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8)),
+        )
+    };
 }
 
 /// The cube route's data outputs (`glsl/sphere_data.comp`): object IDs, depth and range
@@ -529,22 +555,15 @@ impl SphereDataPass {
     /// until the work completes.
     pub unsafe fn record_for_readers(&self, cmd: vk::CommandBuffer, band: Option<[u32; 4]>) {
         let (w, h) = self.output_size;
-        let [x0, y0, x1, y1] = band.unwrap_or([0, 0, w, h]);
-        let (x1, y1) = (x1.min(w), y1.min(h));
-        if x0 >= x1 || y0 >= y1 {
-            return;
-        }
-        let push = SpherePush {
-            band: [x0, y0, x1, y1],
-            ..self.push
-        };
         // SAFETY: the caller upholds this function's contract; the push is the block.
         unsafe {
-            self.pipeline.record_dispatch(
-                cmd,
+            record_band_dispatch(
+                &self.pipeline,
                 self.set,
-                bytemuck::bytes_of(&push),
-                ((x1 - x0).div_ceil(8), (y1 - y0).div_ceil(8)),
+                self.push,
+                self.output_size,
+                band.unwrap_or([0, 0, w, h]),
+                cmd,
             );
             crate::gpu::global_barrier(
                 &self.gpu,

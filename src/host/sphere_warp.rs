@@ -47,3 +47,84 @@ pub fn run_environment(
     }
     Ok((colour, mask))
 }
+
+/// The IDs and depths of a cube map a renderer of your own made, through `camera`'s lens:
+/// `ids` and `face_z` per face in [`crate::pass::sphere_warp::CubeFace::ALL`]'s order (+x −x +y
+/// −y +z −z, each `side`² texels, rows from the top), each face's depth its z along its own
+/// axis. Per output pixel the nearest ID and the depth carried onto the pixel's own ray
+/// ([`crate::pass::sphere_warp::SphereDataPass`]): (IDs, z, range), each of the camera's
+/// size; 0 and +inf where the lens sees nothing or the faces show nothing.
+pub fn run_cube_data(
+    ctx: &Context,
+    camera: &Camera,
+    side: u32,
+    ids: &[Vec<u32>; 6],
+    face_z: &[Vec<f32>; 6],
+) -> Result<(Vec<u32>, Vec<f32>, Vec<f32>)> {
+    use crate::gpu::{record_upload, Access, Buffer, Image};
+    use crate::host::readback::{Download, Left};
+    use crate::pass::sphere_warp::{CubeFace, SphereDataPass};
+    use ash::vk;
+    let gpu = ctx.gpu();
+    let n = side as usize * side as usize;
+    if ids.iter().any(|f| f.len() != n) || face_z.iter().any(|f| f.len() != n) {
+        return Err(Error::input(format!(
+            "cube faces of {side}² texels expected for the IDs and the depth"
+        )));
+    }
+    // The texels in the order of the cube's layers.
+    let (mut id_texels, mut z_texels) = (vec![0u32; 6 * n], vec![0f32; 6 * n]);
+    for (k, face) in CubeFace::ALL.iter().enumerate() {
+        let l = face.layer() as usize * n;
+        id_texels[l..l + n].copy_from_slice(&ids[k]);
+        z_texels[l..l + n].copy_from_slice(&face_z[k]);
+    }
+    let sampled = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+    let ids_cube = Image::new_cube(gpu, "cube_data.ids", vk::Format::R32_UINT, side, sampled)?;
+    let z_cube = Image::new_cube(gpu, "cube_data.z", vk::Format::R32_SFLOAT, side, sampled)?;
+    let src = vk::BufferUsageFlags::TRANSFER_SRC;
+    let up_ids = Buffer::from_pod(gpu, "cube_data.ids.upload", &id_texels, src)?;
+    let up_z = Buffer::from_pod(gpu, "cube_data.z.upload", &z_texels, src)?;
+    let (w, h) = (camera.width, camera.height);
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    let out = |name: &str, format| Image::new_2d(gpu, name, format, w, h, usage);
+    let outputs = [
+        out("cube_data.out_ids", vk::Format::R32_UINT)?,
+        out("cube_data.out_z", vk::Format::R32_SFLOAT)?,
+        out("cube_data.out_range", vk::Format::R32_SFLOAT)?,
+    ];
+    let mut pass = SphereDataPass::new(gpu, camera)?;
+    // SAFETY: the pass is new; the views are two cube views and three 2D storage views of
+    // this device, in the layouts the submission below puts them in.
+    unsafe {
+        pass.bind(
+            [ids_cube.view, z_cube.view],
+            outputs.each_ref().map(|o| o.view),
+        )
+    };
+    let downloads = outputs
+        .iter()
+        .map(|o| Download::new(gpu, o, "cube_data.download"))
+        .collect::<Result<Vec<_>>>()?;
+    ctx.submit(|cmd| {
+        // SAFETY: `cmd` is the fresh buffer `submit` is recording, outside any render pass, on
+        // a graphics and compute queue; the uploads hold the cubes' every layer tightly packed;
+        // nothing else uses the new images; everything outlives the submission, which
+        // `submit` waits for.
+        unsafe {
+            record_upload(gpu, cmd, &up_ids, &ids_cube, Access::ComputeSampled);
+            record_upload(gpu, cmd, &up_z, &z_cube, Access::ComputeSampled);
+            crate::gpu::record_discard_for_compute_write(gpu, cmd, outputs.iter());
+            pass.record_for_readers(cmd, None);
+            for (d, o) in downloads.iter().zip(&outputs) {
+                d.record(gpu, cmd, o, Left::ComputeGeneral)?;
+            }
+        }
+        Ok(())
+    })?;
+    Ok((
+        downloads[0].read()?,
+        downloads[1].read()?,
+        downloads[2].read()?,
+    ))
+}

@@ -79,6 +79,83 @@ pub fn is_eight_bit(path: &Path) -> Option<bool> {
 }
 
 /// Reads an image and says which channels the file held.
+/// An object-ID image a renderer wrote: a grey 8- or 16-bit PNG, or an OpenEXR whose first
+/// channel holds whole numbers (0 is nothing). Never filtered or scaled: the IDs as written.
+/// Colour PNGs are refused (an ID image with colour or alpha is not one ID per pixel).
+pub fn load_ids(path: &Path) -> Result<(u32, u32, Vec<u32>)> {
+    let shown = path.display();
+    let (probe, _) = load_with_channels(path)?;
+    let img = image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| Error::io(path, "cannot read", &e))?
+        .decode()
+        .map_err(|e| Error::input(format!("{shown}: cannot decode: {e}")))?;
+    let (w, h) = (probe.width, probe.height);
+    let ids: Vec<u32> = match &img {
+        DynamicImage::ImageLuma8(g) => g.pixels().map(|p| p[0] as u32).collect(),
+        DynamicImage::ImageLuma16(g) => g.pixels().map(|p| p[0] as u32).collect(),
+        DynamicImage::ImageRgb32F(_) | DynamicImage::ImageRgba32F(_) => {
+            let rgba = img.to_rgba32f();
+            let mut ids = Vec::with_capacity(rgba.len() / 4);
+            for (i, p) in rgba.pixels().enumerate() {
+                let v = p[0];
+                if !(v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f32) {
+                    return Err(Error::input(format!(
+                        "{shown}: pixel ({}, {}) holds {v}, not an object ID (a whole number ≥ 0)",
+                        i as u32 % w,
+                        i as u32 / w
+                    )));
+                }
+                ids.push(v as u32);
+            }
+            ids
+        }
+        other => {
+            return Err(Error::input(format!(
+                "{shown}: IDs are one grey channel (an 8- or 16-bit grey PNG, or an EXR), this image is {:?}",
+                other.color()
+            )))
+        }
+    };
+    Ok((w, h, ids))
+}
+
+/// A depth image a renderer wrote: an OpenEXR's first channel, metres; +inf where nothing was
+/// drawn. NaN or a negative depth is refused, naming the pixel.
+pub fn load_depth(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
+    let shown = path.display();
+    let (raster, _) = load_with_channels(path)?;
+    let Pixels::Rgba32F(p) = &raster.pixels else {
+        return Err(Error::input(format!(
+            "{shown}: depth is a 32-bit float OpenEXR (metres), not an integer image"
+        )));
+    };
+    if raster.bit_depth != BitDepth::F32 {
+        return Err(Error::input(format!(
+            "{shown}: depth is a 32-bit float OpenEXR (metres), not a {}-bit PNG",
+            if raster.bit_depth == BitDepth::U16 {
+                16
+            } else {
+                8
+            }
+        )));
+    }
+    let w = raster.width;
+    let mut depth = Vec::with_capacity(p.len());
+    for (i, px) in p.iter().enumerate() {
+        let d = px[0];
+        if d.is_nan() || d < 0.0 {
+            return Err(Error::input(format!(
+                "{shown}: pixel ({}, {}) has depth {d}: expected metres ≥ 0 (+inf where nothing is drawn)",
+                i as u32 % w,
+                i as u32 / w
+            )));
+        }
+        depth.push(d);
+    }
+    Ok((w, raster.height, depth))
+}
+
 pub fn load_with_channels(path: &Path) -> Result<(Raster, Channels)> {
     let shown = path.display();
     let reader = image::ImageReader::open(path)

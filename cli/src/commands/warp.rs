@@ -88,6 +88,30 @@ pub struct WarpArgs {
     /// right; latitude from straight up at the top row to straight down at the bottom).
     #[arg(long, value_name = "PANO", conflicts_with = "input")]
     input_equirect: Option<PathBuf>,
+    /// distort with --input-cubemap: the faces' object IDs, in the colour's layout (six face
+    /// files or one cross): 8- or 16-bit grey PNG, or EXR (IDs as whole numbers; 0 nothing).
+    /// Carried through the lens at the nearest texel, never blended: no ID that is not in the
+    /// input appears. Write them with --output-ids.
+    #[arg(long, value_name = "FACES", value_delimiter = ',', num_args = 1)]
+    input_ids: Vec<PathBuf>,
+    /// distort with --input-cubemap: the faces' depth (32-bit float EXR, metres, +inf where
+    /// nothing is drawn), in the colour's layout. Converted on each output pixel's own ray:
+    /// write it with --output-depth (the lens camera's z) or --output-range.
+    #[arg(long, value_name = "FACES", value_delimiter = ',', num_args = 1)]
+    input_depth: Vec<PathBuf>,
+    /// What --input-depth holds: z (each face's distance along its own axis, what a
+    /// rasterizer's depth is) or range (distance from the centre along the texel's ray).
+    #[arg(long, value_name = "KIND", default_value = "z", value_parser = ["z", "range"])]
+    input_depth_kind: String,
+    /// The IDs through the lens (.png 16-bit grey, or .exr): needs --input-ids.
+    #[arg(long, value_name = "IDS")]
+    output_ids: Option<PathBuf>,
+    /// The lens camera's z through the lens (.exr, metres): needs --input-depth.
+    #[arg(long, value_name = "D.exr")]
+    output_depth: Option<PathBuf>,
+    /// Range along each output pixel's ray (.exr, metres): needs --input-depth.
+    #[arg(long, value_name = "R.exr")]
+    output_range: Option<PathBuf>,
     /// Output image (.png keeps the input's bit depth; .exr writes 32-bit float).
     #[arg(long, value_name = "OUT")]
     output: PathBuf,
@@ -255,6 +279,29 @@ fn run_opening<'scope>(
     opening: Opening<'scope>,
 ) -> Result<(), CliError> {
     let cam = super::load_camera(&args.camera)?;
+    let data = [
+        (!args.input_ids.is_empty(), "--input-ids"),
+        (!args.input_depth.is_empty(), "--input-depth"),
+        (args.output_ids.is_some(), "--output-ids"),
+        (args.output_depth.is_some(), "--output-depth"),
+        (args.output_range.is_some(), "--output-range"),
+    ];
+    if let Some((_, flag)) = data.iter().find(|(given, _)| *given) {
+        if args.input_cubemap.is_empty() {
+            return Err(CliError::input(format!(
+                "{flag}: IDs and depth go through the lens from a cube map (--input-cubemap) so far; a pinhole image's or a panorama's are not read yet"
+            )));
+        }
+        for (path, what, ext) in [
+            (&args.output_ids, "ID", &["png", "exr"][..]),
+            (&args.output_depth, "depth", &["exr"][..]),
+            (&args.output_range, "range", &["exr"][..]),
+        ] {
+            if let Some(p) = path {
+                check_output(p, what, ext)?;
+            }
+        }
+    }
     if !args.input_cubemap.is_empty() || args.input_equirect.is_some() {
         return run_sphere(args, direction, &cam, opening);
     }
@@ -543,13 +590,173 @@ fn run_sphere(
         );
         (Environment::Cube(Box::new(faces)), channels)
     };
+    let data = load_cube_data(args, &environment)?;
     // The 360° image is the scene: planned and recorded as any scene is.
     let ctx = opened(opening)?;
     let scene = Scene::from_environment(flag, environment);
     let (out, mask) = run_environment(&ctx, cam, &scene, &options)?;
+    // The faces' IDs and depth, through the same lens, staged with the colour.
+    let mut staged = Vec::new();
+    if let Some((side, ids, face_z)) = &data {
+        let (ids_out, z_out, range_out) =
+            vklens::host::sphere_warp::run_cube_data(&ctx, cam, *side, ids, face_z)?;
+        let (w, h) = (cam.width, cam.height);
+        if let Some(p) = &args.output_ids {
+            let raster = Raster {
+                width: w,
+                height: h,
+                pixels: Pixels::R32Uint(ids_out),
+                bit_depth: BitDepth::U16,
+            };
+            staged.push(image_io::save_staged(&raster, p, image_io::Channels(1))?);
+        }
+        for (path, values) in [(&args.output_depth, z_out), (&args.output_range, range_out)] {
+            if let Some(p) = path {
+                let raster = Raster {
+                    width: w,
+                    height: h,
+                    pixels: Pixels::Rgba32F(values.iter().map(|&v| [v, v, v, 1.0]).collect()),
+                    bit_depth: BitDepth::F32,
+                };
+                staged.push(image_io::save_staged(&raster, p, image_io::Channels(4))?);
+            }
+        }
+    }
     super::finish(&ctx)?;
     let mask: Vec<bool> = mask.iter().map(|&m| m > 127).collect();
-    save_outputs(args, &out, &mask, channels)
+    save_outputs(args, &out, &mask, channels)?;
+    for s in staged {
+        s.commit()?;
+    }
+    Ok(())
+}
+
+/// The cube faces' IDs and depth (`--input-ids`, `--input-depth`) as `run_cube_data` takes
+/// them, each face the colour faces' size; a range depth turned into each face's z. `None`
+/// where neither is given.
+#[allow(clippy::type_complexity)]
+fn load_cube_data(
+    args: &WarpArgs,
+    environment: &vklens::scene::Environment,
+) -> Result<Option<(u32, [Vec<u32>; 6], [Vec<f32>; 6])>, CliError> {
+    use vklens::pass::sphere_warp::CubeFace;
+    let given = !args.input_ids.is_empty() || !args.input_depth.is_empty();
+    for (out, needs, flag) in [
+        (
+            &args.output_ids,
+            &args.input_ids,
+            "--output-ids needs --input-ids",
+        ),
+        (
+            &args.output_depth,
+            &args.input_depth,
+            "--output-depth needs --input-depth",
+        ),
+        (
+            &args.output_range,
+            &args.input_depth,
+            "--output-range needs --input-depth",
+        ),
+    ] {
+        if out.is_some() && needs.is_empty() {
+            return Err(CliError::input(format!(
+                "{flag}: the faces' data to carry through the lens"
+            )));
+        }
+    }
+    if !given {
+        return Ok(None);
+    }
+    let vklens::scene::Environment::Cube(faces) = environment else {
+        return Err(CliError::input(
+            "--input-ids and --input-depth go through the lens from a cube map (--input-cubemap) so far; a panorama's or a pinhole image's are not read yet",
+        ));
+    };
+    let side = faces[0].width;
+    // One image per face, or a cross cut into faces, each checked against the colour's size.
+    fn per_face<T: Clone>(
+        flag: &str,
+        paths: &[PathBuf],
+        side: u32,
+        load: impl Fn(&Path) -> Result<(u32, u32, Vec<T>), vklens::Error>,
+    ) -> Result<[Vec<T>; 6], CliError> {
+        let cut = |w: u32, v: &[T], col: u32, row: u32| -> Vec<T> {
+            (0..side)
+                .flat_map(|y| {
+                    let start = ((row * side + y) * w + col * side) as usize;
+                    v[start..start + side as usize].to_vec()
+                })
+                .collect()
+        };
+        match paths {
+            [cross] => {
+                let (w, h, v) = load(cross)?;
+                if (w, h) != (4 * side, 3 * side) {
+                    return Err(CliError::input(format!(
+                        "{flag} {}: {w}×{h}, but the colour's cross is {}×{}",
+                        cross.display(),
+                        4 * side,
+                        3 * side
+                    )));
+                }
+                Ok(CubeFace::ALL.map(|f| {
+                    let (col, row) = f.cross_cell();
+                    cut(w, &v, col, row)
+                }))
+            }
+            six if six.len() == 6 => {
+                let mut out: Vec<Vec<T>> = Vec::with_capacity(6);
+                for (face, p) in CubeFace::ALL.iter().zip(six) {
+                    let (w, h, v) = load(p)?;
+                    if (w, h) != (side, side) {
+                        return Err(CliError::input(format!(
+                            "{flag} {}: face {} is {w}×{h}, but the colour's faces are {side}×{side}",
+                            p.display(),
+                            face.name()
+                        )));
+                    }
+                    out.push(v);
+                }
+                out.try_into()
+                    .map_err(|_| CliError::input(format!("{flag}: six faces expected")))
+            }
+            other => Err(CliError::input(format!(
+                "{flag}: give six face files +x,-x,+y,-y,+z,-z or one horizontal cross, as --input-cubemap, not {} file(s)",
+                other.len()
+            ))),
+        }
+    }
+    let n = (side * side) as usize;
+    let ids = if args.input_ids.is_empty() {
+        // Depth alone: every drawn texel one object, so that depth is carried everywhere.
+        std::array::from_fn(|_| vec![1u32; n])
+    } else {
+        per_face("--input-ids", &args.input_ids, side, image_io::load_ids)?
+    };
+    let mut face_z = if args.input_depth.is_empty() {
+        std::array::from_fn(|_| vec![f32::INFINITY; n])
+    } else {
+        per_face(
+            "--input-depth",
+            &args.input_depth,
+            side,
+            image_io::load_depth,
+        )?
+    };
+    if args.input_depth_kind == "range" {
+        // Range along the texel's ray → the face's z: divided by the ray's length at z = 1.
+        let camera = CubeFace::camera(side)?;
+        for face in face_z.iter_mut() {
+            for (i, d) in face.iter_mut().enumerate() {
+                let p = camera.intrinsics.to_normalized(DVec2::new(
+                    (i as u32 % side) as f64,
+                    (i as u32 / side) as f64,
+                ));
+                *d = (*d as f64 / p.extend(1.0).length()) as f32;
+            }
+        }
+    }
+    Ok(Some((side, ids, face_z)))
 }
 
 /// Six face files (+x -x +y -y +z -z) or one horizontal cross, with the layout's name.

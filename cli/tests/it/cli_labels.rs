@@ -247,3 +247,228 @@ fn bad_label_input_is_one_line_exit_2_and_nothing_written() {
     assert!(err.contains("[classes] \"box_*\""), "{err}");
     assert!(!out.exists(), "the output folder was made");
 }
+
+/// Six faces of a 4 m room around the camera as a renderer would write them (`side`² each,
+/// +x −x +y −y +z −z; file names start with `tag`): grey colour, the wall's ID (1 + the face's index) in a 16-bit PNG, and
+/// each face's z (the wall is 2 m along every face's axis) in an EXR. The file lists.
+fn room_faces(side: u32, tag: &str) -> (String, String, String) {
+    use vklens::imaging::{file::save, BitDepth, Pixels, Raster};
+    let n = (side * side) as usize;
+    let (mut colour, mut ids, mut depth) = (Vec::new(), Vec::new(), Vec::new());
+    for k in 0..6u32 {
+        let c = tmp(&format!("{tag}_c{k}.png"));
+        let i = tmp(&format!("{tag}_i{k}.png"));
+        let d = tmp(&format!("{tag}_d{k}.exr"));
+        let raster = |pixels, bit_depth| Raster {
+            width: side,
+            height: side,
+            pixels,
+            bit_depth,
+        };
+        save(
+            &raster(Pixels::Rgba8(vec![[128, 128, 128, 255]; n]), BitDepth::U8),
+            &c,
+        )
+        .unwrap();
+        save(&raster(Pixels::R32Uint(vec![k + 1; n]), BitDepth::U16), &i).unwrap();
+        save(
+            &raster(
+                Pixels::Rgba32F(vec![[2.0, 2.0, 2.0, 1.0]; n]),
+                BitDepth::F32,
+            ),
+            &d,
+        )
+        .unwrap();
+        colour.push(c.display().to_string());
+        ids.push(i.display().to_string());
+        depth.push(d.display().to_string());
+    }
+    (colour.join(","), ids.join(","), depth.join(","))
+}
+
+#[test]
+fn a_renderers_own_cube_faces_give_ids_depth_and_range_through_the_lens() {
+    let (colour, ids, depth) = room_faces(64, "room");
+    let (c, oi, od, or) = (
+        tmp("ext_c.png"),
+        tmp("ext_ids.png"),
+        tmp("ext_d.exr"),
+        tmp("ext_r.exr"),
+    );
+    let cam = fisheye();
+    let o = vklens(&[
+        "distort",
+        "--camera",
+        &cam,
+        "--input-cubemap",
+        &colour,
+        "--input-ids",
+        &ids,
+        "--input-depth",
+        &depth,
+        "--output",
+        c.to_str().unwrap(),
+        "--output-ids",
+        oi.to_str().unwrap(),
+        "--output-depth",
+        od.to_str().unwrap(),
+        "--output-range",
+        or.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let camera = vklens::Camera::load(&cam).unwrap();
+    let got_ids = image::open(&oi).unwrap().to_luma16();
+    let range = image::open(&or).unwrap().to_rgba32f();
+    let z = image::open(&od).unwrap().to_rgba32f();
+    let (mut checked, mut wrong, mut worst) = (0, 0, 0f64);
+    for (x, y, id) in got_ids.enumerate_pixels() {
+        let id = id[0] as u32;
+        assert!(id <= 6, "ID {id} is in no input face");
+        let rays = camera.unproject_points(&[[x as f64, y as f64]]);
+        let Some(r) = rays[0] else {
+            assert_eq!(id, 0, "an ID outside the lens");
+            continue;
+        };
+        let a = r.map(f64::abs);
+        let (axis, along) = (0..3)
+            .map(|k| (k, a[k]))
+            .fold((0, 0.0), |m, v| if v.1 > m.1 { v } else { m });
+        let want = 1 + 2 * axis as u32 + (r[axis] < 0.0) as u32;
+        // Faces meet at 45°: a pixel that close may take either wall.
+        let sorted = {
+            let mut s = a;
+            s.sort_by(f64::total_cmp);
+            s
+        };
+        if sorted[2] - sorted[1] < 0.02 {
+            continue;
+        }
+        checked += 1;
+        wrong += (id != want) as usize;
+        let want_range = 2.0 / along;
+        worst = worst
+            .max((range.get_pixel(x, y)[0] as f64 - want_range).abs() / want_range)
+            .max((z.get_pixel(x, y)[0] as f64 - want_range * r[2]).abs() / want_range);
+    }
+    println!("{checked} px checked, {wrong} wrong IDs, range and z within {worst:.1e}");
+    assert!(checked > 100_000 && wrong == 0);
+    assert!(worst < 1e-3, "{worst}");
+}
+
+#[test]
+fn bad_face_data_is_one_line_exit_2_and_nothing_written() {
+    use vklens::imaging::{file::save, BitDepth, Pixels, Raster};
+    let (colour, ids, depth) = room_faces(32, "bad");
+    let cam = fisheye();
+    let out = tmp("bad_ext.png");
+    let oi = tmp("bad_ext_ids.png");
+    let _ = std::fs::remove_file(&out);
+    let _ = std::fs::remove_file(&oi);
+    // A depth face of another size; a NaN depth; IDs in a colour PNG with alpha.
+    let small = tmp("small_d.exr");
+    save(
+        &Raster {
+            width: 16,
+            height: 16,
+            pixels: Pixels::Rgba32F(vec![[2.0; 4]; 256]),
+            bit_depth: BitDepth::F32,
+        },
+        &small,
+    )
+    .unwrap();
+    let nan = tmp("nan_d.exr");
+    save(
+        &Raster {
+            width: 32,
+            height: 32,
+            pixels: Pixels::Rgba32F(vec![[f32::NAN, 0.0, 0.0, 1.0]; 1024]),
+            bit_depth: BitDepth::F32,
+        },
+        &nan,
+    )
+    .unwrap();
+    let rgba = tmp("rgba_ids.png");
+    save(
+        &Raster {
+            width: 32,
+            height: 32,
+            pixels: Pixels::Rgba8(vec![[1, 2, 3, 4]; 1024]),
+            bit_depth: BitDepth::U8,
+        },
+        &rgba,
+    )
+    .unwrap();
+    let with_face = |list: &str, k: usize, p: &std::path::Path| {
+        let mut v: Vec<String> = list.split(',').map(String::from).collect();
+        v[k] = p.display().to_string();
+        v.join(",")
+    };
+    let cases = [
+        (
+            vec![
+                "--input-depth".to_string(),
+                with_face(&depth, 2, &small),
+                "--output-range".into(),
+                tmp("bad_r.exr").display().to_string(),
+            ],
+            "--input-depth",
+        ),
+        (
+            vec![
+                "--input-depth".to_string(),
+                with_face(&depth, 0, &nan),
+                "--output-range".into(),
+                tmp("bad_r.exr").display().to_string(),
+            ],
+            "NaN",
+        ),
+        (
+            vec![
+                "--input-ids".to_string(),
+                with_face(&ids, 1, &rgba),
+                "--output-ids".into(),
+                oi.display().to_string(),
+            ],
+            "grey",
+        ),
+        (
+            vec!["--output-ids".to_string(), oi.display().to_string()],
+            "--input-ids",
+        ),
+    ];
+    for (extra, named) in cases {
+        let mut args: Vec<String> = [
+            "distort",
+            "--camera",
+            cam.as_str(),
+            "--input-cubemap",
+            colour.as_str(),
+            "--output",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        args.push(out.display().to_string());
+        args.extend(extra);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = vklens(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(named), "{args:?}: {err}");
+        assert!(!out.exists() && !oi.exists(), "{args:?} wrote a file");
+    }
+    // Face data beside a pinhole image: not read yet, and said so.
+    let o = vklens(&[
+        "distort",
+        "--camera",
+        cam.as_str(),
+        "--input",
+        colour.split(',').next().unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+        "--input-ids",
+        &ids,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--input-cubemap"), "{}", stderr(&o));
+}

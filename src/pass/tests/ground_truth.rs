@@ -551,3 +551,90 @@ fn ids_depth_and_range_through_the_cube_route_match_the_ray_caster() {
         );
     }
 }
+
+/// The ray caster's cube faces of `scene` from the origin (`side`² each, +x −x +y −y +z −z):
+/// per face its IDs and its z along its own axis (+inf where nothing is hit).
+fn ray_cast_faces(scene: &Scene, side: u32) -> ([Vec<u32>; 6], [Vec<f32>; 6]) {
+    use crate::pass::sphere_warp::CubeFace;
+    let bvh = Bvh::new(&scene.mesh);
+    let face_camera = CubeFace::camera(side).unwrap();
+    let mut ids: [Vec<u32>; 6] = Default::default();
+    let mut z: [Vec<f32>; 6] = Default::default();
+    for (k, face) in CubeFace::ALL.iter().enumerate() {
+        // A point r of the lens frame is at R r in the face's frame.
+        let to_lens = face.rotation().transpose();
+        for y in 0..side {
+            for x in 0..side {
+                let dir = face_camera
+                    .intrinsics
+                    .to_normalized(DVec2::new(x as f64, y as f64))
+                    .extend(1.0);
+                let ray = (to_lens * dir).normalize();
+                let hit = bvh.intersect(DVec3::ZERO, ray, 1e-9, f64::INFINITY);
+                ids[k].push(hit.map_or(0, |h| {
+                    scene.mesh.vertices[scene.mesh.indices[3 * h.triangle] as usize].object_id
+                }));
+                // The face's z: the hit's distance along the face's axis (its camera's z).
+                z[k].push(hit.map_or(f32::INFINITY, |h| (h.t / dir.length()) as f32));
+            }
+        }
+    }
+    (ids, z)
+}
+
+#[test]
+fn a_renderers_own_cube_faces_give_ids_and_range_through_the_lens_where_resampled_z_does_not() {
+    let scene = named_boxes();
+    let ctx = validated_context();
+    let (name, camera) = cameras().swap_remove(1);
+    let side = 320;
+    let (ids, face_z) = ray_cast_faces(&scene, side);
+    let (got_ids, got_z, got_range) =
+        crate::host::sphere_warp::run_cube_data(ctx, &camera, side, &ids, &face_z).unwrap();
+    assert_no_validation_messages(ctx);
+    let reference = ray_cast(&scene, &camera);
+    let inner = interior(&reference, &camera);
+    let flat = flat_interior(&reference, &camera);
+    let wrong = inner
+        .iter()
+        .filter(|&&i| got_ids[i] != reference.ids[i])
+        .count();
+    let known = scene.object_ids();
+    assert!(
+        got_ids.iter().all(|&id| id == 0 || known.contains(&id)),
+        "a foreign ID"
+    );
+    let relative = |got: f32, want: f64| (got as f64 - want).abs() / want.abs().max(1e-9);
+    let mut worst = 0f64;
+    // The common recipe: the nearest face texel's z taken as the lens camera's z.
+    let mut recipe = 0f64;
+    for &i in flat.iter().filter(|&&i| got_ids[i] == reference.ids[i]) {
+        let p = reference.points[i];
+        worst = worst
+            .max(relative(got_range[i], p.length()))
+            .max((got_z[i] as f64 - p.z).abs() / p.length());
+        let r = p.normalize();
+        let a = r.abs();
+        let (k, along) = if a.x >= a.y && a.x >= a.z {
+            (if r.x > 0.0 { 0 } else { 1 }, a.x)
+        } else if a.y >= a.z {
+            (if r.y > 0.0 { 2 } else { 3 }, a.y)
+        } else {
+            (if r.z > 0.0 { 4 } else { 5 }, a.z)
+        };
+        let face = crate::pass::sphere_warp::CubeFace::ALL[k];
+        let d = face.rotation() * r / along;
+        let f = side as f64 / 2.0;
+        let (u, v) = (d.x * f + (f - 0.5), d.y * f + (f - 0.5));
+        let t = (v.round().clamp(0.0, side as f64 - 1.0) as usize) * side as usize
+            + u.round().clamp(0.0, side as f64 - 1.0) as usize;
+        recipe = recipe.max((face_z[k][t] as f64 - p.z).abs() / p.length());
+    }
+    println!(
+        "{name}, six {side}² ray-cast faces: {} interior px, {wrong} wrong IDs; z and range {worst:.2e} relative on planes; resampled face z as the lens's: {recipe:.2e}",
+        inner.len()
+    );
+    assert!(wrong * 500 < inner.len(), "{wrong} wrong IDs");
+    assert!(worst < 1e-3, "z or range off by {worst:.2e}");
+    assert!(recipe > 1e-3, "resampling z as it is passed ({recipe:.2e})");
+}

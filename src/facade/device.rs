@@ -50,7 +50,7 @@ impl Device {
     }
 
     /// The headless context (submission, timing) behind the device.
-    pub(crate) fn context(&self) -> &Context {
+    pub fn context(&self) -> &Context {
         &self.ctx
     }
 

@@ -13,7 +13,9 @@ use crate::pass::geometry::{
     ColorFormat, GeometryDesc, GeometryPass, GeometrySlots, GeometryTargets, MeshBuffers, Outputs,
     Projection,
 };
-use crate::pass::sphere_warp::{CubeFace, SphereDataPass, SphereWarpOptions, SphereWarpPass};
+use crate::pass::sphere_warp::{
+    CubeFace, DataSource, SphereDataPass, SphereWarpOptions, SphereWarpPass,
+};
 use crate::pass::warp_stage::DataOutputs;
 use crate::scene::Pose;
 use crate::{Error, Result};
@@ -195,7 +197,7 @@ impl CubeStage {
             let ids = out("cube_stage.ids", vk::Format::R32_UINT)?;
             let depth = out("cube_stage.depth", vk::Format::R32_SFLOAT)?;
             let range = out("cube_stage.range", vk::Format::R32_SFLOAT)?;
-            let mut pass = SphereDataPass::new(gpu, camera)?;
+            let mut pass = SphereDataPass::new(gpu, camera, DataSource::Cube)?;
             // SAFETY: the pass is new, so no recorded work uses it; the views are two cube
             // views and three 2D storage views of this device, in the layouts `record` leaves
             // them in.

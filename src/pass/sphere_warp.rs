@@ -425,9 +425,21 @@ unsafe fn record_band_dispatch(
     };
 }
 
-/// The cube route's data outputs (`glsl/sphere_data.comp`): object IDs, depth and range
-/// through the lens from a cube of face IDs and a cube of face depths, each sampled at the
-/// nearest texel, the depth converted on each output pixel's own ray.
+/// What a [`SphereDataPass`] reads its IDs and depths from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DataSource {
+    /// Six faces (an R32_UINT and an R32F cube image), each face's z along its own axis.
+    Cube,
+    /// A pinhole image from the lens camera's centre along its axes, of these intrinsics
+    /// (2D images; depth: z).
+    Pinhole(Intrinsics),
+    /// An equirectangular panorama from the lens camera's centre (2D images; depth: range).
+    Equirect,
+}
+
+/// Object IDs, depth and range through the lens (`glsl/sphere_data.comp`) from a source's IDs
+/// and depths ([`DataSource`]), each sampled at the nearest texel, the depth carried onto
+/// each output pixel's own ray: the cube route's data outputs, and a renderer's own frames.
 pub struct SphereDataPass {
     gpu: Gpu,
     pipeline: ComputePipeline,
@@ -440,9 +452,14 @@ pub struct SphereDataPass {
 }
 
 impl SphereDataPass {
-    /// The pass for `camera`'s lens (its model alone compiled in).
-    pub fn new(gpu: &Gpu, camera: &Camera) -> Result<Self> {
-        let spirv = shaders::SPHERE_DATA_COMP_BY_MODEL[camera.model().gpu_id() as usize];
+    /// The pass for `camera`'s lens (its model alone compiled in) reading `source`.
+    pub fn new(gpu: &Gpu, camera: &Camera, source: DataSource) -> Result<Self> {
+        let by_model = match source {
+            DataSource::Cube => &shaders::SPHERE_DATA_COMP_BY_MODEL,
+            DataSource::Pinhole(_) => &shaders::SPHERE_DATA_COMP_PINHOLE_BY_MODEL,
+            DataSource::Equirect => &shaders::SPHERE_DATA_COMP_EQUIRECT_BY_MODEL,
+        };
+        let spirv = by_model[camera.model().gpu_id() as usize];
         let pipeline = ComputePipeline::new(
             gpu,
             spirv,
@@ -480,7 +497,12 @@ impl SphereDataPass {
             sampler,
             camera: camera_buf,
             push: SpherePush {
-                chromatic: [1.0; 4],
+                // The pinhole source's intrinsics ride in the slot the data pass has no
+                // other use for.
+                chromatic: match source {
+                    DataSource::Pinhole(k) => [k.fx, k.fy, k.cx, k.cy].map(|v| v as f32),
+                    _ => [1.0; 4],
+                },
                 fill: [0.0; 4],
                 sizes: [0, 0, w, h],
                 band: [0, 0, w, h],
@@ -503,8 +525,8 @@ impl SphereDataPass {
             .write(0, bytemuck::bytes_of(&CameraParams::from_camera(camera)))
     }
 
-    /// Points the pass at the faces' ID and depth cubes (R32_UINT and R32F cube views in
-    /// `SHADER_READ_ONLY_OPTIMAL`) and its outputs (R32_UINT, R32F, R32F storage images of the
+    /// Points the pass at the source's ID and depth images (R32_UINT and R32F cube views, or
+    /// 2D views for a pinhole or panorama source, in `SHADER_READ_ONLY_OPTIMAL`) and its outputs (R32_UINT, R32F, R32F storage images of the
     /// lens camera's size in `GENERAL`).
     ///
     /// # Safety

@@ -11,6 +11,7 @@ use vklens::imaging::cpu_warp::{self, Border, Sampling};
 use vklens::imaging::{file as image_io, BitDepth, Pixels, Raster};
 use vklens::model::overscan::overscan;
 use vklens::model::{Camera, CameraModel, InverseMethod};
+use vklens::pass::sphere_warp::DataSource;
 use vklens::pass::warp::PixelFormat;
 use vklens::{Device, WarpDirection, WarpMethod, WarpOptions, Warper};
 
@@ -287,9 +288,9 @@ fn run_opening<'scope>(
         (args.output_range.is_some(), "--output-range"),
     ];
     if let Some((_, flag)) = data.iter().find(|(given, _)| *given) {
-        if args.input_cubemap.is_empty() {
+        if direction != WarpDirection::Distort || args.backend == super::Backend::Cpu {
             return Err(CliError::input(format!(
-                "{flag}: IDs and depth go through the lens from a cube map (--input-cubemap) so far; a pinhole image's or a panorama's are not read yet"
+                "{flag}: IDs and depth go through the lens with `vklens distort` on --backend gpu"
             )));
         }
         for (path, what, ext) in [
@@ -400,6 +401,18 @@ fn run_opening<'scope>(
             geometry.source_size.1
         )));
     }
+    // IDs and depth beside the pinhole image: the source camera's, at the lens's centre
+    // along its axes.
+    let source_k = options
+        .source_camera
+        .as_ref()
+        .map_or(cam.intrinsics, |c| c.intrinsics);
+    let data = load_image_data(
+        args,
+        (source.width, source.height),
+        DataSource::Pinhole(source_k),
+    )?;
+    let mut staged = Vec::new();
     let (out, mask) = match args.backend {
         // imaging::file::save writes float data read from an 8-bit file back as 8-bit.
         super::Backend::Cpu => {
@@ -442,11 +455,17 @@ fn run_opening<'scope>(
                 warper = Warper::new(device.gpu(), &cam, &options)?;
             }
             let warped = warper.run(&device, &source)?;
+            if let Some(d) = &data {
+                staged = stage_data_outputs(args, &cam, d.run(device.context(), &cam)?)?;
+            }
             device.check_validation()?;
             (warped.image, warped.mask)
         }
     };
     save_outputs(args, &out, &mask, channels)?;
+    for s in staged {
+        s.commit()?;
+    }
     if let Some(line) = output_camera {
         eprintln!("{line}");
     }
@@ -590,38 +609,21 @@ fn run_sphere(
         );
         (Environment::Cube(Box::new(faces)), channels)
     };
-    let data = load_cube_data(args, &environment)?;
+    let data = match &environment {
+        Environment::Cube(faces) => load_cube_data(args, faces[0].width)?,
+        Environment::Panorama(p) => {
+            load_image_data(args, (p.width, p.height), DataSource::Equirect)?
+        }
+    };
     // The 360° image is the scene: planned and recorded as any scene is.
     let ctx = opened(opening)?;
     let scene = Scene::from_environment(flag, environment);
     let (out, mask) = run_environment(&ctx, cam, &scene, &options)?;
-    // The faces' IDs and depth, through the same lens, staged with the colour.
-    let mut staged = Vec::new();
-    if let Some((side, ids, face_z)) = &data {
-        let (ids_out, z_out, range_out) =
-            vklens::host::sphere_warp::run_cube_data(&ctx, cam, *side, ids, face_z)?;
-        let (w, h) = (cam.width, cam.height);
-        if let Some(p) = &args.output_ids {
-            let raster = Raster {
-                width: w,
-                height: h,
-                pixels: Pixels::R32Uint(ids_out),
-                bit_depth: BitDepth::U16,
-            };
-            staged.push(image_io::save_staged(&raster, p, image_io::Channels(1))?);
-        }
-        for (path, values) in [(&args.output_depth, z_out), (&args.output_range, range_out)] {
-            if let Some(p) = path {
-                let raster = Raster {
-                    width: w,
-                    height: h,
-                    pixels: Pixels::Rgba32F(values.iter().map(|&v| [v, v, v, 1.0]).collect()),
-                    bit_depth: BitDepth::F32,
-                };
-                staged.push(image_io::save_staged(&raster, p, image_io::Channels(4))?);
-            }
-        }
-    }
+    // The source's IDs and depth, through the same lens, staged with the colour.
+    let staged = match &data {
+        Some(d) => stage_data_outputs(args, cam, d.run(&ctx, cam)?)?,
+        None => Vec::new(),
+    };
     super::finish(&ctx)?;
     let mask: Vec<bool> = mask.iter().map(|&m| m > 127).collect();
     save_outputs(args, &out, &mask, channels)?;
@@ -631,16 +633,66 @@ fn run_sphere(
     Ok(())
 }
 
-/// The cube faces' IDs and depth (`--input-ids`, `--input-depth`) as `run_cube_data` takes
-/// them, each face the colour faces' size; a range depth turned into each face's z. `None`
-/// where neither is given.
-#[allow(clippy::type_complexity)]
-fn load_cube_data(
+/// A source's IDs and depth (`--input-ids`, `--input-depth`), as the data pass takes them.
+enum SourceData {
+    /// Six faces of `side`² texels, +x −x +y −y +z −z; each face's z.
+    Cube(u32, [Vec<u32>; 6], [Vec<f32>; 6]),
+    /// One image: a pinhole image's z, or a panorama's range.
+    Image(DataSource, (u32, u32), Vec<u32>, Vec<f32>),
+}
+
+impl SourceData {
+    /// (IDs, z, range) through `cam`'s lens.
+    #[allow(clippy::type_complexity)]
+    fn run(
+        &self,
+        ctx: &vklens::host::Context,
+        cam: &Camera,
+    ) -> Result<(Vec<u32>, Vec<f32>, Vec<f32>), CliError> {
+        use vklens::host::sphere_warp::{run_cube_data, run_image_data};
+        Ok(match self {
+            SourceData::Cube(side, ids, z) => run_cube_data(ctx, cam, *side, ids, z)?,
+            SourceData::Image(kind, size, ids, depth) => {
+                run_image_data(ctx, cam, *kind, *size, ids, depth)?
+            }
+        })
+    }
+}
+
+/// The data outputs (`--output-ids`, `--output-depth`, `--output-range`) of `(ids, z, range)`,
+/// staged: put in place with the colour, or not at all.
+fn stage_data_outputs(
     args: &WarpArgs,
-    environment: &vklens::scene::Environment,
-) -> Result<Option<(u32, [Vec<u32>; 6], [Vec<f32>; 6])>, CliError> {
-    use vklens::pass::sphere_warp::CubeFace;
-    let given = !args.input_ids.is_empty() || !args.input_depth.is_empty();
+    cam: &Camera,
+    (ids, z, range): (Vec<u32>, Vec<f32>, Vec<f32>),
+) -> Result<Vec<image_io::Staged>, CliError> {
+    let (w, h) = (cam.width, cam.height);
+    let mut staged = Vec::new();
+    if let Some(p) = &args.output_ids {
+        let raster = Raster {
+            width: w,
+            height: h,
+            pixels: Pixels::R32Uint(ids),
+            bit_depth: BitDepth::U16,
+        };
+        staged.push(image_io::save_staged(&raster, p, image_io::Channels(1))?);
+    }
+    for (path, values) in [(&args.output_depth, z), (&args.output_range, range)] {
+        if let Some(p) = path {
+            let raster = Raster {
+                width: w,
+                height: h,
+                pixels: Pixels::Rgba32F(values.iter().map(|&v| [v, v, v, 1.0]).collect()),
+                bit_depth: BitDepth::F32,
+            };
+            staged.push(image_io::save_staged(&raster, p, image_io::Channels(4))?);
+        }
+    }
+    Ok(staged)
+}
+
+/// Checks the data flags against each other; whether any source data is given.
+fn data_given(args: &WarpArgs) -> Result<bool, CliError> {
     for (out, needs, flag) in [
         (
             &args.output_ids,
@@ -660,19 +712,95 @@ fn load_cube_data(
     ] {
         if out.is_some() && needs.is_empty() {
             return Err(CliError::input(format!(
-                "{flag}: the faces' data to carry through the lens"
+                "{flag}: the source's data to carry through the lens"
             )));
         }
     }
-    if !given {
+    Ok(!args.input_ids.is_empty() || !args.input_depth.is_empty())
+}
+
+/// One image of IDs and one of depth (`--input-ids`, `--input-depth`) of the colour's `size`,
+/// for a pinhole source (its z) or a panorama (its range), the other kind converted. `None`
+/// where neither is given.
+fn load_image_data(
+    args: &WarpArgs,
+    (w, h): (u32, u32),
+    kind: DataSource,
+) -> Result<Option<SourceData>, CliError> {
+    if !data_given(args)? {
         return Ok(None);
     }
-    let vklens::scene::Environment::Cube(faces) = environment else {
-        return Err(CliError::input(
-            "--input-ids and --input-depth go through the lens from a cube map (--input-cubemap) so far; a panorama's or a pinhole image's are not read yet",
-        ));
+    fn one<T>(
+        flag: &str,
+        paths: &[PathBuf],
+        (w, h): (u32, u32),
+        load: impl Fn(&Path) -> Result<(u32, u32, Vec<T>), vklens::Error>,
+    ) -> Result<Option<Vec<T>>, CliError> {
+        match paths {
+            [] => Ok(None),
+            [p] => {
+                let (iw, ih, v) = load(p)?;
+                if (iw, ih) != (w, h) {
+                    return Err(CliError::input(format!(
+                        "{flag} {}: {iw}×{ih}, but the colour input is {w}×{h}",
+                        p.display()
+                    )));
+                }
+                Ok(Some(v))
+            }
+            more => Err(CliError::input(format!(
+                "{flag}: one image beside --input or --input-equirect, not {}",
+                more.len()
+            ))),
+        }
+    }
+    let n = w as usize * h as usize;
+    let ids = one("--input-ids", &args.input_ids, (w, h), image_io::load_ids)?
+        .unwrap_or_else(|| vec![1; n]);
+    let mut depth = one(
+        "--input-depth",
+        &args.input_depth,
+        (w, h),
+        image_io::load_depth,
+    )?
+    .unwrap_or_else(|| vec![f32::INFINITY; n]);
+    // Each pixel's ray: a pinhole's at z = 1, a panorama's unit ray.
+    let ray = |i: usize| {
+        let (x, y) = ((i % w as usize) as f64, (i / w as usize) as f64);
+        match kind {
+            DataSource::Pinhole(k) => k.to_normalized(DVec2::new(x, y)).extend(1.0),
+            _ => {
+                let lon = ((x + 0.5) / w as f64 - 0.5) * std::f64::consts::TAU;
+                let lat = ((y + 0.5) / h as f64 - 0.5) * std::f64::consts::PI;
+                glam::DVec3::new(lat.cos() * lon.sin(), lat.sin(), lat.cos() * lon.cos())
+            }
+        }
     };
-    let side = faces[0].width;
+    match (kind, args.input_depth_kind.as_str()) {
+        // A pinhole image wants z, a panorama range: the other converted along each ray.
+        (DataSource::Pinhole(_), "range") => {
+            for (i, d) in depth.iter_mut().enumerate() {
+                *d = (*d as f64 / ray(i).length()) as f32;
+            }
+        }
+        (DataSource::Equirect, "z") => {
+            for (i, d) in depth.iter_mut().enumerate() {
+                *d = (*d as f64 / ray(i).z) as f32;
+            }
+        }
+        _ => {}
+    }
+    Ok(Some(SourceData::Image(kind, (w, h), ids, depth)))
+}
+
+/// The cube faces' IDs and depth (`--input-ids`, `--input-depth`) as `run_cube_data` takes
+/// them, each face the colour faces' `side`; a range depth turned into each face's z. `None`
+/// where neither is given.
+fn load_cube_data(args: &WarpArgs, side: u32) -> Result<Option<SourceData>, CliError> {
+    use vklens::pass::sphere_warp::CubeFace;
+    if !data_given(args)? {
+        return Ok(None);
+    }
     // One image per face, or a cross cut into faces, each checked against the colour's size.
     fn per_face<T: Clone>(
         flag: &str,
@@ -756,7 +884,7 @@ fn load_cube_data(
             }
         }
     }
-    Ok(Some((side, ids, face_z)))
+    Ok(Some(SourceData::Cube(side, ids, face_z)))
 }
 
 /// Six face files (+x -x +y -y +z -z) or one horizontal cross, with the layout's name.

@@ -457,18 +457,65 @@ fn bad_face_data_is_one_line_exit_2_and_nothing_written() {
         assert!(err.contains(named), "{args:?}: {err}");
         assert!(!out.exists() && !oi.exists(), "{args:?} wrote a file");
     }
-    // Face data beside a pinhole image: not read yet, and said so.
+    // Beside a pinhole image, one image of IDs: six are refused, naming the flag.
+    let src = tmp("src32.json");
+    std::fs::write(
+        &src,
+        r#"{"width": 32, "height": 32, "fx": 16, "fy": 16, "cx": 15.5, "cy": 15.5, "dist_coeffs": [0, 0, 0, 0]}"#,
+    )
+    .unwrap();
     let o = vklens(&[
         "distort",
         "--camera",
         cam.as_str(),
+        "--source-camera",
+        src.to_str().unwrap(),
         "--input",
-        colour.split(',').next().unwrap(),
+        colour.split(',').nth(4).unwrap(),
         "--output",
         out.to_str().unwrap(),
         "--input-ids",
         &ids,
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("--input-cubemap"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--input-ids: one image"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    // One image each: the +z face as the pinhole image of a 90° camera, its wall (ID 5) 2 m
+    // ahead: straight ahead through the fisheye, ID 5 at range 2.
+    let (one_id, one_depth) = (
+        ids.split(',').nth(4).unwrap(),
+        depth.split(',').nth(4).unwrap(),
+    );
+    let or = tmp("pinhole_r.exr");
+    let o = vklens(&[
+        "distort",
+        "--camera",
+        cam.as_str(),
+        "--source-camera",
+        src.to_str().unwrap(),
+        "--input",
+        colour.split(',').nth(4).unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+        "--input-ids",
+        one_id,
+        "--input-depth",
+        one_depth,
+        "--output-ids",
+        oi.to_str().unwrap(),
+        "--output-range",
+        or.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = image::open(&oi).unwrap().to_luma16();
+    let range = image::open(&or).unwrap().to_rgba32f();
+    assert!(got.pixels().all(|p| p[0] == 0 || p[0] == 5));
+    assert_eq!(got.get_pixel(399, 399)[0], 5);
+    assert!((range.get_pixel(399, 399)[0] - 2.0).abs() < 1e-4);
+    let _ = std::fs::remove_file(&out);
+    let _ = std::fs::remove_file(&oi);
 }

@@ -638,3 +638,107 @@ fn a_renderers_own_cube_faces_give_ids_and_range_through_the_lens_where_resample
     assert!(worst < 1e-3, "z or range off by {worst:.2e}");
     assert!(recipe > 1e-3, "resampling z as it is passed ({recipe:.2e})");
 }
+
+/// The ray caster's image of `scene` from the origin through `ray_of` (pixel → unit ray, or
+/// none): IDs and, per pixel, `depth_of(ray, hit distance)`.
+fn ray_cast_image(
+    scene: &Scene,
+    (w, h): (u32, u32),
+    ray_of: impl Fn(DVec2) -> Option<DVec3>,
+    depth_of: impl Fn(DVec3, f64) -> f64,
+) -> (Vec<u32>, Vec<f32>) {
+    let bvh = Bvh::new(&scene.mesh);
+    let (mut ids, mut depth) = (Vec::new(), Vec::new());
+    for y in 0..h {
+        for x in 0..w {
+            let hit = ray_of(DVec2::new(x as f64, y as f64))
+                .and_then(|r| Some((r, bvh.intersect(DVec3::ZERO, r, 1e-9, f64::INFINITY)?)));
+            ids.push(hit.map_or(0, |(_, h)| {
+                scene.mesh.vertices[scene.mesh.indices[3 * h.triangle] as usize].object_id
+            }));
+            depth.push(hit.map_or(f32::INFINITY, |(r, h)| depth_of(r, h.t) as f32));
+        }
+    }
+    (ids, depth)
+}
+
+#[test]
+fn a_renderers_own_pinhole_image_and_panorama_give_ids_and_range_through_the_lens() {
+    use crate::pass::sphere_warp::DataSource;
+    let scene = named_boxes();
+    let ctx = validated_context();
+    let mut all = cameras();
+    let fisheye = all.swap_remove(1).1;
+    let standard = all.swap_remove(0).1;
+    // A pinhole image (z) of the overscanned source camera of the standard lens, and a
+    // panorama (range) seen through the fisheye.
+    let source = crate::model::overscan::overscan(&standard, 1.0).unwrap();
+    let k = source.intrinsics;
+    let pinhole = ray_cast_image(
+        &scene,
+        (source.width, source.height),
+        |p| Some(k.to_normalized(p).extend(1.0).normalize()),
+        |r, t| r.z * t,
+    );
+    let (pw, ph) = (720u32, 360u32);
+    let pano = ray_cast_image(
+        &scene,
+        (pw, ph),
+        |p| {
+            let lon = ((p.x + 0.5) / pw as f64 - 0.5) * std::f64::consts::TAU;
+            let lat = ((p.y + 0.5) / ph as f64 - 0.5) * std::f64::consts::PI;
+            Some(DVec3::new(
+                lat.cos() * lon.sin(),
+                lat.sin(),
+                lat.cos() * lon.cos(),
+            ))
+        },
+        |_, t| t,
+    );
+    let runs = [
+        (
+            "pinhole image → standard",
+            &standard,
+            DataSource::Pinhole(k),
+            (source.width, source.height),
+            &pinhole,
+        ),
+        (
+            "panorama → fisheye 200°",
+            &fisheye,
+            DataSource::Equirect,
+            (pw, ph),
+            &pano,
+        ),
+    ];
+    for (name, camera, kind, size, (ids, depth)) in runs {
+        let (got_ids, got_z, got_range) =
+            crate::host::sphere_warp::run_image_data(ctx, camera, kind, size, ids, depth).unwrap();
+        assert_no_validation_messages(ctx);
+        let reference = ray_cast(&scene, camera);
+        let inner = interior(&reference, camera);
+        let flat = flat_interior(&reference, camera);
+        let wrong = inner
+            .iter()
+            .filter(|&&i| got_ids[i] != reference.ids[i])
+            .count();
+        let known = scene.object_ids();
+        assert!(
+            got_ids.iter().all(|&id| id == 0 || known.contains(&id)),
+            "{name}: a foreign ID"
+        );
+        let mut worst = 0f64;
+        for &i in flat.iter().filter(|&&i| got_ids[i] == reference.ids[i]) {
+            let p = reference.points[i];
+            worst = worst
+                .max((got_range[i] as f64 - p.length()).abs() / p.length())
+                .max((got_z[i] as f64 - p.z).abs() / p.length());
+        }
+        println!(
+            "{name}: {} interior px, {wrong} wrong IDs; z and range {worst:.2e} relative on planes",
+            inner.len()
+        );
+        assert!(wrong * 500 < inner.len(), "{name}: {wrong} wrong IDs");
+        assert!(worst < 1e-3, "{name}: z or range off by {worst:.2e}");
+    }
+}

@@ -105,6 +105,15 @@ pub(super) fn plan_camera(file: &SceneFile, scene: &Scene, path: &Path) -> Resul
     };
     // The steps weigh the route against every candidate, the dropped ones included.
     let mut steps = explain::camera_steps(&choice, &all, terms);
+    if file.outputs.renders_data() {
+        // A cube route asked for with IDs, depth or range: what its data pass does.
+        for s in steps
+            .iter_mut()
+            .filter(|s| matches!(s.stage, super::Stage::SphereWarp { .. }))
+        {
+            s.why.push_str("; IDs and depth at the nearest texel, the depth carried onto each pixel's own ray as z and range");
+        }
+    }
     steps.extend(explain::antialias_step(file.antialias, file.outputs.color));
     let mut plan = file_plan(
         file,

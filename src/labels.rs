@@ -157,7 +157,19 @@ pub struct View<'a> {
     pub moving: Option<(Readout, FrameMotion)>,
 }
 
-impl View<'_> {
+impl<'a> View<'a> {
+    /// The view of a frame read from `pose` whose last line is read at `end` in `readout`
+    /// order (`None`, or `end` equal to `pose`: the camera does not move during the frame).
+    pub fn new(camera: &'a Camera, pose: Pose, readout: Option<(Readout, Pose)>) -> Self {
+        View {
+            camera,
+            pose,
+            moving: readout
+                .filter(|(_, end)| *end != pose)
+                .map(|(r, end)| (r, FrameMotion::new(pose.into(), end.into()))),
+        }
+    }
+
     /// Where the world point `x` appears (OpenCV pixel, possibly outside the image) and its
     /// range (metres from the projection centre) when it appears there; `None` where the lens
     /// does not see it. Under a moving rolling shutter, at its own line's time (the

@@ -84,40 +84,40 @@ pub fn is_eight_bit(path: &Path) -> Option<bool> {
 /// Colour PNGs are refused (an ID image with colour or alpha is not one ID per pixel).
 pub fn load_ids(path: &Path) -> Result<(u32, u32, Vec<u32>)> {
     let shown = path.display();
-    let (probe, _) = load_with_channels(path)?;
-    let img = image::ImageReader::open(path)
-        .and_then(|r| r.with_guessed_format())
-        .map_err(|e| Error::io(path, "cannot read", &e))?
-        .decode()
-        .map_err(|e| Error::input(format!("{shown}: cannot decode: {e}")))?;
-    let (w, h) = (probe.width, probe.height);
-    let ids: Vec<u32> = match &img {
-        DynamicImage::ImageLuma8(g) => g.pixels().map(|p| p[0] as u32).collect(),
-        DynamicImage::ImageLuma16(g) => g.pixels().map(|p| p[0] as u32).collect(),
-        DynamicImage::ImageRgb32F(_) | DynamicImage::ImageRgba32F(_) => {
-            let rgba = img.to_rgba32f();
-            let mut ids = Vec::with_capacity(rgba.len() / 4);
-            for (i, p) in rgba.pixels().enumerate() {
-                let v = p[0];
-                if !(v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f32) {
-                    return Err(Error::input(format!(
-                        "{shown}: pixel ({}, {}) holds {v}, not an object ID (a whole number ≥ 0)",
-                        i as u32 % w,
-                        i as u32 / w
-                    )));
-                }
-                ids.push(v as u32);
-            }
-            ids
-        }
-        other => {
-            return Err(Error::input(format!(
-                "{shown}: IDs are one grey channel (an 8- or 16-bit grey PNG, or an EXR), this image is {:?}",
-                other.color()
+    let (raster, channels) = load_with_channels(path)?;
+    let w = raster.width;
+    let whole = |i: usize, v: f32| {
+        if v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f32 {
+            Ok(v as u32)
+        } else {
+            Err(Error::input(format!(
+                "{shown}: pixel ({}, {}) holds {v}, not an object ID (a whole number ≥ 0)",
+                i as u32 % w,
+                i as u32 / w
             )))
         }
     };
-    Ok((w, h, ids))
+    let ids: Vec<u32> = match (&raster.pixels, raster.bit_depth) {
+        // A PNG: one grey channel (load_with_channels keeps 8-bit as it is and scales 16-bit
+        // to 0..1, which f32 holds exactly enough to round back).
+        (_, BitDepth::U8 | BitDepth::U16) if channels.0 != 1 => {
+            return Err(Error::input(format!(
+                "{shown}: IDs are one grey channel (an 8- or 16-bit grey PNG, or an EXR), this PNG has {} channels",
+                channels.0
+            )))
+        }
+        (Pixels::Rgba8(p), _) => p.iter().map(|p| p[0] as u32).collect(),
+        (Pixels::Rgba32F(p), BitDepth::U16) => {
+            p.iter().map(|p| (p[0] * 65535.0).round() as u32).collect()
+        }
+        (Pixels::Rgba32F(p), _) => p
+            .iter()
+            .enumerate()
+            .map(|(i, p)| whole(i, p[0]))
+            .collect::<Result<_>>()?,
+        (Pixels::R32Uint(p), _) => p.clone(),
+    };
+    Ok((w, raster.height, ids))
 }
 
 /// A depth image a renderer wrote: an OpenEXR's first channel, metres; +inf where nothing was

@@ -263,19 +263,8 @@ impl Plan {
     pub fn view(&self, index: usize) -> Option<crate::labels::View<'_>> {
         let pose = *self.poses.get(index)?;
         let end = self.end_pose(index)?;
-        Some(crate::labels::View {
-            camera: self.camera()?,
-            pose,
-            moving: self
-                .shutter
-                .moving_readout()
-                .filter(|_| end != pose)
-                .map(|r| {
-                    let motion =
-                        crate::model::rolling_shutter::FrameMotion::new(pose.into(), end.into());
-                    (r, motion)
-                }),
-        })
+        let readout = self.shutter.moving_readout().map(|r| (r, end));
+        Some(crate::labels::View::new(self.camera()?, pose, readout))
     }
 
     /// The lens prescription and its setting, if the optics are one.

@@ -367,14 +367,6 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
         exr: color_ext == "exr",
     };
     let objects = vklens::labels::object_labels(&scene, &args.class);
-    let view_moving = rolling_shutter
-        .filter(|(_, end)| *end != pose)
-        .map(|(r, end)| {
-            (
-                r,
-                vklens::rolling_shutter::FrameMotion::new(pose.into(), end.into()),
-            )
-        });
     let path = args.path.choice(
         &camera,
         args.delta,
@@ -417,11 +409,7 @@ pub fn run(args: RenderArgs) -> Result<(), CliError> {
             }
         })?;
     finish(&ctx)?;
-    let view = vklens::labels::View {
-        camera: &request.camera,
-        pose,
-        moving: view_moving,
-    };
+    let view = vklens::labels::View::new(&request.camera, pose, rolling_shutter);
     let labels = vklens::labels::frame_labels(
         &view,
         &scene,
